@@ -1,0 +1,32 @@
+//! Data model and numerics of the BTF toolkit.
+//!
+//! A bidirectional texture function (BTF) gives, for every texel of a flat sample, the
+//! radiance reflected towards a view direction per unit irradiance arriving from a light
+//! direction, both sampled on the hemisphere (Sattler et al. 2003, §3). This crate holds
+//! what every other crate shares:
+//!
+//! - [`direction`]: tangent-space directions and their (θ, φ) angles;
+//! - [`sampling`]: the measured ring samplings (`ubo81`, `ubo81-h1`, `dome151`, custom);
+//! - [`interp`]: nearest and "four nearest" interpolation weights (eq. 3 and 5);
+//! - [`zarr`], [`store`], [`eigen`]: the chunked on-disk BTF and eigen stores;
+//! - [`pca`]: the per-view-slot PCA (eq. 1);
+//! - [`reconstruct`]: CPU reconstruction for any view and light (eq. 2–5);
+//! - [`metrics`]: error measures (relative RMSE, PSNR, Eckart–Young).
+//!
+//! No GPU code and no image-format crates live here.
+
+pub mod direction;
+pub mod eigen;
+pub mod error;
+pub mod interp;
+pub mod metrics;
+pub mod pca;
+pub mod reconstruct;
+pub mod sampling;
+pub mod store;
+pub mod zarr;
+
+pub use direction::Direction;
+pub use error::{Error, Result};
+pub use interp::{InterpMode, Weights};
+pub use sampling::{Ring, Sampling};

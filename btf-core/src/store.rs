@@ -1,0 +1,379 @@
+//! The BTF store: uncompressed normtextures `[view][light][y][x][rgb]` in a Zarr v3 group,
+//! one chunk per (view slot, light) image, linear values in `f16` or `f32`.
+//!
+//! A store is written into `NAME.partial/` and renamed to `NAME` only when every chunk is
+//! in place, so an interrupted run leaves any previous output untouched; running the same
+//! job again with `resume` keeps the chunks already written. The group attributes record
+//! the samplings, colour space, units and provenance (see [`BtfMeta`]).
+
+use crate::sampling::Sampling;
+use crate::zarr::{self, ArrayMeta, DType, Limits, ZarrArray};
+use crate::{Error, Result};
+use serde::{Deserialize, Serialize};
+use serde_json::{Value, json};
+use std::fs;
+use std::path::{Path, PathBuf};
+
+/// What a BTF store holds, recorded in its group attributes under `"btf"`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct BtfMeta {
+    /// `"btf"` for normtextures, `"eigen"` for a compressed store.
+    pub kind: String,
+    /// Sampling of the view slots.
+    pub view_sampling: Sampling,
+    /// Sampling of the light directions.
+    pub light_sampling: Sampling,
+    /// Texels per row.
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+    /// Colour space of the linear RGB values.
+    pub color_space: String,
+    /// What one unit means.
+    pub units: String,
+    /// Free-form provenance (generator, parameters, source files).
+    pub provenance: Value,
+}
+
+impl BtfMeta {
+    /// Metadata for a new store with the usual colour space and units.
+    pub fn new(view_sampling: Sampling, light_sampling: Sampling, width: usize, height: usize) -> Self {
+        BtfMeta {
+            kind: "btf".into(),
+            view_sampling,
+            light_sampling,
+            width,
+            height,
+            color_space: "linear sRGB (Rec. 709 primaries)".into(),
+            units: "radiance per unit irradiance perpendicular to the light (1/sr); includes cos(theta_light)".into(),
+            provenance: json!({}),
+        }
+    }
+
+    /// Number of view slots.
+    pub fn n_views(&self) -> usize {
+        self.view_sampling.len()
+    }
+    /// Number of light directions.
+    pub fn n_lights(&self) -> usize {
+        self.light_sampling.len()
+    }
+    /// Floats per image (`height · width · 3`).
+    pub fn texel_values(&self) -> usize {
+        self.width * self.height * 3
+    }
+
+    pub(crate) fn validate(mut self, path: &Path) -> Result<Self> {
+        self.view_sampling = self.view_sampling.validated()?;
+        self.light_sampling = self.light_sampling.validated()?;
+        if self.width == 0 || self.height == 0 || self.width > 1 << 16 || self.height > 1 << 16 {
+            return Err(Error::Invalid(format!(
+                "{}: texture size {}x{} is outside 1..=65536",
+                path.display(),
+                self.width,
+                self.height
+            )));
+        }
+        Ok(self)
+    }
+}
+
+/// Reads a store's group metadata (shared by BTF and eigen stores).
+pub fn read_meta(path: &Path) -> Result<BtfMeta> {
+    let attrs = zarr::read_group(path)?;
+    let m: BtfMeta = serde_json::from_value(attrs["btf"].clone())
+        .map_err(|source| Error::Json { path: path.join("zarr.json"), source })?;
+    if attrs["complete"] != json!(true) {
+        return Err(Error::Invalid(format!("{}: store is incomplete (an interrupted write?)", path.display())));
+    }
+    m.validate(path)
+}
+
+/// A store folder being written: `NAME.partial` until [`StoreTxn::commit`].
+#[derive(Debug)]
+pub struct StoreTxn {
+    final_path: PathBuf,
+    partial: PathBuf,
+}
+
+impl StoreTxn {
+    /// Starts (or, with `resume`, continues) writing a store at `path`.
+    pub fn begin(path: &Path, resume: bool) -> Result<Self> {
+        let name = path
+            .file_name()
+            .ok_or_else(|| Error::Invalid(format!("{}: not a file name", path.display())))?;
+        let partial = path.with_file_name(format!("{}.partial", name.to_string_lossy()));
+        if partial.exists() && !resume {
+            fs::remove_dir_all(&partial).map_err(|e| Error::io(&partial, e))?;
+        }
+        fs::create_dir_all(&partial).map_err(|e| Error::io(&partial, e))?;
+        Ok(StoreTxn { final_path: path.to_owned(), partial })
+    }
+
+    /// The folder being written.
+    pub fn dir(&self) -> &Path {
+        &self.partial
+    }
+
+    /// Marks the store complete and moves it into place, replacing any previous store.
+    pub fn commit(self, attributes: Value) -> Result<()> {
+        let mut attrs = attributes;
+        attrs["complete"] = json!(true);
+        zarr::write_group(&self.partial, &attrs)?;
+        if self.final_path.exists() {
+            let old = self.final_path.with_file_name(format!(
+                "{}.old-{}",
+                self.final_path.file_name().unwrap().to_string_lossy(),
+                std::process::id()
+            ));
+            fs::rename(&self.final_path, &old).map_err(|e| Error::io(&self.final_path, e))?;
+            fs::rename(&self.partial, &self.final_path).map_err(|e| Error::io(&self.final_path, e))?;
+            let _ = if old.is_dir() { fs::remove_dir_all(&old) } else { fs::remove_file(&old) };
+        } else {
+            fs::rename(&self.partial, &self.final_path).map_err(|e| Error::io(&self.final_path, e))?;
+        }
+        Ok(())
+    }
+}
+
+/// Checks that every value is finite; names the slot, light and texel otherwise.
+pub fn check_finite(values: &[f32], view: usize, light: usize, width: usize) -> Result<()> {
+    if let Some(pos) = values.iter().position(|v| !v.is_finite()) {
+        let texel = pos / 3;
+        let (y, x) = if width > 0 { (texel / width, texel % width) } else { (0, texel) };
+        return Err(Error::NonFinite { view, light, at: Some(format!("texel y={y}, x={x}, channel {}", pos % 3)) });
+    }
+    Ok(())
+}
+
+/// Writer of a BTF store, one image at a time, in any order, resumable.
+#[derive(Debug)]
+pub struct BtfWriter {
+    txn: StoreTxn,
+    meta: BtfMeta,
+    arr: ZarrArray,
+}
+
+fn normtexture_array(meta: &BtfMeta, dtype: DType) -> ArrayMeta {
+    ArrayMeta {
+        shape: vec![meta.n_views() as u64, meta.n_lights() as u64, meta.height as u64, meta.width as u64, 3],
+        chunk_shape: vec![1, 1, meta.height as u64, meta.width as u64, 3],
+        dtype,
+        dimension_names: ["view", "light", "y", "x", "channel"].map(String::from).to_vec(),
+    }
+}
+
+impl BtfWriter {
+    /// Starts a store at `path` with element type `dtype` (`F16` or `F32`).
+    pub fn create(path: &Path, meta: BtfMeta, dtype: DType, resume: bool) -> Result<Self> {
+        if !matches!(dtype, DType::F16 | DType::F32) {
+            return Err(Error::Unsupported(format!("normtexture dtype {dtype:?} (use f16 or f32)")));
+        }
+        let meta = meta.validate(path)?;
+        let txn = StoreTxn::begin(path, resume)?;
+        let arr = ZarrArray::create(&txn.dir().join("normtextures"), normtexture_array(&meta, dtype))?;
+        Ok(BtfWriter { txn, meta, arr })
+    }
+
+    /// The metadata being written.
+    pub fn meta(&self) -> &BtfMeta {
+        &self.meta
+    }
+
+    /// True when image `(view, light)` is already written (for resuming).
+    pub fn has_image(&self, view: usize, light: usize) -> bool {
+        self.arr.has_chunk(&[view as u64, light as u64, 0, 0, 0])
+    }
+
+    /// Writes one normtexture (`height · width · 3` linear values, row-major, RGB).
+    pub fn write_image(&self, view: usize, light: usize, values: &[f32]) -> Result<()> {
+        if view >= self.meta.n_views() || light >= self.meta.n_lights() {
+            return Err(Error::Invalid(format!("image ({view}, {light}) is outside the sampling")));
+        }
+        if values.len() != self.meta.texel_values() {
+            return Err(Error::Invalid(format!(
+                "image ({view}, {light}) has {} values, {} expected",
+                values.len(),
+                self.meta.texel_values()
+            )));
+        }
+        check_finite(values, view, light, self.meta.width)?;
+        self.arr.write_chunk(&[view as u64, light as u64, 0, 0, 0], &zarr::encode_f32(values, self.arr.meta().dtype))
+    }
+
+    /// Checks that every image is present and moves the store into place.
+    pub fn finish(self) -> Result<()> {
+        for v in 0..self.meta.n_views() {
+            for l in 0..self.meta.n_lights() {
+                if !self.has_image(v, l) {
+                    return Err(Error::Invalid(format!("image (view {v}, light {l}) was never written")));
+                }
+            }
+        }
+        let attrs = json!({"btf": self.meta});
+        self.txn.commit(attrs)
+    }
+}
+
+/// The light images of one view slot: `n_lights` rows of `texel_values` floats.
+#[derive(Debug, Clone)]
+pub struct SlotData {
+    /// View slot index.
+    pub view: usize,
+    /// Number of rows (lights).
+    pub n_lights: usize,
+    /// Floats per row.
+    pub texel_values: usize,
+    /// Row-major data, `n_lights × texel_values`.
+    pub data: Vec<f32>,
+}
+
+impl SlotData {
+    /// Row `light`.
+    pub fn row(&self, light: usize) -> &[f32] {
+        &self.data[light * self.texel_values..(light + 1) * self.texel_values]
+    }
+}
+
+/// A BTF store opened for reading.
+#[derive(Debug, Clone)]
+pub struct BtfStore {
+    path: PathBuf,
+    meta: BtfMeta,
+    arr: ZarrArray,
+}
+
+impl BtfStore {
+    /// Opens a store, checking its metadata and limits before reading any chunk.
+    pub fn open(path: &Path) -> Result<Self> {
+        let meta = read_meta(path)?;
+        if meta.kind != "btf" {
+            return Err(Error::Invalid(format!("{}: a '{}' store, not a BTF store", path.display(), meta.kind)));
+        }
+        let arr = ZarrArray::open(&path.join("normtextures"), &Limits::default())?;
+        if arr.meta() != &normtexture_array(&meta, arr.meta().dtype) {
+            return Err(Error::Corrupt {
+                path: path.join("normtextures/zarr.json"),
+                what: "array shape disagrees with the store's sampling and size".into(),
+            });
+        }
+        Ok(BtfStore { path: path.to_owned(), meta, arr })
+    }
+
+    /// The store's metadata.
+    pub fn meta(&self) -> &BtfMeta {
+        &self.meta
+    }
+    /// The store's folder.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+    /// Element type on disk.
+    pub fn dtype(&self) -> DType {
+        self.arr.meta().dtype
+    }
+    /// Bytes of all chunks on disk.
+    pub fn bytes(&self) -> u64 {
+        (self.meta.n_views() * self.meta.n_lights()) as u64 * self.arr.meta().chunk_bytes().unwrap_or(0)
+    }
+
+    /// Reads one normtexture into `out` (`texel_values` floats), refusing non-finite data.
+    pub fn read_image_into(&self, view: usize, light: usize, out: &mut [f32]) -> Result<()> {
+        if view >= self.meta.n_views() || light >= self.meta.n_lights() {
+            return Err(Error::Invalid(format!("image ({view}, {light}) is outside the sampling")));
+        }
+        let raw = self.arr.read_chunk(&[view as u64, light as u64, 0, 0, 0]).map_err(|e| match e {
+            Error::Corrupt { path, what } => Error::Corrupt { path, what: format!("view slot {view}, light {light}: {what}") },
+            other => other,
+        })?;
+        zarr::decode_to_f32(&raw, self.dtype(), out);
+        check_finite(out, view, light, self.meta.width)
+    }
+
+    /// Reads one normtexture.
+    pub fn read_image(&self, view: usize, light: usize) -> Result<Vec<f32>> {
+        let mut out = vec![0f32; self.meta.texel_values()];
+        self.read_image_into(view, light, &mut out)?;
+        Ok(out)
+    }
+
+    /// Reads all light images of view slot `view`.
+    pub fn read_slot(&self, view: usize) -> Result<SlotData> {
+        let n = self.meta.texel_values();
+        let mut data = vec![0f32; n * self.meta.n_lights()];
+        for (l, row) in data.chunks_exact_mut(n).enumerate() {
+            self.read_image_into(view, l, row)?;
+        }
+        Ok(SlotData { view, n_lights: self.meta.n_lights(), texel_values: n, data })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tiny_meta() -> BtfMeta {
+        let s = Sampling::new("custom", vec![crate::Ring { theta_deg: 0.0, count: 1, phi_offset_deg: 0.0 }, crate::Ring { theta_deg: 40.0, count: 3, phi_offset_deg: 0.0 }]).unwrap();
+        BtfMeta::new(s.clone(), s, 3, 2)
+    }
+
+    fn write_store(path: &Path, scale: f32) {
+        let w = BtfWriter::create(path, tiny_meta(), DType::F32, false).unwrap();
+        for v in 0..4 {
+            for l in 0..4 {
+                let img: Vec<f32> = (0..18).map(|k| scale * (v * 100 + l * 10 + k) as f32).collect();
+                w.write_image(v, l, &img).unwrap();
+            }
+        }
+        w.finish().unwrap();
+    }
+
+    #[test]
+    fn round_trip() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("m.btf");
+        write_store(&p, 1.0);
+        let s = BtfStore::open(&p).unwrap();
+        assert_eq!(s.read_image(2, 3).unwrap()[5], 235.0);
+        let slot = s.read_slot(1).unwrap();
+        assert_eq!(slot.row(2)[0], 120.0);
+    }
+
+    #[test]
+    fn interrupted_write_leaves_previous_store_and_resume_works() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("m.btf");
+        write_store(&p, 1.0);
+        // An interrupted second write: half the images, no finish.
+        {
+            let w = BtfWriter::create(&p, tiny_meta(), DType::F32, false).unwrap();
+            w.write_image(0, 0, &[2.0; 18]).unwrap();
+        }
+        assert_eq!(BtfStore::open(&p).unwrap().read_image(0, 0).unwrap()[1], 1.0);
+        // Resuming keeps the written image; finishing fails while images are missing.
+        let w = BtfWriter::create(&p, tiny_meta(), DType::F32, true).unwrap();
+        assert!(w.has_image(0, 0) && !w.has_image(0, 1));
+        let err = w.finish().unwrap_err().to_string();
+        assert!(err.contains("never written"), "{err}");
+        assert_eq!(BtfStore::open(&p).unwrap().read_image(0, 0).unwrap()[1], 1.0);
+    }
+
+    #[test]
+    fn corrupt_chunk_named_and_nan_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("m.btf");
+        write_store(&p, 1.0);
+        let chunk = p.join("normtextures/c/2/1/0/0/0");
+        let mut b = fs::read(&chunk).unwrap();
+        b[10] ^= 1;
+        fs::write(&chunk, b).unwrap();
+        let err = BtfStore::open(&p).unwrap().read_slot(2).unwrap_err().to_string();
+        assert!(err.contains("view slot 2, light 1") && err.contains("checksum"), "{err}");
+
+        let w = BtfWriter::create(&dir.path().join("n.btf"), tiny_meta(), DType::F32, false).unwrap();
+        let mut img = vec![0.0; 18];
+        img[7] = f32::NAN;
+        let err = w.write_image(3, 2, &img).unwrap_err().to_string();
+        assert!(err.contains("view slot 3, light 2") && err.contains("x=2"), "{err}");
+    }
+}

@@ -1,0 +1,417 @@
+//! A small, strict implementation of the Zarr v3 on-disk format: one JSON metadata document
+//! per group and array, regular chunk grids, the `default` chunk-key encoding with `/`, and
+//! the codec chain `bytes` (little endian) → `crc32c`, so every chunk carries a checksum.
+//!
+//! The stores written here open in zarr-python ≥ 3 (`zarr.open_group(path)`), numpy and
+//! Dask. Only what the toolkit needs is implemented; anything else in a metadata document
+//! is refused as unsupported rather than misread. Sizes are checked against [`Limits`]
+//! before anything is allocated, and every file is written to a temporary name and renamed,
+//! so a reader never sees half a chunk.
+
+use crate::{Error, Result};
+use half::f16;
+use serde_json::{Value, json};
+use std::fs;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Element types the stores use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum DType {
+    /// IEEE half precision.
+    F16,
+    /// IEEE single precision.
+    F32,
+    /// IEEE double precision.
+    F64,
+    /// Unsigned byte.
+    U8,
+}
+
+impl DType {
+    /// Bytes per element.
+    pub fn size(self) -> usize {
+        match self {
+            DType::F16 => 2,
+            DType::F32 => 4,
+            DType::F64 => 8,
+            DType::U8 => 1,
+        }
+    }
+    /// The Zarr v3 data type name.
+    pub fn zarr_name(self) -> &'static str {
+        match self {
+            DType::F16 => "float16",
+            DType::F32 => "float32",
+            DType::F64 => "float64",
+            DType::U8 => "uint8",
+        }
+    }
+    /// Parses a Zarr v3 data type name.
+    pub fn from_zarr_name(s: &str) -> Result<Self> {
+        Ok(match s {
+            "float16" => DType::F16,
+            "float32" => DType::F32,
+            "float64" => DType::F64,
+            "uint8" => DType::U8,
+            o => return Err(Error::Unsupported(format!("zarr data type '{o}'"))),
+        })
+    }
+}
+
+/// Allocation limits enforced before reading anything a header claims.
+#[derive(Debug, Clone, Copy)]
+pub struct Limits {
+    /// Largest chunk we agree to read into memory, in bytes.
+    pub max_chunk_bytes: u64,
+    /// Largest number of chunks an array may declare.
+    pub max_chunks: u64,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits { max_chunk_bytes: 4 << 30, max_chunks: 50_000_000 }
+    }
+}
+
+/// Metadata of one array.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ArrayMeta {
+    /// Array shape.
+    pub shape: Vec<u64>,
+    /// Chunk shape (same rank).
+    pub chunk_shape: Vec<u64>,
+    /// Element type.
+    pub dtype: DType,
+    /// Names of the dimensions.
+    pub dimension_names: Vec<String>,
+}
+
+impl ArrayMeta {
+    fn to_json(&self) -> Value {
+        let fill = match self.dtype {
+            DType::U8 => json!(0),
+            _ => json!(0.0),
+        };
+        json!({
+            "zarr_format": 3,
+            "node_type": "array",
+            "shape": self.shape,
+            "data_type": self.dtype.zarr_name(),
+            "chunk_grid": {"name": "regular", "configuration": {"chunk_shape": self.chunk_shape}},
+            "chunk_key_encoding": {"name": "default", "configuration": {"separator": "/"}},
+            "fill_value": fill,
+            "codecs": [
+                {"name": "bytes", "configuration": {"endian": "little"}},
+                {"name": "crc32c"}
+            ],
+            "attributes": {},
+            "dimension_names": self.dimension_names,
+        })
+    }
+
+    fn from_json(path: &Path, v: &Value) -> Result<Self> {
+        let bad = |what: &str| Error::Corrupt { path: path.to_owned(), what: what.to_owned() };
+        if v["zarr_format"] != json!(3) || v["node_type"] != json!("array") {
+            return Err(bad("not a Zarr v3 array"));
+        }
+        let dims = |key: &Value| -> Result<Vec<u64>> {
+            key.as_array()
+                .ok_or_else(|| bad("shape is not a list"))?
+                .iter()
+                .map(|x| x.as_u64().ok_or_else(|| bad("shape entry is not an unsigned integer")))
+                .collect()
+        };
+        let shape = dims(&v["shape"])?;
+        if v["chunk_grid"]["name"] != json!("regular") {
+            return Err(Error::Unsupported(format!("{}: chunk grid other than regular", path.display())));
+        }
+        let chunk_shape = dims(&v["chunk_grid"]["configuration"]["chunk_shape"])?;
+        if chunk_shape.len() != shape.len() || chunk_shape.contains(&0) {
+            return Err(bad("chunk shape does not match the array's rank or has a zero"));
+        }
+        if v["chunk_key_encoding"]["name"] != json!("default")
+            || v["chunk_key_encoding"]["configuration"]["separator"] != json!("/")
+        {
+            return Err(Error::Unsupported(format!("{}: chunk key encoding", path.display())));
+        }
+        let codecs: Vec<&str> = v["codecs"]
+            .as_array()
+            .ok_or_else(|| bad("codecs is not a list"))?
+            .iter()
+            .map(|c| c["name"].as_str().unwrap_or(""))
+            .collect();
+        if codecs != ["bytes", "crc32c"] || v["codecs"][0]["configuration"]["endian"] != json!("little") {
+            return Err(Error::Unsupported(format!(
+                "{}: codec chain {codecs:?} (this toolkit reads bytes(little) + crc32c)",
+                path.display()
+            )));
+        }
+        let dtype = DType::from_zarr_name(v["data_type"].as_str().ok_or_else(|| bad("data_type"))?)?;
+        let dimension_names = v["dimension_names"]
+            .as_array()
+            .map(|a| a.iter().map(|x| x.as_str().unwrap_or("").to_owned()).collect())
+            .unwrap_or_default();
+        Ok(ArrayMeta { shape, chunk_shape, dtype, dimension_names })
+    }
+
+    /// Elements per chunk, or an error when that overflows.
+    pub fn chunk_elems(&self) -> Result<u64> {
+        self.chunk_shape
+            .iter()
+            .try_fold(1u64, |a, &b| a.checked_mul(b))
+            .ok_or_else(|| Error::Limit("chunk element count overflows".into()))
+    }
+
+    /// Bytes of one encoded chunk (data + 4-byte checksum).
+    pub fn chunk_bytes(&self) -> Result<u64> {
+        self.chunk_elems()?
+            .checked_mul(self.dtype.size() as u64)
+            .and_then(|b| b.checked_add(4))
+            .ok_or_else(|| Error::Limit("chunk byte count overflows".into()))
+    }
+
+    fn check_limits(&self, path: &Path, limits: &Limits) -> Result<()> {
+        let cb = self.chunk_bytes()?;
+        if cb > limits.max_chunk_bytes {
+            return Err(Error::Limit(format!(
+                "{}: a chunk would take {cb} bytes (limit {})",
+                path.display(),
+                limits.max_chunk_bytes
+            )));
+        }
+        let mut n = 1u64;
+        for (s, c) in self.shape.iter().zip(&self.chunk_shape) {
+            n = n.checked_mul(s.div_ceil(*c)).unwrap_or(u64::MAX);
+        }
+        if n > limits.max_chunks {
+            return Err(Error::Limit(format!("{}: {n} chunks (limit {})", path.display(), limits.max_chunks)));
+        }
+        Ok(())
+    }
+}
+
+/// Writes `bytes` to `path` through a temporary file in the same folder and a rename.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("file");
+    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
+    let mut f = fs::File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
+    f.write_all(bytes).map_err(|e| Error::io(&tmp, e))?;
+    drop(f);
+    fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+}
+
+fn read_json(path: &Path) -> Result<Value> {
+    let text = fs::read(path).map_err(|e| Error::io(path, e))?;
+    if text.len() > 64 << 20 {
+        return Err(Error::Limit(format!("{}: metadata larger than 64 MiB", path.display())));
+    }
+    serde_json::from_slice(&text).map_err(|source| Error::Json { path: path.to_owned(), source })
+}
+
+/// Writes a group's `zarr.json` with the given attributes.
+pub fn write_group(dir: &Path, attributes: &Value) -> Result<()> {
+    let doc = json!({"zarr_format": 3, "node_type": "group", "attributes": attributes});
+    write_atomic(&dir.join("zarr.json"), serde_json::to_string_pretty(&doc).unwrap().as_bytes())
+}
+
+/// Reads a group's attributes.
+pub fn read_group(dir: &Path) -> Result<Value> {
+    let path = dir.join("zarr.json");
+    let v = read_json(&path)?;
+    if v["zarr_format"] != json!(3) || v["node_type"] != json!("group") {
+        return Err(Error::Invalid(format!("{}: not a Zarr v3 group", path.display())));
+    }
+    Ok(v["attributes"].clone())
+}
+
+/// One array of a store.
+#[derive(Debug, Clone)]
+pub struct ZarrArray {
+    dir: PathBuf,
+    meta: ArrayMeta,
+}
+
+impl ZarrArray {
+    /// Creates (or re-opens with identical metadata, for resuming) an array folder.
+    pub fn create(dir: &Path, meta: ArrayMeta) -> Result<Self> {
+        meta.check_limits(dir, &Limits::default())?;
+        let path = dir.join("zarr.json");
+        if path.exists() {
+            let existing = ArrayMeta::from_json(&path, &read_json(&path)?)?;
+            if existing != meta {
+                return Err(Error::Invalid(format!(
+                    "{}: existing partial array has different metadata; remove it to start over",
+                    path.display()
+                )));
+            }
+        } else {
+            write_atomic(&path, serde_json::to_string_pretty(&meta.to_json()).unwrap().as_bytes())?;
+        }
+        Ok(ZarrArray { dir: dir.to_owned(), meta })
+    }
+
+    /// Opens an existing array, validating its metadata against `limits`.
+    pub fn open(dir: &Path, limits: &Limits) -> Result<Self> {
+        let path = dir.join("zarr.json");
+        let meta = ArrayMeta::from_json(&path, &read_json(&path)?)?;
+        meta.check_limits(dir, limits)?;
+        Ok(ZarrArray { dir: dir.to_owned(), meta })
+    }
+
+    /// The array's metadata.
+    pub fn meta(&self) -> &ArrayMeta {
+        &self.meta
+    }
+
+    /// Path of the chunk with grid index `idx`.
+    pub fn chunk_path(&self, idx: &[u64]) -> PathBuf {
+        let mut p = self.dir.join("c");
+        for i in idx {
+            p.push(i.to_string());
+        }
+        p
+    }
+
+    /// Writes one chunk given its raw little-endian element bytes.
+    pub fn write_chunk(&self, idx: &[u64], raw: &[u8]) -> Result<()> {
+        let expect = self.meta.chunk_bytes()? - 4;
+        if raw.len() as u64 != expect {
+            return Err(Error::Invalid(format!(
+                "chunk {idx:?} of {}: {} bytes given, {expect} expected",
+                self.dir.display(),
+                raw.len()
+            )));
+        }
+        let mut buf = Vec::with_capacity(raw.len() + 4);
+        buf.extend_from_slice(raw);
+        buf.extend_from_slice(&crc32c::crc32c(raw).to_le_bytes());
+        write_atomic(&self.chunk_path(idx), &buf)
+    }
+
+    /// Reads one chunk's raw element bytes after checking its size and checksum.
+    pub fn read_chunk(&self, idx: &[u64]) -> Result<Vec<u8>> {
+        let path = self.chunk_path(idx);
+        let expect = self.meta.chunk_bytes()?;
+        let len = fs::metadata(&path).map_err(|e| Error::io(&path, e))?.len();
+        if len != expect {
+            return Err(Error::Corrupt {
+                path,
+                what: format!("chunk has {len} bytes, {expect} expected (truncated or foreign)"),
+            });
+        }
+        let mut buf = fs::read(&path).map_err(|e| Error::io(&path, e))?;
+        let n = buf.len() - 4;
+        let stored = u32::from_le_bytes(buf[n..].try_into().unwrap());
+        if crc32c::crc32c(&buf[..n]) != stored {
+            return Err(Error::Corrupt { path, what: "crc32c checksum mismatch".into() });
+        }
+        buf.truncate(n);
+        Ok(buf)
+    }
+
+    /// True when the chunk exists with the right size (checksum not verified; used to resume).
+    pub fn has_chunk(&self, idx: &[u64]) -> bool {
+        let expect = self.meta.chunk_bytes().unwrap_or(0);
+        fs::metadata(self.chunk_path(idx)).map(|m| m.len() == expect).unwrap_or(false)
+    }
+}
+
+/// Encodes `f32` values into the little-endian bytes of `dtype` (`F16`/`F32`/`F64`).
+pub fn encode_f32(values: &[f32], dtype: DType) -> Vec<u8> {
+    match dtype {
+        DType::F32 => values.iter().flat_map(|v| v.to_le_bytes()).collect(),
+        DType::F16 => values.iter().flat_map(|v| f16::from_f32(*v).to_le_bytes()).collect(),
+        DType::F64 => values.iter().flat_map(|v| (*v as f64).to_le_bytes()).collect(),
+        DType::U8 => values.iter().map(|v| v.round().clamp(0.0, 255.0) as u8).collect(),
+    }
+}
+
+/// Decodes little-endian bytes of `dtype` into `out` (lengths must agree).
+pub fn decode_to_f32(raw: &[u8], dtype: DType, out: &mut [f32]) {
+    assert_eq!(raw.len(), out.len() * dtype.size());
+    match dtype {
+        DType::F32 => {
+            for (o, c) in out.iter_mut().zip(raw.chunks_exact(4)) {
+                *o = f32::from_le_bytes(c.try_into().unwrap());
+            }
+        }
+        DType::F16 => {
+            for (o, c) in out.iter_mut().zip(raw.chunks_exact(2)) {
+                *o = f16::from_le_bytes(c.try_into().unwrap()).to_f32();
+            }
+        }
+        DType::F64 => {
+            for (o, c) in out.iter_mut().zip(raw.chunks_exact(8)) {
+                *o = f64::from_le_bytes(c.try_into().unwrap()) as f32;
+            }
+        }
+        DType::U8 => {
+            for (o, &b) in out.iter_mut().zip(raw) {
+                *o = b as f32;
+            }
+        }
+    }
+}
+
+/// Decodes little-endian `f64` bytes.
+pub fn decode_f64(raw: &[u8]) -> Vec<f64> {
+    raw.chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().unwrap())).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn meta() -> ArrayMeta {
+        ArrayMeta {
+            shape: vec![3, 4],
+            chunk_shape: vec![1, 4],
+            dtype: DType::F32,
+            dimension_names: vec!["a".into(), "b".into()],
+        }
+    }
+
+    #[test]
+    fn chunk_round_trip_and_corruption() {
+        let dir = tempfile::tempdir().unwrap();
+        let a = ZarrArray::create(dir.path(), meta()).unwrap();
+        let raw = encode_f32(&[1.0, -2.0, 3.5, 1e30], DType::F32);
+        a.write_chunk(&[1, 0], &raw).unwrap();
+        let b = ZarrArray::open(dir.path(), &Limits::default()).unwrap();
+        assert_eq!(b.read_chunk(&[1, 0]).unwrap(), raw);
+        // Flip one bit.
+        let p = b.chunk_path(&[1, 0]);
+        let mut bytes = fs::read(&p).unwrap();
+        bytes[3] ^= 0x10;
+        fs::write(&p, &bytes).unwrap();
+        let err = b.read_chunk(&[1, 0]).unwrap_err().to_string();
+        assert!(err.contains("checksum") && err.contains("c/1/0"), "{err}");
+        // Truncate.
+        fs::write(&p, &bytes[..7]).unwrap();
+        assert!(b.read_chunk(&[1, 0]).unwrap_err().to_string().contains("truncated"));
+    }
+
+    #[test]
+    fn absurd_header_refused_before_allocating() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut m = meta();
+        m.shape = vec![1 << 40, 1 << 40];
+        m.chunk_shape = vec![1 << 20, 1 << 20];
+        fs::write(dir.path().join("zarr.json"), serde_json::to_string(&m.to_json()).unwrap()).unwrap();
+        let err = ZarrArray::open(dir.path(), &Limits::default()).unwrap_err();
+        assert!(matches!(err, Error::Limit(_)), "{err}");
+    }
+
+    #[test]
+    fn half_precision_round_trip() {
+        let v = [0.0f32, 1.0, -0.5, 65504.0, 1e-3];
+        let mut out = [0f32; 5];
+        decode_to_f32(&encode_f32(&v, DType::F16), DType::F16, &mut out);
+        for (a, b) in v.iter().zip(out) {
+            assert!((a - b).abs() <= a.abs() * 1e-3);
+        }
+    }
+}
