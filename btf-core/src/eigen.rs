@@ -120,15 +120,60 @@ struct Arrays {
 }
 
 fn array_metas(m: &EigenMeta) -> [(&'static str, ArrayMeta); 5] {
-    let (v, l, h, w, c) =
-        (m.btf.n_views() as u64, m.btf.n_lights() as u64, m.btf.height as u64, m.btf.width as u64, m.components as u64);
+    let (v, l, h, w, c) = (
+        m.btf.n_views() as u64,
+        m.btf.n_lights() as u64,
+        m.btf.height as u64,
+        m.btf.width as u64,
+        m.components as u64,
+    );
     let names = |n: &[&str]| n.iter().map(|s| s.to_string()).collect::<Vec<_>>();
     [
-        ("mean", ArrayMeta { shape: vec![v, h, w, 3], chunk_shape: vec![1, h, w, 3], dtype: DType::F32, dimension_names: names(&["view", "y", "x", "channel"]) }),
-        ("eigentextures", ArrayMeta { shape: vec![v, c, h, w, 3], chunk_shape: vec![1, c, h, w, 3], dtype: m.quantization.dtype(), dimension_names: names(&["view", "component", "y", "x", "channel"]) }),
-        ("scale_offset", ArrayMeta { shape: vec![v, c, 2], chunk_shape: vec![1, c, 2], dtype: DType::F32, dimension_names: names(&["view", "component", "scale_offset"]) }),
-        ("weights", ArrayMeta { shape: vec![v, l, c], chunk_shape: vec![1, l, c], dtype: DType::F32, dimension_names: names(&["view", "light", "component"]) }),
-        ("eigenvalues", ArrayMeta { shape: vec![v, l], chunk_shape: vec![1, l], dtype: DType::F64, dimension_names: names(&["view", "index"]) }),
+        (
+            "mean",
+            ArrayMeta {
+                shape: vec![v, h, w, 3],
+                chunk_shape: vec![1, h, w, 3],
+                dtype: DType::F32,
+                dimension_names: names(&["view", "y", "x", "channel"]),
+            },
+        ),
+        (
+            "eigentextures",
+            ArrayMeta {
+                shape: vec![v, c, h, w, 3],
+                chunk_shape: vec![1, c, h, w, 3],
+                dtype: m.quantization.dtype(),
+                dimension_names: names(&["view", "component", "y", "x", "channel"]),
+            },
+        ),
+        (
+            "scale_offset",
+            ArrayMeta {
+                shape: vec![v, c, 2],
+                chunk_shape: vec![1, c, 2],
+                dtype: DType::F32,
+                dimension_names: names(&["view", "component", "scale_offset"]),
+            },
+        ),
+        (
+            "weights",
+            ArrayMeta {
+                shape: vec![v, l, c],
+                chunk_shape: vec![1, l, c],
+                dtype: DType::F32,
+                dimension_names: names(&["view", "light", "component"]),
+            },
+        ),
+        (
+            "eigenvalues",
+            ArrayMeta {
+                shape: vec![v, l],
+                chunk_shape: vec![1, l],
+                dtype: DType::F64,
+                dimension_names: names(&["view", "index"]),
+            },
+        ),
     ]
 }
 
@@ -140,7 +185,10 @@ fn open_arrays(dir: &Path, m: &EigenMeta, create: bool) -> Result<Arrays> {
         } else {
             let a = ZarrArray::open(&p, &Limits::default())?;
             if a.meta() != &meta {
-                return Err(Error::Corrupt { path: p.join("zarr.json"), what: "array shape disagrees with the store metadata".into() });
+                return Err(Error::Corrupt {
+                    path: p.join("zarr.json"),
+                    what: "array shape disagrees with the store metadata".into(),
+                });
             }
             Ok(a)
         }
@@ -166,7 +214,8 @@ pub fn quantize(basis: &[f32], components: usize, q: Quantization) -> (Vec<u8>, 
                 so.push([scale, 0.0]);
             }
             Quantization::U8 => {
-                let (lo, hi) = row.iter().fold((f32::MAX, f32::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+                let (lo, hi) =
+                    row.iter().fold((f32::MAX, f32::MIN), |(a, b), &v| (a.min(v), b.max(v)));
                 let scale = if hi > lo { (hi - lo) / 255.0 } else { 1.0 };
                 raw.extend(row.iter().map(|v| ((v - lo) / scale).round().clamp(0.0, 255.0) as u8));
                 so.push([scale, lo]);
@@ -191,6 +240,14 @@ pub fn dequantize(raw: &[u8], scale_offset: &[[f32; 2]], q: Quantization) -> Vec
     out
 }
 
+fn read_stats_file(path: &Path) -> Option<serde_json::Value> {
+    let bytes = std::fs::read(path).ok()?;
+    if bytes.len() > 1 << 20 {
+        return None;
+    }
+    serde_json::from_slice(&bytes).ok()
+}
+
 /// Writer of an eigen store, one slot at a time, resumable.
 pub struct EigenWriter {
     txn: StoreTxn,
@@ -202,7 +259,11 @@ impl EigenWriter {
     /// Starts an eigen store at `path`.
     pub fn create(path: &Path, meta: EigenMeta, resume: bool) -> Result<Self> {
         if meta.components == 0 || meta.components > meta.btf.n_lights() {
-            return Err(Error::Invalid(format!("components {} not in 1..={}", meta.components, meta.btf.n_lights())));
+            return Err(Error::Invalid(format!(
+                "components {} not in 1..={}",
+                meta.components,
+                meta.btf.n_lights()
+            )));
         }
         let txn = StoreTxn::begin(path, resume)?;
         let arrays = open_arrays(txn.dir(), &meta, true)?;
@@ -224,8 +285,13 @@ impl EigenWriter {
         let v = view as u64;
         let c = self.meta.components;
         let n_l = self.meta.btf.n_lights();
-        if slot.scale_offset.len() != c || slot.weights.len() != n_l * c || slot.mean.len() != self.meta.btf.texel_values() {
-            return Err(Error::Invalid(format!("slot {view}: arrays do not match the store's shape")));
+        if slot.scale_offset.len() != c
+            || slot.weights.len() != n_l * c
+            || slot.mean.len() != self.meta.btf.texel_values()
+        {
+            return Err(Error::Invalid(format!(
+                "slot {view}: arrays do not match the store's shape"
+            )));
         }
         for (l, w) in slot.weights.chunks(c).enumerate() {
             crate::store::check_finite(w, view, l, 0)?;
@@ -237,8 +303,21 @@ impl EigenWriter {
         self.arrays.mean.write_chunk(&[v, 0, 0, 0], &zarr::encode_f32(&slot.mean, DType::F32))?;
         self.arrays.eig.write_chunk(&[v, 0, 0, 0, 0], &slot.eigentextures)?;
         self.arrays.scale.write_chunk(&[v, 0, 0], &zarr::encode_f32(&so, DType::F32))?;
-        self.arrays.weights.write_chunk(&[v, 0, 0], &zarr::encode_f32(&slot.weights, DType::F32))?;
+        self.arrays
+            .weights
+            .write_chunk(&[v, 0, 0], &zarr::encode_f32(&slot.weights, DType::F32))?;
         self.arrays.values.write_chunk(&[v, 0], &ev_raw)
+    }
+
+    /// Stores per-slot statistics (JSON) beside the arrays; they survive a resume.
+    pub fn write_stats(&self, view: usize, stats: &serde_json::Value) -> Result<()> {
+        let path = self.txn.dir().join("stats").join(format!("{view}.json"));
+        zarr::write_atomic(&path, serde_json::to_string(stats).unwrap().as_bytes())
+    }
+
+    /// Statistics written for slot `view` by [`EigenWriter::write_stats`], if any.
+    pub fn read_stats(&self, view: usize) -> Option<serde_json::Value> {
+        read_stats_file(&self.txn.dir().join("stats").join(format!("{view}.json")))
     }
 
     /// Checks every slot is present and moves the store into place.
@@ -267,14 +346,22 @@ impl EigenStore {
     pub fn open(path: &Path) -> Result<Self> {
         let btf = read_meta(path)?;
         if btf.kind != "eigen" {
-            return Err(Error::Invalid(format!("{}: a '{}' store, not an eigen store (run `btf compress` first)", path.display(), btf.kind)));
+            return Err(Error::Invalid(format!(
+                "{}: a '{}' store, not an eigen store (run `btf compress` first)",
+                path.display(),
+                btf.kind
+            )));
         }
         let attrs = zarr::read_group(path)?;
         let components = attrs["eigen"]["components"].as_u64().unwrap_or(0) as usize;
-        let quantization: Quantization = serde_json::from_value(attrs["eigen"]["quantization"].clone())
-            .map_err(|source| Error::Json { path: path.join("zarr.json"), source })?;
+        let quantization: Quantization =
+            serde_json::from_value(attrs["eigen"]["quantization"].clone())
+                .map_err(|source| Error::Json { path: path.join("zarr.json"), source })?;
         if components == 0 || components > btf.n_lights() {
-            return Err(Error::Corrupt { path: path.join("zarr.json"), what: format!("components {components} out of range") });
+            return Err(Error::Corrupt {
+                path: path.join("zarr.json"),
+                what: format!("components {components} out of range"),
+            });
         }
         let meta = EigenMeta { btf, components, quantization };
         let arrays = open_arrays(path, &meta, false)?;
@@ -293,23 +380,39 @@ impl EigenStore {
     /// Bytes of all chunks on disk.
     pub fn bytes(&self) -> u64 {
         let v = self.meta.btf.n_views() as u64;
-        [&self.arrays.mean, &self.arrays.eig, &self.arrays.scale, &self.arrays.weights, &self.arrays.values]
-            .iter()
-            .map(|a| a.meta().chunk_bytes().unwrap_or(0) * v)
-            .sum()
+        [
+            &self.arrays.mean,
+            &self.arrays.eig,
+            &self.arrays.scale,
+            &self.arrays.weights,
+            &self.arrays.values,
+        ]
+        .iter()
+        .map(|a| a.meta().chunk_bytes().unwrap_or(0) * v)
+        .sum()
     }
 
     fn named<T>(&self, view: usize, r: Result<T>) -> Result<T> {
         r.map_err(|e| match e {
-            Error::Corrupt { path, what } => Error::Corrupt { path, what: format!("view slot {view}: {what}") },
+            Error::Corrupt { path, what } => {
+                Error::Corrupt { path, what: format!("view slot {view}: {what}") }
+            }
             o => o,
         })
+    }
+
+    /// Per-slot statistics written at compression time, if present.
+    pub fn slot_stats(&self, view: usize) -> Option<serde_json::Value> {
+        read_stats_file(&self.path.join("stats").join(format!("{view}.json")))
     }
 
     /// Reads slot `view` as stored.
     pub fn read_quantized(&self, view: usize) -> Result<QuantizedSlot> {
         if view >= self.meta.btf.n_views() {
-            return Err(Error::Invalid(format!("view slot {view} out of range 0..{}", self.meta.btf.n_views())));
+            return Err(Error::Invalid(format!(
+                "view slot {view} out of range 0..{}",
+                self.meta.btf.n_views()
+            )));
         }
         let v = view as u64;
         let f32s = |raw: Vec<u8>| {
@@ -321,7 +424,8 @@ impl EigenStore {
         let eigentextures = self.named(view, self.arrays.eig.read_chunk(&[v, 0, 0, 0, 0]))?;
         let so = f32s(self.named(view, self.arrays.scale.read_chunk(&[v, 0, 0]))?);
         let weights = f32s(self.named(view, self.arrays.weights.read_chunk(&[v, 0, 0]))?);
-        let eigenvalues = zarr::decode_f64(&self.named(view, self.arrays.values.read_chunk(&[v, 0]))?);
+        let eigenvalues =
+            zarr::decode_f64(&self.named(view, self.arrays.values.read_chunk(&[v, 0]))?);
         let scale_offset = so.chunks_exact(2).map(|p| [p[0], p[1]]).collect();
         Ok(QuantizedSlot { mean, eigentextures, scale_offset, weights, eigenvalues })
     }
@@ -330,7 +434,14 @@ impl EigenStore {
     pub fn read_slot(&self, view: usize) -> Result<EigenSlot> {
         let q = self.read_quantized(view)?;
         let basis = dequantize(&q.eigentextures, &q.scale_offset, self.meta.quantization);
-        Ok(EigenSlot { view, mean: q.mean, basis, weights: q.weights, eigenvalues: q.eigenvalues, components: self.meta.components })
+        Ok(EigenSlot {
+            view,
+            mean: q.mean,
+            basis,
+            weights: q.weights,
+            eigenvalues: q.eigenvalues,
+            components: self.meta.components,
+        })
     }
 
     /// The view sampling.
@@ -350,7 +461,10 @@ mod tests {
     #[test]
     fn quantize_round_trip_error_bounds() {
         let basis: Vec<f32> = (0..2000).map(|i| ((i as f32) * 0.37).sin() * 0.01 - 0.002).collect();
-        for (q, tol) in [(Quantization::F16, 0.012 * 2f32.powi(-11)), (Quantization::U8, 0.02 / 255.0 * 0.5 + 1e-7)] {
+        for (q, tol) in [
+            (Quantization::F16, 0.012 * 2f32.powi(-11)),
+            (Quantization::U8, 0.02 / 255.0 * 0.5 + 1e-7),
+        ] {
             let (raw, so) = quantize(&basis, 2, q);
             let back = dequantize(&raw, &so, q);
             let err = basis.iter().zip(&back).map(|(a, b)| (a - b).abs()).fold(0f32, f32::max);

@@ -15,9 +15,11 @@
 //!
 //! No GPU code and no image-format crates live here.
 
+pub mod compress;
 pub mod direction;
 pub mod eigen;
 pub mod error;
+pub mod gemm;
 pub mod interp;
 pub mod metrics;
 pub mod pca;

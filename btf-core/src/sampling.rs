@@ -50,7 +50,10 @@ impl Sampling {
                 )));
             }
             if ring.count == 0 || ring.count > 100_000 {
-                return Err(Error::Invalid(format!("ring {r}: count {} is not in 1..=100000", ring.count)));
+                return Err(Error::Invalid(format!(
+                    "ring {r}: count {} is not in 1..=100000",
+                    ring.count
+                )));
             }
             if ring.theta_deg == 0.0 && ring.count != 1 {
                 return Err(Error::Invalid(format!("ring {r}: the pole ring must have count 1")));
@@ -59,7 +62,9 @@ impl Sampling {
                 return Err(Error::Invalid(format!("ring {r}: phi offset is not finite")));
             }
             if r > 0 && ring.theta_deg <= rings[r - 1].theta_deg {
-                return Err(Error::Invalid(format!("ring {r}: theta must increase from ring to ring")));
+                return Err(Error::Invalid(format!(
+                    "ring {r}: theta must increase from ring to ring"
+                )));
             }
         }
         let mut s = Sampling { name: name.into(), rings, ring_start: Vec::new() };
@@ -84,7 +89,11 @@ impl Sampling {
 
     /// One of the built-in samplings by name.
     pub fn by_name(name: &str) -> Result<Self> {
-        let ring = |theta_deg: f64, count: usize, phi_offset_deg: f64| Ring { theta_deg, count, phi_offset_deg };
+        let ring = |theta_deg: f64, count: usize, phi_offset_deg: f64| Ring {
+            theta_deg,
+            count,
+            phi_offset_deg,
+        };
         let counts = [1usize, 6, 12, 18, 20, 24];
         let rings: Vec<Ring> = match name {
             "ubo81" => [0.0, 15.0, 30.0, 45.0, 60.0, 75.0]
@@ -142,7 +151,10 @@ impl Sampling {
     pub fn direction(&self, i: usize) -> Direction {
         let (r, k) = self.ring_of(i);
         let ring = &self.rings[r];
-        Direction::new(ring.theta_deg, wrap_phi_deg(ring.phi_offset_deg + k as f64 * self.ring_step_deg(r)))
+        Direction::new(
+            ring.theta_deg,
+            wrap_phi_deg(ring.phi_offset_deg + k as f64 * self.ring_step_deg(r)),
+        )
     }
 
     /// All directions in index order.

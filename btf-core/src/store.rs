@@ -37,7 +37,12 @@ pub struct BtfMeta {
 
 impl BtfMeta {
     /// Metadata for a new store with the usual colour space and units.
-    pub fn new(view_sampling: Sampling, light_sampling: Sampling, width: usize, height: usize) -> Self {
+    pub fn new(
+        view_sampling: Sampling,
+        light_sampling: Sampling,
+        width: usize,
+        height: usize,
+    ) -> Self {
         BtfMeta {
             kind: "btf".into(),
             view_sampling,
@@ -84,7 +89,10 @@ pub fn read_meta(path: &Path) -> Result<BtfMeta> {
     let m: BtfMeta = serde_json::from_value(attrs["btf"].clone())
         .map_err(|source| Error::Json { path: path.join("zarr.json"), source })?;
     if attrs["complete"] != json!(true) {
-        return Err(Error::Invalid(format!("{}: store is incomplete (an interrupted write?)", path.display())));
+        return Err(Error::Invalid(format!(
+            "{}: store is incomplete (an interrupted write?)",
+            path.display()
+        )));
     }
     m.validate(path)
 }
@@ -127,10 +135,12 @@ impl StoreTxn {
                 std::process::id()
             ));
             fs::rename(&self.final_path, &old).map_err(|e| Error::io(&self.final_path, e))?;
-            fs::rename(&self.partial, &self.final_path).map_err(|e| Error::io(&self.final_path, e))?;
+            fs::rename(&self.partial, &self.final_path)
+                .map_err(|e| Error::io(&self.final_path, e))?;
             let _ = if old.is_dir() { fs::remove_dir_all(&old) } else { fs::remove_file(&old) };
         } else {
-            fs::rename(&self.partial, &self.final_path).map_err(|e| Error::io(&self.final_path, e))?;
+            fs::rename(&self.partial, &self.final_path)
+                .map_err(|e| Error::io(&self.final_path, e))?;
         }
         Ok(())
     }
@@ -141,7 +151,11 @@ pub fn check_finite(values: &[f32], view: usize, light: usize, width: usize) -> 
     if let Some(pos) = values.iter().position(|v| !v.is_finite()) {
         let texel = pos / 3;
         let (y, x) = if width > 0 { (texel / width, texel % width) } else { (0, texel) };
-        return Err(Error::NonFinite { view, light, at: Some(format!("texel y={y}, x={x}, channel {}", pos % 3)) });
+        return Err(Error::NonFinite {
+            view,
+            light,
+            at: Some(format!("texel y={y}, x={x}, channel {}", pos % 3)),
+        });
     }
     Ok(())
 }
@@ -156,7 +170,13 @@ pub struct BtfWriter {
 
 fn normtexture_array(meta: &BtfMeta, dtype: DType) -> ArrayMeta {
     ArrayMeta {
-        shape: vec![meta.n_views() as u64, meta.n_lights() as u64, meta.height as u64, meta.width as u64, 3],
+        shape: vec![
+            meta.n_views() as u64,
+            meta.n_lights() as u64,
+            meta.height as u64,
+            meta.width as u64,
+            3,
+        ],
         chunk_shape: vec![1, 1, meta.height as u64, meta.width as u64, 3],
         dtype,
         dimension_names: ["view", "light", "y", "x", "channel"].map(String::from).to_vec(),
@@ -167,11 +187,14 @@ impl BtfWriter {
     /// Starts a store at `path` with element type `dtype` (`F16` or `F32`).
     pub fn create(path: &Path, meta: BtfMeta, dtype: DType, resume: bool) -> Result<Self> {
         if !matches!(dtype, DType::F16 | DType::F32) {
-            return Err(Error::Unsupported(format!("normtexture dtype {dtype:?} (use f16 or f32)")));
+            return Err(Error::Unsupported(format!(
+                "normtexture dtype {dtype:?} (use f16 or f32)"
+            )));
         }
         let meta = meta.validate(path)?;
         let txn = StoreTxn::begin(path, resume)?;
-        let arr = ZarrArray::create(&txn.dir().join("normtextures"), normtexture_array(&meta, dtype))?;
+        let arr =
+            ZarrArray::create(&txn.dir().join("normtextures"), normtexture_array(&meta, dtype))?;
         Ok(BtfWriter { txn, meta, arr })
     }
 
@@ -198,7 +221,10 @@ impl BtfWriter {
             )));
         }
         check_finite(values, view, light, self.meta.width)?;
-        self.arr.write_chunk(&[view as u64, light as u64, 0, 0, 0], &zarr::encode_f32(values, self.arr.meta().dtype))
+        self.arr.write_chunk(
+            &[view as u64, light as u64, 0, 0, 0],
+            &zarr::encode_f32(values, self.arr.meta().dtype),
+        )
     }
 
     /// Checks that every image is present and moves the store into place.
@@ -206,7 +232,9 @@ impl BtfWriter {
         for v in 0..self.meta.n_views() {
             for l in 0..self.meta.n_lights() {
                 if !self.has_image(v, l) {
-                    return Err(Error::Invalid(format!("image (view {v}, light {l}) was never written")));
+                    return Err(Error::Invalid(format!(
+                        "image (view {v}, light {l}) was never written"
+                    )));
                 }
             }
         }
@@ -248,7 +276,11 @@ impl BtfStore {
     pub fn open(path: &Path) -> Result<Self> {
         let meta = read_meta(path)?;
         if meta.kind != "btf" {
-            return Err(Error::Invalid(format!("{}: a '{}' store, not a BTF store", path.display(), meta.kind)));
+            return Err(Error::Invalid(format!(
+                "{}: a '{}' store, not a BTF store",
+                path.display(),
+                meta.kind
+            )));
         }
         let arr = ZarrArray::open(&path.join("normtextures"), &Limits::default())?;
         if arr.meta() != &normtexture_array(&meta, arr.meta().dtype) {
@@ -274,7 +306,8 @@ impl BtfStore {
     }
     /// Bytes of all chunks on disk.
     pub fn bytes(&self) -> u64 {
-        (self.meta.n_views() * self.meta.n_lights()) as u64 * self.arr.meta().chunk_bytes().unwrap_or(0)
+        (self.meta.n_views() * self.meta.n_lights()) as u64
+            * self.arr.meta().chunk_bytes().unwrap_or(0)
     }
 
     /// Reads one normtexture into `out` (`texel_values` floats), refusing non-finite data.
@@ -282,10 +315,14 @@ impl BtfStore {
         if view >= self.meta.n_views() || light >= self.meta.n_lights() {
             return Err(Error::Invalid(format!("image ({view}, {light}) is outside the sampling")));
         }
-        let raw = self.arr.read_chunk(&[view as u64, light as u64, 0, 0, 0]).map_err(|e| match e {
-            Error::Corrupt { path, what } => Error::Corrupt { path, what: format!("view slot {view}, light {light}: {what}") },
-            other => other,
-        })?;
+        let raw =
+            self.arr.read_chunk(&[view as u64, light as u64, 0, 0, 0]).map_err(|e| match e {
+                Error::Corrupt { path, what } => Error::Corrupt {
+                    path,
+                    what: format!("view slot {view}, light {light}: {what}"),
+                },
+                other => other,
+            })?;
         zarr::decode_to_f32(&raw, self.dtype(), out);
         check_finite(out, view, light, self.meta.width)
     }
@@ -313,7 +350,14 @@ mod tests {
     use super::*;
 
     fn tiny_meta() -> BtfMeta {
-        let s = Sampling::new("custom", vec![crate::Ring { theta_deg: 0.0, count: 1, phi_offset_deg: 0.0 }, crate::Ring { theta_deg: 40.0, count: 3, phi_offset_deg: 0.0 }]).unwrap();
+        let s = Sampling::new(
+            "custom",
+            vec![
+                crate::Ring { theta_deg: 0.0, count: 1, phi_offset_deg: 0.0 },
+                crate::Ring { theta_deg: 40.0, count: 3, phi_offset_deg: 0.0 },
+            ],
+        )
+        .unwrap();
         BtfMeta::new(s.clone(), s, 3, 2)
     }
 
@@ -321,7 +365,8 @@ mod tests {
         let w = BtfWriter::create(path, tiny_meta(), DType::F32, false).unwrap();
         for v in 0..4 {
             for l in 0..4 {
-                let img: Vec<f32> = (0..18).map(|k| scale * (v * 100 + l * 10 + k) as f32).collect();
+                let img: Vec<f32> =
+                    (0..18).map(|k| scale * (v * 100 + l * 10 + k) as f32).collect();
                 w.write_image(v, l, &img).unwrap();
             }
         }
@@ -370,7 +415,8 @@ mod tests {
         let err = BtfStore::open(&p).unwrap().read_slot(2).unwrap_err().to_string();
         assert!(err.contains("view slot 2, light 1") && err.contains("checksum"), "{err}");
 
-        let w = BtfWriter::create(&dir.path().join("n.btf"), tiny_meta(), DType::F32, false).unwrap();
+        let w =
+            BtfWriter::create(&dir.path().join("n.btf"), tiny_meta(), DType::F32, false).unwrap();
         let mut img = vec![0.0; 18];
         img[7] = f32::NAN;
         let err = w.write_image(3, 2, &img).unwrap_err().to_string();

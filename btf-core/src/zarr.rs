@@ -124,7 +124,10 @@ impl ArrayMeta {
         };
         let shape = dims(&v["shape"])?;
         if v["chunk_grid"]["name"] != json!("regular") {
-            return Err(Error::Unsupported(format!("{}: chunk grid other than regular", path.display())));
+            return Err(Error::Unsupported(format!(
+                "{}: chunk grid other than regular",
+                path.display()
+            )));
         }
         let chunk_shape = dims(&v["chunk_grid"]["configuration"]["chunk_shape"])?;
         if chunk_shape.len() != shape.len() || chunk_shape.contains(&0) {
@@ -141,13 +144,16 @@ impl ArrayMeta {
             .iter()
             .map(|c| c["name"].as_str().unwrap_or(""))
             .collect();
-        if codecs != ["bytes", "crc32c"] || v["codecs"][0]["configuration"]["endian"] != json!("little") {
+        if codecs != ["bytes", "crc32c"]
+            || v["codecs"][0]["configuration"]["endian"] != json!("little")
+        {
             return Err(Error::Unsupported(format!(
                 "{}: codec chain {codecs:?} (this toolkit reads bytes(little) + crc32c)",
                 path.display()
             )));
         }
-        let dtype = DType::from_zarr_name(v["data_type"].as_str().ok_or_else(|| bad("data_type"))?)?;
+        let dtype =
+            DType::from_zarr_name(v["data_type"].as_str().ok_or_else(|| bad("data_type"))?)?;
         let dimension_names = v["dimension_names"]
             .as_array()
             .map(|a| a.iter().map(|x| x.as_str().unwrap_or("").to_owned()).collect())
@@ -185,7 +191,11 @@ impl ArrayMeta {
             n = n.checked_mul(s.div_ceil(*c)).unwrap_or(u64::MAX);
         }
         if n > limits.max_chunks {
-            return Err(Error::Limit(format!("{}: {n} chunks (limit {})", path.display(), limits.max_chunks)));
+            return Err(Error::Limit(format!(
+                "{}: {n} chunks (limit {})",
+                path.display(),
+                limits.max_chunks
+            )));
         }
         Ok(())
     }
@@ -400,7 +410,8 @@ mod tests {
         let mut m = meta();
         m.shape = vec![1 << 40, 1 << 40];
         m.chunk_shape = vec![1 << 20, 1 << 20];
-        fs::write(dir.path().join("zarr.json"), serde_json::to_string(&m.to_json()).unwrap()).unwrap();
+        fs::write(dir.path().join("zarr.json"), serde_json::to_string(&m.to_json()).unwrap())
+            .unwrap();
         let err = ZarrArray::open(dir.path(), &Limits::default()).unwrap_err();
         assert!(matches!(err, Error::Limit(_)), "{err}");
     }

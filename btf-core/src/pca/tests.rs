@@ -1,0 +1,213 @@
+//! Tests of the per-slot PCA against an independent SVD, Eckart–Young, storage precision and
+//! the hard cases of DESIGN.md §6.
+
+use super::*;
+use crate::eigen::dequantize;
+use crate::reconstruct::reconstruct_sample;
+
+/// A deterministic pseudo-random generator (no dependency needed for tests).
+fn lcg(seed: &mut u64) -> f64 {
+    *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    ((*seed >> 11) as f64) / ((1u64 << 53) as f64)
+}
+
+/// `n` images of `m` values: a few smooth "lighting modes" plus noise, all positive.
+fn slot_data(n: usize, m: usize, seed: u64) -> SlotData {
+    let mut s = seed;
+    let modes: Vec<Vec<f64>> = (0..5).map(|_| (0..m).map(|_| lcg(&mut s)).collect()).collect();
+    let mut data = Vec::with_capacity(n * m);
+    for i in 0..n {
+        let coef: Vec<f64> = (0..5)
+            .map(|k| ((i + 1) as f64 * 0.7 * (k + 1) as f64).cos() / (k + 1) as f64)
+            .collect();
+        for t in 0..m {
+            let v: f64 =
+                1.0 + (0..5).map(|k| coef[k] * modes[k][t]).sum::<f64>() + 0.01 * lcg(&mut s);
+            data.push(v as f32);
+        }
+    }
+    SlotData { view: 3, n_lights: n, texel_values: m, data }
+}
+
+fn as_slot(r: &SlotPca, c: usize, q: Quantization) -> crate::eigen::EigenSlot {
+    crate::eigen::EigenSlot {
+        view: 0,
+        mean: r.stored.mean.clone(),
+        basis: dequantize(&r.stored.eigentextures, &r.stored.scale_offset, q),
+        weights: r.stored.weights.clone(),
+        eigenvalues: r.stored.eigenvalues.clone(),
+        components: c,
+    }
+}
+
+#[test]
+fn eigenvalues_match_svd_and_eckart_young_holds() {
+    let (n, m) = (20, 3 * 17 * 13);
+    let input = slot_data(n, m, 7);
+    // Independent reference: SVD of the centred data in f64.
+    let mut x = DMatrix::<f64>::zeros(n, m);
+    for i in 0..n {
+        for t in 0..m {
+            x[(i, t)] = input.data[i * m + t] as f64;
+        }
+    }
+    let mean = x.row_mean();
+    for i in 0..n {
+        for t in 0..m {
+            x[(i, t)] -= mean[t] as f32 as f64;
+        }
+    }
+    let svd = x.clone().svd(true, true);
+    let mut sv: Vec<f64> = svd.singular_values.iter().map(|s| s * s).collect();
+    sv.sort_by(|a, b| b.total_cmp(a));
+    for c in [1, 3, 6] {
+        let mut slot = input.clone();
+        let r = pca_slot(&mut slot, c, Quantization::F16).unwrap();
+        for k in 0..8 {
+            assert!(
+                (r.stored.eigenvalues[k] - sv[k]).abs() <= 1e-9 * sv[0],
+                "λ{k}: {} vs {}",
+                r.stored.eigenvalues[k],
+                sv[k]
+            );
+        }
+        let discarded: f64 = sv[c..].iter().sum();
+        // Eckart–Young: measured squared error of the exact basis = discarded eigenvalues.
+        assert!(
+            (r.sse - r.discarded_eigen_sum).abs() <= 1e-6 * r.discarded_eigen_sum,
+            "c={c}: {} vs {}",
+            r.sse,
+            r.discarded_eigen_sum
+        );
+        assert!((r.discarded_eigen_sum - discarded).abs() <= 1e-6 * discarded);
+        // Brute force: residual of the stored reconstruction equals sse_stored.
+        let es = as_slot(&r, c, Quantization::F16);
+        let mut brute = 0f64;
+        for i in 0..n {
+            let rec = reconstruct_sample(&es, i, c);
+            brute += crate::metrics::sse(input.row(i), &rec);
+        }
+        assert!(
+            (brute - r.sse_stored).abs() <= 1e-3 * r.sse_stored + 1e-9,
+            "c={c}: brute {brute} vs {}",
+            r.sse_stored
+        );
+        // Quantisation can only add error, and little of it.
+        assert!(
+            r.sse_stored >= r.sse * (1.0 - 1e-9) && r.sse_stored <= r.sse * 1.05 + 1e-6,
+            "{} {}",
+            r.sse_stored,
+            r.sse
+        );
+    }
+}
+
+#[test]
+fn full_rank_reconstructs_input_to_storage_precision() {
+    let (n, m) = (9, 3 * 8 * 8);
+    let input = slot_data(n, m, 11);
+    for q in [Quantization::F16, Quantization::U8] {
+        let c = max_components(n);
+        let mut slot = input.clone();
+        let r = pca_slot(&mut slot, c, q).unwrap();
+        let es = as_slot(&r, c, q);
+        for i in 0..n {
+            let rec = reconstruct_sample(&es, i, c);
+            // Each stored value is off by at most half a quantisation step: 2^-11·scale for
+            // f16 (values in [-1, 1]), scale/2 for u8. The error of a texel is bounded by
+            // Σ_k |p_ik| · step_k plus f32 rounding of the sums.
+            let bound: f64 = (0..c)
+                .map(|k| {
+                    let s = r.stored.scale_offset[k][0] as f64;
+                    let step = if q == Quantization::F16 { s * 2f64.powi(-11) } else { s * 0.5 };
+                    (es.weights_of(i)[k] as f64).abs() * step
+                })
+                .sum::<f64>()
+                + 1e-5;
+            for t in 0..m {
+                let e = (rec[t] as f64 - input.row(i)[t] as f64).abs();
+                assert!(e <= bound, "{q:?} light {i} value {t}: error {e} > bound {bound}");
+            }
+        }
+    }
+}
+
+#[test]
+fn signs_are_deterministic() {
+    let input = slot_data(12, 300, 5);
+    let mut a = input.clone();
+    let r = pca_slot(&mut a, 4, Quantization::F16).unwrap();
+    let es = as_slot(&r, 4, Quantization::F16);
+    for k in 0..4 {
+        let row = es.basis_row(k);
+        let big = row.iter().copied().fold(0f32, |a, v| if v.abs() > a.abs() { v } else { a });
+        assert!(big > 0.0);
+    }
+    // Negating the input flips no stored sign and negates the weights.
+    let mut neg = input.clone();
+    neg.data.iter_mut().for_each(|v| *v = -*v);
+    let rn = pca_slot(&mut neg, 4, Quantization::F16).unwrap();
+    assert_eq!(r.stored.eigentextures, rn.stored.eigentextures);
+    for (a, b) in r.stored.weights.iter().zip(&rn.stored.weights) {
+        assert!((a + b).abs() <= 1e-4 * a.abs().max(1e-3));
+    }
+}
+
+#[test]
+fn constant_and_duplicate_images_are_rank_deficient_but_finite() {
+    // Constant images: zero variance, reconstruction = mean = input.
+    let mut slot = SlotData { view: 0, n_lights: 6, texel_values: 30, data: vec![0.25; 180] };
+    let r = pca_slot(&mut slot, 4, Quantization::F16).unwrap();
+    assert_eq!(r.effective_components, 0);
+    assert!(r.stored.eigenvalues.iter().all(|&l| l == 0.0));
+    assert!(r.stored.weights.iter().all(|&w| w == 0.0));
+    assert!(r.stored.mean.iter().all(|&v| v == 0.25));
+    assert_eq!(r.sse_stored, 0.0);
+    // Duplicates: 8 images that are copies of 2 distinct ones → rank 1 after centring.
+    let base = slot_data(2, 60, 3);
+    let mut data = Vec::new();
+    for i in 0..8 {
+        data.extend_from_slice(base.row(i % 2));
+    }
+    let mut slot = SlotData { view: 0, n_lights: 8, texel_values: 60, data };
+    let r = pca_slot(&mut slot, 5, Quantization::F16).unwrap();
+    assert_eq!(r.effective_components, 1);
+    assert!(r.sse <= 1e-10 * r.energy, "{}", r.sse);
+    assert!(r.stored.weights.iter().all(|w| w.is_finite()));
+}
+
+#[test]
+fn huge_dynamic_range_stays_finite_and_accurate() {
+    // Values from 1e-4 to 1e5 (a specular highlight next to deep shadow).
+    let (n, m) = (10, 300);
+    let mut input = slot_data(n, m, 9);
+    for (t, v) in input.data.iter_mut().enumerate() {
+        let e = ((t * 7919) % 10) as i32 - 4; // exponents -4 ..= 5
+        *v *= 10f32.powi(e);
+    }
+    let mut slot = input.clone();
+    let c = max_components(n);
+    let r = pca_slot(&mut slot, c, Quantization::F16).unwrap();
+    assert!(r.stored.weights.iter().all(|w| w.is_finite()));
+    assert!(r.stored.eigenvalues.iter().all(|l| l.is_finite()));
+    let rel = crate::metrics::rel_rmse_from(r.sse_stored, r.energy);
+    assert!(rel < 2e-3, "relative RMSE {rel}");
+}
+
+#[test]
+fn non_finite_input_is_refused_with_slot_and_light() {
+    let mut slot = slot_data(5, 30, 1);
+    slot.data[2 * 30 + 4] = f32::INFINITY;
+    let err = pca_slot(&mut slot, 2, Quantization::F16).unwrap_err().to_string();
+    assert!(err.contains("view slot 3") && err.contains("light 2"), "{err}");
+}
+
+#[test]
+fn single_light_slot_keeps_one_zero_component() {
+    assert_eq!(max_components(1), 1);
+    assert_eq!(max_components(81), 80);
+    let mut slot = slot_data(1, 30, 1);
+    let r = pca_slot(&mut slot, 1, Quantization::U8).unwrap();
+    assert_eq!(r.effective_components, 0);
+    assert_eq!(r.sse_stored, 0.0);
+}
