@@ -1,2 +1,26 @@
-//! The wgpu renderer: BTF-textured meshes under point, directional and environment lights
-//! (Sattler et al. 2003, §4.2–5).
+//! wgpu renderer for BTF-textured garments (Sattler, Sarlette, Klein 2003, §4.2–4.3).
+//!
+//! The BTF is reconstructed in a fragment shader from per-view-slot PCA data (eq. 2–5):
+//! `T = E · Σ_m ω_m [(Σ_n τ_n) μ_{j_m} + Σ_k γ_{k,j_m} B_{k,j_m}]`, either per pixel or,
+//! as in the paper, per vertex with the three vertices' reconstructions blended across each
+//! triangle. Point and directional lights get the smooth shadow boundary of eq. 6 combined
+//! with shadow volumes or shadow maps.
+//!
+//! - [`gpu`]: headless device, error scopes, read-back, WGSL validation;
+//! - [`mesh`], [`tangent`]: OBJ loading, normals and the UV tangent frame;
+//! - [`scene`]: the plain TOML scene description;
+//! - [`material`]: eigen stores packed for the GPU;
+//! - [`btf_pass`], [`interp`]: the reconstruction shader and its interpolation weights.
+
+pub mod btf_pass;
+pub mod error;
+pub mod gpu;
+pub mod interp;
+pub mod material;
+pub mod math;
+pub mod mesh;
+pub mod scene;
+pub mod tangent;
+
+pub use error::{Error, Result};
+pub use gpu::Gpu;

@@ -1,0 +1,368 @@
+// The BTF pass: reconstructs the BTF of each fragment from per-view-slot PCA data and
+// lights it (Sattler et al. 2003, eq. 2–5), with the smooth shadow boundary of eq. 6 and
+// shadow-volume masks or shadow maps as per-light visibility.
+//
+//   T = Σ_m ω_m [ (Σ_l e_l Σ_n τ_ln) μ_j + Σ_l e_l Σ_n τ_ln b_{j,i_n} + Σ_k γ_kj B_kj ],
+//   γ_kj = Σ_l e_l Σ_n τ_ln p'_{i_n,k,j}
+// with e_l = RGB irradiance (directional) or intensity / d² (point) times visibility.
+// Components come in groups of four packed in three RGBA layers (see material.rs).
+// fs_pixel evaluates directions, slots and weights per fragment; fs_vertex blends the three
+// vertices' per-vertex reconstructions with barycentric weights (the paper's three-pass
+// blending in one pass), merging identical slots so each slot is read once.
+
+const MAX_LIGHTS: u32 = 4u;
+const NONE: u32 = 0xffffffffu;
+const PI: f32 = 3.14159265358979;
+
+override VIEW_FOUR: bool = true;
+override LIGHT_FOUR: bool = true;
+override COUNT_READS: bool = false;
+
+struct LightRaw {
+    // xyz: position (w = 1, point) or direction towards the light (w = 0, directional)
+    pos: vec4<f32>,
+    // rgb: intensity or irradiance; w: 0 unshadowed, 1 shadow-volume mask, 2 shadow map
+    color: vec4<f32>,
+    // x: mask / map layer, y: shadow-map texel size, z: depth bias
+    shadow: vec4<f32>,
+    view_proj: mat4x4<f32>,
+}
+
+struct FrameRaw {
+    view_proj: mat4x4<f32>,
+    // xyz: eye; w: 1 perspective, 0 orthographic
+    eye: vec4<f32>,
+    // xyz: direction towards the camera (orthographic)
+    to_camera: vec4<f32>,
+    // x: lights, y: smooth boundary on (1/0)
+    info: vec4<u32>,
+    // x: alpha in radians
+    terminator: vec4<f32>,
+    lights: array<LightRaw, 4>,
+}
+
+@group(0) @binding(0) var<uniform> frame: FrameRaw;
+@group(0) @binding(1) var terminator_tex: texture_2d<f32>;
+@group(0) @binding(2) var linear_clamp: sampler;
+@group(0) @binding(3) var shadow_masks: texture_2d_array<f32>;
+@group(0) @binding(4) var shadow_maps: texture_depth_2d_array;
+@group(0) @binding(5) var shadow_cmp: sampler_comparison;
+@group(0) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 4>;
+
+@group(1) @binding(0) var<uniform> samplings: Samplings;
+@group(1) @binding(1) var eigen_tex: texture_2d_array<f32>;
+@group(1) @binding(2) var mean_tex: texture_2d_array<f32>;
+@group(1) @binding(3) var tex_sampler: sampler;
+@group(1) @binding(4) var<storage, read> weights: array<vec4<f32>>;
+
+// per-vertex mode: per (vertex, light, slot m): mean coefficient, bias, 3G coefficient vec4
+@group(2) @binding(0) var<storage, read> vertex_coef: array<vec4<f32>>;
+@group(2) @binding(1) var<storage, read> vertex_slots: array<vec4<u32>>;
+
+struct CornerIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) tangent: vec4<f32>,
+    @location(3) uv: vec2<f32>,
+    @location(4) tri: vec3<u32>,
+    @location(5) corner: u32,
+}
+
+struct VertexOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) tangent: vec4<f32>,
+    @location(3) uv: vec2<f32>,
+    @location(4) u_front: vec4<f32>,
+    @location(5) u_back: vec4<f32>,
+    @location(6) bary: vec3<f32>,
+    @location(7) @interpolate(flat) tri: vec3<u32>,
+}
+
+fn light_dir(l: u32, world: vec3<f32>) -> vec4<f32> {
+    let L = frame.lights[l];
+    if (L.pos.w > 0.5) {
+        let d = L.pos.xyz - world;
+        let d2 = max(dot(d, d), 1e-12);
+        return vec4<f32>(d * inverseSqrt(d2), 1.0 / d2);
+    }
+    return vec4<f32>(normalize(L.pos.xyz), 1.0);
+}
+
+@vertex
+fn vs_main(v: CornerIn) -> VertexOut {
+    var out: VertexOut;
+    out.clip = frame.view_proj * vec4<f32>(v.position, 1.0);
+    out.world = v.position;
+    out.normal = v.normal;
+    out.tangent = v.tangent;
+    out.uv = v.uv;
+    out.bary = vec3<f32>(f32(v.corner == 0u), f32(v.corner == 1u), f32(v.corner == 2u));
+    out.tri = v.tri;
+    // eq. 6: u = (1 + cos(α + ∠(n, l))) / 2, for both sides of a two-sided sheet
+    let n = normalize(v.normal);
+    let alpha = frame.terminator.x;
+    for (var l = 0u; l < frame.info.x; l = l + 1u) {
+        let ang = acos(clamp(dot(n, light_dir(l, v.position).xyz), -1.0, 1.0));
+        out.u_front[l] = 0.5 * (1.0 + cos(alpha + ang));
+        out.u_back[l] = 0.5 * (1.0 + cos(alpha + PI - ang));
+    }
+    return out;
+}
+
+fn shadow_map_visibility(L: LightRaw, world: vec3<f32>) -> f32 {
+    let c = L.view_proj * vec4<f32>(world, 1.0);
+    let ndc = c.xyz / c.w;
+    let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+    if (c.w <= 0.0 || any(uv < vec2<f32>(0.0)) || any(uv > vec2<f32>(1.0)) || ndc.z > 1.0) {
+        return 1.0;
+    }
+    var sum = 0.0;
+    for (var dy = -1; dy <= 1; dy = dy + 1) {
+        for (var dx = -1; dx <= 1; dx = dx + 1) {
+            let o = vec2<f32>(f32(dx), f32(dy)) * L.shadow.y;
+            sum = sum + textureSampleCompareLevel(shadow_maps, shadow_cmp, uv + o, i32(L.shadow.x), ndc.z - L.shadow.z);
+        }
+    }
+    return sum / 9.0;
+}
+
+// Visibility of light l at a fragment: smooth boundary (eq. 6) times volume mask or map.
+fn visibility(l: u32, in: VertexOut, back: bool) -> f32 {
+    let L = frame.lights[l];
+    if (L.color.w < 0.5) {
+        return 1.0;
+    }
+    var s = 1.0;
+    if (frame.info.y == 1u) {
+        var u = in.u_front[l];
+        if (back) {
+            u = in.u_back[l];
+        }
+        s = textureSampleLevel(terminator_tex, linear_clamp, vec2<f32>(u, 0.5), 0.0).r;
+    }
+    if (L.color.w < 1.5) {
+        s = s * textureLoad(shadow_masks, vec2<i32>(in.clip.xy), i32(L.shadow.x), 0).r;
+    } else {
+        s = s * shadow_map_visibility(L, in.world);
+    }
+    return s;
+}
+
+fn to_camera(world: vec3<f32>) -> vec3<f32> {
+    if (frame.eye.w > 0.5) {
+        return normalize(frame.eye.xyz - world);
+    }
+    return normalize(frame.to_camera.xyz);
+}
+
+fn tex_uv(uv: vec2<f32>) -> vec2<f32> {
+    // OBJ v grows upwards, texture rows downwards: row = (1 − v) · h
+    return vec2<f32>(uv.x, 1.0 - uv.y) * samplings.params.x;
+}
+
+// Tangent frame (T, B, N) with N turned towards the camera (two-sided cloth).
+struct Frame3 {
+    t: vec3<f32>,
+    b: vec3<f32>,
+    n: vec3<f32>,
+    back: bool,
+}
+
+fn tangent_frame(in: VertexOut, v: vec3<f32>) -> Frame3 {
+    var n = normalize(in.normal);
+    var t = in.tangent.xyz - n * dot(n, in.tangent.xyz);
+    if (dot(t, t) < 1e-20) {
+        t = cross(n, select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), abs(n.x) > 0.9));
+    }
+    t = normalize(t);
+    let b = cross(n, t) * in.tangent.w;
+    let back = dot(n, v) < 0.0;
+    if (back) {
+        n = -n;
+    }
+    return Frame3(t, b, n, back);
+}
+
+// ---- per-pixel evaluation ----
+
+var<private> lw: array<W4, 4>;
+var<private> le: array<vec3<f32>, 4>;
+var<private> n_active: u32;
+var<private> reads: u32;
+
+fn gather_lights(in: VertexOut, f: Frame3) {
+    n_active = 0u;
+    for (var l = 0u; l < frame.info.x; l = l + 1u) {
+        let ld = light_dir(l, in.world);
+        let a = dir_angles(vec3<f32>(dot(ld.xyz, f.t), dot(ld.xyz, f.b), dot(ld.xyz, f.n)));
+        let w = light_weights(a, LIGHT_FOUR);
+        if (w.n == 0u) {
+            continue;
+        }
+        let e = frame.lights[l].color.rgb * ld.w * visibility(l, in, f.back);
+        if (all(e == vec3<f32>(0.0))) {
+            continue;
+        }
+        lw[n_active] = w;
+        le[n_active] = e;
+        n_active = n_active + 1u;
+    }
+}
+
+fn combine(acc_a: vec4<f32>, acc_b: vec4<f32>, acc_c: vec4<f32>) -> vec3<f32> {
+    return vec3<f32>(
+        acc_a.x + acc_a.w + acc_b.z + acc_c.y,
+        acc_a.y + acc_b.x + acc_b.w + acc_c.z,
+        acc_a.z + acc_b.y + acc_c.x + acc_c.w,
+    );
+}
+
+fn slot_pixel(j: u32, uv: vec2<f32>) -> vec3<f32> {
+    let g_count = samplings.info.x;
+    let n_l = samplings.info.y;
+    var mc = vec3<f32>(0.0);
+    var bias = vec3<f32>(0.0);
+    for (var a = 0u; a < n_active; a = a + 1u) {
+        for (var k = 0u; k < lw[a].n; k = k + 1u) {
+            let tau = lw[a].w[k];
+            mc = mc + tau * le[a];
+            bias = bias + tau * weights[(j * n_l + lw[a].idx[k]) * (g_count + 1u) + g_count].x * le[a];
+        }
+    }
+    var col = mc * textureSampleLevel(mean_tex, tex_sampler, uv, j, 0.0).rgb + bias;
+    var acc_a = vec4<f32>(0.0);
+    var acc_b = vec4<f32>(0.0);
+    var acc_c = vec4<f32>(0.0);
+    for (var g = 0u; g < g_count; g = g + 1u) {
+        var ca = vec4<f32>(0.0);
+        var cb = vec4<f32>(0.0);
+        var cc = vec4<f32>(0.0);
+        for (var a = 0u; a < n_active; a = a + 1u) {
+            var gam = vec4<f32>(0.0);
+            for (var k = 0u; k < lw[a].n; k = k + 1u) {
+                gam = gam + lw[a].w[k] * weights[(j * n_l + lw[a].idx[k]) * (g_count + 1u) + g];
+            }
+            let e = le[a];
+            ca = ca + vec4<f32>(gam.x * e, gam.y * e.r);
+            cb = cb + vec4<f32>(gam.y * e.gb, gam.z * e.rg);
+            cc = cc + vec4<f32>(gam.z * e.b, gam.w * e);
+        }
+        let layer = j * 3u * g_count + 3u * g;
+        acc_a = acc_a + ca * textureSampleLevel(eigen_tex, tex_sampler, uv, layer, 0.0);
+        acc_b = acc_b + cb * textureSampleLevel(eigen_tex, tex_sampler, uv, layer + 1u, 0.0);
+        acc_c = acc_c + cc * textureSampleLevel(eigen_tex, tex_sampler, uv, layer + 2u, 0.0);
+    }
+    reads = reads + 1u + 3u * g_count;
+    return col + combine(acc_a, acc_b, acc_c);
+}
+
+fn count_reads() {
+    if (COUNT_READS) {
+        atomicAdd(&counters[0], reads);
+        atomicAdd(&counters[1], 1u);
+    }
+}
+
+@fragment
+fn fs_pixel(in: VertexOut) -> @location(0) vec4<f32> {
+    let v = to_camera(in.world);
+    let f = tangent_frame(in, v);
+    let uv = tex_uv(in.uv);
+    reads = 0u;
+    gather_lights(in, f);
+    var rgb = vec3<f32>(0.0);
+    if (n_active > 0u) {
+        let views = view_weights(dir_angles(vec3<f32>(dot(v, f.t), dot(v, f.b), dot(v, f.n))), VIEW_FOUR);
+        for (var m = 0u; m < views.n; m = m + 1u) {
+            rgb = rgb + views.w[m] * slot_pixel(views.idx[m], uv);
+        }
+    }
+    count_reads();
+    return vec4<f32>(rgb, 1.0);
+}
+
+// ---- per-vertex evaluation (the paper's blending) ----
+
+var<private> vis: array<f32, 4>;
+
+fn cand_slot(tri: vec3<u32>, c: u32) -> u32 {
+    return vertex_slots[tri[c / 4u]][c % 4u];
+}
+
+fn coef_base(tri: vec3<u32>, c: u32, l: u32, stride: u32) -> u32 {
+    return ((tri[c / 4u] * frame.info.x + l) * 4u + c % 4u) * stride;
+}
+
+@fragment
+fn fs_vertex(in: VertexOut) -> @location(0) vec4<f32> {
+    let v = to_camera(in.world);
+    let f = tangent_frame(in, v);
+    let uv = tex_uv(in.uv);
+    let n_lights = frame.info.x;
+    for (var l = 0u; l < n_lights; l = l + 1u) {
+        vis[l] = visibility(l, in, f.back);
+    }
+    let g_count = samplings.info.x;
+    let stride = 2u + 3u * g_count;
+    reads = 0u;
+    var rgb = vec3<f32>(0.0);
+    for (var c = 0u; c < 12u; c = c + 1u) {
+        let j = cand_slot(in.tri, c);
+        if (j == NONE || in.bary[c / 4u] <= 0.0) {
+            continue;
+        }
+        var seen = false;
+        for (var c2 = 0u; c2 < c; c2 = c2 + 1u) {
+            if (cand_slot(in.tri, c2) == j && in.bary[c2 / 4u] > 0.0) {
+                seen = true;
+            }
+        }
+        if (seen) {
+            continue;
+        }
+        var mc = vec3<f32>(0.0);
+        var bias = vec3<f32>(0.0);
+        for (var c3 = c; c3 < 12u; c3 = c3 + 1u) {
+            if (cand_slot(in.tri, c3) != j) {
+                continue;
+            }
+            for (var l = 0u; l < n_lights; l = l + 1u) {
+                let s = in.bary[c3 / 4u] * vis[l];
+                let base = coef_base(in.tri, c3, l, stride);
+                mc = mc + s * vertex_coef[base].rgb;
+                bias = bias + s * vertex_coef[base + 1u].rgb;
+            }
+        }
+        var col = mc * textureSampleLevel(mean_tex, tex_sampler, uv, j, 0.0).rgb + bias;
+        var acc_a = vec4<f32>(0.0);
+        var acc_b = vec4<f32>(0.0);
+        var acc_c = vec4<f32>(0.0);
+        for (var g = 0u; g < g_count; g = g + 1u) {
+            var ca = vec4<f32>(0.0);
+            var cb = vec4<f32>(0.0);
+            var cc = vec4<f32>(0.0);
+            for (var c3 = c; c3 < 12u; c3 = c3 + 1u) {
+                if (cand_slot(in.tri, c3) != j) {
+                    continue;
+                }
+                for (var l = 0u; l < n_lights; l = l + 1u) {
+                    let s = in.bary[c3 / 4u] * vis[l];
+                    let base = coef_base(in.tri, c3, l, stride) + 2u + 3u * g;
+                    ca = ca + s * vertex_coef[base];
+                    cb = cb + s * vertex_coef[base + 1u];
+                    cc = cc + s * vertex_coef[base + 2u];
+                }
+            }
+            let layer = j * 3u * g_count + 3u * g;
+            acc_a = acc_a + ca * textureSampleLevel(eigen_tex, tex_sampler, uv, layer, 0.0);
+            acc_b = acc_b + cb * textureSampleLevel(eigen_tex, tex_sampler, uv, layer + 1u, 0.0);
+            acc_c = acc_c + cc * textureSampleLevel(eigen_tex, tex_sampler, uv, layer + 2u, 0.0);
+        }
+        reads = reads + 1u + 3u * g_count;
+        rgb = rgb + col + combine(acc_a, acc_b, acc_c);
+    }
+    count_reads();
+    return vec4<f32>(rgb, 1.0);
+}

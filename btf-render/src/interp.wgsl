@@ -1,0 +1,160 @@
+// Interpolation weights between measured directions, exactly as btf_core::interp
+// (Sattler et al. 2003, eq. 3 for lights, eq. 5 for views): bracket θ between two rings,
+// on each ring bracket φ between two neighbours (with wrap-around), the pole ring has a
+// single sample; lights beyond the last ring fade by cos θ / cos θ_last and vanish at or
+// below the horizon; views clamp. "Nearest" takes the nearest ring in θ, then the nearest
+// sample in φ. The including shader declares `samplings: Samplings`.
+
+const MAX_RINGS: u32 = 16u;
+const VIEW: u32 = 0u;
+const LIGHT: u32 = 1u;
+
+struct Samplings {
+    // (theta_deg, count, phi_offset_deg, first index); view rings 0..16, light rings 16..32
+    rings: array<vec4<f32>, 32>,
+    // ring counts: view, light
+    n_rings: vec4<u32>,
+    // groups G, light directions, view slots, unused
+    info: vec4<u32>,
+    // uv scale, unused
+    params: vec4<f32>,
+}
+
+// Up to four (index, weight) pairs, weights > 0.
+struct W4 {
+    idx: vec4<u32>,
+    w: vec4<f32>,
+    n: u32,
+}
+
+struct Pair {
+    i0: u32,
+    i1: u32,
+    s: f32,
+}
+
+fn wrap_phi(p: f32) -> f32 {
+    var q = p - 360.0 * floor(p / 360.0);
+    if (q >= 360.0) {
+        q = 0.0;
+    }
+    return q;
+}
+
+// (theta_deg, phi_deg) of a tangent-space vector (need not be unit length).
+fn dir_angles(d: vec3<f32>) -> vec2<f32> {
+    let rho = length(d.xy);
+    let theta = degrees(atan2(rho, d.z));
+    var phi = 0.0;
+    if (rho > length(d) * 1e-7) {
+        phi = wrap_phi(degrees(atan2(d.y, d.x)));
+    }
+    return vec2<f32>(theta, phi);
+}
+
+fn ring_of(which: u32, r: u32) -> vec4<f32> {
+    return samplings.rings[which * MAX_RINGS + r];
+}
+
+// (inner ring, outer ring, weight t of the outer ring)
+fn ring_bracket(which: u32, theta: f32) -> vec3<f32> {
+    let last = samplings.n_rings[which] - 1u;
+    if (theta <= ring_of(which, 0u).x) {
+        return vec3<f32>(0.0, 0.0, 0.0);
+    }
+    if (theta >= ring_of(which, last).x) {
+        return vec3<f32>(f32(last), f32(last), 0.0);
+    }
+    var r = 0u;
+    for (var k = 1u; k < last; k = k + 1u) {
+        if (ring_of(which, k).x <= theta) {
+            r = k;
+        }
+    }
+    let t0 = ring_of(which, r).x;
+    let t1 = ring_of(which, r + 1u).x;
+    return vec3<f32>(f32(r), f32(r + 1u), clamp((theta - t0) / (t1 - t0), 0.0, 1.0));
+}
+
+fn ring_neighbours(which: u32, r: u32, phi: f32) -> Pair {
+    let ring = ring_of(which, r);
+    let count = u32(ring.y);
+    let start = u32(ring.w);
+    if (count == 1u) {
+        return Pair(start, start, 0.0);
+    }
+    let u = wrap_phi(phi - ring.z) / (360.0 / ring.y);
+    let k = floor(u);
+    let frac = clamp(u - k, 0.0, 1.0);
+    let ki = u32(k) % count;
+    return Pair(start + ki, start + (ki + 1u) % count, frac);
+}
+
+fn nearest_on_ring(which: u32, r: u32, phi: f32) -> u32 {
+    let ring = ring_of(which, r);
+    let count = u32(ring.y);
+    let u = wrap_phi(phi - ring.z) / (360.0 / ring.y);
+    return u32(ring.w) + u32(floor(u + 0.5)) % count;
+}
+
+fn w4_push(p: ptr<function, W4>, i: u32, w: f32) {
+    if (w <= 0.0) {
+        return;
+    }
+    for (var k = 0u; k < (*p).n; k = k + 1u) {
+        if ((*p).idx[k] == i) {
+            (*p).w[k] = (*p).w[k] + w;
+            return;
+        }
+    }
+    (*p).idx[(*p).n] = i;
+    (*p).w[(*p).n] = w;
+    (*p).n = (*p).n + 1u;
+}
+
+fn interp_weights(which: u32, a: vec2<f32>, four: bool) -> W4 {
+    var w = W4(vec4<u32>(0u), vec4<f32>(0.0), 0u);
+    let b = ring_bracket(which, a.x);
+    let r0 = u32(b.x);
+    let r1 = u32(b.y);
+    let t = b.z;
+    if (four) {
+        let p = ring_neighbours(which, r0, a.y);
+        w4_push(&w, p.i0, (1.0 - t) * (1.0 - p.s));
+        w4_push(&w, p.i1, (1.0 - t) * p.s);
+        if (r1 != r0) {
+            let q = ring_neighbours(which, r1, a.y);
+            w4_push(&w, q.i0, t * (1.0 - q.s));
+            w4_push(&w, q.i1, t * q.s);
+        }
+    } else {
+        var r = r0;
+        if (t > 0.5) {
+            r = r1;
+        }
+        w4_push(&w, nearest_on_ring(which, r, a.y), 1.0);
+    }
+    return w;
+}
+
+// View-slot weights ω (eq. 5); `a` = (theta_deg, phi_deg) in tangent space.
+fn view_weights(a: vec2<f32>, four: bool) -> W4 {
+    return interp_weights(VIEW, a, four);
+}
+
+// Light weights τ (eq. 3) with the horizon fade.
+fn light_weights(a: vec2<f32>, four: bool) -> W4 {
+    if (!(a.x < 90.0)) {
+        return W4(vec4<u32>(0u), vec4<f32>(0.0), 0u);
+    }
+    var w = interp_weights(LIGHT, a, four);
+    let last = ring_of(LIGHT, samplings.n_rings[LIGHT] - 1u).x;
+    if (a.x > last) {
+        let f = cos(radians(a.x)) / cos(radians(last));
+        w.w = w.w * f;
+        if (f <= 0.0) {
+            w.n = 0u;
+        }
+    }
+    return w;
+}

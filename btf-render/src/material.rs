@@ -1,0 +1,285 @@
+//! BTF materials on the GPU: an eigen store's view slots packed for few texture reads
+//! (Sattler et al. 2003, eq. 2–5).
+//!
+//! Layout. The `c` eigentextures of a slot hold `3c` values per texel (component `k`,
+//! channel `ch` at flat position `f = 3k + ch`). They are packed four values to a texel in
+//! `3 · ⌈c/4⌉` RGBA layers (layer `q` holds `f = 4q … 4q+3`), so one group of four
+//! components costs three reads instead of four; slot `j` owns layers `j·3G … j·3G+3G−1`
+//! (`G = ⌈c/4⌉`). The stored `f16` (or `u8`, read as `Rgba8Unorm`) values are uploaded as
+//! they are: the per-component scale is folded into the weights, `p'_ikj = p_ikj · s_kj`
+//! (`·255` for `u8`), and the offsets into a per-(slot, light) constant
+//! `b_ij = Σ_k p_ikj · o_kj`, so dequantisation costs the shader nothing. The mean `μ_j` is
+//! one `Rgba16Float` layer per slot. Weights sit in a storage buffer, `G + 1` vec4 per
+//! (slot, light): the scaled weights, then `(b_ij, 0, 0, 0)`.
+//!
+//! Error of the layout: `f16` keeps 11 significant bits of each eigentexture value scaled
+//! to `[−1, 1]` (≤ 2⁻¹¹ of the component's largest magnitude), `u8` ≤ half a step of
+//! `(max − min)/255`; the mean in `f16` is within 2⁻¹¹ relative.
+
+use crate::{Error, Result};
+use btf_core::Sampling;
+use btf_core::eigen::{EigenStore, Quantization};
+use half::f16;
+use std::path::Path;
+
+/// Most rings a sampling may have on the GPU.
+pub const MAX_RINGS: usize = 16;
+
+/// A material's data, packed for upload (CPU side).
+#[derive(Debug, Clone)]
+pub struct MaterialData {
+    /// View-slot sampling.
+    pub view_sampling: Sampling,
+    /// Light sampling.
+    pub light_sampling: Sampling,
+    /// Texels per row.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
+    /// Components used (`≤` stored).
+    pub components: usize,
+    /// Groups of four components, `G = ⌈c/4⌉`.
+    pub groups: usize,
+    /// Storage of the eigentextures.
+    pub quantization: Quantization,
+    /// Eigentexture layers (`n_views · 3G` layers of `w·h` RGBA texels, raw f16 or u8).
+    pub eigen_layers: Vec<u8>,
+    /// Mean layers (`n_views` layers of `w·h` RGBA f16 texels).
+    pub mean_layers: Vec<f16>,
+    /// Scaled weights and biases, `(n_views · n_lights) · (G + 1)` vec4.
+    pub weights: Vec<[f32; 4]>,
+}
+
+impl MaterialData {
+    /// Reads and packs an eigen store for `components` components (`None` = all stored).
+    pub fn load(path: &Path, components: Option<usize>) -> Result<MaterialData> {
+        let store = EigenStore::open(path)?;
+        let meta = store.meta().clone();
+        let stored = meta.components;
+        let c = components.unwrap_or(stored);
+        if c == 0 || c > stored {
+            return Err(Error::Invalid(format!(
+                "{}: {c} components asked, the store holds {stored}",
+                path.display()
+            )));
+        }
+        for (s, what) in [(&meta.btf.view_sampling, "view"), (&meta.btf.light_sampling, "light")] {
+            if s.rings.len() > MAX_RINGS {
+                return Err(Error::Unsupported(format!(
+                    "{}: {what} sampling has more than {MAX_RINGS} rings",
+                    path.display()
+                )));
+            }
+        }
+        let (w, h) = (meta.btf.width, meta.btf.height);
+        let (n_v, n_l) = (meta.btf.n_views(), meta.btf.n_lights());
+        let g = c.div_ceil(4);
+        let q = meta.quantization;
+        let elem = match q {
+            Quantization::F16 => 2,
+            Quantization::U8 => 1,
+        };
+        let texels = w * h;
+        let mut data = MaterialData {
+            view_sampling: meta.btf.view_sampling.clone(),
+            light_sampling: meta.btf.light_sampling.clone(),
+            width: w as u32,
+            height: h as u32,
+            components: c,
+            groups: g,
+            quantization: q,
+            eigen_layers: vec![0u8; n_v * 3 * g * texels * 4 * elem],
+            mean_layers: vec![f16::ZERO; n_v * texels * 4],
+            weights: vec![[0.0; 4]; n_v * n_l * (g + 1)],
+        };
+        for j in 0..n_v {
+            let slot = store.read_quantized(j)?;
+            data.pack_slot(j, &slot, stored, elem);
+        }
+        Ok(data)
+    }
+
+    fn pack_slot(
+        &mut self,
+        j: usize,
+        slot: &btf_core::eigen::QuantizedSlot,
+        stored: usize,
+        elem: usize,
+    ) {
+        let (c, g) = (self.components, self.groups);
+        let texels = (self.width * self.height) as usize;
+        let n_l = self.light_sampling.len();
+        let layer_bytes = texels * 4 * elem;
+        for layer in 0..3 * g {
+            let base = (j * 3 * g + layer) * layer_bytes;
+            for lane in 0..4 {
+                let f = 4 * layer + lane;
+                let (k, ch) = (f / 3, f % 3);
+                if k >= c {
+                    continue;
+                }
+                for t in 0..texels {
+                    let src = ((k * texels + t) * 3 + ch) * elem;
+                    let dst = base + (t * 4 + lane) * elem;
+                    self.eigen_layers[dst..dst + elem]
+                        .copy_from_slice(&slot.eigentextures[src..src + elem]);
+                }
+            }
+        }
+        let mean = &mut self.mean_layers[j * texels * 4..(j + 1) * texels * 4];
+        for t in 0..texels {
+            for ch in 0..3 {
+                mean[t * 4 + ch] = f16::from_f32(slot.mean[t * 3 + ch]);
+            }
+            mean[t * 4 + 3] = f16::ONE;
+        }
+        let unorm = if self.quantization == Quantization::U8 { 255.0 } else { 1.0 };
+        for i in 0..n_l {
+            let row = &slot.weights[i * stored..(i + 1) * stored];
+            let out = &mut self.weights[(j * n_l + i) * (g + 1)..(j * n_l + i + 1) * (g + 1)];
+            let mut bias = 0.0f64;
+            for k in 0..c {
+                let [s, o] = slot.scale_offset[k];
+                out[k / 4][k % 4] = row[k] * s * unorm;
+                bias += row[k] as f64 * o as f64;
+            }
+            out[g] = [bias as f32, 0.0, 0.0, 0.0];
+        }
+    }
+
+    /// Scaled weights of (slot `j`, light `i`), group `g` (vec4), as the shader reads them.
+    pub fn weight_group(&self, j: usize, i: usize, g: usize) -> [f32; 4] {
+        self.weights[(j * self.light_sampling.len() + i) * (self.groups + 1) + g]
+    }
+
+    /// Bias `b_ij` (the folded dequantisation offsets).
+    pub fn bias(&self, j: usize, i: usize) -> f32 {
+        self.weight_group(j, i, self.groups)[0]
+    }
+
+    /// Texture reads one slot costs per pixel: the mean plus three per group.
+    pub fn reads_per_slot(&self) -> usize {
+        1 + 3 * self.groups
+    }
+
+    /// The sampling uniform block (`Samplings` in `interp.wgsl`).
+    pub fn samplings_raw(&self, uv_scale: f32) -> SamplingsRaw {
+        let mut raw = SamplingsRaw::zeroed();
+        for (which, s) in [&self.view_sampling, &self.light_sampling].into_iter().enumerate() {
+            for (r, ring) in s.rings.iter().enumerate() {
+                raw.rings[which * MAX_RINGS + r] = [
+                    ring.theta_deg as f32,
+                    ring.count as f32,
+                    ring.phi_offset_deg as f32,
+                    s.ring_start(r) as f32,
+                ];
+            }
+            raw.n_rings[which] = s.rings.len() as u32;
+        }
+        raw.info = [
+            self.groups as u32,
+            self.light_sampling.len() as u32,
+            self.view_sampling.len() as u32,
+            0,
+        ];
+        raw.params = [uv_scale, 0.0, 0.0, 0.0];
+        raw
+    }
+}
+
+/// GPU mirror of the `Samplings` uniform: rings `(θ°, count, φ offset°, first index)`, view
+/// rings at `0..16`, light rings at `16..32`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SamplingsRaw {
+    /// Rings of both samplings.
+    pub rings: [[f32; 4]; 2 * MAX_RINGS],
+    /// Ring counts: view, light.
+    pub n_rings: [u32; 4],
+    /// `G`, light directions, view slots, unused.
+    pub info: [u32; 4],
+    /// UV scale, unused ×3.
+    pub params: [f32; 4],
+}
+
+impl SamplingsRaw {
+    fn zeroed() -> Self {
+        bytemuck::Zeroable::zeroed()
+    }
+}
+
+/// A material uploaded to the GPU.
+pub struct MaterialGpu {
+    /// Packed eigentextures, `n_views · 3G` layers.
+    pub eigen: wgpu::Texture,
+    /// Means, `n_views` layers.
+    pub mean: wgpu::Texture,
+    /// Scaled weights and biases.
+    pub weights: wgpu::Buffer,
+    /// Bytes uploaded (textures + weights).
+    pub bytes: u64,
+}
+
+impl MaterialGpu {
+    /// Uploads `data`, checking the device's texture limits first.
+    pub fn upload(gpu: &crate::Gpu, data: &MaterialData, name: &str) -> Result<MaterialGpu> {
+        use wgpu::util::DeviceExt;
+        let limits = gpu.device.limits();
+        let n_v = data.view_sampling.len() as u32;
+        let layers = n_v * 3 * data.groups as u32;
+        if layers > limits.max_texture_array_layers
+            || data.width.max(data.height) > limits.max_texture_dimension_2d
+        {
+            return Err(Error::Limit(format!(
+                "{name}: {layers} eigentexture layers of {}×{} exceed the GPU's limits ({} layers, {} texels); use fewer components",
+                data.width,
+                data.height,
+                limits.max_texture_array_layers,
+                limits.max_texture_dimension_2d
+            )));
+        }
+        let format = match data.quantization {
+            Quantization::F16 => wgpu::TextureFormat::Rgba16Float,
+            Quantization::U8 => wgpu::TextureFormat::Rgba8Unorm,
+        };
+        let tex = |label: &str, format, layers: u32, bytes: &[u8]| {
+            gpu.device.create_texture_with_data(
+                &gpu.queue,
+                &wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: wgpu::Extent3d {
+                        width: data.width,
+                        height: data.height,
+                        depth_or_array_layers: layers,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                    view_formats: &[],
+                },
+                wgpu::util::TextureDataOrder::LayerMajor,
+                bytes,
+            )
+        };
+        gpu.scoped(&format!("uploading material {name}"), || {
+            let eigen = tex("eigentextures", format, layers, &data.eigen_layers);
+            let mean = tex(
+                "means",
+                wgpu::TextureFormat::Rgba16Float,
+                n_v,
+                bytemuck::cast_slice(&data.mean_layers),
+            );
+            let weights = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("weights"),
+                contents: bytemuck::cast_slice(&data.weights),
+                usage: wgpu::BufferUsages::STORAGE,
+            });
+            let bytes = (data.eigen_layers.len()
+                + data.mean_layers.len() * 2
+                + data.weights.len() * 16) as u64;
+            MaterialGpu { eigen, mean, weights, bytes }
+        })
+    }
+}

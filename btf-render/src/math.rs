@@ -1,0 +1,91 @@
+//! Small linear-algebra helpers for cameras and lights: look-at views and projections in
+//! wgpu's clip convention (right-handed world, `z_ndc ∈ [0, 1]`), built on nalgebra.
+
+use nalgebra::{Matrix4, Point3, Vector3};
+
+/// A 3-vector of `f32`.
+pub type Vec3 = Vector3<f32>;
+/// A 4×4 `f32` matrix (column-major, as WGSL expects).
+pub type Mat4 = Matrix4<f32>;
+
+/// Converts `[x, y, z]` to a vector.
+pub fn v3(a: [f32; 3]) -> Vec3 {
+    Vec3::new(a[0], a[1], a[2])
+}
+
+/// View matrix (world → camera, camera looks down `−z`).
+pub fn look_at(eye: Vec3, target: Vec3, up: Vec3) -> Mat4 {
+    Matrix4::look_at_rh(&Point3::from(eye), &Point3::from(target), &up)
+}
+
+/// Perspective projection to wgpu clip space (`z_ndc = 0` at `near`, 1 at `far`).
+pub fn perspective(fov_y_deg: f32, aspect: f32, near: f32, far: f32) -> Mat4 {
+    let f = 1.0 / (fov_y_deg.to_radians() * 0.5).tan();
+    let mut m = Mat4::zeros();
+    m[(0, 0)] = f / aspect;
+    m[(1, 1)] = f;
+    m[(2, 2)] = far / (near - far);
+    m[(2, 3)] = near * far / (near - far);
+    m[(3, 2)] = -1.0;
+    m
+}
+
+/// Orthographic projection of a `width × height` window to wgpu clip space.
+pub fn orthographic(width: f32, height: f32, near: f32, far: f32) -> Mat4 {
+    let mut m = Mat4::identity();
+    m[(0, 0)] = 2.0 / width;
+    m[(1, 1)] = 2.0 / height;
+    m[(2, 2)] = 1.0 / (near - far);
+    m[(2, 3)] = near / (near - far);
+    m
+}
+
+/// Some unit vector perpendicular to `n` (for frames without a preferred direction).
+pub fn any_perpendicular(n: Vec3) -> Vec3 {
+    let a = if n.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() };
+    n.cross(&a).normalize()
+}
+
+/// An `up` vector usable with [`look_at`] for viewing direction `dir` (falls back when
+/// `up` is parallel to `dir`).
+pub fn safe_up(dir: Vec3, up: Vec3) -> Vec3 {
+    if dir.cross(&up).norm() > 1e-4 * dir.norm() * up.norm() { up } else { any_perpendicular(dir) }
+}
+
+/// Column-major `[[f32; 4]; 4]` for uniform buffers.
+pub fn to_cols(m: &Mat4) -> [[f32; 4]; 4] {
+    let mut out = [[0.0; 4]; 4];
+    for c in 0..4 {
+        for r in 0..4 {
+            out[c][r] = m[(r, c)];
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector4;
+
+    #[test]
+    fn projections_map_near_far_to_0_1() {
+        let p = perspective(60.0, 1.5, 0.5, 20.0);
+        let near = p * Vector4::new(0.0, 0.0, -0.5, 1.0);
+        let far = p * Vector4::new(0.0, 0.0, -20.0, 1.0);
+        assert!((near.z / near.w).abs() < 1e-6);
+        assert!((far.z / far.w - 1.0).abs() < 1e-6);
+        let o = orthographic(4.0, 2.0, 1.0, 9.0);
+        let c = o * Vector4::new(2.0, 1.0, -9.0, 1.0);
+        assert!((c.x - 1.0).abs() < 1e-6 && (c.y - 1.0).abs() < 1e-6 && (c.z - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn look_at_puts_target_on_minus_z() {
+        let v = look_at(Vec3::new(0.0, 0.0, 5.0), Vec3::zeros(), Vec3::y());
+        let t = v * Vector4::new(0.0, 0.0, 0.0, 1.0);
+        assert!((t.z + 5.0).abs() < 1e-6);
+        let up = safe_up(Vec3::z(), Vec3::z());
+        assert!(up.dot(&Vec3::z()).abs() < 1e-6);
+    }
+}
