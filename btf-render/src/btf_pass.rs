@@ -13,8 +13,11 @@ use crate::scene::Evaluation;
 /// WGSL of the pass (with the shared interpolation functions).
 pub const SOURCE: &str = concat!(include_str!("interp.wgsl"), include_str!("btf_pass.wgsl"));
 
-/// Format of the linear HDR colour target.
-pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// Format of the linear HDR colour target: `f32` without MSAA, `f16` (multisample-capable
+/// everywhere) with it.
+pub fn color_format(msaa: u32) -> wgpu::TextureFormat {
+    if msaa > 1 { wgpu::TextureFormat::Rgba16Float } else { wgpu::TextureFormat::Rgba32Float }
+}
 /// Depth format of the pass.
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
@@ -203,7 +206,7 @@ impl BtfPass {
                         Evaluation::PerVertex => "fs_vertex",
                     }),
                     compilation_options: options,
-                    targets: &[Some(COLOR_FORMAT.into())],
+                    targets: &[Some(color_format(key.msaa).into())],
                 }),
                 multiview_mask: None,
                 cache: None,

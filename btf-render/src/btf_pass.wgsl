@@ -34,7 +34,7 @@ struct FrameRaw {
     eye: vec4<f32>,
     // xyz: direction towards the camera (orthographic)
     to_camera: vec4<f32>,
-    // x: lights, y: smooth boundary on (1/0)
+    // x: lights, y: smooth boundary on (1/0), z: per-vertex coefficient stride G
     info: vec4<u32>,
     // x: alpha in radians
     terminator: vec4<f32>,
@@ -305,7 +305,7 @@ fn fs_vertex(in: VertexOut) -> @location(0) vec4<f32> {
         vis[l] = visibility(l, in, f.back);
     }
     let g_count = samplings.info.x;
-    let stride = 2u + 3u * g_count;
+    let stride = 2u + 3u * frame.info.z;
     reads = 0u;
     var rgb = vec3<f32>(0.0);
     for (var c = 0u; c < 12u; c = c + 1u) {

@@ -10,17 +10,31 @@
 //! - [`mesh`], [`tangent`]: OBJ loading, normals and the UV tangent frame;
 //! - [`scene`]: the plain TOML scene description;
 //! - [`material`]: eigen stores packed for the GPU;
-//! - [`btf_pass`], [`interp`]: the reconstruction shader and its interpolation weights.
+//! - [`btf_pass`], [`interp`], [`per_vertex`]: the reconstruction shader, its interpolation
+//!   weights, and the paper's per-vertex coefficients;
+//! - [`terminator`], [`shadow`], [`shadow_volume`], [`shadow_map`]: eq. 6 and shadows;
+//! - [`renderer`], [`frame`], [`timer`]: pass selection, output images, `--stats`.
 
 pub mod btf_pass;
 pub mod error;
+pub mod frame;
 pub mod gpu;
 pub mod interp;
 pub mod material;
 pub mod math;
 pub mod mesh;
+pub mod per_vertex;
+pub mod renderer;
 pub mod scene;
+pub mod shadow;
+pub mod shadow_map;
+pub mod shadow_volume;
 pub mod tangent;
+pub mod terminator;
+pub mod timer;
 
 pub use error::{Error, Result};
+pub use frame::{Frame, PassStat, Stats};
 pub use gpu::Gpu;
+pub use renderer::{RenderOptions, Renderer, render_scene};
+pub use scene::Scene;

@@ -1,0 +1,563 @@
+//! Builds the runtime objects of a [`Scene`] — merged mesh with tangent frames, uploaded
+//! materials, the passes the scene asks for — and renders frames.
+//!
+//! Only what the scene calls for is built and run (DESIGN.md §3): the smooth shadow
+//! boundary (eq. 6) and a shadow pass only with a shadowing light and `shadows ≠ none`;
+//! per-vertex coefficients only in per-vertex mode; blending work only with `four`.
+
+use crate::btf_pass::{
+    BtfPass, BtfPassKey, CornerVertex, DEPTH_FORMAT, FrameRaw, LightRaw, color_format,
+};
+use crate::frame::{Frame, Stats};
+use crate::material::{MaterialData, MaterialGpu};
+use crate::math::{self, Mat4, Vec3, v3};
+use crate::mesh::Mesh;
+use crate::per_vertex::{self, VertexEvalInput, VertexLight};
+use crate::scene::{Evaluation, Light, Projection, Scene, Shadows};
+use crate::shadow::{ShadowInputs, Shadowing};
+use crate::timer::PassTimer;
+use crate::{Error, Gpu, Result, tangent, terminator};
+use btf_core::InterpMode;
+use std::time::Instant;
+use wgpu::util::DeviceExt;
+
+/// Extra knobs for tests and measurements.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct RenderOptions {
+    /// Count texture reads per pixel in the BTF pass (atomics; slows the pass).
+    pub count_reads: bool,
+}
+
+struct LoadedMaterial {
+    data: MaterialData,
+    _gpu: MaterialGpu,
+    bind_group: wgpu::BindGroup,
+}
+
+struct Draw {
+    material: usize,
+    first: u32,
+    count: u32,
+}
+
+/// Camera matrices and the quantities shaders need.
+#[derive(Debug, Clone, Copy)]
+pub struct CameraSetup {
+    /// World → clip.
+    pub view_proj: Mat4,
+    /// Eye position.
+    pub eye: Vec3,
+    /// Direction towards the camera for orthographic projections.
+    pub ortho_to_camera: Option<Vec3>,
+}
+
+/// A scene ready to render.
+pub struct Renderer {
+    scene: Scene,
+    mesh: Mesh,
+    tangents: Vec<[f32; 4]>,
+    vertex_material: Vec<usize>,
+    corners: wgpu::Buffer,
+    draws: Vec<Draw>,
+    materials: Vec<LoadedMaterial>,
+    btf: BtfPass,
+    frame_uniform: wgpu::Buffer,
+    frame_group: wgpu::BindGroup,
+    counters: wgpu::Buffer,
+    shadowing: Option<Shadowing>,
+    camera: CameraSetup,
+    options: RenderOptions,
+    /// Bytes of material data on the GPU.
+    pub material_bytes: u64,
+}
+
+/// Merges the scene's meshes and assigns each triangle a scene material index.
+fn load_meshes(scene: &Scene) -> Result<(Mesh, Vec<usize>)> {
+    let mut mesh = Mesh::default();
+    let mut tri_desc = Vec::new();
+    for desc in &scene.meshes {
+        let m = Mesh::load_obj(&desc.path, desc.planar_uv)?;
+        let base = mesh.positions.len() as u32;
+        let mut mat_of_name = Vec::new();
+        for name in &m.material_names {
+            let found = scene
+                .materials
+                .iter()
+                .position(|md| md.name.as_deref() == Some(name.as_str()))
+                .or_else(|| scene.materials.iter().position(|md| md.name.is_none()));
+            let Some(i) = found else {
+                let what = if name.is_empty() {
+                    "faces without `usemtl`".to_string()
+                } else {
+                    format!("material '{name}'")
+                };
+                return Err(Error::Invalid(format!(
+                    "{}: {what} has no [[materials]] entry (add one with that name, or one without a name as default)",
+                    desc.path.display()
+                )));
+            };
+            mat_of_name.push(i);
+        }
+        mesh.triangles.extend(m.triangles.iter().map(|t| t.map(|i| i + base)));
+        tri_desc.extend(m.triangle_material.iter().map(|&id| mat_of_name[id as usize]));
+        mesh.positions.extend(m.positions);
+        mesh.normals.extend(m.normals);
+        mesh.uvs.extend(m.uvs);
+        mesh.repaired_normals += m.repaired_normals;
+    }
+    Ok((mesh, tri_desc))
+}
+
+fn camera_setup(scene: &Scene, mesh: &Mesh, extra_depth: f32) -> CameraSetup {
+    let c = &scene.camera;
+    let (lo, hi) = mesh.bounds();
+    let center = (v3(lo) + v3(hi)) * 0.5;
+    let radius = ((v3(hi) - v3(lo)).norm() * 0.5).max(1e-6);
+    let (eye, target) = (v3(c.eye), v3(c.target));
+    let dir = target - eye;
+    let view = math::look_at(eye, target, math::safe_up(dir, v3(c.up)));
+    let aspect = scene.output.width as f32 / scene.output.height as f32;
+    let dist = (center - eye).norm();
+    let far = dist + radius * 1.05 + extra_depth;
+    match c.projection {
+        Projection::Perspective => {
+            let near = (dist - radius * 1.05).max(far * 1e-4);
+            CameraSetup {
+                view_proj: math::perspective(c.fov_y_deg, aspect, near, far) * view,
+                eye,
+                ortho_to_camera: None,
+            }
+        }
+        Projection::Orthographic => {
+            let near = dist - radius * 1.05 - extra_depth;
+            let proj = math::orthographic(c.ortho_height * aspect, c.ortho_height, near, far);
+            CameraSetup { view_proj: proj * view, eye, ortho_to_camera: Some(-dir.normalize()) }
+        }
+    }
+}
+
+impl Renderer {
+    /// Loads meshes and materials and builds the passes the scene asks for.
+    pub fn new(gpu: &Gpu, scene: &Scene, options: RenderOptions) -> Result<Renderer> {
+        let (mesh, tri_desc) = load_meshes(scene)?;
+        let tangents = tangent::compute_tangents(&mesh);
+        // Materials actually used, each loaded once.
+        let mut used: Vec<usize> = tri_desc.clone();
+        used.sort_unstable();
+        used.dedup();
+        let mut slot_of_desc = vec![usize::MAX; scene.materials.len()];
+        let mut datas = Vec::new();
+        for &d in &used {
+            slot_of_desc[d] = datas.len();
+            datas.push(MaterialData::load(&scene.materials[d].store, scene.effects.components)?);
+        }
+        let fx = &scene.effects;
+        let key = BtfPassKey {
+            evaluation: fx.evaluation,
+            view_four: fx.view_blend == InterpMode::Four,
+            light_four: fx.light_interp == InterpMode::Four,
+            msaa: fx.msaa,
+            count_reads: options.count_reads,
+        };
+        let btf = BtfPass::new(gpu, key)?;
+        let sampler = gpu.device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("btf texels"),
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::Repeat,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        let mut materials = Vec::new();
+        let mut material_bytes = 0;
+        for (k, data) in datas.into_iter().enumerate() {
+            let desc = &scene.materials[used[k]];
+            let gpu_mat = MaterialGpu::upload(gpu, &data, &desc.store.display().to_string())?;
+            material_bytes += gpu_mat.bytes;
+            let samplings = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("samplings"),
+                contents: bytemuck::bytes_of(&data.samplings_raw(desc.uv_scale)),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            let bind_group = btf.material_bind_group(gpu, &gpu_mat, &samplings, &sampler);
+            materials.push(LoadedMaterial { data, _gpu: gpu_mat, bind_group });
+        }
+        // Corners sorted by material, one draw per material.
+        let mut order: Vec<usize> = (0..mesh.triangles.len()).collect();
+        order.sort_by_key(|&t| slot_of_desc[tri_desc[t]]);
+        let mut corners = Vec::with_capacity(order.len() * 3);
+        let mut draws: Vec<Draw> = Vec::new();
+        let mut vertex_material = vec![usize::MAX; mesh.positions.len()];
+        for &t in &order {
+            let m = slot_of_desc[tri_desc[t]];
+            match draws.last_mut() {
+                Some(d) if d.material == m => d.count += 3,
+                _ => draws.push(Draw { material: m, first: corners.len() as u32, count: 3 }),
+            }
+            let tri = mesh.triangles[t];
+            for (corner, &v) in tri.iter().enumerate() {
+                let v = v as usize;
+                vertex_material[v] = m;
+                corners.push(CornerVertex {
+                    position: mesh.positions[v],
+                    normal: mesh.normals[v],
+                    tangent: tangents[v],
+                    uv: mesh.uvs[v],
+                    tri,
+                    corner: corner as u32,
+                });
+            }
+        }
+        let corners = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("corners"),
+            contents: bytemuck::cast_slice(&corners),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let shadowing =
+            if scene.wants_shadow_pass() { Some(Shadowing::new(gpu, scene, &mesh)?) } else { None };
+        let extra_depth = shadowing.as_ref().map_or(0.0, |s| s.extra_camera_depth());
+        let camera = camera_setup(scene, &mesh, extra_depth);
+        let frame_uniform = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("frame"),
+            size: std::mem::size_of::<FrameRaw>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let counters = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("read counters"),
+            size: 16,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let inputs = match &shadowing {
+            Some(s) => s.inputs(gpu, scene.output.width, scene.output.height),
+            None => ShadowInputs::dummy(gpu),
+        };
+        let boundary = if shadowing.is_some() {
+            terminator::texture(gpu, fx.terminator_blur)
+        } else {
+            terminator::texture(gpu, 0) // 1 KiB placeholder; never sampled without a shadowing light
+        };
+        let frame_group =
+            frame_bind_group(gpu, &btf, &frame_uniform, &boundary, &inputs, &counters);
+        Ok(Renderer {
+            scene: scene.clone(),
+            mesh,
+            tangents,
+            vertex_material,
+            corners,
+            draws,
+            materials,
+            btf,
+            frame_uniform,
+            frame_group,
+            counters,
+            shadowing,
+            camera,
+            options,
+            material_bytes,
+        })
+    }
+
+    /// The merged mesh.
+    pub fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    /// Camera matrices in use.
+    pub fn camera(&self) -> &CameraSetup {
+        &self.camera
+    }
+
+    fn frame_raw(&self) -> FrameRaw {
+        let fx = &self.scene.effects;
+        let mut raw = FrameRaw {
+            view_proj: math::to_cols(&self.camera.view_proj),
+            eye: [self.camera.eye.x, self.camera.eye.y, self.camera.eye.z, 1.0],
+            info: [
+                self.scene.lights.len() as u32,
+                self.shadowing.is_some() as u32,
+                self.materials.iter().map(|m| m.data.groups).max().unwrap_or(1) as u32,
+                0,
+            ],
+            terminator: [fx.terminator_deg.to_radians(), 0.0, 0.0, 0.0],
+            ..Default::default()
+        };
+        if let Some(d) = self.camera.ortho_to_camera {
+            raw.eye[3] = 0.0;
+            raw.to_camera = [d.x, d.y, d.z, 0.0];
+        }
+        for (l, light) in self.scene.lights.iter().enumerate() {
+            let shadow_kind = match (&self.shadowing, light.casts_shadows(), fx.shadows) {
+                (Some(_), true, Shadows::Volume) => 1.0,
+                (Some(_), true, Shadows::Map) => 2.0,
+                _ => 0.0,
+            };
+            let mut lr = match light {
+                Light::Directional { direction, irradiance, .. } => {
+                    let d = v3(*direction).normalize();
+                    LightRaw {
+                        pos: [d.x, d.y, d.z, 0.0],
+                        color: [irradiance[0], irradiance[1], irradiance[2], shadow_kind],
+                        ..Default::default()
+                    }
+                }
+                Light::Point { position, intensity, .. } => LightRaw {
+                    pos: [position[0], position[1], position[2], 1.0],
+                    color: [intensity[0], intensity[1], intensity[2], shadow_kind],
+                    ..Default::default()
+                },
+            };
+            if let Some(s) = &self.shadowing {
+                s.fill_light_raw(l, &mut lr);
+            }
+            raw.lights[l] = lr;
+        }
+        raw
+    }
+
+    fn vertex_lights(&self) -> Vec<VertexLight> {
+        self.scene
+            .lights
+            .iter()
+            .map(|l| match l {
+                Light::Directional { direction, irradiance, .. } => VertexLight {
+                    pos_or_dir: v3(*direction).normalize(),
+                    point: false,
+                    color: *irradiance,
+                },
+                Light::Point { position, intensity, .. } => {
+                    VertexLight { pos_or_dir: v3(*position), point: true, color: *intensity }
+                }
+            })
+            .collect()
+    }
+
+    /// Renders one frame and reads it back.
+    pub fn render(&self, gpu: &Gpu) -> Result<Frame> {
+        let (w, h) = (self.scene.output.width, self.scene.output.height);
+        let msaa = self.scene.effects.msaa;
+        let start = Instant::now();
+        let mut timer = PassTimer::new(gpu, 16);
+        gpu.queue.write_buffer(&self.frame_uniform, 0, bytemuck::bytes_of(&self.frame_raw()));
+        gpu.queue.write_buffer(&self.counters, 0, &[0u8; 16]);
+        let per_vertex_group = if self.scene.effects.evaluation == Evaluation::PerVertex {
+            let t = Instant::now();
+            let group = self.per_vertex_bind_group(gpu)?;
+            timer.cpu("per-vertex coefficients (cpu)", t.elapsed().as_secs_f64() * 1e3);
+            Some(group)
+        } else {
+            None
+        };
+        if let Some(s) = &self.shadowing {
+            s.encode(
+                gpu,
+                &mut timer,
+                &self.corners,
+                self.mesh.triangles.len() as u32 * 3,
+                &self.camera,
+            )?;
+        }
+        let target = |format, samples, usage| {
+            gpu.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("btf target"),
+                size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: samples,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let att = wgpu::TextureUsages::RENDER_ATTACHMENT;
+        let color = target(color_format(msaa), 1, att | wgpu::TextureUsages::COPY_SRC);
+        let color_ms = (msaa > 1).then(|| target(color_format(msaa), msaa, att));
+        let depth = target(DEPTH_FORMAT, msaa, att);
+        let color_view = color.create_view(&Default::default());
+        let ms_view = color_ms.as_ref().map(|t| t.create_view(&Default::default()));
+        let depth_view = depth.create_view(&Default::default());
+        let bg = self.scene.output.background;
+        let name = match self.scene.effects.evaluation {
+            Evaluation::PerPixel => "btf (per-pixel)",
+            Evaluation::PerVertex => "btf (per-vertex)",
+        };
+        gpu.scoped("BTF pass", || {
+            timer.pass(name, |enc, ts| {
+                let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some(name),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: ms_view.as_ref().unwrap_or(&color_view),
+                        depth_slice: None,
+                        resolve_target: ms_view.as_ref().map(|_| &color_view),
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color {
+                                r: bg[0] as f64,
+                                g: bg[1] as f64,
+                                b: bg[2] as f64,
+                                a: 1.0,
+                            }),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &depth_view,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(1.0),
+                            store: wgpu::StoreOp::Discard,
+                        }),
+                        stencil_ops: None,
+                    }),
+                    timestamp_writes: ts,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                pass.set_pipeline(&self.btf.pipeline);
+                pass.set_bind_group(0, &self.frame_group, &[]);
+                if let Some(g) = &per_vertex_group {
+                    pass.set_bind_group(2, &g.2, &[]);
+                }
+                pass.set_vertex_buffer(0, self.corners.slice(..));
+                for d in &self.draws {
+                    pass.set_bind_group(1, &self.materials[d.material].bind_group, &[]);
+                    pass.draw(d.first..d.first + d.count, 0..1);
+                }
+            })
+        })??;
+        let passes = timer.finish()?;
+        let frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        let rgb = read_rgb(gpu, &color, msaa)?;
+        let mut stats = Stats {
+            passes,
+            frame_ms,
+            timing: if gpu.timestamps { "gpu-timestamps" } else { "cpu" }.into(),
+            ..Default::default()
+        };
+        if self.options.count_reads {
+            let read = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: None,
+                size: 16,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            });
+            let mut enc = gpu.device.create_command_encoder(&Default::default());
+            enc.copy_buffer_to_buffer(&self.counters, 0, &read, 0, 16);
+            gpu.queue.submit([enc.finish()]);
+            let c: Vec<u32> = bytemuck::cast_slice(&gpu.read_buffer(&read)?).to_vec();
+            stats.shaded_pixels = Some(c[1] as u64);
+            stats.reads_per_pixel = Some(if c[1] > 0 { c[0] as f64 / c[1] as f64 } else { 0.0 });
+        }
+        Ok(Frame { width: w, height: h, rgb, stats })
+    }
+
+    fn per_vertex_bind_group(
+        &self,
+        gpu: &Gpu,
+    ) -> Result<(wgpu::Buffer, wgpu::Buffer, wgpu::BindGroup)> {
+        let lights = self.vertex_lights();
+        let mats: Vec<&MaterialData> = self.materials.iter().map(|m| &m.data).collect();
+        let input = VertexEvalInput {
+            eye: self.camera.eye,
+            ortho_to_camera: self.camera.ortho_to_camera,
+            lights: &lights,
+            view_mode: self.scene.effects.view_blend,
+            light_mode: self.scene.effects.light_interp,
+            groups_stride: mats.iter().map(|m| m.groups).max().unwrap_or(1),
+        };
+        let vc = per_vertex::compute(
+            &self.mesh.positions,
+            &self.mesh.normals,
+            &self.tangents,
+            &self.vertex_material,
+            &mats,
+            &input,
+        );
+        let mk = |label, bytes: &[u8]| {
+            gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytes,
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+        };
+        let coef = mk("vertex coefficients", bytemuck::cast_slice(&vc.coef));
+        let slots = mk("vertex slots", bytemuck::cast_slice(&vc.slots));
+        let layout = self
+            .btf
+            .vertex_layout
+            .as_ref()
+            .ok_or_else(|| Error::Gpu("per-vertex layout missing".into()))?;
+        let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("per-vertex"),
+            layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: coef.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: slots.as_entire_binding() },
+            ],
+        });
+        Ok((coef, slots, group))
+    }
+}
+
+fn frame_bind_group(
+    gpu: &Gpu,
+    btf: &BtfPass,
+    frame: &wgpu::Buffer,
+    boundary: &wgpu::Texture,
+    shadow: &ShadowInputs,
+    counters: &wgpu::Buffer,
+) -> wgpu::BindGroup {
+    let clamp = gpu.device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("linear clamp"),
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        ..Default::default()
+    });
+    let boundary_view = boundary.create_view(&Default::default());
+    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("btf frame"),
+        layout: &btf.frame_layout,
+        entries: &[
+            wgpu::BindGroupEntry { binding: 0, resource: frame.as_entire_binding() },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: wgpu::BindingResource::TextureView(&boundary_view),
+            },
+            wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&clamp) },
+            wgpu::BindGroupEntry {
+                binding: 3,
+                resource: wgpu::BindingResource::TextureView(&shadow.masks),
+            },
+            wgpu::BindGroupEntry {
+                binding: 4,
+                resource: wgpu::BindingResource::TextureView(&shadow.maps),
+            },
+            wgpu::BindGroupEntry {
+                binding: 5,
+                resource: wgpu::BindingResource::Sampler(&shadow.compare),
+            },
+            wgpu::BindGroupEntry { binding: 6, resource: counters.as_entire_binding() },
+        ],
+    })
+}
+
+fn read_rgb(gpu: &Gpu, color: &wgpu::Texture, msaa: u32) -> Result<Vec<f32>> {
+    if msaa > 1 {
+        let raw = gpu.read_texture(color, 8)?;
+        let halves: &[half::f16] = bytemuck::cast_slice(&raw);
+        Ok(halves
+            .chunks_exact(4)
+            .flat_map(|p| [p[0].to_f32(), p[1].to_f32(), p[2].to_f32()])
+            .collect())
+    } else {
+        let raw = gpu.read_texture(color, 16)?;
+        let f: &[f32] = bytemuck::cast_slice(&raw);
+        Ok(f.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect())
+    }
+}
+
+/// Loads a scene, renders one frame and returns it (what `btf render` and `btf demo` call).
+pub fn render_scene(gpu: &Gpu, scene: &Scene, options: RenderOptions) -> Result<Frame> {
+    Renderer::new(gpu, scene, options)?.render(gpu)
+}

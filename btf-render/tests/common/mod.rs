@@ -1,0 +1,201 @@
+//! Shared fixtures for the GPU tests: tiny synthetic eigen stores, OBJ meshes and scenes
+//! written into a temporary folder, plus image comparison with `-actual`/`-difference`
+//! PNGs written on failure.
+#![allow(dead_code)]
+
+use btf_core::Sampling;
+use btf_core::eigen::{EigenMeta, EigenWriter, Quantization, QuantizedSlot, quantize};
+use btf_core::store::BtfMeta;
+use btf_render::{Frame, Gpu};
+use std::f32::consts::TAU;
+use std::path::{Path, PathBuf};
+
+/// Spatial pattern of the synthetic material.
+#[derive(Clone, Copy, PartialEq)]
+pub enum Pattern {
+    /// Ribs: varies along texture x (columns) only, constant along rows — anisotropic.
+    Ribs,
+    /// Texture-varying in x and y, smooth in view and light.
+    Checker,
+    /// The same value at every texel (tests the direction dependence alone).
+    Uniform,
+}
+
+/// Writes an eigen store with `ubo81` samplings and `c` components. The images of slot `j`
+/// under light `i` are `μ_j + Σ_k p_ikj B_kj` with smooth dependence on both directions.
+pub fn write_store(
+    dir: &Path,
+    name: &str,
+    pattern: Pattern,
+    w: usize,
+    h: usize,
+    c: usize,
+    q: Quantization,
+) -> PathBuf {
+    let views = Sampling::ubo81();
+    let lights = Sampling::ubo81();
+    let meta = EigenMeta {
+        btf: BtfMeta::new(views.clone(), lights.clone(), w, h),
+        components: c,
+        quantization: q,
+    };
+    let path = dir.join(name);
+    let writer = EigenWriter::create(&path, meta, false).unwrap();
+    for j in 0..views.len() {
+        let vd = views.direction(j).to_vector();
+        let mut mean = vec![0f32; w * h * 3];
+        let mut basis = vec![0f32; c * w * h * 3];
+        for y in 0..h {
+            for x in 0..w {
+                let (fx, fy) = (x as f32 / w as f32, y as f32 / h as f32);
+                let s = match pattern {
+                    Pattern::Ribs => 0.5 + 0.4 * (TAU * fx * 4.0).cos(),
+                    Pattern::Checker => 0.5 + 0.3 * (TAU * fx * 2.0).sin() * (TAU * fy * 3.0).cos(),
+                    Pattern::Uniform => 1.0,
+                };
+                let t = (y * w + x) * 3;
+                for ch in 0..3 {
+                    mean[t + ch] = 0.2 * s * (1.0 + 0.3 * vd[2] as f32) * [1.0, 0.8, 0.6][ch];
+                    for k in 0..c {
+                        let pk = match pattern {
+                            Pattern::Uniform => 1.0,
+                            _ => (TAU
+                                * (fx * (k % 3 + 1) as f32
+                                    + fy * (k / 3) as f32
+                                    + 0.1 * ch as f32))
+                                .cos(),
+                        };
+                        basis[k * w * h * 3 + t + ch] =
+                            0.15 * pk * (1.0 + 0.5 * vd[0] as f32) / (1.0 + k as f32);
+                    }
+                }
+            }
+        }
+        let mut weights = vec![0f32; lights.len() * c];
+        for i in 0..lights.len() {
+            let ld = lights.direction(i).to_vector();
+            for k in 0..c {
+                weights[i * c + k] = (ld[2] as f32 * 2.0 - 1.0) * (1.0 + k as f32 * 0.1)
+                    + (ld[0] as f32 * (k + 1) as f32).sin()
+                    + 0.5 * ld[1] as f32 * ((k % 2) as f32 - 0.5);
+            }
+        }
+        let (eigentextures, scale_offset) = quantize(&basis, c, q);
+        let slot = QuantizedSlot {
+            mean,
+            eigentextures,
+            scale_offset,
+            weights,
+            eigenvalues: vec![1.0; lights.len()],
+        };
+        writer.write_slot(j, &slot).unwrap();
+    }
+    writer.finish().unwrap();
+    path
+}
+
+/// A unit plane `[0,1]²` at z = 0 split into `n × n` quads, UV = (x, y) (or rotated 90°:
+/// UV = (y, 1 − x)).
+pub fn plane_obj(n: usize, rotate_uv: bool) -> String {
+    let mut s = String::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let (x, y) = (i as f32 / n as f32, j as f32 / n as f32);
+            s += &format!("v {x} {y} 0\n");
+            let (u, v) = if rotate_uv { (y, 1.0 - x) } else { (x, y) };
+            s += &format!("vt {u} {v}\nvn 0 0 1\n");
+        }
+    }
+    let id = |i: usize, j: usize| j * (n + 1) + i + 1;
+    for j in 0..n {
+        for i in 0..n {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            s += &format!(
+                "f {a}/{a}/{a} {b}/{b}/{b} {c}/{c}/{c}\nf {a}/{a}/{a} {c}/{c}/{c} {d}/{d}/{d}\n"
+            );
+        }
+    }
+    s
+}
+
+/// A UV sphere of radius `r` centred at `c` with `seg` segments and `seg/2` rings.
+pub fn sphere_obj(r: f32, c: [f32; 3], seg: usize) -> String {
+    let rings = seg / 2;
+    let mut s = String::new();
+    for j in 0..=rings {
+        let th = std::f32::consts::PI * j as f32 / rings as f32;
+        for i in 0..=seg {
+            let ph = TAU * i as f32 / seg as f32;
+            let n = [th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin()];
+            s += &format!(
+                "v {} {} {}\nvn {} {} {}\nvt {} {}\n",
+                c[0] + r * n[0],
+                c[1] + r * n[1],
+                c[2] + r * n[2],
+                n[0],
+                n[1],
+                n[2],
+                i as f32 / seg as f32,
+                1.0 - j as f32 / rings as f32
+            );
+        }
+    }
+    let id = |i: usize, j: usize| j * (seg + 1) + i + 1;
+    for j in 0..rings {
+        for i in 0..seg {
+            let (a, b, cc, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            s += &format!(
+                "f {a}/{a}/{a} {d}/{d}/{d} {cc}/{cc}/{cc}\nf {a}/{a}/{a} {cc}/{cc}/{cc} {b}/{b}/{b}\n"
+            );
+        }
+    }
+    s
+}
+
+/// Writes `text` to `dir/name` and returns the path.
+pub fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// A GPU for this test, or `None` (skip) — a failure when `BTF_REQUIRE_GPU=1`.
+pub fn gpu(test: &str) -> Option<Gpu> {
+    Gpu::for_tests(test)
+}
+
+/// Relative RMSE `‖a − b‖ / ‖a‖` over all values.
+pub fn rel_rmse(reference: &[f32], actual: &[f32]) -> f64 {
+    btf_core::metrics::rel_rmse(reference, actual)
+}
+
+/// Where failing comparisons leave their images.
+pub fn artifact_dir() -> PathBuf {
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("render-artifacts");
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Writes `NAME-actual.png`, `NAME-expected.png` and `NAME-difference.png` (×10).
+pub fn save_comparison(name: &str, w: u32, h: u32, expected: &[f32], actual: &[f32]) -> PathBuf {
+    let d = artifact_dir();
+    let scale = expected.iter().fold(0f32, |a, &b| a.max(b)).max(1e-6);
+    let save = |suffix: &str, data: Vec<f32>| {
+        let f = Frame { width: w, height: h, rgb: data, stats: Default::default() };
+        f.write_png(&d.join(format!("{name}-{suffix}.png")), 1.0 / scale).unwrap();
+    };
+    save("actual", actual.to_vec());
+    save("expected", expected.to_vec());
+    save("difference", expected.iter().zip(actual).map(|(a, b)| (a - b).abs() * 10.0).collect());
+    d
+}
+
+/// Asserts `rel_rmse(expected, actual) ≤ tol`, leaving comparison images on failure.
+pub fn assert_close(name: &str, w: u32, h: u32, expected: &[f32], actual: &[f32], tol: f64) -> f64 {
+    let e = rel_rmse(expected, actual);
+    if !(e <= tol) {
+        let d = save_comparison(name, w, h, expected, actual);
+        panic!("{name}: relative RMSE {e:.4} > {tol} (images in {})", d.display());
+    }
+    e
+}
