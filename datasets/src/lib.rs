@@ -2,13 +2,16 @@
 //! gonioreflectometer, HDR environments and garment meshes (DESIGN.md §5).
 //!
 //! - [`material`]: height-field materials rendered into BTF stores (`btf synth material`);
+//! - [`env`]: equirectangular HDR environments (sky, studio, interior) and their loader;
 //! - [`noise`], [`vec3`]: deterministic noise and small vector helpers.
 
+pub mod env;
 pub mod error;
 pub mod material;
 pub mod noise;
 pub mod vec3;
 
+pub use env::{EnvKind, EnvMap, EnvParams, load_env, synth_env, write_exr};
 pub use error::{Error, Result};
 pub use material::{
     GenerateOptions, GenerateReport, Material, MaterialKind, MaterialParams, MaterialSpec, generate,
