@@ -1,2 +1,55 @@
-//! The `btf` command-line tool: argument parsing, validation, and calls into the libraries.
-fn main() {}
+//! The `btf` command-line tool: parses arguments into validated configurations and calls
+//! the libraries (`btf-core`, `datasets`, `btf-capture`, `btf-render`). No numerics live here.
+
+mod cmd_compress;
+mod cmd_export;
+mod cmd_inspect;
+mod cmd_reconstruct;
+mod imageio;
+mod plot;
+mod progress;
+mod render_cmd;
+mod sweep;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// Capture processing, PCA compression and rendering of bidirectional texture functions.
+#[derive(Parser)]
+#[command(name = "btf", version, about, propagate_version = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Print what a BTF or eigen store holds.
+    Inspect(cmd_inspect::InspectArgs),
+    /// Compress a BTF store by per-view-slot PCA (or sweep the number of components).
+    Compress(cmd_compress::CompressArgs),
+    /// Reconstruct the texture for one view and one light direction on the CPU.
+    Reconstruct(cmd_reconstruct::ReconstructArgs),
+    /// Export data for other tools.
+    Export(cmd_export::ExportArgs),
+    /// Render a scene.
+    Render(render_cmd::RenderArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Inspect(a) => cmd_inspect::run(a),
+        Command::Compress(a) => cmd_compress::run(a),
+        Command::Reconstruct(a) => cmd_reconstruct::run(a),
+        Command::Export(a) => cmd_export::run(a),
+        Command::Render(a) => render_cmd::run(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
