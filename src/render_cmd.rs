@@ -1,0 +1,91 @@
+//! `btf render SCENE.toml -o out.png [--exr out.exr] [--width W --height H] [--stats]
+//! [--stats-json]`: renders a scene (TOML, see `examples/scenes/`) headless on the GPU
+//! (lavapipe without one) and writes an sRGB PNG (exposure from the scene) and optionally a
+//! linear EXR.
+
+use anyhow::{Context, Result, bail};
+use btf_render::{Gpu, RenderOptions, Renderer, Scene, Stats};
+use std::path::PathBuf;
+
+/// Arguments of `btf render`.
+#[derive(clap::Args, Debug)]
+pub struct RenderArgs {
+    /// Scene description (TOML).
+    pub scene: PathBuf,
+    /// Output PNG (sRGB, exposure applied).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Also write the linear HDR image as EXR.
+    #[arg(long)]
+    pub exr: Option<PathBuf>,
+    /// Image width (overrides the scene).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height (overrides the scene).
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Print which passes ran and what each cost.
+    #[arg(long)]
+    pub stats: bool,
+    /// Print the statistics as JSON (`{"passes":[{"name","ms"}],"frame_ms",…}`).
+    #[arg(long)]
+    pub stats_json: bool,
+    /// Render this many frames and report the last (warm caches, for timing).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub repeat: u32,
+    /// Count texture reads per pixel in the BTF pass (adds atomics; for measurements).
+    #[arg(long)]
+    pub count_reads: bool,
+}
+
+/// Runs `btf render`.
+pub fn run(args: RenderArgs) -> Result<()> {
+    let mut scene = Scene::load(&args.scene)?;
+    if let Some(w) = args.width {
+        scene.output.width = w;
+    }
+    if let Some(h) = args.height {
+        scene.output.height = h;
+    }
+    scene.validate(&args.scene)?;
+    if args.output.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref()
+        != Some("png")
+    {
+        bail!(
+            "{}: the output must be a .png file (use --exr for linear HDR)",
+            args.output.display()
+        );
+    }
+    let gpu = Gpu::new().context("creating a headless GPU device")?;
+    let renderer = Renderer::new(&gpu, &scene, RenderOptions { count_reads: args.count_reads })
+        .with_context(|| format!("preparing {}", args.scene.display()))?;
+    let mut frame = renderer.render(&gpu)?;
+    for _ in 1..args.repeat {
+        frame = renderer.render(&gpu)?;
+    }
+    if !frame.all_finite() {
+        bail!("the rendered image contains non-finite values (please report this scene)");
+    }
+    frame.write_png(&args.output, scene.output.exposure)?;
+    if let Some(exr) = &args.exr {
+        frame.write_exr(exr)?;
+    }
+    if args.stats {
+        print_stats(&frame.stats, &gpu);
+    }
+    if args.stats_json {
+        println!("{}", serde_json::to_string(&frame.stats)?);
+    }
+    Ok(())
+}
+
+fn print_stats(s: &Stats, gpu: &Gpu) {
+    println!("adapter: {} ({:?}); timing: {}", gpu.info.name, gpu.info.backend, s.timing);
+    for p in &s.passes {
+        println!("  {:<40} {:>10.3} ms", p.name, p.ms);
+    }
+    println!("  {:<40} {:>10.3} ms", "frame", s.frame_ms);
+    if let (Some(r), Some(n)) = (s.reads_per_pixel, s.shaded_pixels) {
+        println!("  texture reads per shaded pixel: {r:.2} ({n} pixels)");
+    }
+}
