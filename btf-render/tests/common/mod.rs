@@ -59,7 +59,10 @@ pub fn write_store(
                     for k in 0..c {
                         let pk = match pattern {
                             Pattern::Uniform => 1.0,
-                            _ => (TAU
+                            Pattern::Ribs => {
+                                (TAU * (fx * (k % 3 + 1) as f32 + 0.1 * ch as f32)).cos()
+                            }
+                            Pattern::Checker => (TAU
                                 * (fx * (k % 3 + 1) as f32
                                     + fy * (k / 3) as f32
                                     + 0.1 * ch as f32))
