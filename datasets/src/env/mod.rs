@@ -82,7 +82,7 @@ impl EnvMap {
 }
 
 fn check_width(width: usize) -> Result<()> {
-    if !(8..=32768).contains(&width) || width % 2 != 0 {
+    if !(8..=32768).contains(&width) || !width.is_multiple_of(2) {
         return Err(Error::Invalid(format!(
             "environment width {width} must be even and in 8..=32768"
         )));

@@ -3,7 +3,7 @@
 //! the key points are jittered slightly per loop (loop variation) and joined along the
 //! course by a periodic cardinal (Catmull–Rom) spline, which gives the yarn's centre line.
 //!
-//! The key points are our own (eight per loop rather than the paper's six, so that the
+//! The key points are our own (ten per loop rather than the paper's six, so that the
 //! centre line also carries a depth): the two legs forming the visible "V" are in front,
 //! the loop head (reaching into the row above) and the sinker (between stitches, reaching
 //! into the row below) pass behind the neighbouring rows' legs. The tube of radius `r` is
@@ -14,15 +14,17 @@ use crate::noise::{Rng, hash01};
 
 /// Key points of one loop in stitch-cell units (`a` across the column, `b` down the rows,
 /// the cell is `[0, 1)²`) with the centre-line depth in yarn radii.
-const KEY_POINTS: [(f64, f64, f64); 8] = [
-    (0.00, 1.12, -0.7),  // sinker, behind the row below
-    (0.40, 0.86, 0.1),   // bottom of the left leg
-    (0.14, 0.36, 0.8),   // left leg, in front
-    (0.22, -0.14, -0.5), // head, left
-    (0.50, -0.30, -0.8), // head top, behind the legs of the row above
-    (0.78, -0.14, -0.5), // head, right
-    (0.86, 0.36, 0.8),   // right leg, in front
-    (0.60, 0.86, 0.1),   // bottom of the right leg
+const KEY_POINTS: [(f64, f64, f64); 10] = [
+    (0.00, 1.05, -0.9),  // sinker, behind the legs of the row below
+    (0.40, 0.92, 0.1),   // bottom of the left leg
+    (0.20, 0.45, 0.7),   // left leg, in front
+    (0.14, 0.05, 0.2),   // top of the left leg
+    (0.28, -0.12, -0.9), // head, left, behind the legs of the row above
+    (0.50, -0.22, -1.0), // head top
+    (0.72, -0.12, -0.9), // head, right
+    (0.86, 0.05, 0.2),   // top of the right leg
+    (0.80, 0.45, 0.7),   // right leg, in front
+    (0.60, 0.92, 0.1),   // bottom of the right leg
 ];
 
 fn catmull_rom(p0: [f64; 3], p1: [f64; 3], p2: [f64; 3], p3: [f64; 3], t: f64) -> [f64; 3] {
@@ -49,7 +51,7 @@ pub fn stockinette(
 ) -> (Vec<f64>, Vec<[f64; 3]>) {
     let n = size as f64;
     let (cw, ch) = (n / cols.max(1) as f64, n / rows.max(1) as f64);
-    let radius = 0.17 * cw.min(1.6 * ch);
+    let radius = 0.2 * cw.min(1.3 * ch);
     let floor = -1.2 * radius;
     let mut height = vec![floor; size * size];
     let mut albedo = vec![yarn.map(|c| c * 0.2); size * size];
@@ -130,17 +132,16 @@ mod tests {
     #[test]
     fn legs_are_in_front_of_heads_and_texture_tiles() {
         let size = 64;
-        let (h, a) = stockinette(5, size, 4, 4, [0.7, 0.2, 0.2]);
+        let (h, a) = stockinette(5, size, 4, 5, [0.7, 0.2, 0.2]);
         assert!(
             h.iter().all(|v| v.is_finite())
                 && a.iter().all(|c| c.iter().all(|&x| (0.0..=1.0).contains(&x)))
         );
         let at = |x: f64, y: f64| h[(y as usize % size) * size + (x as usize % size)];
-        // Cell 16×16 texels: a leg (a = 0.14, b = 0.36) stands higher than the head top
-        // (a = 0.5, b = -0.3 + 1 row further down, where the next row's legs are absent).
-        let leg = at(16.0 + 0.14 * 16.0, 16.0 + 0.36 * 16.0);
+        // Cells of 16 × 12.8 texels: the middle of a leg stands out in front.
+        let leg = at(16.0 + 0.2 * 16.0, 12.8 + 0.45 * 12.8);
         let gap = h.iter().cloned().fold(f64::INFINITY, f64::min);
-        assert!(leg > 0.5 * 0.17 * 16.0, "leg {leg}");
+        assert!(leg > 0.5 * 0.2 * 16.0, "leg {leg}");
         assert!(gap < 0.0, "some floor between loops is visible: {gap}");
     }
 }

@@ -2,7 +2,7 @@
 //! (view, light) pairs, tone-mapped and sRGB-encoded into one PNG for a quick look.
 //!
 //! One exposure is used for the whole sheet (so relative brightness between tiles is kept):
-//! values are scaled so that the sheet's 95th percentile maps to 0.75 after the tone curve
+//! values are scaled so that the sheet's 95th percentile maps to 0.6 after the tone curve
 //! `1 − exp(−x)`, then encoded with the sRGB transfer function.
 
 use crate::{Error, Result};
@@ -54,7 +54,7 @@ pub fn write_contact_sheet(store: &BtfStore, dir: &Path, name: &str) -> Result<P
     let mut lum: Vec<f32> = tiles.iter().flatten().copied().collect();
     lum.sort_by(f32::total_cmp);
     let p95 = lum[(lum.len() * 95 / 100).min(lum.len() - 1)].max(1e-6) as f64;
-    let exposure = -(1.0f64 - 0.75).ln() / p95;
+    let exposure = -(1.0f64 - 0.6).ln() / p95;
     let zoom = (128usize).div_ceil(w.max(h)).max(1);
     let (tw, th, gap) = (w * zoom, h * zoom, 4);
     let sheet_w = tiles.len() * (tw + gap) - gap;
