@@ -19,6 +19,9 @@ pub enum Pattern {
     Checker,
     /// The same value at every texel (tests the direction dependence alone).
     Uniform,
+    /// Exactly Lambertian, albedo 0.8: `BTF = ρ/π · cos θ_l` at every texel (component 0
+    /// carries the light dependence, the others are zero).
+    Lambert,
 }
 
 /// Writes an eigen store with `ubo81` samplings and `c` components. The images of slot `j`
@@ -41,6 +44,9 @@ pub fn write_store(
     };
     let path = dir.join(name);
     let writer = EigenWriter::create(&path, meta, false).unwrap();
+    if pattern == Pattern::Lambert {
+        return write_lambert(path, writer, &lights, w * h * 3, c, q);
+    }
     for j in 0..views.len() {
         let vd = views.direction(j).to_vector();
         let mut mean = vec![0f32; w * h * 3];
@@ -51,14 +57,14 @@ pub fn write_store(
                 let s = match pattern {
                     Pattern::Ribs => 0.5 + 0.4 * (TAU * fx * 4.0).cos(),
                     Pattern::Checker => 0.5 + 0.3 * (TAU * fx * 2.0).sin() * (TAU * fy * 3.0).cos(),
-                    Pattern::Uniform => 1.0,
+                    Pattern::Uniform | Pattern::Lambert => 1.0,
                 };
                 let t = (y * w + x) * 3;
                 for ch in 0..3 {
                     mean[t + ch] = 0.2 * s * (1.0 + 0.3 * vd[2] as f32) * [1.0, 0.8, 0.6][ch];
                     for k in 0..c {
                         let pk = match pattern {
-                            Pattern::Uniform => 1.0,
+                            Pattern::Uniform | Pattern::Lambert => 1.0,
                             Pattern::Ribs => {
                                 (TAU * (fx * (k % 3 + 1) as f32 + 0.1 * ch as f32)).cos()
                             }
@@ -201,4 +207,37 @@ pub fn assert_close(name: &str, w: u32, h: u32, expected: &[f32], actual: &[f32]
         panic!("{name}: relative RMSE {e:.4} > {tol} (images in {})", d.display());
     }
     e
+}
+
+fn write_lambert(
+    path: PathBuf,
+    writer: EigenWriter,
+    lights: &Sampling,
+    n: usize,
+    c: usize,
+    q: Quantization,
+) -> PathBuf {
+    let rho_pi = 0.8 / std::f32::consts::PI;
+    let cos: Vec<f32> = (0..lights.len()).map(|i| lights.direction(i).cos_theta() as f32).collect();
+    let mean_cos = cos.iter().sum::<f32>() / cos.len() as f32;
+    let unit = 1.0 / (n as f32).sqrt();
+    let mut basis = vec![0f32; c * n];
+    basis[..n].fill(unit);
+    let mut weights = vec![0f32; lights.len() * c];
+    for i in 0..lights.len() {
+        weights[i * c] = rho_pi * (cos[i] - mean_cos) / unit;
+    }
+    let (eigentextures, scale_offset) = quantize(&basis, c, q);
+    let slot = QuantizedSlot {
+        mean: vec![rho_pi * mean_cos; n],
+        eigentextures,
+        scale_offset,
+        weights,
+        eigenvalues: vec![1.0; lights.len()],
+    };
+    for j in 0..Sampling::ubo81().len() {
+        writer.write_slot(j, &slot).unwrap();
+    }
+    writer.finish().unwrap();
+    path
 }
