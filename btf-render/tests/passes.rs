@@ -1,0 +1,173 @@
+//! Pass selection and work measured by texture reads per pixel (nearest vs four, fewer
+//! components, per-pixel vs per-vertex), and hard cases: zero-area triangles, missing and
+//! zero normals, degenerate UVs, grazing cameras and lights at the horizon.
+
+mod common;
+
+use btf_core::eigen::Quantization;
+use btf_render::{RenderOptions, Scene, render_scene};
+use common::*;
+
+fn scene(dir: &std::path::Path, obj: &str, effects: &str, light: &str, eye: [f32; 3]) -> Scene {
+    let text = format!(
+        r#"
+        [output]
+        width = 48
+        height = 48
+        [[meshes]]
+        path = "{obj}"
+        [[materials]]
+        store = "m.eigen"
+        [camera]
+        eye = [{}, {}, {}]
+        target = [0.5, 0.5, 0.0]
+        up = [0.0, 0.0, 1.0]
+        fov_y_deg = 50.0
+        {light}
+        [effects]
+        {effects}
+        "#,
+        eye[0], eye[1], eye[2]
+    );
+    Scene::load(&write(dir, "scene.toml", &text)).unwrap()
+}
+
+const SUN: &str =
+    "[[lights]]\nkind = \"directional\"\ndirection = [0.3, 0.2, 1.0]\nirradiance = [1.0, 1.0, 1.0]";
+
+#[test]
+fn only_requested_work_is_done() {
+    let Some(gpu) = gpu("only_requested_work_is_done") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    write_store(dir.path(), "m.eigen", Pattern::Checker, 16, 16, 16, Quantization::F16);
+    write(dir.path(), "plane.obj", &plane_obj(4, false));
+    let eye = [0.5, -0.4, 1.0];
+    let run = |effects: &str| {
+        let f = render_scene(
+            &gpu,
+            &scene(dir.path(), "plane.obj", effects, SUN, eye),
+            RenderOptions { count_reads: true },
+        )
+        .unwrap();
+        let names: Vec<String> = f.stats.passes.iter().map(|p| p.name.clone()).collect();
+        (f.stats.reads_per_pixel.unwrap(), names)
+    };
+    let (four, names) = run("");
+    assert_eq!(names, ["btf (per-pixel)"], "no shadow, no per-vertex work: {names:?}");
+    let unshadowed = format!("{SUN}\nshadows = false");
+    let f = render_scene(
+        &gpu,
+        &scene(dir.path(), "plane.obj", "shadows = \"volume\"", &unshadowed, eye),
+        RenderOptions::default(),
+    )
+    .unwrap();
+    assert!(
+        !f.stats.ran("shadow"),
+        "no shadow pass without a shadowing light: {:?}",
+        f.stats.passes
+    );
+    let (_, names) = run("shadows = \"volume\"");
+    assert!(names.iter().any(|n| n.starts_with("shadow volume")), "{names:?}");
+    let (nearest, _) = run("view_blend = \"nearest\"");
+    let (c8, _) = run("components = 8");
+    let (c4_nearest, _) = run("components = 4\nview_blend = \"nearest\"");
+    let (per_vertex, names) = run("evaluation = \"per-vertex\"");
+    assert!(names.iter().any(|n| n.starts_with("per-vertex coefficients")));
+    // One slot with c = 16 costs 1 mean + 3 · 4 packed reads = 13.
+    eprintln!(
+        "reads/pixel: four {four:.2}, nearest {nearest:.2}, c=8 {c8:.2}, c=4 nearest {c4_nearest:.2}, per-vertex {per_vertex:.2}"
+    );
+    assert_eq!(nearest, 13.0);
+    assert_eq!(c4_nearest, 4.0);
+    assert!(four > 13.0 && four <= 4.0 * 13.0);
+    assert!((c8 / four - 7.0 / 13.0).abs() < 1e-9, "reads scale with ⌈c/4⌉");
+    assert!(per_vertex >= four, "per-pixel reads no more than the paper's per-vertex blending");
+}
+
+fn finite_render(gpu: &btf_render::Gpu, s: &Scene) -> btf_render::Frame {
+    let f = render_scene(gpu, s, RenderOptions::default()).unwrap();
+    assert!(f.all_finite(), "NaN or Inf in the image");
+    f
+}
+
+#[test]
+fn hard_cases_give_finite_images() {
+    let Some(gpu) = gpu("hard_cases_give_finite_images") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    write_store(dir.path(), "m.eigen", Pattern::Checker, 8, 8, 4, Quantization::U8);
+    // Zero-area triangles (repeated and collinear vertices), no normals, degenerate UVs.
+    let nasty = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0.5 0.5\n\
+                 f 1/1 2/2 3/3\nf 1/1 3/3 4/4\nf 1/1 1/1 2/2\nf 1/1 2/2 5/2\nf 2/4 3/4 5/4\n";
+    write(dir.path(), "nasty.obj", nasty);
+    let zero_normals = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 0\nf 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1\n";
+    write(dir.path(), "zero.obj", zero_normals);
+    let horizon =
+        "[[lights]]\nkind = \"directional\"\ndirection = [1.0, 0.0, 0.0]\nirradiance = [1, 1, 1]";
+    let below = "[[lights]]\nkind = \"point\"\nposition = [0.5, 0.5, -1.0]\nintensity = [1, 1, 1]";
+    for obj in ["nasty.obj", "zero.obj"] {
+        for light in [SUN, horizon, below] {
+            for eye in [[0.5, -0.4, 1.0], [0.5, -3.0, 1e-3]] {
+                for fx in [
+                    "",
+                    "evaluation = \"per-vertex\"\nshadows = \"volume\"",
+                    "shadows = \"map\"\nmsaa = 4",
+                ] {
+                    let f = finite_render(&gpu, &scene(dir.path(), obj, fx, light, eye));
+                    if light == horizon {
+                        // A light exactly at the horizon of the plane contributes nothing.
+                        assert!(
+                            f.rgb.iter().all(|v| v.abs() < 1e-6),
+                            "{obj} {fx}: horizon light lit the plane"
+                        );
+                    }
+                }
+            }
+        }
+    }
+    // The back of the sheet seen from below under a light from below is lit (two-sided cloth).
+    let f = finite_render(&gpu, &scene(dir.path(), "zero.obj", "", below, [0.5, 0.5, -1.5]));
+    assert!(f.pixel(24, 24).iter().sum::<f32>() > 0.0);
+}
+
+#[test]
+fn unusable_input_is_a_clear_error() {
+    let Some(gpu) = gpu("unusable_input_is_a_clear_error") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    write_store(dir.path(), "m.eigen", Pattern::Checker, 8, 8, 4, Quantization::F16);
+    write(dir.path(), "nouv.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n");
+    let e = render_scene(
+        &gpu,
+        &scene(dir.path(), "nouv.obj", "", SUN, [0.5, -0.4, 1.0]),
+        RenderOptions::default(),
+    )
+    .err()
+    .unwrap()
+    .to_string();
+    assert!(e.contains("nouv.obj") && e.contains("planar_uv"), "{e}");
+    let e = render_scene(
+        &gpu,
+        &scene(dir.path(), "nouv.obj", "components = 9", SUN, [0.5, -0.4, 1.0]),
+        RenderOptions::default(),
+    );
+    assert!(e.is_err());
+    write(dir.path(), "plane.obj", &plane_obj(1, false));
+    let e = render_scene(
+        &gpu,
+        &scene(dir.path(), "plane.obj", "components = 9", SUN, [0.5, -0.4, 1.0]),
+        RenderOptions::default(),
+    )
+    .err()
+    .unwrap()
+    .to_string();
+    assert!(e.contains("9 components") && e.contains("holds 4"), "{e}");
+    write(dir.path(), "nan.obj", "v 0 0 0\nv 1 0 nan\nv 1 1 0\nvt 0 0\nf 1/1 2/1 3/1\n");
+    let e = render_scene(
+        &gpu,
+        &scene(dir.path(), "nan.obj", "", SUN, [0.5, -0.4, 1.0]),
+        RenderOptions::default(),
+    )
+    .err()
+    .unwrap()
+    .to_string();
+    assert!(e.contains("nan.obj") && e.contains("vertex 2"), "{e}");
+}
