@@ -90,14 +90,7 @@ pub fn pca_slot(
     let x = &slot.data;
 
     // Pass 1: Gram matrix in f64.
-    let mut gram = vec![0f64; n * n];
-    let mut blk = Vec::new();
-    for c0 in (0..m).step_by(BLOCK) {
-        let c1 = (c0 + BLOCK).min(m);
-        block_f64(x, n, m, c0, c1, &mut blk);
-        let b = Mat::new(&blk, n, c1 - c0);
-        dgemm(1.0, b, b.t(), 1.0, &mut gram, n);
-    }
+    let gram = gram_f64(x, n, m);
     let eig = SymmetricEigen::new(DMatrix::from_row_slice(n, n, &gram));
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
@@ -115,6 +108,7 @@ pub fn pca_slot(
     }
 
     // Pass 2: exact eigentextures B = liftᵀ X̃ (c × m), in f64.
+    let mut blk = Vec::new();
     let mut basis = vec![0f64; c * m];
     let mut out = vec![0f64; c * BLOCK];
     for c0 in (0..m).step_by(BLOCK) {
@@ -132,33 +126,42 @@ pub fn pca_slot(
         let big = row.iter().copied().fold(0f64, |a, v| if v.abs() > a.abs() { v } else { a });
         if big < 0.0 {
             row.iter_mut().for_each(|v| *v = -*v);
+            for i in 0..n {
+                lift[i * c + k] = -lift[i * c + k];
+            }
         }
     }
     let basis_f32: Vec<f32> = basis.iter().map(|&v| v as f32).collect();
+    drop(basis);
     let (raw, scale_offset) = quantize(&basis_f32, c, quantization);
+    drop(basis_f32);
     let stored_basis: Vec<f64> =
         dequantize(&raw, &scale_offset, quantization).iter().map(|&v| v as f64).collect();
 
-    // Pass 3: projections of X̃ on the exact and the stored basis (n × 2c) and Gram
-    // matrices of both bases (2c × 2c).
-    let mut both = vec![0f64; 2 * c * BLOCK];
-    let mut proj = vec![0f64; n * 2 * c];
-    let mut bgram = vec![0f64; 4 * c * c];
+    // The exact basis is B = liftᵀX̃, so its projections X̃Bᵀ = G·lift and its Gram matrix
+    // BBᵀ = liftᵀ·G·lift follow from the small Gram matrix alone.
+    let mut proj_exact = vec![0f64; n * c];
+    dgemm(1.0, Mat::new(&gram, n, n), Mat::new(&lift, n, c), 0.0, &mut proj_exact, c);
+    let mut bgram_exact = vec![0f64; c * c];
+    dgemm(1.0, Mat::new(&lift, n, c).t(), Mat::new(&proj_exact, n, c), 0.0, &mut bgram_exact, c);
+
+    // Pass 3: projections of X̃ on the stored basis (n × c) and its Gram matrix (c × c).
+    let mut proj = vec![0f64; n * c];
+    let mut bgram = vec![0f64; c * c];
+    let mut sb = vec![0f64; c * BLOCK];
     for c0 in (0..m).step_by(BLOCK) {
         let c1 = (c0 + BLOCK).min(m);
         let w = c1 - c0;
         block_f64(x, n, m, c0, c1, &mut blk);
         for k in 0..c {
-            both[k * w..(k + 1) * w].copy_from_slice(&basis[k * m + c0..k * m + c1]);
-            both[(c + k) * w..(c + k + 1) * w]
-                .copy_from_slice(&stored_basis[k * m + c0..k * m + c1]);
+            sb[k * w..(k + 1) * w].copy_from_slice(&stored_basis[k * m + c0..k * m + c1]);
         }
-        let bb = Mat::new(&both[..2 * c * w], 2 * c, w);
-        dgemm(1.0, Mat::new(&blk, n, w), bb.t(), 1.0, &mut proj, 2 * c);
-        dgemm(1.0, bb, bb.t(), 1.0, &mut bgram, 2 * c);
+        let bb = Mat::new(&sb[..c * w], c, w);
+        dgemm(1.0, Mat::new(&blk, n, w), bb.t(), 1.0, &mut proj, c);
+        dgemm(1.0, bb, bb.t(), 1.0, &mut bgram, c);
     }
-    let (sse, _) = least_squares(&proj, &bgram, &gram, n, c, 0);
-    let (sse_stored, weights) = least_squares(&proj, &bgram, &gram, n, c, c);
+    let (sse, _) = least_squares(&proj_exact, &bgram_exact, &gram, n, c);
+    let (sse_stored, weights) = least_squares(&proj, &bgram, &gram, n, c);
     let discarded_eigen_sum = (trace - eigenvalues[..effective].iter().sum::<f64>()).max(0.0);
 
     for (l, w) in weights.chunks(c).enumerate() {
@@ -175,18 +178,46 @@ pub fn pca_slot(
     })
 }
 
-/// Least-squares weights of each centred image on one of the two bases (columns
-/// `off..off+c` of the projections) and the resulting total squared error
-/// `Σ_i ‖x̃_i‖² − q_iᵀ M⁺ q_i`, with `M` that basis's Gram matrix.
-fn least_squares(
-    proj: &[f64],
-    bgram: &[f64],
-    gram: &[f64],
-    n: usize,
-    c: usize,
-    off: usize,
-) -> (f64, Vec<f32>) {
-    let m = DMatrix::from_fn(c, c, |a, b| bgram[(off + a) * 2 * c + off + b]);
+/// `X̃X̃ᵀ` in `f64` for the row-major `n × m` matrix `x`, streaming column blocks converted
+/// to `f64`. Only the blocks on and above the diagonal are multiplied (rows split into
+/// three bands), then mirrored: two thirds of the work of the full product.
+fn gram_f64(x: &[f32], n: usize, m: usize) -> Vec<f64> {
+    let band = n.div_ceil(3).max(1);
+    let bands: Vec<(usize, usize)> = (0..n).step_by(band).map(|r| (r, (r + band).min(n))).collect();
+    let mut gram = vec![0f64; n * n];
+    let mut blk = Vec::new();
+    let mut part = vec![0f64; band * band];
+    for c0 in (0..m).step_by(BLOCK) {
+        let c1 = (c0 + BLOCK).min(m);
+        let w = c1 - c0;
+        block_f64(x, n, m, c0, c1, &mut blk);
+        for (bi, &(r0, r1)) in bands.iter().enumerate() {
+            for &(s0, s1) in &bands[bi..] {
+                let (rows, cols) = (r1 - r0, s1 - s0);
+                let a = Mat::new(&blk[r0 * w..r1 * w], rows, w);
+                let b = Mat::new(&blk[s0 * w..s1 * w], cols, w);
+                dgemm(1.0, a, b.t(), 0.0, &mut part[..rows * cols], cols);
+                for i in 0..rows {
+                    for j in 0..cols {
+                        gram[(r0 + i) * n + s0 + j] += part[i * cols + j];
+                    }
+                }
+            }
+        }
+    }
+    for i in 0..n {
+        for j in 0..i {
+            gram[i * n + j] = gram[j * n + i];
+        }
+    }
+    gram
+}
+
+/// Least-squares weights of each centred image on a basis, given the projections `q_i`
+/// (`n × c`) and the basis's Gram matrix `M` (`c × c`), and the resulting total squared
+/// error `Σ_i ‖x̃_i‖² − q_iᵀ M⁻¹ q_i`.
+fn least_squares(proj: &[f64], bgram: &[f64], gram: &[f64], n: usize, c: usize) -> (f64, Vec<f32>) {
+    let m = DMatrix::from_fn(c, c, |a, b| bgram[a * c + b]);
     // Zero components (rank deficiency) make M singular: solve on the non-zero ones.
     let active: Vec<usize> = (0..c).filter(|&k| m[(k, k)] > 0.0).collect();
     let ma = DMatrix::from_fn(active.len(), active.len(), |a, b| m[(active[a], active[b])]);
@@ -194,7 +225,7 @@ fn least_squares(
     let mut sse = 0f64;
     let mut weights = vec![0f32; n * c];
     for i in 0..n {
-        let q = nalgebra::DVector::from_fn(active.len(), |a, _| proj[i * 2 * c + off + active[a]]);
+        let q = nalgebra::DVector::from_fn(active.len(), |a, _| proj[i * c + active[a]]);
         let p = match &chol {
             Some(ch) => ch.solve(&q),
             None => q.clone(),
