@@ -3,11 +3,13 @@
 //!
 //! - [`material`]: height-field materials rendered into BTF stores (`btf synth material`);
 //! - [`env`]: equirectangular HDR environments (sky, studio, interior) and their loader;
+//! - [`mesh`]: plane, sphere, curtain, simulated drape and garments as OBJ;
 //! - [`noise`], [`vec3`]: deterministic noise and small vector helpers.
 
 pub mod env;
 pub mod error;
 pub mod material;
+pub mod mesh;
 pub mod noise;
 pub mod vec3;
 
@@ -16,3 +18,4 @@ pub use error::{Error, Result};
 pub use material::{
     GenerateOptions, GenerateReport, Material, MaterialKind, MaterialParams, MaterialSpec, generate,
 };
+pub use mesh::{Mesh, MeshKind, Resolution, synth_mesh, write_obj};

@@ -1,0 +1,66 @@
+//! Wavefront OBJ output: `v`, `vt`, `vn` and `f p/t/n` records (1-based), positions and
+//! normals sharing indices, UVs indexed separately so seams keep a closed surface closed.
+//! Written to a temporary file and renamed into place.
+
+use super::Mesh;
+use crate::{Error, Result};
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// Writes `mesh` to `path` as OBJ with a comment header `comment`.
+pub fn write_obj(mesh: &Mesh, path: &Path, comment: &str) -> Result<()> {
+    let finite =
+        mesh.positions.iter().chain(&mesh.normals).all(|p| p.iter().all(|v| v.is_finite()))
+            && mesh.uvs.iter().all(|t| t.iter().all(|v| v.is_finite()));
+    if !finite
+        || mesh.normals.len() != mesh.positions.len()
+        || mesh.triangles.len() != mesh.triangle_uvs.len()
+    {
+        return Err(Error::Invalid(format!(
+            "{}: mesh has non-finite or inconsistent data",
+            path.display()
+        )));
+    }
+    let mut s = String::with_capacity(
+        64 * (mesh.positions.len() * 2 + mesh.uvs.len() + mesh.triangles.len()),
+    );
+    for line in comment.lines() {
+        let _ = writeln!(s, "# {line}");
+    }
+    let _ = writeln!(
+        s,
+        "# {} vertices, {} triangles; +z up, metres; UV v up",
+        mesh.positions.len(),
+        mesh.triangles.len()
+    );
+    for p in &mesh.positions {
+        let _ = writeln!(s, "v {:.6} {:.6} {:.6}", p[0], p[1], p[2]);
+    }
+    for t in &mesh.uvs {
+        let _ = writeln!(s, "vt {:.6} {:.6}", t[0], t[1]);
+    }
+    for n in &mesh.normals {
+        let _ = writeln!(s, "vn {:.6} {:.6} {:.6}", n[0], n[1], n[2]);
+    }
+    for (f, ft) in mesh.triangles.iter().zip(&mesh.triangle_uvs) {
+        let _ = writeln!(
+            s,
+            "f {}/{}/{} {}/{}/{} {}/{}/{}",
+            f[0] + 1,
+            ft[0] + 1,
+            f[0] + 1,
+            f[1] + 1,
+            ft[1] + 1,
+            f[1] + 1,
+            f[2] + 1,
+            ft[2] + 1,
+            f[2] + 1
+        );
+    }
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("mesh.obj");
+    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
+    std::fs::write(&tmp, s).map_err(|e| Error::io(&tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+}
