@@ -95,7 +95,10 @@ impl<R: Read + Seek> BdiReader<R> {
         let h = &self.header;
         let (nc, nl, nv) = (h.channels(), h.lights.len(), h.views.len());
         let image = h.width * h.height * nc;
-        let per_view = self.r.check_alloc((nl * image) as u64, 4, "view buffer")? / 4;
+        if let Some(&v) = views.iter().find(|&&v| v >= nv) {
+            return Err(self.r.invalid("views", format!("view {v} requested, file has {nv}")));
+        }
+        let per_view = self.r.check_limit((nl * image) as u64, 4, "view buffer")? / 4;
         let mut out: Vec<Vec<f32>> = views.iter().map(|_| vec![0f32; per_view]).collect();
         let abrdf = nc * nl * nv;
         let per_chunk = h.width * self.scan_lines_per_chunk;

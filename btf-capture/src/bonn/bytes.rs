@@ -78,6 +78,22 @@ impl<R: Read + Seek> ByteReader<R> {
         Ok(())
     }
 
+    /// Checks that `count` elements of `elem_bytes` each stay within the allocation limit
+    /// (for buffers that are computed, not read).
+    pub fn check_limit(&self, count: u64, elem_bytes: u64, field: &str) -> Result<usize> {
+        let bytes = count.checked_mul(elem_bytes).ok_or_else(|| {
+            Error::limit(&self.file, field, format!("{count} x {elem_bytes} bytes overflows"))
+        })?;
+        if bytes > self.limits.max_alloc_bytes {
+            return Err(Error::limit(
+                &self.file,
+                field,
+                format!("{bytes} bytes needed, limit {}", self.limits.max_alloc_bytes),
+            ));
+        }
+        usize::try_from(bytes).map_err(|_| Error::limit(&self.file, field, "too large"))
+    }
+
     /// Checks that `count` elements of `elem_bytes` each may be allocated and are present.
     pub fn check_alloc(&self, count: u64, elem_bytes: u64, field: &str) -> Result<usize> {
         let bytes = count.checked_mul(elem_bytes).ok_or_else(|| {

@@ -69,7 +69,9 @@ fn recover_rings(dirs: &[Direction]) -> Option<Vec<Ring>> {
             j += 1;
         }
         let group = &by_theta[i..j];
-        let theta = group.iter().map(|d| d.theta_deg).sum::<f64>() / group.len() as f64;
+        // Files store f32 radians: round to 1e-3° so that 40° comes back as 40°.
+        let round = |x: f64| (x * 1000.0).round() / 1000.0;
+        let theta = round(group.iter().map(|d| d.theta_deg).sum::<f64>() / group.len() as f64);
         if theta < MATCH_TOL_DEG {
             if group.len() != 1 {
                 return None;
@@ -79,7 +81,7 @@ fn recover_rings(dirs: &[Direction]) -> Option<Vec<Ring>> {
             let mut phis: Vec<f64> = group.iter().map(|d| d.phi_deg).collect();
             phis.sort_by(f64::total_cmp);
             let step = 360.0 / phis.len() as f64;
-            let offset = phis[0];
+            let offset = round(phis[0]);
             let even = phis
                 .iter()
                 .enumerate()

@@ -113,18 +113,35 @@ impl Header {
     }
 }
 
-/// Reads the signature: the longest known one that prefixes the file.
+/// True when the 8 bytes at `at` look like the start of a metadata block (size ≥ 264,
+/// version 1–4) or of the legacy PVF layout.
+fn plausible_meta(head: &[u8], at: usize) -> bool {
+    let word =
+        |i: usize| head.get(i..i + 4).map(|b| u32::from_le_bytes(b.try_into().expect("4 bytes")));
+    match (word(at), word(at + 4)) {
+        (Some(size), Some(version)) => {
+            (size >= 264 && (1..=4).contains(&version)) || size == 301_074
+        }
+        _ => false,
+    }
+}
+
+/// Reads the signature. When several known signatures prefix the file (`!FMF06FC` and
+/// `!FMF06FCR`: a metadata size whose low byte is `R` makes them collide), the longest one
+/// followed by a plausible metadata block wins, else the longest.
 pub fn read_signature<R: Read + Seek>(r: &mut ByteReader<R>) -> Result<Signature> {
-    let n = r.remaining().min(10);
+    let n = r.remaining().min(18);
     let head = r.bytes(n, "signature")?;
-    let found = SIGNATURES
-        .iter()
-        .filter(|s| head.starts_with(s.text.as_bytes()))
-        .max_by_key(|s| s.text.len())
-        .copied();
-    let Some(s) = found else {
-        let shown: String =
-            head.iter().map(|&b| if b.is_ascii_graphic() { b as char } else { '.' }).collect();
+    let mut found: Vec<Signature> =
+        SIGNATURES.iter().filter(|s| head.starts_with(s.text.as_bytes())).copied().collect();
+    found.sort_by_key(|s| std::cmp::Reverse(s.text.len()));
+    let best =
+        found.iter().find(|s| plausible_meta(&head, s.text.len())).or(found.first()).copied();
+    let Some(s) = best else {
+        let shown: String = head[..head.len().min(10)]
+            .iter()
+            .map(|&b| if b.is_ascii_graphic() { b as char } else { '.' })
+            .collect();
         let known: Vec<&str> = SIGNATURES.iter().map(|s| s.text).collect();
         return Err(r.invalid(
             "signature",
