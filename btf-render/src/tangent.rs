@@ -51,13 +51,8 @@ fn frame_from(normal: Vec3, dpdu: Vec3, dpdv: Vec3) -> [f32; 4] {
         .try_normalize(1e-12)
         .or_else(|| (row_dir - n * n.dot(&row_dir)).try_normalize(1e-12).map(|b| b.cross(&n)))
         .unwrap_or_else(|| any_perpendicular(n));
-    let s = if n.cross(&t).dot(&row_dir) > 0.0 {
-        1.0
-    } else if row_dir.norm_squared() > 0.0 {
-        -1.0
-    } else {
-        -1.0 // no information: assume the usual unmirrored OBJ mapping
-    };
+    // Without information (row_dir = 0) assume the usual unmirrored OBJ mapping, s = −1.
+    let s = if n.cross(&t).dot(&row_dir) > 0.0 { 1.0 } else { -1.0 };
     [t.x, t.y, t.z, s]
 }
 

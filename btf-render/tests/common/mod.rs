@@ -202,7 +202,7 @@ pub fn save_comparison(name: &str, w: u32, h: u32, expected: &[f32], actual: &[f
 /// Asserts `rel_rmse(expected, actual) ≤ tol`, leaving comparison images on failure.
 pub fn assert_close(name: &str, w: u32, h: u32, expected: &[f32], actual: &[f32], tol: f64) -> f64 {
     let e = rel_rmse(expected, actual);
-    if !(e <= tol) {
+    if e.is_nan() || e > tol {
         let d = save_comparison(name, w, h, expected, actual);
         panic!("{name}: relative RMSE {e:.4} > {tol} (images in {})", d.display());
     }
