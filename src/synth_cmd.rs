@@ -18,7 +18,7 @@ pub enum SynthCmd {
     Env(EnvArgs),
     /// A mesh with normals and UVs (OBJ).
     Mesh(MeshArgs),
-    /// Raw images of a virtual gonioreflectometer (not implemented yet).
+    /// Raw images of the sample on its holder plate from a virtual gonioreflectometer.
     Capture(CaptureArgs),
 }
 
@@ -91,13 +91,37 @@ pub struct MeshArgs {
     pub output: PathBuf,
 }
 
-/// `btf synth capture` (placeholder until the virtual gonioreflectometer exists).
+/// `btf synth capture`.
 #[derive(Args)]
 pub struct CaptureArgs {
-    /// Material kind to capture.
+    /// Material kind on the plate (lambert, corduroy, knit, woven, wallpaper, stone).
     #[arg(long)]
     pub material: String,
-    /// Output folder of raw images.
+    /// Texels per side of the material.
+    #[arg(long, default_value_t = 64)]
+    pub size: usize,
+    /// View and light sampling: ubo81, ubo81-h1 or dome151.
+    #[arg(long, default_value = "ubo81")]
+    pub sampling: String,
+    /// Seed of the material.
+    #[arg(long, default_value_t = 1)]
+    pub material_seed: u64,
+    /// Image size W,H in pixels.
+    #[arg(long, default_value = "320,240")]
+    pub resolution: String,
+    /// Robot pose error: rotation DEG and shift MM (standard deviations).
+    #[arg(long, default_value = "0.3,0.3")]
+    pub pose_noise: String,
+    /// Sensor noise: read noise (DN) and shot-noise variance per DN.
+    #[arg(long, default_value = "2,0.5")]
+    pub noise: String,
+    /// Vignetting strength (0 = none, 1 = natural cos⁴).
+    #[arg(long, default_value_t = 1.0)]
+    pub vignetting: f64,
+    /// Seed of poses and noise.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Output folder of raw images, capture.toml and truth.toml.
     #[arg(long)]
     pub out: PathBuf,
 }
@@ -108,7 +132,7 @@ pub fn run(cmd: SynthCmd) -> Result<()> {
         SynthCmd::Material(a) => material(a),
         SynthCmd::Env(a) => env(a),
         SynthCmd::Mesh(a) => mesh(a),
-        SynthCmd::Capture(_) => bail!("btf synth capture is not implemented yet"),
+        SynthCmd::Capture(a) => capture(a),
     }
 }
 
@@ -158,11 +182,22 @@ fn material(a: MaterialArgs) -> Result<()> {
 
 fn env(a: EnvArgs) -> Result<()> {
     let kind = EnvKind::from_name(&a.kind)?;
-    let params = EnvParams { sun_elevation_deg: a.sun_elevation, sun_azimuth_deg: a.sun_azimuth, turbidity: a.turbidity };
+    let params = EnvParams {
+        sun_elevation_deg: a.sun_elevation,
+        sun_azimuth_deg: a.sun_azimuth,
+        turbidity: a.turbidity,
+    };
     let map = datasets::synth_env(kind, &params, a.width)?;
     datasets::write_exr(&map, &a.output)?;
     let max = map.pixels.iter().flat_map(|p| p.iter()).fold(0f32, |m, &v| m.max(v));
-    eprintln!("{} {}x{} (max {:.3e}) -> {}", a.kind, map.width, map.height, max, a.output.display());
+    eprintln!(
+        "{} {}x{} (max {:.3e}) -> {}",
+        a.kind,
+        map.width,
+        map.height,
+        max,
+        a.output.display()
+    );
     Ok(())
 }
 
@@ -181,6 +216,40 @@ fn mesh(a: MeshArgs) -> Result<()> {
         mesh.triangles.len(),
         t0.elapsed().as_secs_f64(),
         a.output.display()
+    );
+    Ok(())
+}
+
+fn pair<T: std::str::FromStr>(s: &str, what: &str) -> Result<(T, T)> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if let [a, b] = parts[..]
+        && let (Ok(a), Ok(b)) = (a.parse(), b.parse())
+    {
+        return Ok((a, b));
+    }
+    bail!("{what} '{s}': expected two comma-separated numbers")
+}
+
+fn capture(a: CaptureArgs) -> Result<()> {
+    let kind = MaterialKind::from_name(&a.material)?;
+    let mut material = MaterialSpec::new(kind, a.size);
+    material.sampling = btf_core::Sampling::by_name(&a.sampling)?;
+    material.seed = a.material_seed;
+    let mut spec = datasets::capture::CaptureSpec::new(material);
+    (spec.width, spec.height) = pair(&a.resolution, "--resolution")?;
+    (spec.pose_noise_deg, spec.pose_noise_mm) = pair(&a.pose_noise, "--pose-noise")?;
+    (spec.read_noise_dn, spec.shot_noise_per_dn) = pair(&a.noise, "--noise")?;
+    spec.vignetting = a.vignetting;
+    spec.seed = a.seed;
+    let r = datasets::capture::capture(&spec, &a.out, show_progress())
+        .with_context(|| format!("capturing {} into {}", a.material, a.out.display()))?;
+    eprintln!(
+        "capture {}: {} images written, {} kept, {:.1} s -> {}",
+        a.material,
+        r.images_written,
+        r.images_skipped,
+        r.seconds,
+        a.out.display()
     );
     Ok(())
 }

@@ -2,10 +2,12 @@
 //! gonioreflectometer, HDR environments and garment meshes (DESIGN.md §5).
 //!
 //! - [`material`]: height-field materials rendered into BTF stores (`btf synth material`);
+//! - [`capture`]: the virtual gonioreflectometer (raw images of the sample on its plate);
 //! - [`env`]: equirectangular HDR environments (sky, studio, interior) and their loader;
 //! - [`mesh`]: plane, sphere, curtain, simulated drape and garments as OBJ;
 //! - [`noise`], [`vec3`]: deterministic noise and small vector helpers.
 
+pub mod capture;
 pub mod env;
 pub mod error;
 pub mod material;

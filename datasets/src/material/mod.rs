@@ -318,6 +318,15 @@ impl Material {
         self.brdf.eval(n, view, light, hit.albedo).map(|f| f * mu_i * t)
     }
 
+    /// The BTF value at any point `(px, py)` of the reference plane (texel units, texel
+    /// `(x, y)` spans `[x, x + 1) × [y, y + 1)`), for unit view and light vectors.
+    pub fn eval_at(&self, px: f64, py: f64, view: [f64; 3], light: [f64; 3]) -> [f64; 3] {
+        if view[2] <= 0.0 {
+            return [0.0; 3];
+        }
+        self.shade(&self.surface.view_hit_at(px, py, view), view, light)
+    }
+
     /// The BTF value of texel `(x, y)` for any view and light (unit tangent-space vectors).
     pub fn eval(&self, x: usize, y: usize, view: [f64; 3], light: [f64; 3]) -> [f64; 3] {
         if view[2] <= 0.0 {

@@ -118,7 +118,13 @@ impl Surface {
     /// view direction `view` (unit, pointing to the viewer, `view_z > 0`) down to the first
     /// surface point it meets; bisection refines the crossing to 1/64 of a step.
     pub fn view_hit(&self, x: usize, y: usize, view: V3) -> Hit {
-        let start = [x as f64 + 0.5, y as f64 + 0.5, self.h_max];
+        self.view_hit_at(x as f64 + 0.5, y as f64 + 0.5, view)
+    }
+
+    /// As [`Surface::view_hit`] from any point `(px, py)` of the reference plane (texel
+    /// units), e.g. where a perspective camera ray meets the sample.
+    pub fn view_hit_at(&self, px: f64, py: f64, view: V3) -> Hit {
+        let start = [px, py, self.h_max];
         let d = [-view[0], -view[1], -view[2].max(1e-6)];
         let f =
             |t: f64| start[2] + t * d[2] - self.height_at(start[0] + t * d[0], start[1] + t * d[1]);
