@@ -2,14 +2,17 @@
 //! the libraries (`btf-core`, `datasets`, `btf-capture`, `btf-render`). No numerics live here.
 
 mod cmd_compress;
+mod cmd_demo;
 mod cmd_export;
 mod cmd_inspect;
 mod cmd_reconstruct;
+mod demo_scene;
 mod imageio;
 mod plot;
 mod progress;
 mod render_cmd;
 mod sweep;
+mod synth_cmd;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -24,6 +27,11 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Run the whole pipeline on embedded defaults: synthesise, compress, render, report.
+    Demo(cmd_demo::DemoArgs),
+    /// Synthesise materials, environments, meshes and raw captures with known ground truth.
+    #[command(subcommand)]
+    Synth(synth_cmd::SynthCmd),
     /// Print what a BTF or eigen store holds.
     Inspect(cmd_inspect::InspectArgs),
     /// Compress a BTF store by per-view-slot PCA (or sweep the number of components).
@@ -32,17 +40,19 @@ enum Command {
     Reconstruct(cmd_reconstruct::ReconstructArgs),
     /// Export data for other tools.
     Export(cmd_export::ExportArgs),
-    /// Render a scene.
+    /// Render a scene (TOML) on the GPU.
     Render(render_cmd::RenderArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Demo(a) => cmd_demo::run(a),
         Command::Inspect(a) => cmd_inspect::run(a),
         Command::Compress(a) => cmd_compress::run(a),
         Command::Reconstruct(a) => cmd_reconstruct::run(a),
         Command::Export(a) => cmd_export::run(a),
+        Command::Synth(c) => synth_cmd::run(c),
         Command::Render(a) => render_cmd::run(a),
     };
     match result {

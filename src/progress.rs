@@ -17,3 +17,9 @@ pub fn bar(len: u64, what: &str) -> ProgressBar {
     pb.set_message(what.to_owned());
     pb
 }
+
+/// True when progress bars should be drawn.
+pub fn enabled() -> bool {
+    std::env::var_os("BTF_NO_PROGRESS").is_none()
+        && std::io::IsTerminal::is_terminal(&std::io::stderr())
+}

@@ -28,6 +28,8 @@ pub struct SweepRow {
     pub rel_rmse: f64,
     /// PSNR in dB.
     pub psnr_db: f64,
+    /// Relative RMSE of the exact (unquantised) PCA with the same components.
+    pub rel_rmse_exact: f64,
     /// Seconds to compress the whole BTF.
     pub compress_s: f64,
     /// Milliseconds to reconstruct one texture on the CPU (four views × four lights).
@@ -99,6 +101,7 @@ pub fn run(input: &BtfStore, cs: &[usize], q: Quantization, dir: &Path) -> Resul
             stored_components: r.components,
             rel_rmse: r.rel_rmse,
             psnr_db: r.psnr_db,
+            rel_rmse_exact: r.rel_rmse_exact,
             compress_s: r.seconds,
             reconstruct_ms,
             output_bytes: r.output_bytes,
@@ -106,7 +109,28 @@ pub fn run(input: &BtfStore, cs: &[usize], q: Quantization, dir: &Path) -> Resul
         });
         std::fs::remove_dir_all(&out).ok();
     }
+    // What the storage precision costs: the largest c once more with the other quantisation.
+    let c_max = *cs.iter().max().unwrap();
+    let other = if q == Quantization::F16 { Quantization::U8 } else { Quantization::F16 };
+    let out = work.join("other.eig");
+    let r_other = compress_with_progress(
+        input,
+        &out,
+        CompressParams { components: c_max, quantization: other, resume: false },
+    )?;
     std::fs::remove_dir_all(&work).ok();
+    let last = rows.iter().find(|r| r.components == c_max).unwrap();
+    let quant_md = format!(
+        "\n## What storage precision costs (c = {})\n\n| eigentextures | rel. RMSE | store MiB |\n|---|---:|---:|\n| exact (f64, not stored) | {:.3e} | — |\n| {} | {:.3e} | {:.2} |\n| {} | {:.3e} | {:.2} |\n",
+        last.stored_components,
+        last.rel_rmse_exact,
+        q.name(),
+        last.rel_rmse,
+        last.output_bytes as f64 / 1048576.0,
+        other.name(),
+        r_other.rel_rmse,
+        r_other.output_bytes as f64 / 1048576.0
+    );
     write_tables(dir, &rows, input)?;
     write_png(
         &dir.join("reconstructions.png"),
@@ -191,6 +215,7 @@ pub fn run(input: &BtfStore, cs: &[usize], q: Quantization, dir: &Path) -> Resul
         q.name()
     )?;
     md.push_str(&std::fs::read_to_string(dir.join("sweep.md"))?);
+    md.push_str(&quant_md);
     writeln!(
         md,
         "\n![error](error.png) ![accuracy vs time](accuracy_vs_time.png)\n\n![size and time](size_time.png) ![eigenvalues](eigenvalues.png)\n"
@@ -204,7 +229,7 @@ pub fn run(input: &BtfStore, cs: &[usize], q: Quantization, dir: &Path) -> Resul
         "Difference heat-maps (length of the RGB error vector; green = 0, red ≥ 10 % of the image's peak):\n\n![heat-maps](heatmaps.png)"
     )?;
     crate::imageio::write_text(&dir.join("report.md"), &md)?;
-    println!("{}", std::fs::read_to_string(dir.join("sweep.md"))?);
+    println!("{}{quant_md}", std::fs::read_to_string(dir.join("sweep.md"))?);
     println!("report written to {}", dir.join("report.md").display());
     Ok(())
 }
