@@ -58,8 +58,13 @@ pub struct Frame {
 
 /// sRGB transfer function of a linear value in `[0, 1]`.
 pub fn srgb_encode(linear: f32) -> f32 {
-    let x = linear.clamp(0.0, 1.0);
-    if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 }
+    if linear.is_nan() || linear <= 0.0 {
+        return 0.0;
+    }
+    if linear >= 1.0 {
+        return 1.0;
+    }
+    if linear <= 0.003_130_8 { 12.92 * linear } else { 1.055 * linear.powf(1.0 / 2.4) - 0.055 }
 }
 
 impl Frame {
@@ -109,6 +114,7 @@ mod tests {
         assert!((srgb_encode(1.0) - 1.0).abs() < 1e-6);
         assert!((srgb_encode(0.2140) - 0.5).abs() < 1e-3);
         assert_eq!(srgb_encode(7.0), 1.0);
+        assert_eq!(srgb_encode(f32::NAN), 0.0);
     }
 
     #[test]
