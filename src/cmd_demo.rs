@@ -30,6 +30,9 @@ pub struct DemoArgs {
     /// Rendered image width (height = 3/4 of it).
     #[arg(long, default_value_t = 480)]
     width: u32,
+    /// Component counts of the sweep report.
+    #[arg(long, value_delimiter = ',', default_value = "1,2,4,8,16")]
+    sweep: Vec<usize>,
     /// Start from scratch instead of reusing finished stages.
     #[arg(long)]
     fresh: bool,
@@ -103,9 +106,8 @@ pub fn run(a: DemoArgs) -> Result<()> {
     })?;
     let sweep_dir = a.out.join("sweep");
     stage(&mut stages, "component sweep", sweep_dir.join("report.md").exists(), || {
-        let cs: Vec<usize> =
-            [1, 2, 4, 8, 16, 32].into_iter().filter(|&c| c <= a.components.max(1)).collect();
-        crate::sweep::run(&btf, &cs, Quantization::F16, &sweep_dir)
+        anyhow::ensure!(!a.sweep.is_empty() && !a.sweep.contains(&0), "--sweep needs counts ≥ 1");
+        crate::sweep::run(&btf, &a.sweep, Quantization::F16, &sweep_dir)
     })?;
     let renders = crate::demo_scene::run(&a.out, &eig_path, a.width, &mut |name, done, f| {
         stage(&mut stages, name, done, f)

@@ -114,11 +114,13 @@ pub fn run(out: &Path, eig: &Path, width: u32, stage: &mut StageFn<'_>) -> Resul
     let mut md = String::from("## Renders\n\n");
     let gpu = match Gpu::new() {
         Ok(g) => g,
+        Err(e) if std::env::var("BTF_REQUIRE_GPU").is_ok_and(|v| v == "1") => {
+            return Err(e).context("BTF_REQUIRE_GPU=1 but no GPU adapter");
+        }
         Err(e) => {
-            writeln!(
-                md,
-                "No GPU adapter (install `mesa-vulkan-drivers` for the CPU one): {e}. Renders skipped."
-            )?;
+            let msg = "no GPU adapter (install `mesa-vulkan-drivers` for the CPU one)";
+            eprintln!("warning: {msg}: {e}; renders skipped");
+            writeln!(md, "Renders skipped: {msg}: {e}.")?;
             return Ok(md);
         }
     };
