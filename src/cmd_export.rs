@@ -1,7 +1,11 @@
-//! `btf export`: data for other tools. `--format npy` writes one view slot as a
-//! `lights × (h·w·3)` float32 array, so numpy users can check our numbers.
+//! `btf export`: data for other tools. `npy` writes one view slot of a BTF store as a
+//! `lights × (h·w·3)` float32 array; `ubo2003` writes a BTF store as a Bonn image folder;
+//! `pvf` writes an eigen store as a Bonn PVF file; `exr` writes one slot of an eigen store
+//! (mean and eigentextures) as a multi-layer OpenEXR for any image tool.
 
 use anyhow::{Context, Result, bail};
+use btf_capture::bonn::export::{ImageEncoding, export_pvf, export_ubo2003};
+use btf_core::eigen::EigenStore;
 use btf_core::store::BtfStore;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -9,15 +13,21 @@ use std::path::{Path, PathBuf};
 /// Arguments of `btf export`.
 #[derive(clap::Args)]
 pub struct ExportArgs {
-    /// Input BTF store.
+    /// Input store (a BTF store for npy/ubo2003, an eigen store for pvf/exr).
     input: PathBuf,
-    /// View slot to export.
+    /// View slot to export (npy, exr).
     #[arg(long)]
-    slot: usize,
-    /// Output format (npy).
+    slot: Option<usize>,
+    /// Output format (npy|ubo2003|pvf|exr).
     #[arg(long, default_value = "npy")]
     format: String,
-    /// Output file.
+    /// Image encoding of a ubo2003 folder (png|png16|jpg|exr).
+    #[arg(long, default_value = "png16")]
+    image: String,
+    /// Material name at the start of ubo2003 file names.
+    #[arg(long, default_value = "material")]
+    name: String,
+    /// Output file (or folder for ubo2003).
     #[arg(short = 'o', long)]
     output: PathBuf,
 }
@@ -47,22 +57,104 @@ pub fn write_npy(path: &Path, rows: usize, cols: usize, data: &[f32]) -> Result<
         .with_context(|| format!("cannot move output into place at {}", path.display()))
 }
 
-/// Runs `btf export`.
-pub fn run(a: ExportArgs) -> Result<()> {
-    if a.format != "npy" {
-        bail!("unsupported export format '{}' (this version writes: npy)", a.format);
-    }
-    let store =
-        BtfStore::open(&a.input).with_context(|| format!("cannot open {}", a.input.display()))?;
-    let n_views = store.meta().n_views();
-    if a.slot >= n_views {
+/// Writes `layers` (name, `h·w·3` linear RGB) as one multi-layer float32 EXR, atomically.
+pub fn write_layers_exr(
+    path: &Path,
+    w: usize,
+    h: usize,
+    layers: &[(String, Vec<f32>)],
+) -> Result<()> {
+    use exr::prelude::*;
+    let list: Vec<Layer<AnyChannels<FlatSamples>>> = layers
+        .iter()
+        .map(|(name, px)| {
+            let ch = |c: usize, n: &str| {
+                AnyChannel::new(
+                    n,
+                    FlatSamples::F32(px.iter().skip(c).step_by(3).copied().collect()),
+                )
+            };
+            Layer::new(
+                (w, h),
+                LayerAttributes::named(name.as_str()),
+                Encoding::FAST_LOSSLESS,
+                AnyChannels::sort(vec![ch(0, "R"), ch(1, "G"), ch(2, "B")].into()),
+            )
+        })
+        .collect();
+    let image =
+        Image::from_layers(ImageAttributes::new(IntegerBounds::from_dimensions((w, h))), list);
+    let tmp = path
+        .with_file_name(format!(".{}.tmp", path.file_name().unwrap_or_default().to_string_lossy()));
+    image.write().to_file(&tmp).with_context(|| format!("cannot write {}", tmp.display()))?;
+    std::fs::rename(&tmp, path)
+        .with_context(|| format!("cannot move output into place at {}", path.display()))
+}
+
+fn slot_arg(a: &ExportArgs, n_views: usize) -> Result<usize> {
+    let Some(slot) = a.slot else { bail!("--format {} needs --slot J", a.format) };
+    if slot >= n_views {
         bail!(
             "--slot {} is out of range: {} has view slots 0..{}",
-            a.slot,
+            slot,
             a.input.display(),
             n_views - 1
         );
     }
-    let slot = store.read_slot(a.slot)?;
-    write_npy(&a.output, slot.n_lights, slot.texel_values, &slot.data)
+    Ok(slot)
+}
+
+fn open_eigen(path: &Path) -> Result<EigenStore> {
+    EigenStore::open(path)
+        .with_context(|| format!("cannot open {} as an eigen store", path.display()))
+}
+
+fn open_btf(path: &Path) -> Result<BtfStore> {
+    BtfStore::open(path).with_context(|| format!("cannot open {}", path.display()))
+}
+
+/// Runs `btf export`.
+pub fn run(a: ExportArgs) -> Result<()> {
+    match a.format.as_str() {
+        "npy" => {
+            let store = open_btf(&a.input)?;
+            let slot = store.read_slot(slot_arg(&a, store.meta().n_views())?)?;
+            write_npy(&a.output, slot.n_lights, slot.texel_values, &slot.data)
+        }
+        "ubo2003" => {
+            let enc = match a.image.as_str() {
+                "png" => ImageEncoding::Png8,
+                "png16" => ImageEncoding::Png16,
+                "jpg" => ImageEncoding::Jpeg(95),
+                "exr" => ImageEncoding::Exr,
+                o => bail!("--image '{o}' is not png, png16, jpg or exr"),
+            };
+            let store = open_btf(&a.input)?;
+            let scale = export_ubo2003(&store, &a.output, &a.name, enc)
+                .with_context(|| format!("cannot export to {}", a.output.display()))?;
+            let m = store.meta();
+            println!(
+                "wrote {} images to {} (scale {scale}, in btf-export.json)",
+                m.n_views() * m.n_lights(),
+                a.output.display()
+            );
+            Ok(())
+        }
+        "pvf" => {
+            let store = open_eigen(&a.input)?;
+            export_pvf(&store, &a.output)
+                .with_context(|| format!("cannot write {}", a.output.display()))
+        }
+        "exr" => {
+            let store = open_eigen(&a.input)?;
+            let m = &store.meta().btf;
+            let s = store.read_slot(slot_arg(&a, m.n_views())?)?;
+            let mut layers = vec![("mean".to_string(), s.mean.clone())];
+            for k in 0..s.components {
+                layers.push((format!("eigen{k:02}"), s.basis_row(k).to_vec()));
+            }
+            write_layers_exr(&a.output, m.width, m.height, &layers)
+        }
+        o => bail!("unsupported export format '{o}' (npy, ubo2003, pvf, exr)"),
+    }
 }

@@ -323,3 +323,48 @@ fn lying_sizes_and_wrong_signatures_are_refused_before_allocating() {
         "{e}"
     );
 }
+
+/// Writes the fixtures as seed corpora for the fuzz targets (`btf-capture/fuzz`): run with
+/// `BTF_FUZZ_CORPUS=btf-capture/fuzz/corpus cargo test -p btf-capture --test ubo2014 --
+/// --ignored write_fuzz_seeds`.
+#[test]
+#[ignore]
+fn write_fuzz_seeds() {
+    let root = std::path::PathBuf::from(std::env::var("BTF_FUZZ_CORPUS").expect("BTF_FUZZ_CORPUS"));
+    let m = || meta(4, &["R", "G", "B"]);
+    let seeds: Vec<(&str, u8, Vec<u8>)> = vec![
+        ("fmf", 0, fmf("!FMF06FC", meta(1, &["R", "G", "B"]), 4, false, 0)),
+        ("fmf", 1, fmf("!FMF06FCR", m(), 2, true, 0)),
+        ("fmf", 2, fmf("!FMF12FCER", m(), 8, false, 2)),
+        ("fmf", 2, fmf("!FMF12FCER", meta(4, &["R", "G", "B", "550nm"]), 4, true, 1)),
+        ("dfmf", 0, dfmf(11, [0.0; 3], [0.0; 9], &|c, l, v, t| f(c, l, v, t) - 0.5)),
+        (
+            "dfmf",
+            0,
+            dfmf(3, [0.1; 3], [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0], &|c, l, v, t| {
+                f(c, l, v, t)
+            }),
+        ),
+        ("pvf", 0, pvf("!PVF06FC", 4, true, false)),
+        ("pvf", 1, pvf("!PVF06FCR", 2, false, false)),
+        ("pvf", 0, pvf("!PVF06FC", 4, true, true)),
+        ("bdi", 0, bdi(true)),
+        ("bdi", 0, bdi(false)),
+    ];
+    for (k, (target, pick, bytes)) in seeds.into_iter().enumerate() {
+        let sig_len = [10usize, 9, 8].into_iter().find(|&n| {
+            btf_capture::bonn::header::signature(std::str::from_utf8(&bytes[..n]).unwrap_or(""))
+                .is_some()
+        });
+        let sig_len = sig_len.unwrap();
+        let dir = root.join(target);
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut seed = vec![pick];
+        seed.extend_from_slice(&bytes[sig_len..]);
+        std::fs::write(dir.join(format!("seed{k:02}")), seed).unwrap();
+    }
+    let names = root.join("ubo2003_name");
+    std::fs::create_dir_all(&names).unwrap();
+    std::fs::write(names.join("a"), "tv030_pv030/00008 tl000 pl000 tv030 pv030.jpg").unwrap();
+    std::fs::write(names.join("b"), "WoolPKNT256_00084_tl015_pl000_tv015_pv120.jpg").unwrap();
+}

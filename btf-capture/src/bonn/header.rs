@@ -37,6 +37,9 @@ const fn sig(text: &'static str, payload: Payload, rotations: bool, extended: bo
     Signature { text, payload, rotations, extended }
 }
 
+/// `(θ, φ)` pairs in radians, in file order.
+pub type Directions = Vec<[f32; 2]>;
+
 /// Every signature this reader knows.
 pub const SIGNATURES: [Signature; 7] = [
     sig("!DFMF08FCR", Payload::Dfmf, true, false),
@@ -198,9 +201,7 @@ pub fn read_meta<R: Read + Seek>(r: &mut ByteReader<R>) -> Result<MetaData> {
 }
 
 /// Reads the bidirectional sampling: views, each with its light list (all alike).
-pub fn read_sampling<R: Read + Seek>(
-    r: &mut ByteReader<R>,
-) -> Result<(Vec<[f32; 2]>, Vec<[f32; 2]>)> {
+pub fn read_sampling<R: Read + Seek>(r: &mut ByteReader<R>) -> Result<(Directions, Directions)> {
     let max = r.limits.max_directions as u64;
     let n_v = r.u32("num_views")? as u64;
     if n_v == 0 || n_v > max {

@@ -152,7 +152,8 @@ impl<R: Read + Seek> PvfReader<R> {
                 format!("slot {}: {p} is not in 1..={dim}", self.next),
             ));
         }
-        let total = p + dim + dim.saturating_mul(p) + nw.saturating_mul(p);
+        let total =
+            (p + dim).saturating_add(dim.saturating_mul(p)).saturating_add(nw.saturating_mul(p));
         r.need(total.saturating_mul(size as u64), "slot payload")?;
         let eigenvalues = r.scalars(p, size, "slot.eigenvalues")?;
         let mean = r.scalars(dim, size, "slot.mean")?;

@@ -83,7 +83,7 @@ fn read_svd<R: Read + Seek>(
     }
     let (p, rows, cols) = (p as u64, rows as u64, cols as u64);
     // Check the whole payload's size up front, then each factor as it is read.
-    let total = p + rows.checked_mul(p).unwrap_or(u64::MAX).saturating_add(cols.saturating_mul(p));
+    let total = rows.saturating_mul(p).saturating_add(cols.saturating_mul(p)).saturating_add(p);
     r.need(total.saturating_mul(size as u64), "svd payload")?;
     let singular_values = r.scalars(p, size, "singular_values")?;
     let u = r.scalars(rows * p, size, "U")?;
