@@ -4,6 +4,7 @@
 //! without it that benchmark is skipped). The baseline (scikit-learn's PCA on the same
 //! slots, exported with `btf export --format npy`) runs in the same session through
 //! `benches/sklearn_baseline.py`; BENCHMARKS.md has the commands and figures.
+#![allow(missing_docs)] // criterion_group! generates undocumented items
 
 use btf_core::eigen::Quantization;
 use btf_core::pca::pca_slot;

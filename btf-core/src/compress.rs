@@ -108,11 +108,10 @@ pub fn compress(
     let slots: Vec<(SlotReport, bool)> = views
         .par_iter()
         .map(|&v| -> Result<(SlotReport, bool)> {
-            if writer.has_slot(v) {
-                if let Some(r) = writer.read_stats(v).and_then(|s| serde_json::from_value(s).ok()) {
-                    progress();
-                    return Ok((r, true));
-                }
+            let done = writer.has_slot(v).then(|| writer.read_stats(v)).flatten();
+            if let Some(r) = done.and_then(|s| serde_json::from_value(s).ok()) {
+                progress();
+                return Ok((r, true));
             }
             let t0 = Instant::now();
             let mut slot = input.read_slot(v)?;

@@ -200,7 +200,7 @@ fn open_arrays(dir: &Path, m: &EigenMeta, create: bool) -> Result<Arrays> {
 /// Quantises `basis` (`components × n` floats) per component; returns raw bytes and
 /// `(scale, offset)` pairs.
 pub fn quantize(basis: &[f32], components: usize, q: Quantization) -> (Vec<u8>, Vec<[f32; 2]>) {
-    let n = if components == 0 { 0 } else { basis.len() / components };
+    let n = basis.len().checked_div(components).unwrap_or(0);
     let mut raw = Vec::with_capacity(basis.len() * q.dtype().size());
     let mut so = Vec::with_capacity(components);
     for k in 0..components {

@@ -150,7 +150,7 @@ impl StoreTxn {
 pub fn check_finite(values: &[f32], view: usize, light: usize, width: usize) -> Result<()> {
     if let Some(pos) = values.iter().position(|v| !v.is_finite()) {
         let texel = pos / 3;
-        let (y, x) = if width > 0 { (texel / width, texel % width) } else { (0, texel) };
+        let (y, x) = texel.checked_div(width).map_or((0, texel), |y| (y, texel % width));
         return Err(Error::NonFinite {
             view,
             light,

@@ -188,7 +188,7 @@ impl ArrayMeta {
         }
         let mut n = 1u64;
         for (s, c) in self.shape.iter().zip(&self.chunk_shape) {
-            n = n.checked_mul(s.div_ceil(*c)).unwrap_or(u64::MAX);
+            n = n.saturating_mul(s.div_ceil(*c));
         }
         if n > limits.max_chunks {
             return Err(Error::Limit(format!(
