@@ -4,6 +4,7 @@
 mod cmd_compress;
 mod cmd_demo;
 mod cmd_export;
+mod cmd_import;
 mod cmd_inspect;
 mod cmd_reconstruct;
 mod demo_scene;
@@ -38,6 +39,9 @@ enum Command {
     Compress(cmd_compress::CompressArgs),
     /// Reconstruct the texture for one view and one light direction on the CPU.
     Reconstruct(cmd_reconstruct::ReconstructArgs),
+    /// Import Bonn-database BTFs (UBO2003 image folders, UBO2014 `.btf` files).
+    #[command(subcommand)]
+    Import(cmd_import::ImportCmd),
     /// Export data for other tools.
     Export(cmd_export::ExportArgs),
     /// Render a scene (TOML) on the GPU.
@@ -51,6 +55,7 @@ fn main() -> ExitCode {
         Command::Inspect(a) => cmd_inspect::run(a),
         Command::Compress(a) => cmd_compress::run(a),
         Command::Reconstruct(a) => cmd_reconstruct::run(a),
+        Command::Import(c) => cmd_import::run(c),
         Command::Export(a) => cmd_export::run(a),
         Command::Synth(c) => synth_cmd::run(c),
         Command::Render(a) => render_cmd::run(a),
