@@ -5,7 +5,7 @@
 use crate::eigen::{EigenMeta, EigenWriter, Quantization};
 use crate::metrics::{psnr_db, rel_rmse_from};
 use crate::pca::{max_components, pca_slot};
-use crate::store::BtfStore;
+use crate::store::{BtfStore, SlotData};
 use crate::{Error, Result};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -107,31 +107,33 @@ pub fn compress(
     let views: Vec<usize> = (0..meta.n_views()).collect();
     let slots: Vec<(SlotReport, bool)> = views
         .par_iter()
-        .map(|&v| -> Result<(SlotReport, bool)> {
-            let done = writer.has_slot(v).then(|| writer.read_stats(v)).flatten();
-            if let Some(r) = done.and_then(|s| serde_json::from_value(s).ok()) {
+        .map_init(
+            || (SlotData { view: 0, n_lights: 0, texel_values: 0, data: Vec::new() }, Vec::new()),
+            |(slot, raw), &v| -> Result<(SlotReport, bool)> {
+                let done = writer.has_slot(v).then(|| writer.read_stats(v)).flatten();
+                if let Some(r) = done.and_then(|s| serde_json::from_value(s).ok()) {
+                    progress();
+                    return Ok((r, true));
+                }
+                let t0 = Instant::now();
+                input.read_slot_into(v, slot, raw)?;
+                let r = pca_slot(slot, c, params.quantization)?;
+                writer.write_slot(v, &r.stored)?;
+                let report = SlotReport {
+                    view: v,
+                    sse: r.sse,
+                    sse_stored: r.sse_stored,
+                    discarded_eigen_sum: r.discarded_eigen_sum,
+                    energy: r.energy,
+                    peak: r.peak,
+                    effective_components: r.effective_components,
+                    seconds: t0.elapsed().as_secs_f64(),
+                };
+                writer.write_stats(v, &json!(report))?;
                 progress();
-                return Ok((r, true));
-            }
-            let t0 = Instant::now();
-            let mut slot = input.read_slot(v)?;
-            let r = pca_slot(&mut slot, c, params.quantization)?;
-            drop(slot);
-            writer.write_slot(v, &r.stored)?;
-            let report = SlotReport {
-                view: v,
-                sse: r.sse,
-                sse_stored: r.sse_stored,
-                discarded_eigen_sum: r.discarded_eigen_sum,
-                energy: r.energy,
-                peak: r.peak,
-                effective_components: r.effective_components,
-                seconds: t0.elapsed().as_secs_f64(),
-            };
-            writer.write_stats(v, &json!(report))?;
-            progress();
-            Ok((report, false))
-        })
+                Ok((report, false))
+            },
+        )
         .collect::<Result<_>>()?;
     writer.finish()?;
     let resumed_slots = slots.iter().filter(|s| s.1).count();

@@ -12,6 +12,8 @@ pub struct Mat<'a, T> {
     pub rows: usize,
     /// Columns of the stored matrix.
     pub cols: usize,
+    /// Elements between the starts of consecutive rows (≥ `cols`).
+    pub row_stride: usize,
     /// Read as its transpose.
     pub transposed: bool,
 }
@@ -19,8 +21,15 @@ pub struct Mat<'a, T> {
 impl<'a, T> Mat<'a, T> {
     /// A view of `data` as `rows × cols`.
     pub fn new(data: &'a [T], rows: usize, cols: usize) -> Self {
-        assert!(data.len() >= rows * cols, "matrix view larger than its slice");
-        Mat { data, rows, cols, transposed: false }
+        Self::strided(data, rows, cols, cols)
+    }
+    /// A view of `rows × cols` elements whose rows start `row_stride` elements apart (a
+    /// block of columns of a wider row-major matrix).
+    pub fn strided(data: &'a [T], rows: usize, cols: usize, row_stride: usize) -> Self {
+        assert!(row_stride >= cols, "row stride smaller than the row");
+        let need = if rows == 0 { 0 } else { (rows - 1) * row_stride + cols };
+        assert!(data.len() >= need, "matrix view larger than its slice");
+        Mat { data, rows, cols, row_stride, transposed: false }
     }
     /// The same view, transposed.
     pub fn t(self) -> Self {
@@ -30,7 +39,8 @@ impl<'a, T> Mat<'a, T> {
         if self.transposed { (self.cols, self.rows) } else { (self.rows, self.cols) }
     }
     fn strides(&self) -> (isize, isize) {
-        if self.transposed { (1, self.cols as isize) } else { (self.cols as isize, 1) }
+        let rs = self.row_stride as isize;
+        if self.transposed { (1, rs) } else { (rs, 1) }
     }
 }
 

@@ -11,7 +11,7 @@
 //! error of the slot equals the sum of the discarded eigenvalues; both are reported.
 
 use crate::eigen::{Quantization, QuantizedSlot, dequantize, quantize};
-use crate::gemm::{Mat, dgemm};
+use crate::gemm::{Mat, dgemm, sgemm};
 use crate::store::SlotData;
 use crate::{Error, Result};
 use nalgebra::{DMatrix, SymmetricEigen};
@@ -107,23 +107,15 @@ pub fn pca_slot(
         }
     }
 
-    // Pass 2: exact eigentextures B = liftᵀ X̃ (c × m), in f64.
-    let mut blk = Vec::new();
-    let mut basis = vec![0f64; c * m];
-    let mut out = vec![0f64; c * BLOCK];
-    for c0 in (0..m).step_by(BLOCK) {
-        let c1 = (c0 + BLOCK).min(m);
-        let w = c1 - c0;
-        block_f64(x, n, m, c0, c1, &mut blk);
-        dgemm(1.0, Mat::new(&lift, n, c).t(), Mat::new(&blk, n, w), 0.0, &mut out[..c * w], w);
-        for k in 0..c {
-            basis[k * m + c0..k * m + c1].copy_from_slice(&out[k * w..(k + 1) * w]);
-        }
-    }
+    // Pass 2: eigentextures B = liftᵀ X̃ (c × m). Each entry sums only n products, so
+    // single precision loses nothing the f16/u8 storage would keep.
+    let lift32: Vec<f32> = lift.iter().map(|&v| v as f32).collect();
+    let mut basis = vec![0f32; c * m];
+    sgemm(1.0, Mat::new(&lift32, n, c).t(), Mat::new(x, n, m), 0.0, &mut basis, m);
     // Deterministic signs: the largest-magnitude entry of each eigentexture is positive.
     for k in 0..effective {
         let row = &mut basis[k * m..(k + 1) * m];
-        let big = row.iter().copied().fold(0f64, |a, v| if v.abs() > a.abs() { v } else { a });
+        let big = row.iter().copied().fold(0f32, |a, v| if v.abs() > a.abs() { v } else { a });
         if big < 0.0 {
             row.iter_mut().for_each(|v| *v = -*v);
             for i in 0..n {
@@ -131,34 +123,30 @@ pub fn pca_slot(
             }
         }
     }
-    let basis_f32: Vec<f32> = basis.iter().map(|&v| v as f32).collect();
+    let (raw, scale_offset) = quantize(&basis, c, quantization);
     drop(basis);
-    let (raw, scale_offset) = quantize(&basis_f32, c, quantization);
-    drop(basis_f32);
-    let stored_basis: Vec<f64> =
-        dequantize(&raw, &scale_offset, quantization).iter().map(|&v| v as f64).collect();
+    let stored_basis = dequantize(&raw, &scale_offset, quantization);
 
     // The exact basis is B = liftᵀX̃, so its projections X̃Bᵀ = G·lift and its Gram matrix
-    // BBᵀ = liftᵀ·G·lift follow from the small Gram matrix alone.
+    // BBᵀ = liftᵀ·G·lift follow from the small Gram matrix alone, in f64.
     let mut proj_exact = vec![0f64; n * c];
     dgemm(1.0, Mat::new(&gram, n, n), Mat::new(&lift, n, c), 0.0, &mut proj_exact, c);
     let mut bgram_exact = vec![0f64; c * c];
     dgemm(1.0, Mat::new(&lift, n, c).t(), Mat::new(&proj_exact, n, c), 0.0, &mut bgram_exact, c);
 
-    // Pass 3: projections of X̃ on the stored basis (n × c) and its Gram matrix (c × c).
+    // Pass 3: projections of X̃ on the stored basis (n × c) and its Gram matrix (c × c), in
+    // f64: the stored error is the small difference ‖x̃‖² − qᵀM⁻¹q and needs the precision.
     let mut proj = vec![0f64; n * c];
     let mut bgram = vec![0f64; c * c];
-    let mut sb = vec![0f64; c * BLOCK];
+    let (mut xb, mut bb) = (Vec::new(), Vec::new());
     for c0 in (0..m).step_by(BLOCK) {
         let c1 = (c0 + BLOCK).min(m);
         let w = c1 - c0;
-        block_f64(x, n, m, c0, c1, &mut blk);
-        for k in 0..c {
-            sb[k * w..(k + 1) * w].copy_from_slice(&stored_basis[k * m + c0..k * m + c1]);
-        }
-        let bb = Mat::new(&sb[..c * w], c, w);
-        dgemm(1.0, Mat::new(&blk, n, w), bb.t(), 1.0, &mut proj, c);
-        dgemm(1.0, bb, bb.t(), 1.0, &mut bgram, c);
+        block_f64(x, n, m, c0, c1, &mut xb);
+        block_f64(&stored_basis, c, m, c0, c1, &mut bb);
+        let b = Mat::new(&bb, c, w);
+        dgemm(1.0, Mat::new(&xb, n, w), b.t(), 1.0, &mut proj, c);
+        dgemm(1.0, b, b.t(), 1.0, &mut bgram, c);
     }
     let (sse, _) = least_squares(&proj_exact, &bgram_exact, &gram, n, c);
     let (sse_stored, weights) = least_squares(&proj, &bgram, &gram, n, c);

@@ -312,18 +312,29 @@ impl BtfStore {
 
     /// Reads one normtexture into `out` (`texel_values` floats), refusing non-finite data.
     pub fn read_image_into(&self, view: usize, light: usize, out: &mut [f32]) -> Result<()> {
+        self.read_image_buffered(view, light, out, &mut Vec::new())
+    }
+
+    fn read_image_buffered(
+        &self,
+        view: usize,
+        light: usize,
+        out: &mut [f32],
+        raw: &mut Vec<u8>,
+    ) -> Result<()> {
         if view >= self.meta.n_views() || light >= self.meta.n_lights() {
             return Err(Error::Invalid(format!("image ({view}, {light}) is outside the sampling")));
         }
-        let raw =
-            self.arr.read_chunk(&[view as u64, light as u64, 0, 0, 0]).map_err(|e| match e {
+        self.arr.read_chunk_into(&[view as u64, light as u64, 0, 0, 0], raw).map_err(
+            |e| match e {
                 Error::Corrupt { path, what } => Error::Corrupt {
                     path,
                     what: format!("view slot {view}, light {light}: {what}"),
                 },
                 other => other,
-            })?;
-        zarr::decode_to_f32(&raw, self.dtype(), out);
+            },
+        )?;
+        zarr::decode_to_f32(raw, self.dtype(), out);
         check_finite(out, view, light, self.meta.width)
     }
 
@@ -336,12 +347,28 @@ impl BtfStore {
 
     /// Reads all light images of view slot `view`.
     pub fn read_slot(&self, view: usize) -> Result<SlotData> {
+        let mut slot = SlotData { view, n_lights: 0, texel_values: 0, data: Vec::new() };
+        self.read_slot_into(view, &mut slot, &mut Vec::new())?;
+        Ok(slot)
+    }
+
+    /// Reads all light images of view slot `view` into reusable buffers (`raw` holds one
+    /// chunk's bytes), so streaming the slots of a large BTF allocates nothing per slot.
+    pub fn read_slot_into(
+        &self,
+        view: usize,
+        slot: &mut SlotData,
+        raw: &mut Vec<u8>,
+    ) -> Result<()> {
         let n = self.meta.texel_values();
-        let mut data = vec![0f32; n * self.meta.n_lights()];
-        for (l, row) in data.chunks_exact_mut(n).enumerate() {
-            self.read_image_into(view, l, row)?;
+        slot.view = view;
+        slot.n_lights = self.meta.n_lights();
+        slot.texel_values = n;
+        slot.data.resize(n * slot.n_lights, 0.0);
+        for (l, row) in slot.data.chunks_exact_mut(n).enumerate() {
+            self.read_image_buffered(view, l, row, raw)?;
         }
-        Ok(SlotData { view, n_lights: self.meta.n_lights(), texel_values: n, data })
+        Ok(())
     }
 }
 

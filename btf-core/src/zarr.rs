@@ -303,23 +303,34 @@ impl ZarrArray {
 
     /// Reads one chunk's raw element bytes after checking its size and checksum.
     pub fn read_chunk(&self, idx: &[u64]) -> Result<Vec<u8>> {
+        let mut buf = Vec::new();
+        self.read_chunk_into(idx, &mut buf)?;
+        Ok(buf)
+    }
+
+    /// Like [`ZarrArray::read_chunk`], into a reusable buffer (no allocation once it is large
+    /// enough).
+    pub fn read_chunk_into(&self, idx: &[u64], buf: &mut Vec<u8>) -> Result<()> {
+        use std::io::Read;
         let path = self.chunk_path(idx);
         let expect = self.meta.chunk_bytes()?;
-        let len = fs::metadata(&path).map_err(|e| Error::io(&path, e))?.len();
+        let mut f = fs::File::open(&path).map_err(|e| Error::io(&path, e))?;
+        let len = f.metadata().map_err(|e| Error::io(&path, e))?.len();
         if len != expect {
             return Err(Error::Corrupt {
                 path,
                 what: format!("chunk has {len} bytes, {expect} expected (truncated or foreign)"),
             });
         }
-        let mut buf = fs::read(&path).map_err(|e| Error::io(&path, e))?;
+        buf.resize(expect as usize, 0);
+        f.read_exact(buf).map_err(|e| Error::io(&path, e))?;
         let n = buf.len() - 4;
         let stored = u32::from_le_bytes(buf[n..].try_into().unwrap());
         if crc32c::crc32c(&buf[..n]) != stored {
             return Err(Error::Corrupt { path, what: "crc32c checksum mismatch".into() });
         }
         buf.truncate(n);
-        Ok(buf)
+        Ok(())
     }
 
     /// True when the chunk exists with the right size (checksum not verified; used to resume).
