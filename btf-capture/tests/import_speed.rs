@@ -61,16 +61,38 @@ fn ubo2003_import_vs_plain_decoding() {
     }
     let plain = t.elapsed().as_secs_f64();
 
+    // The store-writing floor: the same number of f16 images written without decoding.
+    let t = Instant::now();
+    let floor = dir.path().join("floor.zarr");
+    let fw = BtfWriter::create(
+        &floor,
+        BtfMeta::new(s.clone(), s.clone(), size, size),
+        DType::F16,
+        false,
+    )
+    .unwrap();
+    let img = vec![0.25f32; size * size * 3];
+    for v in 0..81 {
+        for l in 0..81 {
+            fw.write_image(v, l, &img).unwrap();
+        }
+    }
+    fw.finish().unwrap();
+    let write_only = t.elapsed().as_secs_f64();
+    std::fs::remove_dir_all(&floor).unwrap();
+
     let t = Instant::now();
     let rep = ubo2003::import(&folder, &dir.path().join("imported.zarr"), DType::F16).unwrap();
     let import = t.elapsed().as_secs_f64();
     assert_eq!(rep.images, 6561);
     println!(
-        "{} JPEGs of {size}x{size} ({:.1} MB): plain decode {plain:.2} s ({:.0} images/s), import {import:.2} s ({:.0} images/s), import/plain = {:.2} (checksum {checksum})",
+        "{} JPEGs of {size}x{size} ({:.1} MB): plain decode {plain:.2} s ({:.0} images/s), store write only {write_only:.2} s ({:.0} MB/s), import {import:.2} s ({:.0} images/s), import/plain = {:.2}, import/(plain + write) = {:.2} (checksum {checksum})",
         files.len(),
         bytes as f64 / 1e6,
         files.len() as f64 / plain,
+        (6561 * size * size * 6) as f64 / 1e6 / write_only,
         files.len() as f64 / import,
-        import / plain
+        import / plain,
+        import / (plain + write_only)
     );
 }
