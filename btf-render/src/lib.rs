@@ -16,6 +16,7 @@
 //! - [`renderer`], [`frame`], [`timer`]: pass selection, output images, `--stats`.
 
 pub mod btf_pass;
+pub mod envlight;
 pub mod error;
 pub mod frame;
 pub mod gpu;

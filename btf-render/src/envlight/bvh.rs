@@ -1,0 +1,232 @@
+//! A bounding-volume hierarchy over the mesh triangles for the occlusion rays of the
+//! visibility maps (Sattler et al. 2003, §5.2: `V(x, p_α)` of eq. 9).
+//!
+//! Built top-down by splitting at the median centroid along the longest axis (leaves of at
+//! most [`LEAF_SIZE`] triangles), stored flat in depth-first order so the left child of a
+//! node is the next node. Queries are any-hit: a ray is occluded as soon as one triangle
+//! is hit in `(t_min, ∞)`. Triangles are double-sided (cloth occludes from both sides), the
+//! test is Möller–Trumbore in `f32`; zero-area triangles never report a hit.
+
+/// Most triangles per leaf.
+pub const LEAF_SIZE: usize = 4;
+
+#[derive(Debug, Clone, Copy)]
+struct Node {
+    lo: [f32; 3],
+    hi: [f32; 3],
+    /// Leaf: first triangle; inner: index of the right child.
+    start_or_right: u32,
+    /// Triangles in a leaf, 0 for an inner node.
+    count: u32,
+}
+
+/// Precomputed triangle: a vertex and two edges.
+#[derive(Debug, Clone, Copy)]
+struct Tri {
+    p0: [f32; 3],
+    e1: [f32; 3],
+    e2: [f32; 3],
+}
+
+/// The hierarchy.
+#[derive(Debug, Clone)]
+pub struct Bvh {
+    nodes: Vec<Node>,
+    tris: Vec<Tri>,
+}
+
+fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+impl Bvh {
+    /// Builds the hierarchy of `triangles` over `positions` (indices must be in range).
+    pub fn new(positions: &[[f32; 3]], triangles: &[[u32; 3]]) -> Bvh {
+        let corners: Vec<[[f32; 3]; 3]> =
+            triangles.iter().map(|t| t.map(|i| positions[i as usize])).collect();
+        let centroid = |c: &[[f32; 3]; 3]| -> [f32; 3] {
+            [0, 1, 2].map(|a| (c[0][a] + c[1][a] + c[2][a]) / 3.0)
+        };
+        let mut order: Vec<u32> = (0..triangles.len() as u32).collect();
+        let cents: Vec<[f32; 3]> = corners.iter().map(centroid).collect();
+        let mut bvh =
+            Bvh { nodes: Vec::with_capacity(2 * triangles.len() / LEAF_SIZE + 1), tris: vec![] };
+        if !triangles.is_empty() {
+            bvh.build(&corners, &cents, &mut order, 0);
+        }
+        bvh.tris = order
+            .iter()
+            .map(|&t| {
+                let c = corners[t as usize];
+                Tri { p0: c[0], e1: sub(c[1], c[0]), e2: sub(c[2], c[0]) }
+            })
+            .collect();
+        bvh
+    }
+
+    fn build(
+        &mut self,
+        corners: &[[[f32; 3]; 3]],
+        cents: &[[f32; 3]],
+        order: &mut [u32],
+        start: usize,
+    ) -> usize {
+        let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
+        let (mut clo, mut chi) = ([f32::MAX; 3], [f32::MIN; 3]);
+        for &t in order.iter() {
+            for p in &corners[t as usize] {
+                for a in 0..3 {
+                    lo[a] = lo[a].min(p[a]);
+                    hi[a] = hi[a].max(p[a]);
+                }
+            }
+            let c = cents[t as usize];
+            for a in 0..3 {
+                clo[a] = clo[a].min(c[a]);
+                chi[a] = chi[a].max(c[a]);
+            }
+        }
+        let me = self.nodes.len();
+        self.nodes.push(Node { lo, hi, start_or_right: start as u32, count: order.len() as u32 });
+        let axis =
+            (0..3).max_by(|&a, &b| (chi[a] - clo[a]).total_cmp(&(chi[b] - clo[b]))).unwrap_or(0);
+        if order.len() <= LEAF_SIZE || chi[axis] <= clo[axis] {
+            return me;
+        }
+        let mid = order.len() / 2;
+        order.select_nth_unstable_by(mid, |&a, &b| {
+            cents[a as usize][axis].total_cmp(&cents[b as usize][axis])
+        });
+        let (left, right) = order.split_at_mut(mid);
+        self.build(corners, cents, left, start);
+        let r = self.build(corners, cents, right, start + mid);
+        self.nodes[me].start_or_right = r as u32;
+        self.nodes[me].count = 0;
+        me
+    }
+
+    /// Number of triangles.
+    pub fn triangles(&self) -> usize {
+        self.tris.len()
+    }
+
+    /// Whether the ray `origin + t·dir`, `t > t_min`, hits any triangle.
+    pub fn occluded(&self, origin: [f32; 3], dir: [f32; 3], t_min: f32) -> bool {
+        if self.nodes.is_empty() {
+            return false;
+        }
+        let inv = dir.map(|d| 1.0 / d);
+        let mut stack = [0u32; 64];
+        let mut sp = 1usize;
+        while sp > 0 {
+            sp -= 1;
+            let me = stack[sp];
+            let node = &self.nodes[me as usize];
+            if !slab_hit(node, origin, inv, t_min) {
+                continue;
+            }
+            if node.count > 0 {
+                let s = node.start_or_right as usize;
+                let hit = self.tris[s..s + node.count as usize]
+                    .iter()
+                    .any(|t| tri_hit(t, origin, dir, t_min));
+                if hit {
+                    return true;
+                }
+            } else if sp + 2 <= stack.len() {
+                // Depth-first layout: the left child directly follows its parent.
+                stack[sp] = node.start_or_right;
+                stack[sp + 1] = me + 1;
+                sp += 2;
+            }
+        }
+        false
+    }
+}
+
+fn slab_hit(n: &Node, o: [f32; 3], inv: [f32; 3], t_min: f32) -> bool {
+    let (mut t0, mut t1) = (t_min, f32::INFINITY);
+    for a in 0..3 {
+        let ta = (n.lo[a] - o[a]) * inv[a];
+        let tb = (n.hi[a] - o[a]) * inv[a];
+        // NaN (0·∞ on a slab boundary) is treated as "inside" by min/max.
+        t0 = t0.max(ta.min(tb));
+        t1 = t1.min(ta.max(tb));
+    }
+    t0 <= t1
+}
+
+fn tri_hit(t: &Tri, o: [f32; 3], d: [f32; 3], t_min: f32) -> bool {
+    let p = cross(d, t.e2);
+    let det = dot(t.e1, p);
+    if det.abs() < 1e-20 {
+        return false;
+    }
+    let inv = 1.0 / det;
+    let s = sub(o, t.p0);
+    let u = dot(s, p) * inv;
+    if !(0.0..=1.0).contains(&u) {
+        return false;
+    }
+    let q = cross(s, t.e1);
+    let v = dot(d, q) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return false;
+    }
+    dot(t.e2, q) * inv > t_min
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn brute(pos: &[[f32; 3]], tris: &[[u32; 3]], o: [f32; 3], d: [f32; 3]) -> bool {
+        tris.iter().any(|t| {
+            let c = t.map(|i| pos[i as usize]);
+            tri_hit(&Tri { p0: c[0], e1: sub(c[1], c[0]), e2: sub(c[2], c[0]) }, o, d, 1e-4)
+        })
+    }
+
+    #[test]
+    fn matches_brute_force_on_random_rays() {
+        // A wavy 12×12 sheet and rays from below and above it.
+        let n = 12;
+        let mut pos = vec![];
+        for j in 0..=n {
+            for i in 0..=n {
+                let (x, y) = (i as f32 / n as f32, j as f32 / n as f32);
+                pos.push([x, y, 0.1 * (6.0 * x).sin() * (4.0 * y).cos()]);
+            }
+        }
+        let mut tris = vec![];
+        for j in 0..n as u32 {
+            for i in 0..n as u32 {
+                let a = j * (n as u32 + 1) + i;
+                tris.push([a, a + 1, a + n as u32 + 2]);
+                tris.push([a, a + n as u32 + 2, a + n as u32 + 1]);
+            }
+        }
+        let bvh = Bvh::new(&pos, &tris);
+        let mut seed = 1u32;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (seed >> 8) as f32 / (1 << 24) as f32
+        };
+        let mut hits = 0;
+        for _ in 0..2000 {
+            let o = [rnd() * 1.4 - 0.2, rnd() * 1.4 - 0.2, rnd() * 0.6 - 0.3];
+            let d = [rnd() - 0.5, rnd() - 0.5, rnd() - 0.5];
+            let expect = brute(&pos, &tris, o, d);
+            assert_eq!(bvh.occluded(o, d, 1e-4), expect, "{o:?} {d:?}");
+            hits += expect as usize;
+        }
+        assert!(hits > 200 && hits < 1800, "{hits}");
+        assert!(!Bvh::new(&pos, &[]).occluded([0.0; 3], [0.0, 0.0, 1.0], 0.0));
+    }
+}

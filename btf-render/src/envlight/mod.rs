@@ -1,0 +1,28 @@
+//! Image-based lighting with macroscopic self-shadowing (Sattler et al. 2003, §5,
+//! eq. 7–13).
+//!
+//! - [`hemicube`]: pixel directions, exact solid angles (sum 2π) and the shared table
+//!   "pixel → four nearest measured light directions + weights" (eq. 9, §5.2);
+//! - [`bvh`], [`visibility`]: per-vertex visibility maps by ray casting against the mesh,
+//!   cached on disk (§5.2);
+//! - [`envmap`]: equirectangular HDR maps and their area-averaged cube form (`L_env`);
+//! - [`weights`]: `g_i` per vertex, `γ*` and the weight vector `U` (eq. 10–12);
+//! - [`eigenweights`]: the PCA over environment rotations and `U(δ)` (eq. 13);
+//! - [`scene_env`]: an environment light of a scene: state, rotation, per-vertex coefficients;
+//! - [`heatmap`]: green → red error images and small line plots written with `image`.
+
+pub mod bvh;
+pub mod eigenweights;
+pub mod envmap;
+pub mod heatmap;
+pub mod hemicube;
+pub mod scene_env;
+pub mod visibility;
+pub mod weights;
+
+pub use eigenweights::EigenWeightSets;
+pub use envmap::{EnvCube, EnvMap};
+pub use hemicube::{Hemicube, LightTable};
+pub use scene_env::{EnvironmentParams, SceneEnvironment};
+pub use visibility::{HemicubeFrame, VisibilityMaps};
+pub use weights::{CoefficientMatrix, GatherInput, WeightSet};

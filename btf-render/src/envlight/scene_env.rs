@@ -1,0 +1,296 @@
+//! An environment light of a scene at run time (Sattler et al. 2003, §5.3–5.4): the
+//! visibility maps of the mesh, the gathered weights `g` of the current environment and
+//! rotation, optionally the eigenweightsets, and the per-vertex coefficients the BTF pass
+//! reads — `f · ω_m · γ*_{k j_m}` for the four view slots of each vertex (eq. 11 with the
+//! view blending of eq. 5), in the layout of [`crate::per_vertex`].
+//!
+//! Visibility is computed once per mesh and resolution (and cached on disk when a cache
+//! folder is given); a new environment costs one gather (eq. 10) and, with
+//! eigenweightsets, one PCA over `A` rotations, after which a rotation costs `e` vector
+//! additions (eq. 13). Back sides of two-sided cloth have hemicubes of their own.
+
+use super::eigenweights::EigenWeightSets;
+use super::envmap::{EnvCube, EnvMap};
+use super::hemicube::{Hemicube, LightTable};
+use super::visibility::{HemicubeFrame, VisibilityMaps};
+use super::weights::{CoefficientMatrix, GatherInput, WeightSet};
+use crate::material::MaterialData;
+use crate::math::Vec3;
+use crate::per_vertex::VertexCoefficients;
+use crate::{Error, Result, tangent};
+use btf_core::{Direction, InterpMode};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// What an environment light asks for.
+#[derive(Debug, Clone)]
+pub struct EnvironmentParams {
+    /// Rotation of the environment about world `+z`, degrees.
+    pub rotation_deg: f64,
+    /// Exposure factor `f` (eq. 11).
+    pub exposure: f32,
+    /// Hemicube resolution (pixels across the top face).
+    pub visibility_res: u32,
+    /// Separate hemicubes for the back sides of the cloth.
+    pub two_sided: bool,
+    /// Eigenweightsets: `Some((A rotations, e))`.
+    pub eigen: Option<(usize, usize)>,
+    /// Folder for the visibility cache (`None`: no caching).
+    pub cache_dir: Option<PathBuf>,
+}
+
+/// The mesh data the environment needs.
+pub struct EnvMesh<'a> {
+    /// Positions.
+    pub positions: &'a [[f32; 3]],
+    /// Unit normals.
+    pub normals: &'a [[f32; 3]],
+    /// Tangents `[T, s]`.
+    pub tangents: &'a [[f32; 4]],
+    /// Triangles.
+    pub triangles: &'a [[u32; 3]],
+}
+
+/// Costs of the last preparation steps, milliseconds.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct EnvTimings {
+    /// Visibility maps (0 when loaded from the cache).
+    pub visibility_ms: f64,
+    /// Whether the visibility maps came from the cache.
+    pub visibility_cached: bool,
+    /// Filtering plus gathering `g` for the current environment and rotation.
+    pub weights_ms: f64,
+    /// Building the eigenweightsets (A gathers and the PCA).
+    pub eigen_ms: f64,
+    /// Last rotation update (eigenweightset reconstruction or gather).
+    pub rotation_ms: f64,
+}
+
+/// Runtime state of one environment light.
+pub struct SceneEnvironment {
+    params: EnvironmentParams,
+    cube: Hemicube,
+    table: LightTable,
+    frames: Vec<HemicubeFrame>,
+    vertices: usize,
+    vis: VisibilityMaps,
+    coefficients: Vec<CoefficientMatrix>,
+    env: EnvCube,
+    weights: WeightSet,
+    eigen: Option<EigenWeightSets>,
+    /// Timings of the preparation.
+    pub timings: EnvTimings,
+}
+
+impl SceneEnvironment {
+    /// Computes (or loads) the visibility maps and gathers the weights of `env`.
+    pub fn new(
+        params: EnvironmentParams,
+        env: &EnvMap,
+        mesh: &EnvMesh,
+        materials: &[&MaterialData],
+    ) -> Result<Self> {
+        let first = materials
+            .first()
+            .ok_or_else(|| Error::Invalid("environment light without materials".into()))?;
+        if materials.iter().any(|m| m.light_sampling != first.light_sampling) {
+            return Err(Error::Unsupported(
+                "environment lighting with materials of different light samplings".into(),
+            ));
+        }
+        let cube = Hemicube::new(params.visibility_res)?;
+        let table = LightTable::new(&cube, &first.light_sampling, InterpMode::Four)?;
+        let frames =
+            HemicubeFrame::of_mesh(mesh.positions, mesh.normals, mesh.tangents, params.two_sided);
+        let t = Instant::now();
+        let (vis, cached) = match &params.cache_dir {
+            Some(dir) => {
+                VisibilityMaps::cached(dir, &cube, &frames, mesh.positions, mesh.triangles)?
+            }
+            None => {
+                (VisibilityMaps::compute(&cube, &frames, mesh.positions, mesh.triangles), false)
+            }
+        };
+        let timings =
+            EnvTimings { visibility_ms: ms(t), visibility_cached: cached, ..Default::default() };
+        let coefficients = materials.iter().map(|m| CoefficientMatrix::from_material(m)).collect();
+        let weights =
+            WeightSet { frames: frames.len(), lights: first.light_sampling.len(), g: vec![] };
+        let env_cube = EnvCube { res: 1, dirs: vec![], power: vec![] };
+        let mut s = SceneEnvironment {
+            params,
+            cube,
+            table,
+            frames,
+            vertices: mesh.positions.len(),
+            vis,
+            coefficients,
+            env: env_cube,
+            weights,
+            eigen: None,
+            timings,
+        };
+        s.set_environment(env)?;
+        Ok(s)
+    }
+
+    /// Cube resolution the environment is binned to for hemicube resolution `res`: texels
+    /// as large as the top face's pixels (finer texels only cost time: each source is
+    /// dropped into one pixel anyway).
+    pub fn cube_res(res: u32) -> usize {
+        (res as usize).max(1)
+    }
+
+    fn gather(&self, delta_deg: f64) -> WeightSet {
+        let input = GatherInput {
+            table: &self.table,
+            visibility: &self.vis,
+            frames: &self.frames,
+            dirs: &self.cube.dirs,
+            lights: self.weights.lights,
+        };
+        WeightSet::gather(&input, &self.env, delta_deg)
+    }
+
+    /// Switches to a new environment map (keeps rotation and exposure).
+    pub fn set_environment(&mut self, env: &EnvMap) -> Result<()> {
+        let t = Instant::now();
+        self.env = EnvCube::new(env, Self::cube_res(self.params.visibility_res));
+        self.weights = self.gather(self.params.rotation_deg);
+        self.timings.weights_ms = ms(t);
+        self.eigen = None;
+        if let Some((a_n, e)) = self.params.eigen {
+            let t = Instant::now();
+            let sets: Vec<WeightSet> =
+                (0..a_n).map(|a| self.gather(a as f64 * 360.0 / a_n as f64)).collect();
+            let metric = self.coefficients[0].metric();
+            self.eigen = Some(EigenWeightSets::build(&sets, &metric, e.min(a_n - 1))?);
+            self.timings.eigen_ms = ms(t);
+            self.set_rotation(self.params.rotation_deg);
+        }
+        Ok(())
+    }
+
+    /// Turns the environment to `delta_deg` about world `+z`: `e` vector additions with
+    /// eigenweightsets, else a new gather.
+    pub fn set_rotation(&mut self, delta_deg: f64) {
+        let t = Instant::now();
+        self.params.rotation_deg = delta_deg;
+        self.weights = match (&self.eigen, self.params.eigen) {
+            (Some(ews), Some((_, e))) => ews.reconstruct(delta_deg, e),
+            _ => self.gather(delta_deg),
+        };
+        self.timings.rotation_ms = ms(t);
+    }
+
+    /// Sets the exposure `f`.
+    pub fn set_exposure(&mut self, f: f32) {
+        self.params.exposure = f;
+    }
+
+    /// The current weights `g`.
+    pub fn weights(&self) -> &WeightSet {
+        &self.weights
+    }
+
+    /// The visibility maps.
+    pub fn visibility(&self) -> &VisibilityMaps {
+        &self.vis
+    }
+
+    /// The hemicube.
+    pub fn hemicube(&self) -> &Hemicube {
+        &self.cube
+    }
+
+    /// The eigenweightsets, when built.
+    pub fn eigenweightsets(&self) -> Option<&EigenWeightSets> {
+        self.eigen.as_ref()
+    }
+
+    /// The `U` metric of material 0 (for error measures).
+    pub fn metric(&self) -> Vec<f64> {
+        self.coefficients[0].metric()
+    }
+
+    /// Writes this light's coefficients (light `l` of `n_lights`) into `out`, for the
+    /// camera at `eye` (or the orthographic direction `ortho_to_camera`).
+    pub fn fill(
+        &self,
+        out: &mut VertexCoefficients,
+        view: &ViewInput,
+        l: usize,
+        n_lights: usize,
+        stride: usize,
+    ) {
+        let mut gs =
+            vec![0f32; 3 * (self.coefficients.iter().map(|c| c.per_slot()).max().unwrap_or(2))];
+        for v in 0..self.vertices {
+            let Some(&mi) = view.material_of.get(v) else { continue };
+            if mi == usize::MAX || mi >= self.coefficients.len() {
+                continue;
+            }
+            let p = Vec3::from(view.positions[v]);
+            let (t, b, mut n) = tangent::frame(view.normals[v], view.tangents[v]);
+            let to_cam =
+                view.ortho_to_camera.unwrap_or(view.eye - p).try_normalize(0.0).unwrap_or(n);
+            let back = to_cam.dot(&n) < 0.0;
+            if back {
+                n = -n;
+            }
+            let Some(dir) = Direction::from_vector(tangent::to_tangent(to_cam, (t, b, n))) else {
+                continue;
+            };
+            let f = if back && self.params.two_sided { self.vertices + v } else { v };
+            let pm = &self.coefficients[mi];
+            let k = pm.per_slot();
+            let vw = view.view_sampling(mi).view_weights(dir, view.view_mode);
+            for (m, &(j, omega)) in vw.as_slice().iter().enumerate() {
+                self.weights.gamma_star(pm, f, j, &mut gs);
+                let s = omega as f32 * self.params.exposure;
+                let base = ((v * n_lights + l) * 4 + m) * stride;
+                let dst = &mut out.coef[base..base + stride];
+                for col in 0..2 {
+                    dst[col] = [s * gs[col], s * gs[k + col], s * gs[2 * k + col], 0.0];
+                }
+                for kk in 0..pm.components {
+                    for ch in 0..3 {
+                        let flat = 3 * kk + ch;
+                        let (g, lane) = (flat / 12, flat % 12);
+                        dst[2 + 3 * g + lane / 4][lane % 4] = s * gs[ch * k + 2 + kk];
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Camera and mesh inputs of [`SceneEnvironment::fill`].
+pub struct ViewInput<'a> {
+    /// Eye position.
+    pub eye: Vec3,
+    /// Direction towards an orthographic camera.
+    pub ortho_to_camera: Option<Vec3>,
+    /// View blending.
+    pub view_mode: InterpMode,
+    /// Positions, normals, tangents of the mesh.
+    pub positions: &'a [[f32; 3]],
+    /// Unit normals.
+    pub normals: &'a [[f32; 3]],
+    /// Tangents.
+    pub tangents: &'a [[f32; 4]],
+    /// Material of each vertex (`usize::MAX` = none).
+    pub material_of: &'a [usize],
+    /// Materials (for their view samplings).
+    pub materials: &'a [&'a MaterialData],
+}
+
+impl ViewInput<'_> {
+    fn view_sampling(&self, m: usize) -> &btf_core::Sampling {
+        &self.materials[m].view_sampling
+    }
+}
+
+fn ms(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
