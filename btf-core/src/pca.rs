@@ -74,12 +74,12 @@ pub fn pca_slot(
     let mut peak = f32::MIN;
     for i in 0..n {
         let row = slot.row(i);
-        crate::store::check_finite(row, slot.view, i, 0)?;
-        for (acc, &v) in mean64.iter_mut().zip(row) {
-            *acc += v as f64;
-            energy += (v as f64) * (v as f64);
-            peak = peak.max(v);
+        let (e, p, finite) = row_stats(row, &mut mean64);
+        if !finite {
+            crate::store::check_finite(row, slot.view, i, 0)?;
         }
+        energy += e;
+        peak = peak.max(p);
     }
     let mean: Vec<f32> = mean64.iter().map(|s| (s / n as f64) as f32).collect();
     for row in slot.data.chunks_exact_mut(m) {
@@ -164,6 +164,35 @@ pub fn pca_slot(
         energy,
         peak,
     })
+}
+
+/// Adds `row` into `sum` and returns its energy `Σ v²`, its largest value and whether all
+/// its values are finite. Eight independent accumulators keep the loop vectorisable (a
+/// single running sum would be a serial chain of dependent additions).
+fn row_stats(row: &[f32], sum: &mut [f64]) -> (f64, f32, bool) {
+    const L: usize = 8;
+    let mut e = [0f64; L];
+    let mut p = [f32::MIN; L];
+    let mut bad = [0f32; L];
+    let (rc, rr) = (row.chunks_exact(L), row.chunks_exact(L).remainder());
+    for (r, s) in rc.zip(sum.chunks_exact_mut(L)) {
+        for k in 0..L {
+            let v = r[k];
+            s[k] += v as f64;
+            e[k] += (v as f64) * (v as f64);
+            p[k] = p[k].max(v);
+            bad[k] += v * 0.0; // NaN for NaN or ±∞, 0 otherwise
+        }
+    }
+    let tail = row.len() - rr.len();
+    for (k, &v) in rr.iter().enumerate() {
+        sum[tail + k] += v as f64;
+        e[k] += (v as f64) * (v as f64);
+        p[k] = p[k].max(v);
+        bad[k] += v * 0.0;
+    }
+    let finite = bad.iter().all(|b| *b == 0.0);
+    (e.iter().sum(), p.iter().copied().fold(f32::MIN, f32::max), finite)
 }
 
 /// `X̃X̃ᵀ` in `f64` for the row-major `n × m` matrix `x`, streaming column blocks converted
