@@ -141,7 +141,9 @@ impl SceneEnvironment {
         (res as usize).max(1)
     }
 
-    fn gather(&self, delta_deg: f64) -> WeightSet {
+    /// The exact weights for rotation `delta_deg` (a full gather, eq. 10), whatever the
+    /// eigenweightset setting.
+    pub fn gather(&self, delta_deg: f64) -> WeightSet {
         let input = GatherInput {
             table: &self.table,
             visibility: &self.vis,
