@@ -15,7 +15,7 @@ use btf_core::zarr::DType;
 use std::time::Instant;
 
 #[test]
-#[ignore]
+#[ignore = "a measurement (minutes, release build): run for BENCHMARKS.md"]
 fn ubo2003_import_vs_plain_decoding() {
     let size: usize =
         std::env::var("BTF_SPEED_SIZE").ok().and_then(|s| s.parse().ok()).unwrap_or(128);

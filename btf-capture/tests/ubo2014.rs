@@ -328,7 +328,7 @@ fn lying_sizes_and_wrong_signatures_are_refused_before_allocating() {
 /// `BTF_FUZZ_CORPUS=btf-capture/fuzz/corpus cargo test -p btf-capture --test ubo2014 --
 /// --ignored write_fuzz_seeds`.
 #[test]
-#[ignore]
+#[ignore = "a tool, not a test: writes fuzz seed files when BTF_FUZZ_CORPUS is set"]
 fn write_fuzz_seeds() {
     let root = std::path::PathBuf::from(std::env::var("BTF_FUZZ_CORPUS").expect("BTF_FUZZ_CORPUS"));
     let m = || meta(4, &["R", "G", "B"]);

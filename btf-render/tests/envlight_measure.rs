@@ -29,7 +29,7 @@ fn shirt(dir: &std::path::Path, res: Resolution) -> Mesh {
 }
 
 #[test]
-#[ignore]
+#[ignore = "a measurement (minutes): run for BENCHMARKS.md"]
 fn measure_shirts() {
     let dir = tempfile::tempdir().unwrap();
     let store = common::write_store(

@@ -10,7 +10,7 @@ use btf_render::{RenderOptions, Renderer, Scene};
 use common::*;
 
 #[test]
-#[ignore]
+#[ignore = "a measurement on lavapipe: run for BENCHMARKS.md"]
 fn frame_time_ratios() {
     let Some(gpu) = gpu("frame_time_ratios") else { return };
     let dir = tempfile::tempdir().unwrap();
