@@ -28,7 +28,8 @@ fn realistic_slot(size: usize) -> SlotData {
     for i in 0..n {
         let row = &mut data[i * m..(i + 1) * m];
         for (k, mode) in modes.iter().enumerate() {
-            let coef = ((i as f32 + 1.0) * 0.37 * (k as f32 + 1.0)).cos() / (1.0 + k as f32).powf(1.5);
+            let coef =
+                ((i as f32 + 1.0) * 0.37 * (k as f32 + 1.0)).cos() / (1.0 + k as f32).powf(1.5);
             for (v, b) in row.iter_mut().zip(mode) {
                 *v += coef * b;
             }
@@ -45,7 +46,11 @@ fn bench_pca_slot(c: &mut Criterion) {
     let mut g = c.benchmark_group("pca_slot_256");
     g.sample_size(10);
     g.bench_function("c16_f16", |b| {
-        b.iter_batched_ref(|| slot.clone(), |s| black_box(pca_slot(s, 16, Quantization::F16).unwrap()), criterion::BatchSize::LargeInput)
+        b.iter_batched_ref(
+            || slot.clone(),
+            |s| black_box(pca_slot(s, 16, Quantization::F16).unwrap()),
+            criterion::BatchSize::LargeInput,
+        )
     });
     g.finish();
 }
@@ -55,7 +60,8 @@ fn bench_store(c: &mut Criterion) {
         eprintln!("compress_store: set BTF_BENCH_STORE to a BTF store to run this benchmark");
         return;
     };
-    let store = btf_core::store::BtfStore::open(std::path::Path::new(&path)).expect("bench store opens");
+    let store =
+        btf_core::store::BtfStore::open(std::path::Path::new(&path)).expect("bench store opens");
     let out = std::env::temp_dir().join(format!("btf-bench-{}.eig", std::process::id()));
     let mut g = c.benchmark_group("compress_store");
     g.sample_size(10);
@@ -63,15 +69,26 @@ fn bench_store(c: &mut Criterion) {
     let name = format!("{}x{}_{}px_c16_f16", m.n_views(), m.n_lights(), m.width);
     g.bench_function(name, |b| {
         b.iter(|| {
-            let params = btf_core::compress::CompressParams { components: 16, quantization: Quantization::F16, resume: false };
+            let params = btf_core::compress::CompressParams {
+                components: 16,
+                quantization: Quantization::F16,
+                resume: false,
+            };
             let r = btf_core::compress::compress(&store, &out, params, &|| {}).unwrap();
             black_box(r.rel_rmse)
         })
     });
     g.finish();
-    let params = btf_core::compress::CompressParams { components: 16, quantization: Quantization::F16, resume: false };
+    let params = btf_core::compress::CompressParams {
+        components: 16,
+        quantization: Quantization::F16,
+        resume: false,
+    };
     let r = btf_core::compress::compress(&store, &out, params, &|| {}).unwrap();
-    eprintln!("compress_store: rel_rmse {:.4e} (exact PCA {:.4e}), {:.2} s", r.rel_rmse, r.rel_rmse_exact, r.seconds);
+    eprintln!(
+        "compress_store: rel_rmse {:.4e} (exact PCA {:.4e}), {:.2} s",
+        r.rel_rmse, r.rel_rmse_exact, r.seconds
+    );
     std::fs::remove_dir_all(&out).ok();
 }
 
