@@ -152,6 +152,27 @@ impl Gpu {
     }
 }
 
+/// A bind-group layout with one uniform buffer at binding 0, seen by `visibility`.
+pub fn uniform_layout(
+    dev: &wgpu::Device,
+    label: &str,
+    visibility: wgpu::ShaderStages,
+) -> wgpu::BindGroupLayout {
+    dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
+        entries: &[wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        }],
+    })
+}
+
 /// Validates WGSL source with naga (parse + full validation), naming the file on failure.
 pub fn validate_wgsl(name: &str, source: &str) -> Result<()> {
     use wgpu::naga;

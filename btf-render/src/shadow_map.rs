@@ -77,19 +77,7 @@ impl ShadowMaps {
             label: Some("shadow_map.wgsl"),
             source: wgpu::ShaderSource::Wgsl(SOURCE.into()),
         });
-        let layout = dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("shadow map"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
-        });
+        let layout = crate::gpu::uniform_layout(dev, "shadow map", wgpu::ShaderStages::VERTEX);
         let pl = dev.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("shadow map"),
             bind_group_layouts: &[Some(&layout)],

@@ -127,19 +127,7 @@ impl ShadowVolumes {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let layout = dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("volume camera"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
-        });
+        let layout = crate::gpu::uniform_layout(dev, "volume camera", wgpu::ShaderStages::VERTEX);
         let group = dev.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("volume camera"),
             layout: &layout,

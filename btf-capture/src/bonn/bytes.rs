@@ -96,18 +96,9 @@ impl<R: Read + Seek> ByteReader<R> {
 
     /// Checks that `count` elements of `elem_bytes` each may be allocated and are present.
     pub fn check_alloc(&self, count: u64, elem_bytes: u64, field: &str) -> Result<usize> {
-        let bytes = count.checked_mul(elem_bytes).ok_or_else(|| {
-            Error::limit(&self.file, field, format!("{count} x {elem_bytes} bytes overflows"))
-        })?;
-        if bytes > self.limits.max_alloc_bytes {
-            return Err(Error::limit(
-                &self.file,
-                field,
-                format!("{bytes} bytes claimed, limit {}", self.limits.max_alloc_bytes),
-            ));
-        }
-        self.need(bytes, field)?;
-        usize::try_from(bytes).map_err(|_| Error::limit(&self.file, field, "too large"))
+        let bytes = self.check_limit(count, elem_bytes, field)?;
+        self.need(bytes as u64, field)?;
+        Ok(bytes)
     }
 
     /// Reads exactly `n` bytes (checked first).
