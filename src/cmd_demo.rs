@@ -109,7 +109,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
         anyhow::ensure!(!a.sweep.is_empty() && !a.sweep.contains(&0), "--sweep needs counts ≥ 1");
         crate::sweep::run(&btf, &a.sweep, Quantization::F16, &sweep_dir)
     })?;
-    let renders = crate::demo_scene::run(&a.out, &eig_path, a.width, &mut |name, done, f| {
+    let renders = crate::demo_scene::run(&a.out, a.width, &mut |name, done, f| {
         stage(&mut stages, name, done, f)
     })?;
 

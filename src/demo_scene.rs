@@ -91,7 +91,7 @@ msaa = 4
 }
 
 /// Runs the mesh, environment and render stages; returns the report section.
-pub fn run(out: &Path, eig: &Path, width: u32, stage: &mut StageFn<'_>) -> Result<String> {
+pub fn run(out: &Path, width: u32, stage: &mut StageFn<'_>) -> Result<String> {
     let mesh_path = out.join("garment.obj");
     let env_path = out.join("sky.exr");
     let mesh = datasets::synth_mesh(MeshKind::Shirt, Resolution::Low)?;
@@ -110,7 +110,6 @@ pub fn run(out: &Path, eig: &Path, width: u32, stage: &mut StageFn<'_>) -> Resul
             )?)
         }),
     )?;
-    let _ = eig;
     let mut md = String::from("## Renders\n\n");
     let gpu = match Gpu::new() {
         Ok(g) => g,

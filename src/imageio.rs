@@ -36,11 +36,14 @@ fn check_rgb(values: &[f32], w: usize, h: usize, path: &Path) -> Result<()> {
 pub fn write_exr(path: &Path, w: usize, h: usize, rgb: &[f32]) -> Result<()> {
     check_rgb(rgb, w, h, path)?;
     let tmp = temp_beside(path, "exr");
-    exr::prelude::write_rgb_file(&tmp, w, h, |x, y| {
+    let written = exr::prelude::write_rgb_file(&tmp, w, h, |x, y| {
         let i = (y * w + x) * 3;
         (rgb[i], rgb[i + 1], rgb[i + 2])
-    })
-    .with_context(|| format!("cannot write {}", path.display()))?;
+    });
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(e).with_context(|| format!("cannot write {}", path.display()));
+    }
     finish(&tmp, path)
 }
 
@@ -68,8 +71,10 @@ pub fn write_png_linear(path: &Path, w: usize, h: usize, rgb: &[f32], exposure: 
 /// Writes an 8-bit RGB image as PNG.
 pub fn write_png(path: &Path, img: &RgbImage) -> Result<()> {
     let tmp = temp_beside(path, "png");
-    img.save_with_format(&tmp, image::ImageFormat::Png)
-        .with_context(|| format!("cannot write {}", path.display()))?;
+    if let Err(e) = img.save_with_format(&tmp, image::ImageFormat::Png) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(e).with_context(|| format!("cannot write {}", path.display()));
+    }
     finish(&tmp, path)
 }
 
