@@ -46,11 +46,7 @@ fn bench_pca_slot(c: &mut Criterion) {
     let mut g = c.benchmark_group("pca_slot_256");
     g.sample_size(10);
     g.bench_function("c16_f16", |b| {
-        b.iter_batched_ref(
-            || slot.clone(),
-            |s| black_box(pca_slot(s, 16, Quantization::F16).unwrap()),
-            criterion::BatchSize::LargeInput,
-        )
+        b.iter(|| black_box(pca_slot(&slot, 16, Quantization::F16).unwrap()))
     });
     g.finish();
 }

@@ -11,6 +11,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Instant;
 
 /// Parameters of [`compress`].
@@ -104,37 +105,62 @@ pub fn compress(
     }
     let emeta = EigenMeta { btf: meta.clone(), components: c, quantization: params.quantization };
     let writer = EigenWriter::create(output, emeta, params.resume)?;
-    let views: Vec<usize> = (0..meta.n_views()).collect();
-    let slots: Vec<(SlotReport, bool)> = views
-        .par_iter()
-        .map_init(
-            || (SlotData { view: 0, n_lights: 0, texel_values: 0, data: Vec::new() }, Vec::new()),
-            |(slot, raw), &v| -> Result<(SlotReport, bool)> {
-                let done = writer.has_slot(v).then(|| writer.read_stats(v)).flatten();
-                if let Some(r) = done.and_then(|s| serde_json::from_value(s).ok()) {
-                    progress();
-                    return Ok((r, true));
+    // One worker per thread, each with its own slot buffers for the whole run (a slot is
+    // 64 MB at 256²: allocating and faulting it in per slot would cost more than reading it).
+    let one = |v: usize, slot: &mut SlotData, raw: &mut Vec<u8>| -> Result<(SlotReport, bool)> {
+        let done = writer.has_slot(v).then(|| writer.read_stats(v)).flatten();
+        if let Some(r) = done.and_then(|s| serde_json::from_value(s).ok()) {
+            progress();
+            return Ok((r, true));
+        }
+        let t0 = Instant::now();
+        input.read_slot_into(v, slot, raw)?;
+        let r = pca_slot(slot, c, params.quantization)?;
+        writer.write_slot(v, &r.stored)?;
+        let report = SlotReport {
+            view: v,
+            sse: r.sse,
+            sse_stored: r.sse_stored,
+            discarded_eigen_sum: r.discarded_eigen_sum,
+            energy: r.energy,
+            peak: r.peak,
+            effective_components: r.effective_components,
+            seconds: t0.elapsed().as_secs_f64(),
+        };
+        writer.write_stats(v, &json!(report))?;
+        progress();
+        Ok((report, false))
+    };
+    let n_views = meta.n_views();
+    let next = AtomicUsize::new(0);
+    let failed = AtomicBool::new(false);
+    let workers = rayon::current_num_threads().clamp(1, n_views.max(1));
+    let per_worker: Vec<Result<Vec<(SlotReport, bool)>>> = (0..workers)
+        .into_par_iter()
+        .map(|_| {
+            let mut slot = SlotData { view: 0, n_lights: 0, texel_values: 0, data: Vec::new() };
+            let mut raw = Vec::new();
+            let mut done = Vec::new();
+            loop {
+                let v = next.fetch_add(1, Ordering::Relaxed);
+                if v >= n_views || failed.load(Ordering::Relaxed) {
+                    return Ok(done);
                 }
-                let t0 = Instant::now();
-                input.read_slot_into(v, slot, raw)?;
-                let r = pca_slot(slot, c, params.quantization)?;
-                writer.write_slot(v, &r.stored)?;
-                let report = SlotReport {
-                    view: v,
-                    sse: r.sse,
-                    sse_stored: r.sse_stored,
-                    discarded_eigen_sum: r.discarded_eigen_sum,
-                    energy: r.energy,
-                    peak: r.peak,
-                    effective_components: r.effective_components,
-                    seconds: t0.elapsed().as_secs_f64(),
-                };
-                writer.write_stats(v, &json!(report))?;
-                progress();
-                Ok((report, false))
-            },
-        )
-        .collect::<Result<_>>()?;
+                match one(v, &mut slot, &mut raw) {
+                    Ok(r) => done.push(r),
+                    Err(e) => {
+                        failed.store(true, Ordering::Relaxed);
+                        return Err(e);
+                    }
+                }
+            }
+        })
+        .collect();
+    let mut slots = Vec::with_capacity(n_views);
+    for w in per_worker {
+        slots.extend(w?);
+    }
+    slots.sort_by_key(|s| s.0.view);
     writer.finish()?;
     let resumed_slots = slots.iter().filter(|s| s.1).count();
     let slots: Vec<SlotReport> = slots.into_iter().map(|s| s.0).collect();

@@ -21,6 +21,7 @@ pub mod eigen;
 pub mod error;
 pub mod gemm;
 pub mod interp;
+pub mod kernels;
 pub mod metrics;
 pub mod pca;
 pub mod reconstruct;

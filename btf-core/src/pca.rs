@@ -1,22 +1,27 @@
 //! Principal component analysis of one view slot (Sattler et al. 2003, eq. 1).
 //!
 //! The `n` light images of slot `j` are the rows of `X` (`n × 3hw`). With so few rows the
-//! snapshot method is the efficient one: centre the rows on their mean `μ`, accumulate the
-//! small Gram matrix `G = X̃X̃ᵀ` in `f64` (column block by column block, so memory stays
-//! bounded), eigen-solve it in `f64`, and lift each eigenvector `v_k` to an eigentexture
-//! `B_k = X̃ᵀv_k / √λ_k` of unit norm. Signs are fixed so that the largest-magnitude entry of
-//! every `B_k` is positive. The eigentextures are then quantised for storage and the weights
-//! `p_ik` are the least-squares coefficients of each centred image on the *stored* basis, so
-//! quantisation costs as little as it can. By Eckart–Young, with the exact basis the squared
-//! error of the slot equals the sum of the discarded eigenvalues; both are reported.
+//! snapshot method is the efficient one: accumulate the small Gram matrix `G = X̃X̃ᵀ` of the
+//! images centred on their mean `μ` in `f64`, eigen-solve it in `f64`, and lift each
+//! eigenvector `v_k` to an eigentexture `B_k = X̃ᵀv_k / √λ_k` of unit norm. The data is never
+//! centred in memory: `G = C·YYᵀ·C` and `B = (C·V)ᵀY` for `Y = X − 1x_0ᵀ` (shifted by the
+//! first image, exactly, in `f64`) and `C = I − 11ᵀ/n`. Three streaming passes read the
+//! slot, block by block of columns: the Gram matrix (with mean, energy and peak), the
+//! eigentextures, and the correction terms of the stored basis. Signs are fixed so that
+//! the largest-magnitude entry of every `B_k` is positive. The eigentextures are then
+//! quantised for storage and the weights `p_ik` are the least-squares coefficients of each
+//! centred image on the *stored* basis, so quantisation costs as little as it can. By
+//! Eckart–Young, with the exact basis the squared error of the slot equals the sum of the
+//! discarded eigenvalues; both are reported.
 
 use crate::eigen::{Quantization, QuantizedSlot, dequantize, quantize};
-use crate::gemm::{Mat, dgemm, sgemm};
+use crate::gemm::{Mat, dgemm};
+use crate::kernels::{Block, LANES, LIFT_COMPONENTS, dot_rows, lift_rows, load_shifted};
 use crate::store::SlotData;
 use crate::{Error, Result};
 use nalgebra::{DMatrix, SymmetricEigen};
 
-/// Columns per block in the streaming passes (fits the L2 cache in `f64` for 81 rows).
+/// Columns per block in the streaming passes (81 rows of them fit the L2 cache in `f64`).
 const BLOCK: usize = 1024;
 
 /// Result of the PCA of one slot.
@@ -44,54 +49,24 @@ pub fn max_components(n_lights: usize) -> usize {
     n_lights.saturating_sub(1).max(1)
 }
 
-/// Converts columns `c0..c1` of the row-major `rows × cols` `f32` matrix into a dense `f64`
-/// block `rows × (c1 − c0)`.
-fn block_f64(data: &[f32], rows: usize, cols: usize, c0: usize, c1: usize, out: &mut Vec<f64>) {
-    let w = c1 - c0;
-    out.clear();
-    out.reserve(rows * w);
-    for r in 0..rows {
-        out.extend(data[r * cols + c0..r * cols + c1].iter().map(|&v| v as f64));
-    }
-}
-
 /// Computes the PCA of `slot` with `components` components (already clamped by the caller
-/// to `1..=max_components`), quantising the basis with `quantization`. The slot's data is
-/// centred in place.
-pub fn pca_slot(
-    slot: &mut SlotData,
-    components: usize,
-    quantization: Quantization,
-) -> Result<SlotPca> {
+/// to `1..=max_components`), quantising the basis with `quantization`.
+pub fn pca_slot(slot: &SlotData, components: usize, quantization: Quantization) -> Result<SlotPca> {
     let (n, m) = (slot.n_lights, slot.texel_values);
     let c = components;
     if c == 0 || c > n {
         return Err(Error::Invalid(format!("components {c} not in 1..={n}")));
     }
-    // Mean, energy and peak, refusing non-finite input with its location.
-    let mut mean64 = vec![0f64; m];
-    let mut energy = 0f64;
-    let mut peak = f32::MIN;
-    for i in 0..n {
-        let row = slot.row(i);
-        let (e, p, finite) = row_stats(row, &mut mean64);
-        if !finite {
-            crate::store::check_finite(row, slot.view, i, 0)?;
-        }
-        energy += e;
-        peak = peak.max(p);
+    if slot.data.len() != n * m {
+        return Err(Error::Invalid(format!(
+            "slot holds {} values, {n}×{m} expected",
+            slot.data.len()
+        )));
     }
-    let mean: Vec<f32> = mean64.iter().map(|s| (s / n as f64) as f32).collect();
-    for row in slot.data.chunks_exact_mut(m) {
-        for (v, mu) in row.iter_mut().zip(&mean) {
-            *v -= mu;
-        }
-    }
-    let x = &slot.data;
-
-    // Pass 1: Gram matrix in f64.
-    let gram = gram_f64(x, n, m);
-    let eig = SymmetricEigen::new(DMatrix::from_row_slice(n, n, &gram));
+    // Pass 1: the centred Gram matrix, mean, energy and peak.
+    let first = first_pass(slot)?;
+    let gram = &first.gram;
+    let eig = SymmetricEigen::new(DMatrix::from_row_slice(n, n, gram));
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
     let eigenvalues: Vec<f64> = order.iter().map(|&k| eig.eigenvalues[k].max(0.0)).collect();
@@ -107,15 +82,153 @@ pub fn pca_slot(
         }
     }
 
-    // Pass 2: eigentextures B = liftᵀ X̃ (c × m). Each entry sums only n products, so
-    // single precision loses nothing the f16/u8 storage would keep.
-    let lift32: Vec<f32> = lift.iter().map(|&v| v as f32).collect();
-    let mut basis = vec![0f32; c * m];
-    sgemm(1.0, Mat::new(&lift32, n, c).t(), Mat::new(x, n, m), 0.0, &mut basis, m);
-    // Deterministic signs: the largest-magnitude entry of each eigentexture is positive.
+    // Pass 2: eigentextures B = liftᵀX̃ in f64, with deterministic signs.
+    let mut basis = lift_pass(slot, &mut lift, c, effective);
+    let (raw, scale_offset) = quantize(&basis.rows_f32(), c, quantization);
+    let stored_basis = dequantize(&raw, &scale_offset, quantization);
+
+    // The exact basis is B = liftᵀX̃, so its projections X̃Bᵀ = G·lift and its Gram matrix
+    // BBᵀ = liftᵀ·G·lift follow from the small Gram matrix alone, in f64.
+    let mut proj_exact = vec![0f64; n * c];
+    dgemm(1.0, Mat::new(gram, n, n), Mat::new(&lift, n, c), 0.0, &mut proj_exact, c);
+    let mut bgram_exact = vec![0f64; c * c];
+    dgemm(1.0, Mat::new(&lift, n, c).t(), Mat::new(&proj_exact, n, c), 0.0, &mut bgram_exact, c);
+
+    // Pass 3: the stored basis S = B + E. Its projections X̃Sᵀ = G·lift + X̃Eᵀ need only the
+    // small correction X̃Eᵀ from the data, and its Gram matrix SSᵀ only the basis.
+    let (cross, bgram) = stored_pass(slot, &mut basis, &stored_basis, c);
+    let mut proj = proj_exact.clone();
+    for k in 0..c {
+        let row = &cross[k * n..(k + 1) * n];
+        let mean = row.iter().sum::<f64>() / n as f64;
+        for i in 0..n {
+            proj[i * c + k] += row[i] - mean;
+        }
+    }
+    let (sse, _) = least_squares(&proj_exact, &bgram_exact, gram, n, c);
+    let (sse_stored, weights) = least_squares(&proj, &bgram, gram, n, c);
+    let discarded_eigen_sum = (trace - eigenvalues[..effective].iter().sum::<f64>()).max(0.0);
+
+    for (l, w) in weights.chunks(c).enumerate() {
+        crate::store::check_finite(w, slot.view, l, 0)?;
+    }
+    Ok(SlotPca {
+        stored: QuantizedSlot {
+            mean: first.mean,
+            eigentextures: raw,
+            scale_offset,
+            weights,
+            eigenvalues,
+        },
+        effective_components: effective,
+        sse,
+        sse_stored,
+        discarded_eigen_sum,
+        energy: first.energy,
+        peak: first.peak,
+    })
+}
+
+/// What the first pass over a slot yields.
+struct FirstPass {
+    /// `X̃X̃ᵀ` (`n × n`, row-major) of the centred images.
+    gram: Vec<f64>,
+    /// The mean image `μ`.
+    mean: Vec<f32>,
+    /// `Σ_i ‖x_i‖²`.
+    energy: f64,
+    /// Largest value.
+    peak: f32,
+}
+
+/// The Gram matrix of the centred images, without centring them: any shift `s` gives
+/// `X̃ = C·(X − 1sᵀ)` with `C = I − 11ᵀ/n`, so `X̃X̃ᵀ = C·YYᵀ·C` for `Y = X − 1sᵀ`. With
+/// `s = x_0` (the first light image) `Y` is exact in `f64` and of the data's spread, not its
+/// mean, so no precision is lost to a large mean.
+fn first_pass(slot: &SlotData) -> Result<FirstPass> {
+    let (n, m, x) = (slot.n_lights, slot.texel_values, &slot.data[..]);
+    let shift = slot.row(0);
+    let mut g = vec![0f64; n * n];
+    let mut mean = vec![0f32; m];
+    let (mut energy, mut peak) = (0f64, f32::MIN);
+    let mut blk = Block::default();
+    let mut colsum = vec![0f64; BLOCK];
+    for c0 in (0..m).step_by(BLOCK) {
+        let w = BLOCK.min(m - c0);
+        colsum[..w].fill(0.0);
+        let st = load_shifted(x, n, m, c0, w, Some(shift), &mut blk, Some(&mut colsum))
+            .expect("statistics were asked for");
+        if !st.finite {
+            for i in 0..n {
+                crate::store::check_finite(slot.row(i), slot.view, i, 0)?;
+            }
+        }
+        energy += st.energy;
+        peak = peak.max(st.peak);
+        dot_rows(&blk, &blk, true, &mut g, n);
+        for t in 0..w {
+            mean[c0 + t] = (shift[c0 + t] as f64 + colsum[t] / n as f64) as f32;
+        }
+    }
+    for i in 0..n {
+        for j in 0..i {
+            g[i * n + j] = g[j * n + i];
+        }
+    }
+    // C·G·C: subtract row and column means, add back the overall mean.
+    let row_mean: Vec<f64> = g.chunks(n).map(|r| r.iter().sum::<f64>() / n as f64).collect();
+    let all_mean = row_mean.iter().sum::<f64>() / n as f64;
+    for i in 0..n {
+        for j in 0..n {
+            g[i * n + j] += all_mean - row_mean[i] - row_mean[j];
+        }
+    }
+    Ok(FirstPass { gram: g, mean, energy, peak })
+}
+
+/// Eigentextures in `f64`, `cp` rows (a multiple of the lift tile) of `mp` columns (a
+/// multiple of the SIMD width), zero past the `c` rows and `m` columns in use.
+struct Basis {
+    data: Vec<f64>,
+    c: usize,
+    m: usize,
+    mp: usize,
+}
+
+impl Basis {
+    fn rows_f32(&self) -> Vec<f32> {
+        let mut out = Vec::with_capacity(self.c * self.m);
+        for k in 0..self.c {
+            out.extend(self.data[k * self.mp..k * self.mp + self.m].iter().map(|&v| v as f32));
+        }
+        out
+    }
+}
+
+/// `B = liftᵀX̃ = (C·lift)ᵀY` (`C·lift` has zero column sums, so the shift cancels), then
+/// the sign of each eigentexture (and its lift column) fixed so that its largest-magnitude
+/// entry is positive.
+fn lift_pass(slot: &SlotData, lift: &mut [f64], c: usize, effective: usize) -> Basis {
+    let (n, m, x) = (slot.n_lights, slot.texel_values, &slot.data[..]);
+    let cp = c.div_ceil(LIFT_COMPONENTS) * LIFT_COMPONENTS;
+    let mp = m.div_ceil(LANES) * LANES;
+    let mut coef = vec![0f64; n * cp];
+    for k in 0..c {
+        let mean = (0..n).map(|i| lift[i * c + k]).sum::<f64>() / n as f64;
+        for i in 0..n {
+            coef[i * cp + k] = lift[i * c + k] - mean;
+        }
+    }
+    let mut data = vec![0f64; cp * mp];
+    let mut blk = Block::default();
+    for c0 in (0..m).step_by(BLOCK) {
+        let w = BLOCK.min(m - c0);
+        load_shifted(x, n, m, c0, w, Some(slot.row(0)), &mut blk, None);
+        lift_rows(&blk, &coef, cp, &mut data, mp, c0);
+    }
     for k in 0..effective {
-        let row = &mut basis[k * m..(k + 1) * m];
-        let big = row.iter().copied().fold(0f32, |a, v| if v.abs() > a.abs() { v } else { a });
+        let row = &mut data[k * mp..k * mp + m];
+        let big = row.iter().copied().fold(0f64, |a, v| if v.abs() > a.abs() { v } else { a });
         if big < 0.0 {
             row.iter_mut().for_each(|v| *v = -*v);
             for i in 0..n {
@@ -123,111 +236,46 @@ pub fn pca_slot(
             }
         }
     }
-    let (raw, scale_offset) = quantize(&basis, c, quantization);
-    drop(basis);
-    let stored_basis = dequantize(&raw, &scale_offset, quantization);
+    Basis { data, c, m, mp }
+}
 
-    // The exact basis is B = liftᵀX̃, so its projections X̃Bᵀ = G·lift and its Gram matrix
-    // BBᵀ = liftᵀ·G·lift follow from the small Gram matrix alone, in f64.
-    let mut proj_exact = vec![0f64; n * c];
-    dgemm(1.0, Mat::new(&gram, n, n), Mat::new(&lift, n, c), 0.0, &mut proj_exact, c);
-    let mut bgram_exact = vec![0f64; c * c];
-    dgemm(1.0, Mat::new(&lift, n, c).t(), Mat::new(&proj_exact, n, c), 0.0, &mut bgram_exact, c);
-
-    // Pass 3: projections of X̃ on the stored basis (n × c) and its Gram matrix (c × c), in
-    // f64: the stored error is the small difference ‖x̃‖² − qᵀM⁻¹q and needs the precision.
-    let mut proj = vec![0f64; n * c];
+/// For the stored basis `S` (`c × m`) and the exact one `B`: `E·Yᵀ` (`c × n`, with
+/// `E = S − B`; centring it gives `X̃Eᵀ`, transposed) and `SSᵀ` (`c × c`), in `f64`.
+/// The exact basis is overwritten by `E`.
+fn stored_pass(
+    slot: &SlotData,
+    basis: &mut Basis,
+    stored: &[f32],
+    c: usize,
+) -> (Vec<f64>, Vec<f64>) {
+    let (n, m, x) = (slot.n_lights, slot.texel_values, &slot.data[..]);
+    let mp = basis.mp;
+    for k in 0..c {
+        for (e, &s) in basis.data[k * mp..k * mp + m].iter_mut().zip(&stored[k * m..(k + 1) * m]) {
+            *e = s as f64 - *e;
+        }
+    }
+    let mut cross = vec![0f64; c * n];
     let mut bgram = vec![0f64; c * c];
-    let (mut xb, mut bb) = (Vec::new(), Vec::new());
+    let (mut yb, mut sb, mut eb) = (Block::default(), Block::default(), Block::default());
     for c0 in (0..m).step_by(BLOCK) {
-        let c1 = (c0 + BLOCK).min(m);
-        let w = c1 - c0;
-        block_f64(x, n, m, c0, c1, &mut xb);
-        block_f64(&stored_basis, c, m, c0, c1, &mut bb);
-        let b = Mat::new(&bb, c, w);
-        dgemm(1.0, Mat::new(&xb, n, w), b.t(), 1.0, &mut proj, c);
-        dgemm(1.0, b, b.t(), 1.0, &mut bgram, c);
-    }
-    let (sse, _) = least_squares(&proj_exact, &bgram_exact, &gram, n, c);
-    let (sse_stored, weights) = least_squares(&proj, &bgram, &gram, n, c);
-    let discarded_eigen_sum = (trace - eigenvalues[..effective].iter().sum::<f64>()).max(0.0);
-
-    for (l, w) in weights.chunks(c).enumerate() {
-        crate::store::check_finite(w, slot.view, l, 0)?;
-    }
-    Ok(SlotPca {
-        stored: QuantizedSlot { mean, eigentextures: raw, scale_offset, weights, eigenvalues },
-        effective_components: effective,
-        sse,
-        sse_stored,
-        discarded_eigen_sum,
-        energy,
-        peak,
-    })
-}
-
-/// Adds `row` into `sum` and returns its energy `Σ v²`, its largest value and whether all
-/// its values are finite. Eight independent accumulators keep the loop vectorisable (a
-/// single running sum would be a serial chain of dependent additions).
-fn row_stats(row: &[f32], sum: &mut [f64]) -> (f64, f32, bool) {
-    const L: usize = 8;
-    let mut e = [0f64; L];
-    let mut p = [f32::MIN; L];
-    let mut bad = [0f32; L];
-    let (rc, rr) = (row.chunks_exact(L), row.chunks_exact(L).remainder());
-    for (r, s) in rc.zip(sum.chunks_exact_mut(L)) {
-        for k in 0..L {
-            let v = r[k];
-            s[k] += v as f64;
-            e[k] += (v as f64) * (v as f64);
-            p[k] = p[k].max(v);
-            bad[k] += v * 0.0; // NaN for NaN or ±∞, 0 otherwise
+        let w = BLOCK.min(m - c0);
+        load_shifted(x, n, m, c0, w, Some(slot.row(0)), &mut yb, None);
+        load_shifted(stored, c, m, c0, w, None, &mut sb, None);
+        eb.shape(c, w);
+        for k in 0..c {
+            let src = &basis.data[k * mp + c0..k * mp + c0 + w];
+            eb.row_mut(k)[..w].copy_from_slice(src);
         }
+        dot_rows(&eb, &yb, false, &mut cross, n);
+        dot_rows(&sb, &sb, true, &mut bgram, c);
     }
-    let tail = row.len() - rr.len();
-    for (k, &v) in rr.iter().enumerate() {
-        sum[tail + k] += v as f64;
-        e[k] += (v as f64) * (v as f64);
-        p[k] = p[k].max(v);
-        bad[k] += v * 0.0;
-    }
-    let finite = bad.iter().all(|b| *b == 0.0);
-    (e.iter().sum(), p.iter().copied().fold(f32::MIN, f32::max), finite)
-}
-
-/// `X̃X̃ᵀ` in `f64` for the row-major `n × m` matrix `x`, streaming column blocks converted
-/// to `f64`. Only the blocks on and above the diagonal are multiplied (rows split into
-/// three bands), then mirrored: two thirds of the work of the full product.
-fn gram_f64(x: &[f32], n: usize, m: usize) -> Vec<f64> {
-    let band = n.div_ceil(3).max(1);
-    let bands: Vec<(usize, usize)> = (0..n).step_by(band).map(|r| (r, (r + band).min(n))).collect();
-    let mut gram = vec![0f64; n * n];
-    let mut blk = Vec::new();
-    let mut part = vec![0f64; band * band];
-    for c0 in (0..m).step_by(BLOCK) {
-        let c1 = (c0 + BLOCK).min(m);
-        let w = c1 - c0;
-        block_f64(x, n, m, c0, c1, &mut blk);
-        for (bi, &(r0, r1)) in bands.iter().enumerate() {
-            for &(s0, s1) in &bands[bi..] {
-                let (rows, cols) = (r1 - r0, s1 - s0);
-                let a = Mat::new(&blk[r0 * w..r1 * w], rows, w);
-                let b = Mat::new(&blk[s0 * w..s1 * w], cols, w);
-                dgemm(1.0, a, b.t(), 0.0, &mut part[..rows * cols], cols);
-                for i in 0..rows {
-                    for j in 0..cols {
-                        gram[(r0 + i) * n + s0 + j] += part[i * cols + j];
-                    }
-                }
-            }
-        }
-    }
-    for i in 0..n {
+    for i in 0..c {
         for j in 0..i {
-            gram[i * n + j] = gram[j * n + i];
+            bgram[i * c + j] = bgram[j * c + i];
         }
     }
-    gram
+    (cross, bgram)
 }
 
 /// Least-squares weights of each centred image on a basis, given the projections `q_i`

@@ -335,16 +335,20 @@ impl BtfStore {
         if view >= self.meta.n_views() || light >= self.meta.n_lights() {
             return Err(Error::Invalid(format!("image ({view}, {light}) is outside the sampling")));
         }
-        self.arr.read_chunk_into(&[view as u64, light as u64, 0, 0, 0], raw).map_err(
-            |e| match e {
-                Error::Corrupt { path, what } => Error::Corrupt {
-                    path,
-                    what: format!("view slot {view}, light {light}: {what}"),
-                },
-                other => other,
-            },
-        )?;
-        zarr::decode_to_f32(raw, self.dtype(), out);
+        let idx = [view as u64, light as u64, 0, 0, 0];
+        let name = |e| match e {
+            Error::Corrupt { path, what } => {
+                Error::Corrupt { path, what: format!("view slot {view}, light {light}: {what}") }
+            }
+            other => other,
+        };
+        if self.dtype() == DType::F32 && cfg!(target_endian = "little") {
+            // Little-endian f32 on disk is the in-memory layout: read straight into `out`.
+            self.arr.read_chunk_to(&idx, bytemuck::cast_slice_mut(out)).map_err(name)?;
+        } else {
+            self.arr.read_chunk_into(&idx, raw).map_err(name)?;
+            zarr::decode_to_f32(raw, self.dtype(), out);
+        }
         check_finite(out, view, light, self.meta.width)
     }
 

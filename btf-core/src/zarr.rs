@@ -333,6 +333,36 @@ impl ZarrArray {
         Ok(())
     }
 
+    /// Reads and checks chunk `idx` straight into `out`, which must hold exactly the chunk's
+    /// payload (its size less the 4-byte checksum): no intermediate buffer, no copy.
+    pub fn read_chunk_to(&self, idx: &[u64], out: &mut [u8]) -> Result<()> {
+        use std::io::Read;
+        let path = self.chunk_path(idx);
+        let expect = self.meta.chunk_bytes()?;
+        if out.len() as u64 + 4 != expect {
+            return Err(Error::Invalid(format!(
+                "{}: a {expect}-byte chunk does not fit a {}-byte buffer",
+                path.display(),
+                out.len()
+            )));
+        }
+        let mut f = fs::File::open(&path).map_err(|e| Error::io(&path, e))?;
+        let len = f.metadata().map_err(|e| Error::io(&path, e))?.len();
+        if len != expect {
+            return Err(Error::Corrupt {
+                path,
+                what: format!("chunk has {len} bytes, {expect} expected (truncated or foreign)"),
+            });
+        }
+        f.read_exact(out).map_err(|e| Error::io(&path, e))?;
+        let mut crc = [0u8; 4];
+        f.read_exact(&mut crc).map_err(|e| Error::io(&path, e))?;
+        if crc32c::crc32c(out) != u32::from_le_bytes(crc) {
+            return Err(Error::Corrupt { path, what: "crc32c checksum mismatch".into() });
+        }
+        Ok(())
+    }
+
     /// True when the chunk exists with the right size (checksum not verified; used to resume).
     pub fn has_chunk(&self, idx: &[u64]) -> bool {
         let expect = self.meta.chunk_bytes().unwrap_or(0);

@@ -61,8 +61,8 @@ fn eigenvalues_match_svd_and_eckart_young_holds() {
     let mut sv: Vec<f64> = svd.singular_values.iter().map(|s| s * s).collect();
     sv.sort_by(|a, b| b.total_cmp(a));
     for c in [1, 3, 6] {
-        let mut slot = input.clone();
-        let r = pca_slot(&mut slot, c, Quantization::F16).unwrap();
+        let slot = &input;
+        let r = pca_slot(slot, c, Quantization::F16).unwrap();
         for k in 0..8 {
             assert!(
                 (r.stored.eigenvalues[k] - sv[k]).abs() <= 1e-9 * sv[0],
@@ -108,8 +108,8 @@ fn full_rank_reconstructs_input_to_storage_precision() {
     let input = slot_data(n, m, 11);
     for q in [Quantization::F16, Quantization::U8] {
         let c = max_components(n);
-        let mut slot = input.clone();
-        let r = pca_slot(&mut slot, c, q).unwrap();
+        let slot = &input;
+        let r = pca_slot(slot, c, q).unwrap();
         let es = as_slot(&r, c, q);
         for i in 0..n {
             let rec = reconstruct_sample(&es, i, c);
@@ -135,8 +135,8 @@ fn full_rank_reconstructs_input_to_storage_precision() {
 #[test]
 fn signs_are_deterministic() {
     let input = slot_data(12, 300, 5);
-    let mut a = input.clone();
-    let r = pca_slot(&mut a, 4, Quantization::F16).unwrap();
+    let a = &input;
+    let r = pca_slot(a, 4, Quantization::F16).unwrap();
     let es = as_slot(&r, 4, Quantization::F16);
     for k in 0..4 {
         let row = es.basis_row(k);
@@ -146,7 +146,7 @@ fn signs_are_deterministic() {
     // Negating the input flips no stored sign and negates the weights.
     let mut neg = input.clone();
     neg.data.iter_mut().for_each(|v| *v = -*v);
-    let rn = pca_slot(&mut neg, 4, Quantization::F16).unwrap();
+    let rn = pca_slot(&neg, 4, Quantization::F16).unwrap();
     assert_eq!(r.stored.eigentextures, rn.stored.eigentextures);
     for (a, b) in r.stored.weights.iter().zip(&rn.stored.weights) {
         assert!((a + b).abs() <= 1e-4 * a.abs().max(1e-3));
@@ -156,8 +156,8 @@ fn signs_are_deterministic() {
 #[test]
 fn constant_and_duplicate_images_are_rank_deficient_but_finite() {
     // Constant images: zero variance, reconstruction = mean = input.
-    let mut slot = SlotData { view: 0, n_lights: 6, texel_values: 30, data: vec![0.25; 180] };
-    let r = pca_slot(&mut slot, 4, Quantization::F16).unwrap();
+    let slot = SlotData { view: 0, n_lights: 6, texel_values: 30, data: vec![0.25; 180] };
+    let r = pca_slot(&slot, 4, Quantization::F16).unwrap();
     assert_eq!(r.effective_components, 0);
     assert!(r.stored.eigenvalues.iter().all(|&l| l == 0.0));
     assert!(r.stored.weights.iter().all(|&w| w == 0.0));
@@ -169,8 +169,8 @@ fn constant_and_duplicate_images_are_rank_deficient_but_finite() {
     for i in 0..8 {
         data.extend_from_slice(base.row(i % 2));
     }
-    let mut slot = SlotData { view: 0, n_lights: 8, texel_values: 60, data };
-    let r = pca_slot(&mut slot, 5, Quantization::F16).unwrap();
+    let slot = SlotData { view: 0, n_lights: 8, texel_values: 60, data };
+    let r = pca_slot(&slot, 5, Quantization::F16).unwrap();
     assert_eq!(r.effective_components, 1);
     assert!(r.sse <= 1e-10 * r.energy, "{}", r.sse);
     assert!(r.stored.weights.iter().all(|w| w.is_finite()));
@@ -185,9 +185,9 @@ fn huge_dynamic_range_stays_finite_and_accurate() {
         let e = ((t * 7919) % 10) as i32 - 4; // exponents -4 ..= 5
         *v *= 10f32.powi(e);
     }
-    let mut slot = input.clone();
+    let slot = &input;
     let c = max_components(n);
-    let r = pca_slot(&mut slot, c, Quantization::F16).unwrap();
+    let r = pca_slot(slot, c, Quantization::F16).unwrap();
     assert!(r.stored.weights.iter().all(|w| w.is_finite()));
     assert!(r.stored.eigenvalues.iter().all(|l| l.is_finite()));
     let rel = crate::metrics::rel_rmse_from(r.sse_stored, r.energy);
@@ -198,7 +198,7 @@ fn huge_dynamic_range_stays_finite_and_accurate() {
 fn non_finite_input_is_refused_with_slot_and_light() {
     let mut slot = slot_data(5, 30, 1);
     slot.data[2 * 30 + 4] = f32::INFINITY;
-    let err = pca_slot(&mut slot, 2, Quantization::F16).unwrap_err().to_string();
+    let err = pca_slot(&slot, 2, Quantization::F16).unwrap_err().to_string();
     assert!(err.contains("view slot 3") && err.contains("light 2"), "{err}");
 }
 
@@ -206,8 +206,39 @@ fn non_finite_input_is_refused_with_slot_and_light() {
 fn single_light_slot_keeps_one_zero_component() {
     assert_eq!(max_components(1), 1);
     assert_eq!(max_components(81), 80);
-    let mut slot = slot_data(1, 30, 1);
-    let r = pca_slot(&mut slot, 1, Quantization::U8).unwrap();
+    let slot = slot_data(1, 30, 1);
+    let r = pca_slot(&slot, 1, Quantization::U8).unwrap();
     assert_eq!(r.effective_components, 0);
     assert_eq!(r.sse_stored, 0.0);
+}
+
+#[test]
+fn large_mean_costs_no_precision() {
+    // Spread ≈ 1 on a mean of 10⁴: the Gram matrix of the images shifted by the first one
+    // loses nothing to the mean (an uncentred Gram matrix would cancel ~8 of f64's digits).
+    let (n, m) = (12, 3 * 10 * 10);
+    let mut input = slot_data(n, m, 13);
+    input.data.iter_mut().for_each(|v| *v += 1e4);
+    let mut x = DMatrix::<f64>::from_fn(n, m, |i, t| input.data[i * m + t] as f64);
+    let mean = x.row_mean();
+    for i in 0..n {
+        for t in 0..m {
+            x[(i, t)] -= mean[t];
+        }
+    }
+    let mut sv: Vec<f64> = x.svd(false, false).singular_values.iter().map(|s| s * s).collect();
+    sv.sort_by(|a, b| b.total_cmp(a));
+    let c = 4;
+    let r = pca_slot(&input, c, Quantization::F16).unwrap();
+    for k in 0..n - 1 {
+        let e = (r.stored.eigenvalues[k] - sv[k]).abs();
+        assert!(e <= 1e-10 * sv[0], "λ{k}: {} vs {}", r.stored.eigenvalues[k], sv[k]);
+    }
+    let discarded: f64 = sv[c..].iter().sum();
+    assert!((r.sse - discarded).abs() <= 1e-6 * discarded, "{} vs {discarded}", r.sse);
+    assert!((r.discarded_eigen_sum - discarded).abs() <= 1e-6 * discarded);
+    // The stored mean is the f32 rounding of the exact mean.
+    for t in 0..m {
+        assert_eq!(r.stored.mean[t], mean[t] as f32, "texel value {t}");
+    }
 }

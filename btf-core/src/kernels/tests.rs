@@ -1,0 +1,116 @@
+//! The kernels against naive sums, and the AVX-512 and portable versions against each other.
+
+use super::*;
+
+fn values(len: usize, seed: u64) -> Vec<f32> {
+    let mut s = seed;
+    (0..len)
+        .map(|_| {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((s >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 0.5
+        })
+        .collect()
+}
+
+/// A `rows × w` block of the given values (no shift).
+fn block(x: &[f32], rows: usize, m: usize, c0: usize, w: usize) -> Block {
+    let mut b = Block::default();
+    load_shifted(x, rows, m, c0, w, None, &mut b, None);
+    b
+}
+
+#[test]
+fn dot_rows_matches_naive_sums_for_both_kernels() {
+    // Odd shapes: rows not multiples of the tile, width not a multiple of 8.
+    let (na, nb, m) = (11, 7, 45);
+    let xa = values(na * m, 1);
+    let xb = values(nb * m, 2);
+    let (a, b) = (block(&xa, na, m, 0, m), block(&xb, nb, m, 0, m));
+    let naive = |i: usize, j: usize, xb: &[f32]| -> f64 {
+        (0..m).map(|t| xa[i * m + t] as f64 * xb[j * m + t] as f64).sum()
+    };
+    for simd in [false, true] {
+        let mut out = vec![1.0; na * 9];
+        dot_rows_with(&a, &b, false, &mut out, 9, simd);
+        for i in 0..na {
+            for j in 0..9 {
+                let want = if j < nb { 1.0 + naive(i, j, &xb) } else { 1.0 };
+                assert!((out[i * 9 + j] - want).abs() < 1e-12, "simd {simd} ({i}, {j})");
+            }
+        }
+        // Upper triangle of a·aᵀ; the strict lower triangle is left alone.
+        let mut g = vec![0.0; na * na];
+        dot_rows_with(&a, &a, true, &mut g, na, simd);
+        for i in 0..na {
+            for j in 0..na {
+                let want = if j >= i { naive(i, j, &xa) } else { 0.0 };
+                assert!((g[i * na + j] - want).abs() < 1e-12, "simd {simd} gram ({i}, {j})");
+            }
+        }
+    }
+}
+
+#[test]
+fn lift_rows_matches_naive_sums_for_both_kernels() {
+    // 13 rows, 2 groups of 8 components, 5 vectors of columns (3 + 1 + 1 tiles), offset c0.
+    let (n, m, cp, c0, w) = (13, 40, 16, 8, 40);
+    let x = values(n * m, 3);
+    let y = block(&x, n, m, 0, w);
+    let coef: Vec<f64> = values(n * cp, 4).iter().map(|&v| v as f64).collect();
+    let ldo = c0 + w + 3;
+    for simd in [false, true] {
+        let mut out = vec![7.0; cp * ldo];
+        lift_rows_with(&y, &coef, cp, &mut out, ldo, c0, simd);
+        for k in 0..cp {
+            for t in 0..ldo {
+                let want = if (c0..c0 + w).contains(&t) {
+                    (0..n).map(|i| coef[i * cp + k] * x[i * m + t - c0] as f64).sum()
+                } else {
+                    7.0
+                };
+                assert!((out[k * ldo + t] - want).abs() < 1e-12, "simd {simd} ({k}, {t})");
+            }
+        }
+    }
+}
+
+#[test]
+fn load_shifted_is_exact_and_reports_statistics_for_both_kernels() {
+    // 37 columns: two groups of 16 and a tail of 5.
+    let (n, m, c0, w) = (3, 50, 4, 37);
+    let mut x = values(n * m, 5);
+    x[m + 9] = 1e5; // a large value next to small ones: x − s stays exact in f64
+    let shift: Vec<f32> = values(m, 6).iter().map(|v| v * 1e-4).collect();
+    for simd in [false, true] {
+        let mut b = Block::default();
+        let mut colsum = vec![0.5; w];
+        let st = load_shifted_with(&x, n, m, c0, w, Some(&shift), &mut b, Some(&mut colsum), simd)
+            .unwrap();
+        let mut energy = 0f64;
+        for i in 0..n {
+            for t in 0..b.stride {
+                let want =
+                    if t < w { x[i * m + c0 + t] as f64 - shift[c0 + t] as f64 } else { 0.0 };
+                assert_eq!(b.data[i * b.stride + t], want, "simd {simd} ({i}, {t})");
+            }
+            energy += (0..w).map(|t| (x[i * m + c0 + t] as f64).powi(2)).sum::<f64>();
+        }
+        assert!(b.data[n * b.stride..].iter().all(|&v| v == 0.0), "padding rows are zero");
+        for t in 0..w {
+            let want = 0.5 + (0..n).map(|i| b.data[i * b.stride + t]).sum::<f64>();
+            assert!((colsum[t] - want).abs() < 1e-12);
+        }
+        assert!((st.energy - energy).abs() <= 1e-12 * energy);
+        assert_eq!(st.peak, 1e5);
+        assert!(st.finite);
+        // A NaN in the 16-wide body and an infinity in the tail are both seen.
+        for (pos, bad) in [(2 * m + c0 + 12, f32::NAN), (m + c0 + 35, f32::INFINITY)] {
+            let mut y = x.clone();
+            y[pos] = bad;
+            let st =
+                load_shifted_with(&y, n, m, c0, w, Some(&shift), &mut b, Some(&mut colsum), simd)
+                    .unwrap();
+            assert!(!st.finite, "simd {simd}: {bad} at {pos}");
+        }
+    }
+}
