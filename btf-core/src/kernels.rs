@@ -12,9 +12,7 @@
 
 /// `f64` lanes of one AVX-512 register; block widths are padded to a multiple of it.
 pub const LANES: usize = 8;
-/// Rows of `A` per dot-product tile.
-const TA: usize = 4;
-/// Rows of `B` per dot-product tile.
+/// Rows of `B` per dot-product tile (and of `A`, unless `A` has few rows that 4 divides).
 const TB: usize = 5;
 /// Components per lift tile.
 pub const LIFT_COMPONENTS: usize = 8;
@@ -66,39 +64,76 @@ fn has_avx512() -> bool {
     }
 }
 
-/// `out[i·ldo + j] += Σ_t a_i[t]·b_j[t]` for every row `i` of `a` and `j` of `b`; with
-/// `upper`, only for `j ≥ i` (a symmetric product's upper triangle; `a` and `b` the same).
-pub fn dot_rows(a: &Block, b: &Block, upper: bool, out: &mut [f64], ldo: usize) {
-    dot_rows_with(a, b, upper, out, ldo, has_avx512());
+/// Accumulates `A·Bᵀ` block by block of columns: each output keeps one register's worth
+/// ([`LANES`]) of partial sums across blocks, reduced only by [`DotAcc::finish`], so a tile
+/// of `R × 5` outputs is loaded, updated over the block's columns and stored back, and the
+/// rows of `A` stay in the L1 cache while those of `B` stream past.
+#[derive(Debug, Clone)]
+pub struct DotAcc {
+    a_rows: usize,
+    b_rows: usize,
+    upper: bool,
+    /// Rows of `A` per tile (4 or 5).
+    ta: usize,
+    /// Top-left output of every tile.
+    tiles: Vec<(usize, usize)>,
+    /// `LANES` partial sums per output, tile after tile.
+    partial: Vec<f64>,
 }
 
-/// [`dot_rows`] with the kernel chosen by the caller (`simd` only where AVX-512 exists).
-pub(crate) fn dot_rows_with(
-    a: &Block,
-    b: &Block,
-    upper: bool,
-    out: &mut [f64],
-    ldo: usize,
-    simd: bool,
-) {
-    assert_eq!(a.stride, b.stride, "blocks of different widths");
-    let w = a.stride;
-    assert!(a.data.len() >= (a.rows.div_ceil(TA) * TA) * w, "block a lacks padding rows");
-    assert!(b.data.len() >= (b.rows.div_ceil(TB) * TB) * w, "block b lacks padding rows");
-    assert!(a.rows == 0 || out.len() >= (a.rows - 1) * ldo + b.rows, "output too small");
-    assert!(ldo >= b.rows, "output row stride smaller than b's rows");
-    let simd = simd && has_avx512();
-    for i0 in (0..a.rows).step_by(TA) {
-        let j_start = if upper { i0 } else { 0 };
-        for j0 in (j_start..b.rows).step_by(TB) {
-            let ta = &a.data[i0 * w..(i0 + TA) * w];
-            let tb = &b.data[j0 * w..(j0 + TB) * w];
-            let t = if simd { tile_simd(ta, tb, w) } else { tile_portable(ta, tb, w) };
-            for r in 0..TA {
+impl DotAcc {
+    /// For `a_rows × b_rows` outputs; with `upper`, only `j ≥ i` (a symmetric product's
+    /// upper triangle, `A` and `B` the same rows).
+    pub fn new(a_rows: usize, b_rows: usize, upper: bool) -> Self {
+        let ta = if a_rows <= 16 && a_rows.is_multiple_of(4) { 4 } else { TB };
+        let mut tiles = Vec::new();
+        for i0 in (0..a_rows).step_by(ta) {
+            let j_start = if upper { i0 } else { 0 };
+            tiles.extend((j_start..b_rows).step_by(TB).map(|j0| (i0, j0)));
+        }
+        let partial = vec![0f64; tiles.len() * ta * TB * LANES];
+        DotAcc { a_rows, b_rows, upper, ta, tiles, partial }
+    }
+
+    /// Adds the products of one block of columns.
+    pub fn add(&mut self, a: &Block, b: &Block) {
+        self.add_with(a, b, has_avx512());
+    }
+
+    /// [`DotAcc::add`] with the kernel chosen by the caller.
+    pub(crate) fn add_with(&mut self, a: &Block, b: &Block, simd: bool) {
+        assert_eq!((a.rows, b.rows), (self.a_rows, self.b_rows), "blocks of other shapes");
+        assert_eq!(a.stride, b.stride, "blocks of different widths");
+        let (w, ta) = (a.stride, self.ta);
+        assert!(a.data.len() >= a.rows.div_ceil(ta) * ta * w, "block a lacks padding rows");
+        assert!(b.data.len() >= b.rows.div_ceil(TB) * TB * w, "block b lacks padding rows");
+        let simd = simd && has_avx512();
+        let per_tile = ta * TB * LANES;
+        for (&(i0, j0), acc) in self.tiles.iter().zip(self.partial.chunks_exact_mut(per_tile)) {
+            let ra = &a.data[i0 * w..(i0 + ta) * w];
+            let rb = &b.data[j0 * w..(j0 + TB) * w];
+            match (simd, ta) {
+                (true, 4) => tile_simd::<4>(ra, rb, w, acc),
+                (true, _) => tile_simd::<TB>(ra, rb, w, acc),
+                (false, 4) => tile_portable::<4>(ra, rb, w, acc),
+                (false, _) => tile_portable::<TB>(ra, rb, w, acc),
+            }
+        }
+    }
+
+    /// `out[i·ldo + j] += Σ_t a_i[t]·b_j[t]` over every block added (only `j ≥ i` with
+    /// `upper`; other entries are left alone).
+    pub fn finish(&self, out: &mut [f64], ldo: usize) {
+        assert!(ldo >= self.b_rows, "output row stride smaller than b's rows");
+        assert!(self.a_rows == 0 || out.len() >= (self.a_rows - 1) * ldo + self.b_rows);
+        let per_tile = self.ta * TB * LANES;
+        for (&(i0, j0), acc) in self.tiles.iter().zip(self.partial.chunks_exact(per_tile)) {
+            for r in 0..self.ta {
                 for s in 0..TB {
                     let (i, j) = (i0 + r, j0 + s);
-                    if i < a.rows && j < b.rows && (!upper || j >= i) {
-                        out[i * ldo + j] += t[r][s];
+                    if i < self.a_rows && j < self.b_rows && (!self.upper || j >= i) {
+                        let lanes = &acc[(r * TB + s) * LANES..(r * TB + s + 1) * LANES];
+                        out[i * ldo + j] += lanes.iter().sum::<f64>();
                     }
                 }
             }
@@ -106,34 +141,45 @@ pub(crate) fn dot_rows_with(
     }
 }
 
-/// Dot products of the `TA` rows of `a` with the `TB` rows of `b` (rows `w` apart).
-fn tile_portable(a: &[f64], b: &[f64], w: usize) -> [[f64; TB]; TA] {
-    let mut acc = [[[0f64; LANES]; TB]; TA];
+/// `acc[(r·5 + s)·8 + l] += Σ_k a_r[8k + l]·b_s[8k + l]` for the `R` rows of `a` and the 5
+/// of `b` (rows `w` apart).
+fn tile_portable<const R: usize>(a: &[f64], b: &[f64], w: usize, acc: &mut [f64]) {
+    let mut v = [[[0f64; LANES]; TB]; R];
+    for r in 0..R {
+        for s in 0..TB {
+            v[r][s].copy_from_slice(&acc[(r * TB + s) * LANES..(r * TB + s + 1) * LANES]);
+        }
+    }
     for k in (0..w).step_by(LANES) {
-        for r in 0..TA {
+        for r in 0..R {
             let ar = &a[r * w + k..r * w + k + LANES];
             for s in 0..TB {
                 let bs = &b[s * w + k..s * w + k + LANES];
                 for l in 0..LANES {
-                    acc[r][s][l] += ar[l] * bs[l];
+                    v[r][s][l] += ar[l] * bs[l];
                 }
             }
         }
     }
-    acc.map(|row| row.map(|v| v.iter().sum()))
+    for r in 0..R {
+        for s in 0..TB {
+            acc[(r * TB + s) * LANES..(r * TB + s + 1) * LANES].copy_from_slice(&v[r][s]);
+        }
+    }
 }
 
-fn tile_simd(a: &[f64], b: &[f64], w: usize) -> [[f64; TB]; TA] {
-    assert!(a.len() >= TA * w && b.len() >= TB * w && w.is_multiple_of(LANES));
+fn tile_simd<const R: usize>(a: &[f64], b: &[f64], w: usize, acc: &mut [f64]) {
+    assert!(a.len() >= R * w && b.len() >= TB * w && w.is_multiple_of(LANES));
+    assert!(acc.len() >= R * TB * LANES);
     #[cfg(target_arch = "x86_64")]
     {
-        // SAFETY: the caller checked AVX-512F at run time; the slices hold TA and TB rows of
-        // w values and w is a multiple of 8, so every 8-wide load lies inside them.
-        unsafe { avx512::tile(a.as_ptr(), b.as_ptr(), w) }
+        // SAFETY: the caller checked AVX-512F at run time; the slices hold R and 5 rows of
+        // w values (w a multiple of 8) and R·5·8 partial sums, so every access lies inside.
+        unsafe { avx512::tile::<R>(a.as_ptr(), b.as_ptr(), w, acc.as_mut_ptr()) }
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
-        tile_portable(a, b, w)
+        tile_portable::<R>(a, b, w, acc)
     }
 }
 
@@ -309,7 +355,7 @@ fn load_shifted_body(
 
 #[cfg(target_arch = "x86_64")]
 mod avx512 {
-    use super::{LANES, LIFT_COMPONENTS, TA, TB};
+    use super::{LANES, LIFT_COMPONENTS, TB};
     use std::arch::x86_64::*;
 
     /// `load_shifted_body` compiled with AVX-512 (safe code; callers check the feature),
@@ -388,36 +434,45 @@ mod avx512 {
         Some(rest)
     }
 
-    /// See `tile_portable`. Safety: AVX-512F present, `a` and `b` valid for `TA·w` and
-    /// `TB·w` reads, `w` a multiple of 8.
+    /// See `tile_portable`. Safety: AVX-512F present, `a` and `b` valid for `R·w` and `5·w`
+    /// reads, `acc` for `R·5·8` reads and writes, `w` a multiple of 8.
     #[target_feature(enable = "avx512f")]
-    pub(super) unsafe fn tile(a: *const f64, b: *const f64, w: usize) -> [[f64; TB]; TA] {
-        let mut acc = [[_mm512_setzero_pd(); TB]; TA];
+    pub(super) unsafe fn tile<const R: usize>(
+        a: *const f64,
+        b: *const f64,
+        w: usize,
+        acc: *mut f64,
+    ) {
+        let mut v = [[_mm512_setzero_pd(); TB]; R];
+        for r in 0..R {
+            for s in 0..TB {
+                // SAFETY: (r·5 + s)·8 + 8 ≤ R·5·8.
+                v[r][s] = unsafe { _mm512_loadu_pd(acc.add((r * TB + s) * LANES)) };
+            }
+        }
         let mut k = 0;
         while k < w {
-            // SAFETY: k + 8 ≤ w, rows r < TA / s < TB lie inside the caller's extents.
+            let mut av = [_mm512_setzero_pd(); R];
+            // SAFETY: k + 8 ≤ w, rows r < R and s < 5 lie inside the caller's extents.
             unsafe {
-                let a0 = _mm512_loadu_pd(a.add(k));
-                let a1 = _mm512_loadu_pd(a.add(w + k));
-                let a2 = _mm512_loadu_pd(a.add(2 * w + k));
-                let a3 = _mm512_loadu_pd(a.add(3 * w + k));
+                for (r, x) in av.iter_mut().enumerate() {
+                    *x = _mm512_loadu_pd(a.add(r * w + k));
+                }
                 for s in 0..TB {
                     let bs = _mm512_loadu_pd(b.add(s * w + k));
-                    acc[0][s] = _mm512_fmadd_pd(a0, bs, acc[0][s]);
-                    acc[1][s] = _mm512_fmadd_pd(a1, bs, acc[1][s]);
-                    acc[2][s] = _mm512_fmadd_pd(a2, bs, acc[2][s]);
-                    acc[3][s] = _mm512_fmadd_pd(a3, bs, acc[3][s]);
+                    for r in 0..R {
+                        v[r][s] = _mm512_fmadd_pd(av[r], bs, v[r][s]);
+                    }
                 }
             }
             k += LANES;
         }
-        let mut out = [[0f64; TB]; TA];
-        for r in 0..TA {
+        for r in 0..R {
             for s in 0..TB {
-                out[r][s] = _mm512_reduce_add_pd(acc[r][s]);
+                // SAFETY: as for the loads.
+                unsafe { _mm512_storeu_pd(acc.add((r * TB + s) * LANES), v[r][s]) };
             }
         }
-        out
     }
 
     /// See `lift_rows_with`. Safety: AVX-512F present; `y` valid for `n·w` reads, `coef`

@@ -16,13 +16,14 @@
 
 use crate::eigen::{Quantization, QuantizedSlot, dequantize, quantize};
 use crate::gemm::{Mat, dgemm};
-use crate::kernels::{Block, LANES, LIFT_COMPONENTS, dot_rows, lift_rows, load_shifted};
+use crate::kernels::{Block, DotAcc, LANES, LIFT_COMPONENTS, lift_rows, load_shifted};
 use crate::store::SlotData;
 use crate::{Error, Result};
 use nalgebra::{DMatrix, SymmetricEigen};
 
-/// Columns per block in the streaming passes (81 rows of them fit the L2 cache in `f64`).
-const BLOCK: usize = 1024;
+/// Columns per block in the streaming passes: 81 rows of them fit the L2 cache in `f64`,
+/// and five rows the L1 cache.
+const BLOCK: usize = 256;
 
 /// Result of the PCA of one slot.
 #[derive(Debug, Clone)]
@@ -148,7 +149,7 @@ struct FirstPass {
 fn first_pass(slot: &SlotData) -> Result<FirstPass> {
     let (n, m, x) = (slot.n_lights, slot.texel_values, &slot.data[..]);
     let shift = slot.row(0);
-    let mut g = vec![0f64; n * n];
+    let mut gram = DotAcc::new(n, n, true);
     let mut mean = vec![0f32; m];
     let (mut energy, mut peak) = (0f64, f32::MIN);
     let mut blk = Block::default();
@@ -165,11 +166,13 @@ fn first_pass(slot: &SlotData) -> Result<FirstPass> {
         }
         energy += st.energy;
         peak = peak.max(st.peak);
-        dot_rows(&blk, &blk, true, &mut g, n);
+        gram.add(&blk, &blk);
         for t in 0..w {
             mean[c0 + t] = (shift[c0 + t] as f64 + colsum[t] / n as f64) as f32;
         }
     }
+    let mut g = vec![0f64; n * n];
+    gram.finish(&mut g, n);
     for i in 0..n {
         for j in 0..i {
             g[i * n + j] = g[j * n + i];
@@ -255,8 +258,7 @@ fn stored_pass(
             *e = s as f64 - *e;
         }
     }
-    let mut cross = vec![0f64; c * n];
-    let mut bgram = vec![0f64; c * c];
+    let (mut cross_acc, mut bgram_acc) = (DotAcc::new(c, n, false), DotAcc::new(c, c, true));
     let (mut yb, mut sb, mut eb) = (Block::default(), Block::default(), Block::default());
     for c0 in (0..m).step_by(BLOCK) {
         let w = BLOCK.min(m - c0);
@@ -267,9 +269,13 @@ fn stored_pass(
             let src = &basis.data[k * mp + c0..k * mp + c0 + w];
             eb.row_mut(k)[..w].copy_from_slice(src);
         }
-        dot_rows(&eb, &yb, false, &mut cross, n);
-        dot_rows(&sb, &sb, true, &mut bgram, c);
+        cross_acc.add(&eb, &yb);
+        bgram_acc.add(&sb, &sb);
     }
+    let mut cross = vec![0f64; c * n];
+    cross_acc.finish(&mut cross, n);
+    let mut bgram = vec![0f64; c * c];
+    bgram_acc.finish(&mut bgram, c);
     for i in 0..c {
         for j in 0..i {
             bgram[i * c + j] = bgram[j * c + i];

@@ -20,31 +20,40 @@ fn block(x: &[f32], rows: usize, m: usize, c0: usize, w: usize) -> Block {
 }
 
 #[test]
-fn dot_rows_matches_naive_sums_for_both_kernels() {
-    // Odd shapes: rows not multiples of the tile, width not a multiple of 8.
-    let (na, nb, m) = (11, 7, 45);
-    let xa = values(na * m, 1);
-    let xb = values(nb * m, 2);
-    let (a, b) = (block(&xa, na, m, 0, m), block(&xb, nb, m, 0, m));
-    let naive = |i: usize, j: usize, xb: &[f32]| -> f64 {
-        (0..m).map(|t| xa[i * m + t] as f64 * xb[j * m + t] as f64).sum()
-    };
-    for simd in [false, true] {
-        let mut out = vec![1.0; na * 9];
-        dot_rows_with(&a, &b, false, &mut out, 9, simd);
-        for i in 0..na {
-            for j in 0..9 {
-                let want = if j < nb { 1.0 + naive(i, j, &xb) } else { 1.0 };
-                assert!((out[i * 9 + j] - want).abs() < 1e-12, "simd {simd} ({i}, {j})");
+fn dot_acc_matches_naive_sums_for_both_kernels() {
+    // Odd shapes (rows not multiples of the tiles, widths not of 8), accumulated over two
+    // blocks of columns; a 12-row A takes the 4-row tiles.
+    let m = 45;
+    for (na, nb) in [(11, 7), (12, 9)] {
+        let xa = values(na * m, 1);
+        let xb = values(nb * m, 2);
+        let naive = |i: usize, j: usize, xb: &[f32]| -> f64 {
+            (0..m).map(|t| xa[i * m + t] as f64 * xb[j * m + t] as f64).sum()
+        };
+        for simd in [false, true] {
+            let mut acc = DotAcc::new(na, nb, false);
+            let mut gram = DotAcc::new(na, na, true);
+            for (c0, w) in [(0, 24), (24, m - 24)] {
+                let (a, b) = (block(&xa, na, m, c0, w), block(&xb, nb, m, c0, w));
+                acc.add_with(&a, &b, simd);
+                gram.add_with(&a, &a, simd);
             }
-        }
-        // Upper triangle of a·aᵀ; the strict lower triangle is left alone.
-        let mut g = vec![0.0; na * na];
-        dot_rows_with(&a, &a, true, &mut g, na, simd);
-        for i in 0..na {
-            for j in 0..na {
-                let want = if j >= i { naive(i, j, &xa) } else { 0.0 };
-                assert!((g[i * na + j] - want).abs() < 1e-12, "simd {simd} gram ({i}, {j})");
+            let mut out = vec![1.0; na * 10];
+            acc.finish(&mut out, 10);
+            for i in 0..na {
+                for j in 0..10 {
+                    let want = if j < nb { 1.0 + naive(i, j, &xb) } else { 1.0 };
+                    assert!((out[i * 10 + j] - want).abs() < 1e-12, "simd {simd} ({i}, {j})");
+                }
+            }
+            // Upper triangle of a·aᵀ; the strict lower triangle is left alone.
+            let mut g = vec![0.0; na * na];
+            gram.finish(&mut g, na);
+            for i in 0..na {
+                for j in 0..na {
+                    let want = if j >= i { naive(i, j, &xa) } else { 0.0 };
+                    assert!((g[i * na + j] - want).abs() < 1e-12, "simd {simd} gram ({i}, {j})");
+                }
             }
         }
     }
