@@ -84,7 +84,7 @@ pub fn pca_slot(slot: &SlotData, components: usize, quantization: Quantization) 
     }
 
     // Pass 2: eigentextures B = liftᵀX̃ in f64, with deterministic signs.
-    let mut basis = lift_pass(slot, &mut lift, c, effective);
+    let basis = lift_pass(slot, &mut lift, c, effective);
     let (raw, scale_offset) = quantize(&basis.rows_f32(), c, quantization);
     let stored_basis = dequantize(&raw, &scale_offset, quantization);
 
@@ -97,7 +97,7 @@ pub fn pca_slot(slot: &SlotData, components: usize, quantization: Quantization) 
 
     // Pass 3: the stored basis S = B + E. Its projections X̃Sᵀ = G·lift + X̃Eᵀ need only the
     // small correction X̃Eᵀ from the data, and its Gram matrix SSᵀ only the basis.
-    let (cross, bgram) = stored_pass(slot, &mut basis, &stored_basis, c);
+    let (cross, bgram) = stored_pass(slot, &basis, &stored_basis, c);
     let mut proj = proj_exact.clone();
     for k in 0..c {
         let row = &cross[k * n..(k + 1) * n];
@@ -200,12 +200,32 @@ struct Basis {
 
 impl Basis {
     fn rows_f32(&self) -> Vec<f32> {
-        let mut out = Vec::with_capacity(self.c * self.m);
-        for k in 0..self.c {
-            out.extend(self.data[k * self.mp..k * self.mp + self.m].iter().map(|&v| v as f32));
+        let mut out = vec![0f32; self.c * self.m];
+        for (k, o) in out.chunks_exact_mut(self.m.max(1)).enumerate() {
+            let src = &self.data[k * self.mp..k * self.mp + self.m];
+            o.iter_mut().zip(src).for_each(|(o, &v)| *o = v as f32);
         }
         out
     }
+}
+
+/// Largest and smallest value of `row` (zero if it is empty or has none above/below zero),
+/// in a form that vectorises.
+fn max_min(row: &[f64], hi: &mut f64, lo: &mut f64) {
+    let (mut h, mut l) = ([*hi; LANES], [*lo; LANES]);
+    let chunks = row.chunks_exact(LANES);
+    for &v in chunks.remainder() {
+        h[0] = if v > h[0] { v } else { h[0] };
+        l[0] = if v < l[0] { v } else { l[0] };
+    }
+    for ch in chunks {
+        for k in 0..LANES {
+            h[k] = if ch[k] > h[k] { ch[k] } else { h[k] };
+            l[k] = if ch[k] < l[k] { ch[k] } else { l[k] };
+        }
+    }
+    *hi = h.iter().copied().fold(*hi, f64::max);
+    *lo = l.iter().copied().fold(*lo, f64::min);
 }
 
 /// `B = liftᵀX̃ = (C·lift)ᵀY` (`C·lift` has zero column sums, so the shift cancels), then
@@ -224,14 +244,23 @@ fn lift_pass(slot: &SlotData, lift: &mut [f64], c: usize, effective: usize) -> B
     }
     let mut data = vec![0f64; cp * mp];
     let mut blk = Block::default();
+    let (mut hi, mut lo) = (vec![0f64; c], vec![0f64; c]);
     for c0 in (0..m).step_by(BLOCK) {
         let w = BLOCK.min(m - c0);
         load_shifted(x, n, m, c0, w, Some(slot.row(0)), &mut blk, None);
         lift_rows(&blk, &coef, cp, &mut data, mp, c0);
+        for k in 0..effective {
+            max_min(&data[k * mp + c0..k * mp + c0 + w], &mut hi[k], &mut lo[k]);
+        }
     }
     for k in 0..effective {
         let row = &mut data[k * mp..k * mp + m];
-        let big = row.iter().copied().fold(0f64, |a, v| if v.abs() > a.abs() { v } else { a });
+        // The entry of largest magnitude; on a tie of ±, the first one of them.
+        let big = if hi[k] != -lo[k] {
+            if hi[k] > -lo[k] { hi[k] } else { lo[k] }
+        } else {
+            row.iter().copied().fold(0f64, |a, v| if v.abs() > a.abs() { v } else { a })
+        };
         if big < 0.0 {
             row.iter_mut().for_each(|v| *v = -*v);
             for i in 0..n {
@@ -244,20 +273,9 @@ fn lift_pass(slot: &SlotData, lift: &mut [f64], c: usize, effective: usize) -> B
 
 /// For the stored basis `S` (`c × m`) and the exact one `B`: `E·Yᵀ` (`c × n`, with
 /// `E = S − B`; centring it gives `X̃Eᵀ`, transposed) and `SSᵀ` (`c × c`), in `f64`.
-/// The exact basis is overwritten by `E`.
-fn stored_pass(
-    slot: &SlotData,
-    basis: &mut Basis,
-    stored: &[f32],
-    c: usize,
-) -> (Vec<f64>, Vec<f64>) {
+fn stored_pass(slot: &SlotData, basis: &Basis, stored: &[f32], c: usize) -> (Vec<f64>, Vec<f64>) {
     let (n, m, x) = (slot.n_lights, slot.texel_values, &slot.data[..]);
     let mp = basis.mp;
-    for k in 0..c {
-        for (e, &s) in basis.data[k * mp..k * mp + m].iter_mut().zip(&stored[k * m..(k + 1) * m]) {
-            *e = s as f64 - *e;
-        }
-    }
     let (mut cross_acc, mut bgram_acc) = (DotAcc::new(c, n, false), DotAcc::new(c, c, true));
     let (mut yb, mut sb, mut eb) = (Block::default(), Block::default(), Block::default());
     for c0 in (0..m).step_by(BLOCK) {
@@ -266,8 +284,11 @@ fn stored_pass(
         load_shifted(stored, c, m, c0, w, None, &mut sb, None);
         eb.shape(c, w);
         for k in 0..c {
-            let src = &basis.data[k * mp + c0..k * mp + c0 + w];
-            eb.row_mut(k)[..w].copy_from_slice(src);
+            let b = &basis.data[k * mp + c0..k * mp + c0 + w];
+            let s = &sb.data[k * sb.stride..k * sb.stride + w];
+            for ((e, &s), &b) in eb.row_mut(k).iter_mut().zip(s).zip(b) {
+                *e = s - b;
+            }
         }
         cross_acc.add(&eb, &yb);
         bgram_acc.add(&sb, &sb);
