@@ -210,7 +210,14 @@ pub fn quantize(basis: &[f32], components: usize, q: Quantization) -> (Vec<u8>, 
                 let m = row.iter().fold(0f32, |a, v| a.max(v.abs()));
                 let scale = if m > 0.0 { m } else { 1.0 };
                 let scaled: Vec<f32> = row.iter().map(|v| v / scale).collect();
-                raw.extend(zarr::encode_f32(&scaled, DType::F16));
+                // The slice conversion (F16C where the CPU has it), little-endian bytes.
+                let mut halves = vec![half::f16::ZERO; row.len()];
+                half::slice::HalfFloatSliceExt::convert_from_f32_slice(&mut halves[..], &scaled);
+                if cfg!(target_endian = "little") {
+                    raw.extend_from_slice(bytemuck::cast_slice(&halves));
+                } else {
+                    raw.extend(halves.iter().flat_map(|h| h.to_le_bytes()));
+                }
                 so.push([scale, 0.0]);
             }
             Quantization::U8 => {

@@ -14,6 +14,8 @@
 pub const LANES: usize = 8;
 /// Rows of `B` per dot-product tile (and of `A`, unless `A` has few rows that 4 divides).
 const TB: usize = 5;
+/// Columns per dot-product sub-block: five rows of them fit the L1 cache.
+const SUB_BLOCK: usize = 256;
 /// Components per lift tile.
 pub const LIFT_COMPONENTS: usize = 8;
 
@@ -109,14 +111,19 @@ impl DotAcc {
         assert!(b.data.len() >= b.rows.div_ceil(TB) * TB * w, "block b lacks padding rows");
         let simd = simd && has_avx512();
         let per_tile = ta * TB * LANES;
-        for (&(i0, j0), acc) in self.tiles.iter().zip(self.partial.chunks_exact_mut(per_tile)) {
-            let ra = &a.data[i0 * w..(i0 + ta) * w];
-            let rb = &b.data[j0 * w..(j0 + TB) * w];
-            match (simd, ta) {
-                (true, 4) => tile_simd::<4>(ra, rb, w, acc),
-                (true, _) => tile_simd::<TB>(ra, rb, w, acc),
-                (false, 4) => tile_portable::<4>(ra, rb, w, acc),
-                (false, _) => tile_portable::<TB>(ra, rb, w, acc),
+        // Sub-blocks of columns small enough for a tile's `A` rows to stay in L1.
+        for k0 in (0..w).step_by(SUB_BLOCK) {
+            let cols = (k0, (k0 + SUB_BLOCK).min(w));
+            let tiles = self.tiles.iter().zip(self.partial.chunks_exact_mut(per_tile));
+            for (&(i0, j0), acc) in tiles {
+                let ra = &a.data[i0 * w..(i0 + ta) * w];
+                let rb = &b.data[j0 * w..(j0 + TB) * w];
+                match (simd, ta) {
+                    (true, 4) => tile_simd::<4>(ra, rb, w, cols, acc),
+                    (true, _) => tile_simd::<TB>(ra, rb, w, cols, acc),
+                    (false, 4) => tile_portable::<4>(ra, rb, w, cols, acc),
+                    (false, _) => tile_portable::<TB>(ra, rb, w, cols, acc),
+                }
             }
         }
     }
@@ -141,16 +148,22 @@ impl DotAcc {
     }
 }
 
-/// `acc[(r·5 + s)·8 + l] += Σ_k a_r[8k + l]·b_s[8k + l]` for the `R` rows of `a` and the 5
-/// of `b` (rows `w` apart).
-fn tile_portable<const R: usize>(a: &[f64], b: &[f64], w: usize, acc: &mut [f64]) {
+/// `acc[(r·5 + s)·8 + l] += Σ_k a_r[8k + l]·b_s[8k + l]` over columns `k0..k1` of the `R`
+/// rows of `a` and the 5 of `b` (rows `w` apart).
+fn tile_portable<const R: usize>(
+    a: &[f64],
+    b: &[f64],
+    w: usize,
+    (k0, k1): (usize, usize),
+    acc: &mut [f64],
+) {
     let mut v = [[[0f64; LANES]; TB]; R];
     for r in 0..R {
         for s in 0..TB {
             v[r][s].copy_from_slice(&acc[(r * TB + s) * LANES..(r * TB + s + 1) * LANES]);
         }
     }
-    for k in (0..w).step_by(LANES) {
+    for k in (k0..k1).step_by(LANES) {
         for r in 0..R {
             let ar = &a[r * w + k..r * w + k + LANES];
             for s in 0..TB {
@@ -168,18 +181,26 @@ fn tile_portable<const R: usize>(a: &[f64], b: &[f64], w: usize, acc: &mut [f64]
     }
 }
 
-fn tile_simd<const R: usize>(a: &[f64], b: &[f64], w: usize, acc: &mut [f64]) {
+fn tile_simd<const R: usize>(
+    a: &[f64],
+    b: &[f64],
+    w: usize,
+    cols: (usize, usize),
+    acc: &mut [f64],
+) {
     assert!(a.len() >= R * w && b.len() >= TB * w && w.is_multiple_of(LANES));
+    assert!(cols.0 <= cols.1 && cols.1 <= w && cols.0.is_multiple_of(LANES));
     assert!(acc.len() >= R * TB * LANES);
     #[cfg(target_arch = "x86_64")]
     {
         // SAFETY: the caller checked AVX-512F at run time; the slices hold R and 5 rows of
-        // w values (w a multiple of 8) and R·5·8 partial sums, so every access lies inside.
-        unsafe { avx512::tile::<R>(a.as_ptr(), b.as_ptr(), w, acc.as_mut_ptr()) }
+        // w values (w and the first column multiples of 8, the last ≤ w) and R·5·8 partial
+        // sums, so every access lies inside.
+        unsafe { avx512::tile::<R>(a.as_ptr(), b.as_ptr(), w, cols, acc.as_mut_ptr()) }
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
-        tile_portable::<R>(a, b, w, acc)
+        tile_portable::<R>(a, b, w, cols, acc)
     }
 }
 
@@ -435,12 +456,13 @@ mod avx512 {
     }
 
     /// See `tile_portable`. Safety: AVX-512F present, `a` and `b` valid for `R·w` and `5·w`
-    /// reads, `acc` for `R·5·8` reads and writes, `w` a multiple of 8.
+    /// reads, `acc` for `R·5·8` reads and writes, `w` and `k0` multiples of 8, `k1 ≤ w`.
     #[target_feature(enable = "avx512f")]
     pub(super) unsafe fn tile<const R: usize>(
         a: *const f64,
         b: *const f64,
         w: usize,
+        (k0, k1): (usize, usize),
         acc: *mut f64,
     ) {
         let mut v = [[_mm512_setzero_pd(); TB]; R];
@@ -450,8 +472,8 @@ mod avx512 {
                 v[r][s] = unsafe { _mm512_loadu_pd(acc.add((r * TB + s) * LANES)) };
             }
         }
-        let mut k = 0;
-        while k < w {
+        let mut k = k0;
+        while k < k1 {
             let mut av = [_mm512_setzero_pd(); R];
             // SAFETY: k + 8 ≤ w, rows r < R and s < 5 lie inside the caller's extents.
             unsafe {
