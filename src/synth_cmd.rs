@@ -100,7 +100,8 @@ pub struct CaptureArgs {
     /// Texels per side of the material.
     #[arg(long, default_value_t = 64)]
     pub size: usize,
-    /// View and light sampling: ubo81, ubo81-h1 or dome151.
+    /// View and light sampling: ubo81, ubo81-h1, dome151 or rings:θxCOUNT,… (e.g.
+    /// rings:0x1,45x4,75x4 for a small test capture).
     #[arg(long, default_value = "ubo81")]
     pub sampling: String,
     /// Seed of the material.
@@ -233,7 +234,7 @@ fn pair<T: std::str::FromStr>(s: &str, what: &str) -> Result<(T, T)> {
 fn capture(a: CaptureArgs) -> Result<()> {
     let kind = MaterialKind::from_name(&a.material)?;
     let mut material = MaterialSpec::new(kind, a.size);
-    material.sampling = btf_core::Sampling::by_name(&a.sampling)?;
+    material.sampling = datasets::capture::parse_sampling(&a.sampling)?;
     material.seed = a.material_seed;
     let mut spec = datasets::capture::CaptureSpec::new(material);
     (spec.width, spec.height) = pair(&a.resolution, "--resolution")?;

@@ -148,7 +148,7 @@ pub fn render_image(
     let cam = Camera::new(s.direction(j).to_vector(), spec.width, spec.height);
     let light = pose.to_sample(s.direction(i).to_vector());
     let n = spec.material.size as f64;
-    let gain = 0.9 * 4095.0 * std::f64::consts::PI;
+    let gain = 0.9 * 4095.0 * std::f64::consts::PI; // keep in step with `radiometry`
     let origin = pose.to_sample(sub(cam.centre, pose.translation_mm));
     let mut out = Vec::with_capacity(spec.width * spec.height);
     for r in 0..spec.height {
@@ -240,6 +240,7 @@ pub fn capture(spec: &CaptureSpec, out: &Path, progress: bool) -> Result<Capture
     let desc = CaptureDescription {
         version: 1,
         sampling: s.name.clone(),
+        rings: s.rings.clone(),
         directions_deg: s.directions().iter().map(|d| [d.theta_deg, d.phi_deg]).collect(),
         naming: "tvTTT_pvPPP/tlTTT_plPPP_tvTTT_pvPPP.png (rounded integer degrees)".into(),
         camera: CameraDescription {
@@ -259,6 +260,10 @@ pub fn capture(spec: &CaptureSpec, out: &Path, progress: bool) -> Result<Capture
             marker_radius_mm: MARKER_RADIUS_MM,
             border_offset_mm: BORDER_OFFSET_MM,
             border_width_mm: BORDER_WIDTH_MM,
+        },
+        radiometry: RadiometryDescription {
+            reference_white_dn: 0.9 * 4095.0,
+            vignetting_cos_power: 4.0 * spec.vignetting,
         },
         material: {
             let mut m = json!({"kind": spec.material.kind.name(), "size": spec.material.size, "seed": spec.material.seed});
