@@ -32,8 +32,9 @@ pub struct ProcessArgs {
     /// Pixels per side of the rectified frontal frame of the sample (the ROI's units).
     #[arg(long, default_value_t = 1024)]
     rectified_size: usize,
-    /// Region of interest x,y,w,h in rectified pixels (square), or `full`.
-    #[arg(long, default_value = "full")]
+    /// Region of interest x,y,w,h in rectified pixels (square), `auto` (inset so that no
+    /// texel reads past the sample's edge in any view) or `full` (the whole sample).
+    #[arg(long, default_value = "auto")]
     roi: String,
     /// Edge-blend width in output texels (default: size/16).
     #[arg(long)]
@@ -80,11 +81,16 @@ pub fn run(cmd: CaptureCmd) -> Result<()> {
 }
 
 fn parse_roi(s: &str) -> Result<Roi> {
-    if s == "full" {
-        return Ok(Roi::Full);
+    match s {
+        "full" => return Ok(Roi::Full),
+        "auto" => return Ok(Roi::Auto),
+        _ => {}
     }
-    let v: Vec<f64> = s.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>()
-        .with_context(|| format!("--roi '{s}': expected x,y,w,h or full"))?;
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .with_context(|| format!("--roi '{s}': expected x,y,w,h, auto or full"))?;
     match v[..] {
         [x, y, w, h] => Ok(Roi::Rect([x, y, w, h])),
         _ => bail!("--roi '{s}': expected four numbers x,y,w,h"),
@@ -124,7 +130,11 @@ fn process(a: ProcessArgs) -> Result<()> {
     bar.finish_and_clear();
     let seconds = t0.elapsed().as_secs_f64();
     for r in rep.registrations.iter().filter(|r| r.fallback_nominal) {
-        eprintln!("warning: view slot {} registered from the nominal pose: {}", r.view, r.missed.join("; "));
+        eprintln!(
+            "warning: view slot {} registered from the nominal pose: {}",
+            r.view,
+            r.missed.join("; ")
+        );
     }
     let worst = rep.registrations.iter().map(|r| r.marker_rms_px).fold(0.0, f64::max);
     if a.json {
@@ -137,7 +147,14 @@ fn process(a: ProcessArgs) -> Result<()> {
     } else {
         println!(
             "processed {} images ({} kept) of {} view slots into {} ({}², {} filter) in {:.1} s; worst marker RMS {:.3} px",
-            rep.images_written, rep.images_kept, rep.registrations.len(), a.output.display(), a.size, filter.name(), seconds, worst
+            rep.images_written,
+            rep.images_kept,
+            rep.registrations.len(),
+            a.output.display(),
+            a.size,
+            filter.name(),
+            seconds,
+            worst
         );
     }
     Ok(())
@@ -145,12 +162,21 @@ fn process(a: ProcessArgs) -> Result<()> {
 
 /// The truth normtextures of a synthetic capture: its material evaluated orthographically
 /// at the texel centres of a grid, for the nominal view and light directions.
-fn truth_fn(layout: &CaptureLayout) -> Result<impl Fn(usize, usize, &Grid) -> Vec<[f32; 3]> + Sync + '_> {
+fn truth_fn(
+    layout: &CaptureLayout,
+) -> Result<impl Fn(usize, usize, &Grid) -> Vec<[f32; 3]> + Sync + '_> {
     let m = &layout.material;
-    let kind = m["kind"].as_str().context("capture.toml has no [material] kind: not a synthetic capture")?;
-    let mut spec = datasets::MaterialSpec::new(datasets::MaterialKind::from_name(kind)?, m["size"].as_u64().context("material size")? as usize);
+    let kind = m["kind"]
+        .as_str()
+        .context("capture.toml has no [material] kind: not a synthetic capture")?;
+    let mut spec = datasets::MaterialSpec::new(
+        datasets::MaterialKind::from_name(kind)?,
+        m["size"].as_u64().context("material size")? as usize,
+    );
     spec.seed = m["seed"].as_u64().unwrap_or(1);
-    if let Some(a) = m.get("albedo").and_then(|a| serde_json::from_value::<[f64; 3]>(a.clone()).ok()) {
+    if let Some(a) =
+        m.get("albedo").and_then(|a| serde_json::from_value::<[f64; 3]>(a.clone()).ok())
+    {
         spec.albedo = Some(a);
     }
     let material = datasets::Material::build(&spec)?;
@@ -161,7 +187,8 @@ fn truth_fn(layout: &CaptureLayout) -> Result<impl Fn(usize, usize, &Grid) -> Ve
         (0..g.n * g.n)
             .map(|k| {
                 let p = g.centre_mm(k % g.n, k / g.n);
-                let (px, py) = ((p[0] + s_mm / 2.0) / s_mm * n_mat, (p[1] + s_mm / 2.0) / s_mm * n_mat);
+                let (px, py) =
+                    ((p[0] + s_mm / 2.0) / s_mm * n_mat, (p[1] + s_mm / 2.0) / s_mm * n_mat);
                 material.eval_at(px, py, v, l).map(|x| x as f32)
             })
             .collect()
@@ -169,12 +196,26 @@ fn truth_fn(layout: &CaptureLayout) -> Result<impl Fn(usize, usize, &Grid) -> Ve
 }
 
 fn score_cmd(a: ScoreArgs) -> Result<()> {
-    let store = BtfStore::open(&a.store).with_context(|| format!("cannot open {}", a.store.display()))?;
+    let store =
+        BtfStore::open(&a.store).with_context(|| format!("cannot open {}", a.store.display()))?;
     let layout = CaptureLayout::read(&a.truth)?;
     let truth = truth_fn(&layout)?;
-    let filters: &[Filter] = if a.compare_filters { &[Filter::Bilinear, Filter::Footprint] } else { &[] };
-    let s = score::score(&store, &layout, &truth, filters)
-        .with_context(|| format!("cannot score {} against {}", a.store.display(), a.truth.display()))?;
+    if let Ok(dbg) = std::env::var("BTF_DEBUG_DUMP") {
+        let (grid, size, _) = score::recorded(&store)?;
+        let t: Vec<f32> = btf_capture::capture::blend::fold(&truth(0, 0, &grid), grid.n, size)
+            .into_iter()
+            .flatten()
+            .collect();
+        let e = store.read_image(0, 0)?;
+        let bytes = |v: &[f32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+        std::fs::write(format!("{dbg}.truth.f32"), bytes(&t))?;
+        std::fs::write(format!("{dbg}.est.f32"), bytes(&e))?;
+    }
+    let filters: &[Filter] =
+        if a.compare_filters { &[Filter::Bilinear, Filter::Footprint] } else { &[] };
+    let s = score::score(&store, &layout, &truth, filters).with_context(|| {
+        format!("cannot score {} against {}", a.store.display(), a.truth.display())
+    })?;
     let json = serde_json::to_string_pretty(&s)?;
     if let Some(dir) = &a.report {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;

@@ -122,6 +122,9 @@ pub struct CaptureArgs {
     /// Seed of poses and noise.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Rays per pixel side (K² rays average each pixel's area, as a real sensor does).
+    #[arg(long, default_value_t = 1)]
+    pub supersample: usize,
     /// Output folder of raw images, capture.toml and truth.toml.
     #[arg(long)]
     pub out: PathBuf,
@@ -242,6 +245,7 @@ fn capture(a: CaptureArgs) -> Result<()> {
     (spec.read_noise_dn, spec.shot_noise_per_dn) = pair(&a.noise, "--noise")?;
     spec.vignetting = a.vignetting;
     spec.seed = a.seed;
+    spec.supersample = a.supersample;
     let r = datasets::capture::capture(&spec, &a.out, show_progress())
         .with_context(|| format!("capturing {} into {}", a.material, a.out.display()))?;
     eprintln!(

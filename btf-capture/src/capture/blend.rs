@@ -15,7 +15,8 @@ pub fn fold(img: &[[f32; 3]], m: usize, n: usize) -> Vec<[f32; 3]> {
     assert!(n <= m && img.len() == m * m, "fold: {m}² image to {n}²");
     let b = m - n;
     let weight = |k: usize| if k < b { k as f32 / b as f32 } else { 1.0 };
-    let mix = |a: [f32; 3], c: [f32; 3], w: f32| std::array::from_fn(|i| w * a[i] + (1.0 - w) * c[i]);
+    let mix =
+        |a: [f32; 3], c: [f32; 3], w: f32| std::array::from_fn(|i| w * a[i] + (1.0 - w) * c[i]);
     // Rows first (along x), then columns (along y).
     let mut tmp = vec![[0f32; 3]; m * n];
     for y in 0..m {
@@ -37,14 +38,19 @@ pub fn fold(img: &[[f32; 3]], m: usize, n: usize) -> Vec<[f32; 3]> {
 /// Mean absolute difference between horizontal and vertical neighbours of an `n × n`
 /// image: `(interior, seam)`, where *seam* pairs the last column (row) with the first one.
 pub fn neighbour_jumps(img: &[[f32; 3]], n: usize) -> (f64, f64) {
-    let d = |a: [f32; 3], b: [f32; 3]| (0..3).map(|i| (a[i] - b[i]).abs() as f64).sum::<f64>() / 3.0;
+    let d =
+        |a: [f32; 3], b: [f32; 3]| (0..3).map(|i| (a[i] - b[i]).abs() as f64).sum::<f64>() / 3.0;
     let (mut interior, mut seam) = (0.0, 0.0);
     for y in 0..n {
         for x in 0..n {
             let (right, down) = ((x + 1) % n, (y + 1) % n);
             let h = d(img[y * n + x], img[y * n + right]);
             let v = d(img[y * n + x], img[down * n + x]);
-            if x + 1 == n { seam += h } else { interior += h }
+            if x + 1 == n {
+                seam += h
+            } else {
+                interior += h
+            }
             if y + 1 == n { seam += v } else { interior += v }
         }
     }
@@ -61,7 +67,8 @@ mod tests {
         (0..m * m)
             .map(|k| {
                 let (x, y) = ((k % m) as f32, (k / m) as f32);
-                let noise = ((k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40) as f32 / (1u64 << 24) as f32;
+                let noise = ((k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40) as f32
+                    / (1u64 << 24) as f32;
                 let v = 0.5 + 0.3 * (0.37 * x + 0.21 * y).sin() + 0.01 * x + 0.1 * noise;
                 [v, 0.8 * v, 0.5 * v]
             })
@@ -85,6 +92,10 @@ mod tests {
         let raw = texture(16);
         assert_eq!(fold(&raw, 16, 16), raw);
         let flat = vec![[0.25f32, 0.5, 1.0]; 20 * 20];
-        assert!(fold(&flat, 20, 14).iter().all(|p| (p[0] - 0.25).abs() < 1e-6 && (p[2] - 1.0).abs() < 1e-6));
+        assert!(
+            fold(&flat, 20, 14)
+                .iter()
+                .all(|p| (p[0] - 0.25).abs() < 1e-6 && (p[2] - 1.0).abs() < 1e-6)
+        );
     }
 }

@@ -56,9 +56,11 @@ pub fn dlt(matches: &[PointMatch]) -> Option<Matrix3<f64>> {
     }
     let svd = a.svd(false, true);
     let v_t = svd.v_t?;
-    let (imin, smin) = svd.singular_values.iter().enumerate().fold((0, f64::INFINITY), |b, (i, &s)| {
-        if s < b.1 { (i, s) } else { b }
-    });
+    let (imin, smin) =
+        svd.singular_values
+            .iter()
+            .enumerate()
+            .fold((0, f64::INFINITY), |b, (i, &s)| if s < b.1 { (i, s) } else { b });
     let s_sorted = {
         let mut s: Vec<f64> = svd.singular_values.iter().copied().collect();
         s.sort_by(f64::total_cmp);
@@ -137,7 +139,12 @@ fn next_combination(idx: &mut [usize; 4], n: usize) -> bool {
     false
 }
 
-fn residuals(h: &Matrix3<f64>, points: &[PointMatch], lines: &[LineMatch], w_line: f64) -> DVector<f64> {
+fn residuals(
+    h: &Matrix3<f64>,
+    points: &[PointMatch],
+    lines: &[LineMatch],
+    w_line: f64,
+) -> DVector<f64> {
     let mut r = Vec::with_capacity(2 * points.len() + lines.len());
     for m in points {
         let p = apply(h, m.plate_mm);
@@ -151,7 +158,12 @@ fn residuals(h: &Matrix3<f64>, points: &[PointMatch], lines: &[LineMatch], w_lin
 /// Levenberg–Marquardt refinement of the summed squared geometric error: point residuals
 /// and, weighted by `w_line`, point-on-line distances. The 8 free entries are perturbed in
 /// a frame normalised by the image-side similarity so that the steps are well scaled.
-pub fn refine(h0: &Matrix3<f64>, points: &[PointMatch], lines: &[LineMatch], w_line: f64) -> Matrix3<f64> {
+pub fn refine(
+    h0: &Matrix3<f64>,
+    points: &[PointMatch],
+    lines: &[LineMatch],
+    w_line: f64,
+) -> Matrix3<f64> {
     let image: Vec<[f64; 2]> = points.iter().map(|m| m.image_px).collect();
     let ti = normaliser(&image);
     let Some(ti_inv) = ti.try_inverse() else { return *h0 };
@@ -214,7 +226,17 @@ mod tests {
 
     fn layout() -> Vec<[f64; 2]> {
         let a = 60.0;
-        vec![[-a, -a], [0.0, -a], [a, -a], [a, 0.0], [a, a], [0.0, a], [-a, a], [-a, 0.0], [30.0, a]]
+        vec![
+            [-a, -a],
+            [0.0, -a],
+            [a, -a],
+            [a, 0.0],
+            [a, a],
+            [0.0, a],
+            [-a, a],
+            [-a, 0.0],
+            [30.0, a],
+        ]
     }
 
     fn matches(h: &Matrix3<f64>) -> Vec<PointMatch> {
@@ -252,10 +274,18 @@ mod tests {
                 LineMatch { plate_line: [1.0, 0.0, -46.0], image_px: apply(&truth(), [46.0, y]) }
             })
             .collect();
-        let kept: Vec<PointMatch> = m.iter().zip(&inl).filter(|(_, k)| **k).map(|(p, _)| *p).collect();
-        let h1 = refine(&(h * Matrix3::new(1.0, 0.001, 0.05, 0.0, 1.0, -0.03, 0.0, 0.0, 1.0)), &kept, &lines, 1.0);
+        let kept: Vec<PointMatch> =
+            m.iter().zip(&inl).filter(|(_, k)| **k).map(|(p, _)| *p).collect();
+        let h1 = refine(
+            &(h * Matrix3::new(1.0, 0.001, 0.05, 0.0, 1.0, -0.03, 0.0, 0.0, 1.0)),
+            &kept,
+            &lines,
+            1.0,
+        );
         for p in layout() {
-            assert!(point_error(&h1, &PointMatch { plate_mm: p, image_px: apply(&truth(), p) }) < 1e-6);
+            assert!(
+                point_error(&h1, &PointMatch { plate_mm: p, image_px: apply(&truth(), p) }) < 1e-6
+            );
         }
         assert!(lines.iter().all(|l| line_error(&h1, l).abs() < 1e-6));
     }

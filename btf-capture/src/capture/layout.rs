@@ -117,7 +117,11 @@ impl CaptureLayout {
             && c.distance_mm > 0.0
             && (1..=16).contains(&c.bits);
         if !plausible {
-            return Err(invalid(&path, "camera", "size, focal length, distance or bits out of range"));
+            return Err(invalid(
+                &path,
+                "camera",
+                "size, focal length, distance or bits out of range",
+            ));
         }
         let p = &t.plate;
         if p.point_markers_mm.len() < 4 || !(p.sample_mm > 0.0 && p.marker_radius_mm > 0.0) {
@@ -163,7 +167,12 @@ impl CaptureLayout {
 
     /// Homography sample mm `(x, y, 1)` → image pixels for view `j` with the plate placed
     /// at `p_lab = R · p_sample + t` (`R = I`, `t = 0` is the nominal pose).
-    pub fn homography(&self, view: usize, rotation: &Matrix3<f64>, t_mm: &Vector3<f64>) -> Matrix3<f64> {
+    pub fn homography(
+        &self,
+        view: usize,
+        rotation: &Matrix3<f64>,
+        t_mm: &Vector3<f64>,
+    ) -> Matrix3<f64> {
         let (centre, axes) = self.camera_frame(self.sampling.direction(view));
         let mut plane = Matrix3::zeros();
         plane.set_column(0, &rotation.column(0));
@@ -213,7 +222,10 @@ fn check_directions(path: &Path, s: &Sampling, dirs: &[[f64; 2]]) -> Result<()> 
             return Err(invalid(
                 path,
                 "directions_deg",
-                format!("direction {i} is {d:?}, the sampling says [{}, {}]", e.theta_deg, e.phi_deg),
+                format!(
+                    "direction {i} is {d:?}, the sampling says [{}, {}]",
+                    e.theta_deg, e.phi_deg
+                ),
             ));
         }
     }

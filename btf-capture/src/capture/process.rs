@@ -28,6 +28,9 @@ use std::path::{Path, PathBuf};
 pub enum Roi {
     /// The whole sample square.
     Full,
+    /// The largest centred square whose texels' bilinear taps stay on the sample in every
+    /// view ([`auto_inset_mm`]).
+    Auto,
     /// `x, y, w, h` in rectified pixels (`w = h`), `y` along sample `+y`.
     Rect([f64; 4]),
 }
@@ -63,7 +66,7 @@ impl Default for ProcessOptions {
         ProcessOptions {
             size: 256,
             rectified_size: 1024,
-            roi: Roi::Full,
+            roi: Roi::Auto,
             blend_width: 0,
             filter: Filter::Footprint,
             fallback_nominal: false,
@@ -95,17 +98,55 @@ pub fn output_grid(layout: &CaptureLayout, opt: &ProcessOptions) -> Result<Grid>
     let r = opt.rectified_size as f64;
     let [x, y, w, h] = match opt.roi {
         Roi::Full => [0.0, 0.0, r, r],
+        Roi::Auto => {
+            let inset = (auto_inset_mm(layout) / (s / r)).ceil();
+            [inset, inset, r - 2.0 * inset, r - 2.0 * inset]
+        }
         Roi::Rect(v) => v,
     };
     if !(w > 0.0 && (w - h).abs() < 1e-9 && x >= 0.0 && y >= 0.0 && x + w <= r && y + h <= r) {
-        return Err(Error::invalid(&file, "roi", format!("{x},{y},{w},{h} must be a square inside 0..{r}")));
+        return Err(Error::invalid(
+            &file,
+            "roi",
+            format!("{x},{y},{w},{h} must be a square inside 0..{r}"),
+        ));
     }
     if opt.size == 0 || opt.size > 8192 || opt.blend_width >= opt.size {
-        return Err(Error::invalid(&file, "size", "size must be 1..=8192 and the blend width below it"));
+        return Err(Error::invalid(
+            &file,
+            "size",
+            "size must be 1..=8192 and the blend width below it",
+        ));
     }
     let mm = s / r;
     let n = opt.size + opt.blend_width;
     Ok(Grid { origin_mm: [-s / 2.0 + x * mm, -s / 2.0 + y * mm], texel_mm: w * mm / n as f64, n })
+}
+
+/// The inset (mm) of the automatic ROI: one raw pixel (the reach of a bilinear tap) at the
+/// coarsest the sample's corners are seen in any view, `1 / σ_min(J)` for the Jacobian `J`
+/// (pixels per mm) of the nominal homography, plus 1 mm for the robot's pose error.
+pub fn auto_inset_mm(layout: &CaptureLayout) -> f64 {
+    let h = layout.plate.sample_mm / 2.0;
+    let mut worst = 0f64;
+    for view in 0..layout.sampling.len() {
+        let hm = layout.nominal_homography(view);
+        for c in [[-h, -h], [h, -h], [h, h], [-h, h]] {
+            let e = 1e-3;
+            let p = super::layout::apply(&hm, c);
+            let (px, py) = (
+                super::layout::apply(&hm, [c[0] + e, c[1]]),
+                super::layout::apply(&hm, [c[0], c[1] + e]),
+            );
+            let j =
+                nalgebra::Matrix2::new(px[0] - p[0], py[0] - p[0], px[1] - p[1], py[1] - p[1]) / e;
+            let smin = j.singular_values().min();
+            if smin > 1e-9 {
+                worst = worst.max(1.0 / smin);
+            }
+        }
+    }
+    worst + 1.0
 }
 
 /// Every image exists with the camera's size; the first failure names the file.
@@ -115,7 +156,11 @@ pub fn check_inputs(layout: &CaptureLayout) -> Result<()> {
     (0..n * n).into_par_iter().try_for_each(|k| {
         let path = layout.image_path(k / n, k % n);
         if !path.exists() {
-            return Err(Error::invalid(&path.display().to_string(), "image", "missing from the capture"));
+            return Err(Error::invalid(
+                &path.display().to_string(),
+                "image",
+                "missing from the capture",
+            ));
         }
         let (iw, ih) = raw::dimensions(&path)?;
         if (iw, ih) != (w, h) {
@@ -132,17 +177,23 @@ pub fn check_inputs(layout: &CaptureLayout) -> Result<()> {
 /// Pixel value → BTF scale at image position `(u, v)`.
 pub fn radiometric_gain(layout: &CaptureLayout) -> impl Fn(f64, f64) -> f64 + '_ {
     move |u, v| match layout.radiometry {
-        Some(r) => 1.0 / (r.reference_white_dn * std::f64::consts::PI * layout.axis_cosine(u, v).powf(r.vignetting_cos_power)),
+        Some(r) => {
+            1.0 / (r.reference_white_dn
+                * std::f64::consts::PI
+                * layout.axis_cosine(u, v).powf(r.vignetting_cos_power))
+        }
         None => 1.0 / ((1u64 << layout.camera.bits) - 1) as f64,
     }
 }
 
-/// The lights averaged to register a slot: the `k` most frontal ones.
+/// The lights averaged to register a slot: the `k` most frontal ones with `θ ≤ 60°`
+/// (grazing lights leave the markers dim).
 fn registration_lights(layout: &CaptureLayout, k: usize) -> Vec<usize> {
     let s = &layout.sampling;
     let mut idx: Vec<usize> = (0..s.len()).collect();
     idx.sort_by(|&a, &b| s.direction(a).theta_deg.total_cmp(&s.direction(b).theta_deg));
-    idx.truncate(k.max(1));
+    let usable = idx.iter().filter(|&&i| s.direction(i).theta_deg <= 60.0).count();
+    idx.truncate(k.min(usable).max(1));
     idx
 }
 
@@ -150,13 +201,21 @@ fn read_image(layout: &CaptureLayout, view: usize, light: usize) -> Result<RawIm
     let path = layout.image_path(view, light);
     let img = raw::read(&path, layout.camera.bits)?;
     if (img.width, img.height) != (layout.camera.width, layout.camera.height) {
-        return Err(Error::invalid(&path.display().to_string(), "size", "differs from capture.toml"));
+        return Err(Error::invalid(
+            &path.display().to_string(),
+            "size",
+            "differs from capture.toml",
+        ));
     }
     Ok(img)
 }
 
 /// Registers view slot `view` (or falls back to its nominal pose when allowed).
-pub fn register_slot(layout: &CaptureLayout, view: usize, opt: &ProcessOptions) -> Result<Registration> {
+pub fn register_slot(
+    layout: &CaptureLayout,
+    view: usize,
+    opt: &ProcessOptions,
+) -> Result<Registration> {
     let lights = registration_lights(layout, opt.registration_lights);
     let (w, h) = (layout.camera.width, layout.camera.height);
     let mut sum = vec![0f32; w * h];
@@ -171,10 +230,13 @@ pub fn register_slot(layout: &CaptureLayout, view: usize, opt: &ProcessOptions) 
         Ok(r) => Ok(r),
         Err(why) if opt.fallback_nominal => Ok(register::nominal(layout, view, why)),
         Err(why) => {
-            let files: Vec<String> = lights.iter().map(|&l| layout.image_path(view, l).display().to_string()).collect();
+            let files: Vec<String> =
+                lights.iter().map(|&l| layout.image_path(view, l).display().to_string()).collect();
             Err(Error::Registration {
                 file: files.join(", "),
-                what: format!("view slot {view}: {why} (use --fallback nominal to register it from the nominal pose)"),
+                what: format!(
+                    "view slot {view}: {why} (use --fallback nominal to register it from the nominal pose)"
+                ),
             })
         }
     }
@@ -187,7 +249,12 @@ pub fn normtexture(plan: &Plan, img: &RawImage, size: usize) -> Vec<f32> {
 }
 
 /// The plan of a registered slot.
-pub fn slot_plan(layout: &CaptureLayout, reg: &Registration, grid: &Grid, filter: Filter) -> Result<Plan> {
+pub fn slot_plan(
+    layout: &CaptureLayout,
+    reg: &Registration,
+    grid: &Grid,
+    filter: Filter,
+) -> Result<Plan> {
     let (w, h) = (layout.camera.width, layout.camera.height);
     Plan::new(&reg.matrix(), grid, w, h, filter, radiometric_gain(layout)).map_err(|[c, r]| {
         Error::invalid(
@@ -203,7 +270,12 @@ fn sidecar(dir: &Path, view: usize) -> PathBuf {
 }
 
 /// Processes `raw_dir` into the BTF store `out`; `tick` is called once per image.
-pub fn process(raw_dir: &Path, out: &Path, opt: &ProcessOptions, tick: &(dyn Fn() + Sync)) -> Result<ProcessReport> {
+pub fn process(
+    raw_dir: &Path,
+    out: &Path,
+    opt: &ProcessOptions,
+    tick: &(dyn Fn() + Sync),
+) -> Result<ProcessReport> {
     let layout = CaptureLayout::read(raw_dir)?;
     let grid = output_grid(&layout, opt)?;
     check_inputs(&layout)?;
@@ -239,7 +311,10 @@ fn run_slots(
         .map(|view| -> Result<(Registration, usize)> {
             let side = sidecar(writer.dir(), view);
             let done = (0..n).all(|l| writer.has_image(view, l));
-            if done && let Ok(text) = std::fs::read_to_string(&side) && let Ok(reg) = serde_json::from_str(&text) {
+            if done
+                && let Ok(text) = std::fs::read_to_string(&side)
+                && let Ok(reg) = serde_json::from_str(&text)
+            {
                 (0..n).for_each(|_| tick());
                 return Ok((reg, 0));
             }
@@ -271,7 +346,12 @@ fn write_sidecar(path: &Path, reg: &Registration) -> Result<()> {
     std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
 }
 
-fn provenance(layout: &CaptureLayout, grid: &Grid, opt: &ProcessOptions, regs: &[Registration]) -> serde_json::Value {
+fn provenance(
+    layout: &CaptureLayout,
+    grid: &Grid,
+    opt: &ProcessOptions,
+    regs: &[Registration],
+) -> serde_json::Value {
     json!({
         "generator": "btf capture process",
         "raw_dir": layout.dir.display().to_string(),

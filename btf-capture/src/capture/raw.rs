@@ -116,7 +116,10 @@ mod tests {
         let path = dir.path().join("a.png");
         let dn: [u16; 3] = [1, 2049, 4095];
         let data: Vec<u16> = (0..4).flat_map(|_| dn.map(|v| v << 4)).collect();
-        image::ImageBuffer::<image::Rgb<u16>, _>::from_raw(2, 2, data).unwrap().save(&path).unwrap();
+        image::ImageBuffer::<image::Rgb<u16>, _>::from_raw(2, 2, data)
+            .unwrap()
+            .save(&path)
+            .unwrap();
         let img = read(&path, 12).unwrap();
         assert_eq!((img.width, img.height), (2, 2));
         assert_eq!(img.rgb[3], [1.0, 2049.0, 4095.0]);

@@ -205,9 +205,13 @@ mod tests {
     fn gain_scales_and_outside_is_refused() {
         let img = RawImage { width: 8, height: 8, rgb: vec![[2.0, 4.0, 8.0]; 64] };
         let grid = Grid { origin_mm: [0.0, 0.0], texel_mm: 1.0, n: 4 };
-        let plan = Plan::new(&Matrix3::identity(), &grid, 8, 8, Filter::Footprint, |_, _| 0.5).unwrap();
+        let plan =
+            Plan::new(&Matrix3::identity(), &grid, 8, 8, Filter::Footprint, |_, _| 0.5).unwrap();
         assert!(plan.apply(&img).iter().all(|p| *p == [1.0, 2.0, 4.0]));
         let far = Grid { origin_mm: [6.0, 0.0], ..grid };
-        assert_eq!(Plan::new(&Matrix3::identity(), &far, 8, 8, Filter::Bilinear, |_, _| 1.0).unwrap_err(), [2, 0]);
+        assert_eq!(
+            Plan::new(&Matrix3::identity(), &far, 8, 8, Filter::Bilinear, |_, _| 1.0).unwrap_err(),
+            [2, 0]
+        );
     }
 }

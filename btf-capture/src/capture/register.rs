@@ -65,7 +65,7 @@ pub struct RegisterOptions {
 
 impl Default for RegisterOptions {
     fn default() -> Self {
-        RegisterOptions { search_margin_mm: 5.0, consensus_tol_px: 2.0, use_lines: true }
+        RegisterOptions { search_margin_mm: 6.0, consensus_tol_px: 2.0, use_lines: true }
     }
 }
 
@@ -80,31 +80,47 @@ fn describe(miss: Miss) -> &'static str {
 
 /// Registers view `view` from its averaged luminance image; `Err` carries a description of
 /// what was missing when fewer than 4 markers agree.
-pub fn register(layout: &CaptureLayout, view: usize, img: &Gray, opt: &RegisterOptions) -> Result<Registration, String> {
+pub fn register(
+    layout: &CaptureLayout,
+    view: usize,
+    img: &Gray,
+    opt: &RegisterOptions,
+) -> Result<Registration, String> {
     let plate = &layout.plate;
     let (marks, radius) = (&plate.point_markers_mm, plate.marker_radius_mm);
     let nominal = layout.nominal_homography(view);
-    let mut found: Vec<Detection> =
-        marks.iter().map(|&m| markers::detect_point(img, &nominal, m, radius, opt.search_margin_mm)).collect();
+    let mut found: Vec<Detection> = marks
+        .iter()
+        .map(|&m| markers::detect_point(img, &nominal, m, radius, opt.search_margin_mm))
+        .collect();
     let raw = |found: &[Detection]| -> Vec<(usize, PointMatch)> {
         found
             .iter()
             .enumerate()
-            .filter_map(|(k, d)| d.ok().map(|p| (k, PointMatch { plate_mm: marks[k], image_px: p })))
+            .filter_map(|(k, d)| {
+                d.ok().map(|p| (k, PointMatch { plate_mm: marks[k], image_px: p }))
+            })
             .collect()
     };
     let missed_text = |found: &[Detection]| -> Vec<String> {
         found
             .iter()
             .enumerate()
-            .filter_map(|(k, d)| d.err().map(|m| format!("marker {k} at {:?} mm {}", marks[k], describe(m))))
+            .filter_map(|(k, d)| {
+                d.err().map(|m| format!("marker {k} at {:?} mm {}", marks[k], describe(m)))
+            })
             .collect()
     };
     let first = raw(&found);
     let pts: Vec<PointMatch> = first.iter().map(|p| p.1).collect();
     let Some((h1, _)) = homography::consensus(&pts, opt.consensus_tol_px) else {
         let m = missed_text(&found);
-        return Err(format!("{} of {} point markers usable (need 4): {}", pts.len(), marks.len(), m.join("; ")));
+        return Err(format!(
+            "{} of {} point markers usable (need 4): {}",
+            pts.len(),
+            marks.len(),
+            m.join("; ")
+        ));
     };
     for (k, d) in found.iter_mut().enumerate() {
         if d.is_err() {
@@ -113,9 +129,11 @@ pub fn register(layout: &CaptureLayout, view: usize, img: &Gray, opt: &RegisterO
     }
     let found_count = found.iter().filter(|d| d.is_ok()).count();
     let all = raw(&found);
-    let (_, inliers) = homography::consensus(&all.iter().map(|p| p.1).collect::<Vec<_>>(), opt.consensus_tol_px)
-        .ok_or_else(|| "markers disagree after the second search".to_string())?;
-    let outliers: Vec<usize> = all.iter().zip(&inliers).filter(|(_, k)| !**k).map(|(p, _)| p.0).collect();
+    let (_, inliers) =
+        homography::consensus(&all.iter().map(|p| p.1).collect::<Vec<_>>(), opt.consensus_tol_px)
+            .ok_or_else(|| "markers disagree after the second search".to_string())?;
+    let outliers: Vec<usize> =
+        all.iter().zip(&inliers).filter(|(_, k)| !**k).map(|(p, _)| p.0).collect();
     for &k in &outliers {
         found[k] = Err(Miss::Outlier);
     }
@@ -126,7 +144,13 @@ pub fn register(layout: &CaptureLayout, view: usize, img: &Gray, opt: &RegisterO
         h = homography::dlt(&pts).unwrap_or(h);
         if opt.use_lines {
             let span = plate.sample_mm / 2.0;
-            lines = markers::sample_border_lines(img, &h, plate.border_offset_mm, plate.border_width_mm, span);
+            lines = markers::sample_border_lines(
+                img,
+                &h,
+                plate.border_offset_mm,
+                plate.border_width_mm,
+                span,
+            );
         }
         h = homography::refine(&h, &pts, &lines, 1.0);
         if !lines.is_empty() {

@@ -48,7 +48,8 @@ pub fn true_homographies(layout: &CaptureLayout) -> Result<Vec<Matrix3<f64>>> {
     let path = layout.dir.join("truth.toml");
     let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
     let file = path.display().to_string();
-    let t: TruthToml = toml::from_str(&text).map_err(|e| Error::invalid(&file, "toml", e.to_string()))?;
+    let t: TruthToml =
+        toml::from_str(&text).map_err(|e| Error::invalid(&file, "toml", e.to_string()))?;
     let n = layout.sampling.len();
     if t.view_poses.len() != n || t.view_poses.iter().enumerate().any(|(j, p)| p.view != j) {
         return Err(Error::invalid(&file, "view_poses", format!("expected views 0..{n} in order")));
@@ -110,17 +111,27 @@ pub fn recorded(store: &BtfStore) -> Result<(Grid, usize, Vec<Registration>)> {
         texel_mm: g["texel_mm"].as_f64().ok_or_else(bad)?,
         n: g["n"].as_u64().ok_or_else(bad)? as usize,
     };
-    let regs: Vec<Registration> = serde_json::from_value(p["registration"].clone()).map_err(|_| bad())?;
+    let regs: Vec<Registration> =
+        serde_json::from_value(p["registration"].clone()).map_err(|_| bad())?;
     Ok((grid, store.meta().width, regs))
 }
 
 /// Scores `store` against the capture in `layout`'s folder; `filters` lists the filters to
 /// compare (none for the plain score).
-pub fn score(store: &BtfStore, layout: &CaptureLayout, truth: &TruthFn, filters: &[Filter]) -> Result<Score> {
+pub fn score(
+    store: &BtfStore,
+    layout: &CaptureLayout,
+    truth: &TruthFn,
+    filters: &[Filter],
+) -> Result<Score> {
     let (grid, size, regs) = recorded(store)?;
     let n = layout.sampling.len();
     if store.meta().n_views() != n || regs.len() != n {
-        return Err(Error::invalid(&store.path().display().to_string(), "sampling", "differs from the capture's"));
+        return Err(Error::invalid(
+            &store.path().display().to_string(),
+            "sampling",
+            "differs from the capture's",
+        ));
     }
     let truths = true_homographies(layout)?;
     let mut per_view = Vec::with_capacity(n);
@@ -137,7 +148,10 @@ pub fn score(store: &BtfStore, layout: &CaptureLayout, truth: &TruthFn, filters:
     let (rel_rmse, by_theta) = rel_rmse(layout, &grid, size, truth, &stored)?;
     let mut rows = Vec::new();
     for &f in filters {
-        for (which, hs) in [("estimated", regs.iter().map(|r| r.matrix()).collect::<Vec<_>>()), ("true", truths.clone())] {
+        for (which, hs) in [
+            ("estimated", regs.iter().map(|r| r.matrix()).collect::<Vec<_>>()),
+            ("true", truths.clone()),
+        ] {
             rows.push(filter_row(layout, &grid, size, truth, f, which, &hs)?);
         }
     }
@@ -171,7 +185,13 @@ pub fn reprojection_texels(h_est: &Matrix3<f64>, h_true: &Matrix3<f64>, grid: &G
 
 type ImageFn<'a> = dyn Fn(usize, usize) -> Result<Vec<f32>> + Sync + 'a;
 
-fn rel_rmse(layout: &CaptureLayout, grid: &Grid, size: usize, truth: &TruthFn, image: &ImageFn) -> Result<(f64, Vec<[f64; 2]>)> {
+fn rel_rmse(
+    layout: &CaptureLayout,
+    grid: &Grid,
+    size: usize,
+    truth: &TruthFn,
+    image: &ImageFn,
+) -> Result<(f64, Vec<[f64; 2]>)> {
     use rayon::prelude::*;
     let n = layout.sampling.len();
     let per_view: Vec<(f64, f64)> = (0..n)
@@ -179,7 +199,8 @@ fn rel_rmse(layout: &CaptureLayout, grid: &Grid, size: usize, truth: &TruthFn, i
         .map(|j| -> Result<(f64, f64)> {
             let (mut se, mut st) = (0.0, 0.0);
             for i in 0..n {
-                let t: Vec<f32> = blend::fold(&truth(j, i, grid), grid.n, size).into_iter().flatten().collect();
+                let t: Vec<f32> =
+                    blend::fold(&truth(j, i, grid), grid.n, size).into_iter().flatten().collect();
                 let v = image(j, i)?;
                 for (a, b) in v.iter().zip(&t) {
                     se += ((a - b) as f64).powi(2);
@@ -216,15 +237,19 @@ fn filter_row(
     let seconds = std::sync::Mutex::new((0.0f64, 0.0f64));
     // One plan per view slot, built when its first light is read and dropped after its
     // last, as `process` does; its cost is part of the timing.
-    let plans: Vec<std::sync::Mutex<Option<Plan>>> = (0..n).map(|_| std::sync::Mutex::new(None)).collect();
+    let plans: Vec<std::sync::Mutex<Option<Plan>>> =
+        (0..n).map(|_| std::sync::Mutex::new(None)).collect();
     let image = |j: usize, i: usize| -> Result<Vec<f32>> {
         let path = layout.image_path(j, i);
         let img = raw::read(&path, layout.camera.bits)?;
         let t0 = Instant::now();
         let mut slot = plans[j].lock().expect("plan lock");
         if slot.is_none() {
-            let plan = Plan::new(&hs[j], grid, w, h, filter, super::process::radiometric_gain(layout))
-                .map_err(|_| Error::invalid(&path.display().to_string(), "roi", "outside the image"))?;
+            let plan =
+                Plan::new(&hs[j], grid, w, h, filter, super::process::radiometric_gain(layout))
+                    .map_err(|_| {
+                        Error::invalid(&path.display().to_string(), "roi", "outside the image")
+                    })?;
             seconds.lock().expect("timer lock").1 += plan.taps_per_texel() * n as f64;
             *slot = Some(plan);
         }
@@ -249,7 +274,9 @@ fn filter_row(
 
 /// The filter table as Markdown.
 pub fn filter_table_markdown(rows: &[FilterRow]) -> String {
-    let mut s = String::from("| filter | homography | rel. RMSE | ms / image | taps / texel |\n|---|---|---|---|---|\n");
+    let mut s = String::from(
+        "| filter | homography | rel. RMSE | ms / image | taps / texel |\n|---|---|---|---|---|\n",
+    );
     for r in rows {
         s += &format!(
             "| {} | {} | {:.5} | {:.2} | {:.1} |\n",

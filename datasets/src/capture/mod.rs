@@ -49,6 +49,9 @@ pub struct CaptureSpec {
     pub vignetting: f64,
     /// Seed of poses and noise.
     pub seed: u64,
+    /// Rays per pixel side: `k²` stratified rays average the pixel's area as a real sensor
+    /// does (1 = one ray through the pixel centre, the original point-sampled images).
+    pub supersample: usize,
 }
 
 impl CaptureSpec {
@@ -65,6 +68,7 @@ impl CaptureSpec {
             shot_noise_per_dn: 0.5,
             vignetting: 1.0,
             seed: 1,
+            supersample: 1,
         }
     }
 }
@@ -185,7 +189,8 @@ pub fn parse_sampling(spec: &str) -> crate::Result<btf_core::Sampling> {
     let Some(list) = spec.strip_prefix("rings:") else {
         return Ok(btf_core::Sampling::by_name(spec)?);
     };
-    let bad = || crate::Error::Invalid(format!("sampling '{spec}': expected rings:THETAxCOUNT,..."));
+    let bad =
+        || crate::Error::Invalid(format!("sampling '{spec}': expected rings:THETAxCOUNT,..."));
     let rings = list
         .split(',')
         .map(|r| {
