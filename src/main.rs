@@ -1,6 +1,7 @@
 //! The `btf` command-line tool: parses arguments into validated configurations and calls
 //! the libraries (`btf-core`, `datasets`, `btf-capture`, `btf-render`). No numerics live here.
 
+mod cmd_capture;
 mod cmd_compress;
 mod cmd_demo;
 mod cmd_export;
@@ -39,6 +40,9 @@ enum Command {
     Compress(cmd_compress::CompressArgs),
     /// Reconstruct the texture for one view and one light direction on the CPU.
     Reconstruct(cmd_reconstruct::ReconstructArgs),
+    /// Process raw captures into normtextures and score them against ground truth.
+    #[command(subcommand)]
+    Capture(cmd_capture::CaptureCmd),
     /// Import Bonn-database BTFs (UBO2003 image folders, UBO2014 `.btf` files).
     #[command(subcommand)]
     Import(cmd_import::ImportCmd),
@@ -55,6 +59,7 @@ fn main() -> ExitCode {
         Command::Inspect(a) => cmd_inspect::run(a),
         Command::Compress(a) => cmd_compress::run(a),
         Command::Reconstruct(a) => cmd_reconstruct::run(a),
+        Command::Capture(c) => cmd_capture::run(c),
         Command::Import(c) => cmd_import::run(c),
         Command::Export(a) => cmd_export::run(a),
         Command::Synth(c) => synth_cmd::run(c),

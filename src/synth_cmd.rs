@@ -100,7 +100,8 @@ pub struct CaptureArgs {
     /// Texels per side of the material.
     #[arg(long, default_value_t = 64)]
     pub size: usize,
-    /// View and light sampling: ubo81, ubo81-h1 or dome151.
+    /// View and light sampling: ubo81, ubo81-h1, dome151 or rings:θxCOUNT,… (e.g.
+    /// rings:0x1,45x4,75x4 for a small test capture).
     #[arg(long, default_value = "ubo81")]
     pub sampling: String,
     /// Seed of the material.
@@ -121,6 +122,9 @@ pub struct CaptureArgs {
     /// Seed of poses and noise.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Rays per pixel side (K² rays average each pixel's area, as a real sensor does).
+    #[arg(long, default_value_t = 1)]
+    pub supersample: usize,
     /// Output folder of raw images, capture.toml and truth.toml.
     #[arg(long)]
     pub out: PathBuf,
@@ -233,7 +237,7 @@ fn pair<T: std::str::FromStr>(s: &str, what: &str) -> Result<(T, T)> {
 fn capture(a: CaptureArgs) -> Result<()> {
     let kind = MaterialKind::from_name(&a.material)?;
     let mut material = MaterialSpec::new(kind, a.size);
-    material.sampling = btf_core::Sampling::by_name(&a.sampling)?;
+    material.sampling = datasets::capture::parse_sampling(&a.sampling)?;
     material.seed = a.material_seed;
     let mut spec = datasets::capture::CaptureSpec::new(material);
     (spec.width, spec.height) = pair(&a.resolution, "--resolution")?;
@@ -241,6 +245,7 @@ fn capture(a: CaptureArgs) -> Result<()> {
     (spec.read_noise_dn, spec.shot_noise_per_dn) = pair(&a.noise, "--noise")?;
     spec.vignetting = a.vignetting;
     spec.seed = a.seed;
+    spec.supersample = a.supersample;
     let r = datasets::capture::capture(&spec, &a.out, show_progress())
         .with_context(|| format!("capturing {} into {}", a.material, a.out.display()))?;
     eprintln!(

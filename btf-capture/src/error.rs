@@ -43,6 +43,14 @@ pub enum Error {
         /// The decoder's complaint.
         what: String,
     },
+    /// A raw image (or view slot) that could not be registered to the marker layout.
+    #[error("{file}: cannot register: {what}")]
+    Registration {
+        /// The image(s) or view-slot folder at fault.
+        file: String,
+        /// Which markers were missing and why.
+        what: String,
+    },
     /// An I/O error with the path it happened on.
     #[error("{path}: {source}")]
     Io {

@@ -2,6 +2,7 @@
 //! (Sattler et al. 2003, §3.2), and the Bonn database formats are read and written.
 
 pub mod bonn;
+pub mod capture;
 pub mod error;
 
 pub use error::{Error, Result};

@@ -213,6 +213,18 @@ impl BtfWriter {
         &self.meta
     }
 
+    /// The folder being written (`NAME.partial`), for side files that travel with the
+    /// store (they are moved into place by [`BtfWriter::finish`]).
+    pub fn dir(&self) -> &Path {
+        self.txn.dir()
+    }
+
+    /// Replaces the provenance recorded at [`BtfWriter::finish`] (e.g. results known only
+    /// at the end of a run).
+    pub fn set_provenance(&mut self, provenance: Value) {
+        self.meta.provenance = provenance;
+    }
+
     /// True when image `(view, light)` is already written (for resuming).
     pub fn has_image(&self, view: usize, light: usize) -> bool {
         self.arr.has_chunk(&[view as u64, light as u64, 0, 0, 0])

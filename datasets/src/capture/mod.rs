@@ -49,6 +49,9 @@ pub struct CaptureSpec {
     pub vignetting: f64,
     /// Seed of poses and noise.
     pub seed: u64,
+    /// Rays per pixel side: `k²` stratified rays average the pixel's area as a real sensor
+    /// does (1 = one ray through the pixel centre, the original point-sampled images).
+    pub supersample: usize,
 }
 
 impl CaptureSpec {
@@ -65,6 +68,7 @@ impl CaptureSpec {
             shot_noise_per_dn: 0.5,
             vignetting: 1.0,
             seed: 1,
+            supersample: 1,
         }
     }
 }
@@ -114,6 +118,8 @@ pub struct CaptureDescription {
     pub version: u32,
     /// Name of the view and light sampling and its directions in index order.
     pub sampling: String,
+    /// The sampling's rings (so that custom samplings can be rebuilt).
+    pub rings: Vec<btf_core::Ring>,
     /// `[θ, φ]` in degrees of every direction (index order).
     pub directions_deg: Vec<[f64; 2]>,
     /// Image naming pattern.
@@ -122,6 +128,8 @@ pub struct CaptureDescription {
     pub camera: CameraDescription,
     /// Plate and sample geometry.
     pub plate: PlateDescription,
+    /// The lab's radiometric calibration (light reference and flat field).
+    pub radiometry: RadiometryDescription,
     /// How the material was made (to regenerate the ground truth).
     pub material: serde_json::Value,
 }
@@ -162,4 +170,52 @@ pub struct PlateDescription {
     pub border_offset_mm: f64,
     /// Border line width (mm).
     pub border_width_mm: f64,
+}
+
+/// Radiometry part of `capture.toml`: what a lab calibrates with a white reference tile and
+/// a flat-field exposure.
+#[derive(Debug, Serialize)]
+pub struct RadiometryDescription {
+    /// DN of a white (albedo 1) Lambertian reference at normal light and view incidence,
+    /// for the lamp's reference irradiance: `BTF = DN / (reference_white_dn · π)`.
+    pub reference_white_dn: f64,
+    /// Flat field: pixel values fall off as `cos^k` of the ray angle to the optical axis.
+    pub vignetting_cos_power: f64,
+}
+
+/// Parses a sampling name (`ubo81`, `ubo81-h1`, `dome151`) or a custom ring list
+/// `rings:θxCOUNT,θxCOUNT,…` (degrees, e.g. `rings:0x1,45x4,75x6`), for small test captures.
+pub fn parse_sampling(spec: &str) -> crate::Result<btf_core::Sampling> {
+    let Some(list) = spec.strip_prefix("rings:") else {
+        return Ok(btf_core::Sampling::by_name(spec)?);
+    };
+    let bad =
+        || crate::Error::Invalid(format!("sampling '{spec}': expected rings:THETAxCOUNT,..."));
+    let rings = list
+        .split(',')
+        .map(|r| {
+            let (t, c) = r.split_once('x').ok_or_else(bad)?;
+            Ok(btf_core::Ring {
+                theta_deg: t.trim().parse().map_err(|_| bad())?,
+                count: c.trim().parse().map_err(|_| bad())?,
+                phi_offset_deg: 0.0,
+            })
+        })
+        .collect::<crate::Result<Vec<_>>>()?;
+    Ok(btf_core::Sampling::new("custom", rings)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn custom_sampling_parses() {
+        let s = parse_sampling("rings:0x1,45x4,75x6").unwrap();
+        assert_eq!(s.len(), 11);
+        assert_eq!(s.direction(5).theta_deg, 75.0);
+        assert_eq!(parse_sampling("ubo81").unwrap().len(), 81);
+        assert!(parse_sampling("rings:0x2").is_err());
+        assert!(parse_sampling("rings:abc").is_err());
+    }
 }

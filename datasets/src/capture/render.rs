@@ -136,6 +136,25 @@ fn gaussian(seed: u64, a: i64, b: i64, c: i64) -> f64 {
     (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
 }
 
+/// Radiance along the sample-frame ray from `origin` in direction `d`: the material on the
+/// sample square, the Lambertian plate around it, nothing off the plate.
+fn ray_radiance(material: &Material, n: f64, origin: V3, d: V3, light: V3) -> [f64; 3] {
+    if d[2] >= 0.0 {
+        return [0.0; 3];
+    }
+    let t = -origin[2] / d[2];
+    let (x, y) = (origin[0] + t * d[0], origin[1] + t * d[1]);
+    let h = SAMPLE_MM / 2.0;
+    if x.abs() < h && y.abs() < h {
+        let view = scale(d, -1.0);
+        material.eval_at((x + h) / SAMPLE_MM * n, (y + h) / SAMPLE_MM * n, view, light)
+    } else if light[2] > 0.0 {
+        [plate_albedo(x, y) * light[2] / std::f64::consts::PI; 3]
+    } else {
+        [0.0; 3]
+    }
+}
+
 /// Renders image (view `j`, light `i`) as 12-bit DN values, RGB, row-major.
 pub fn render_image(
     spec: &CaptureSpec,
@@ -148,31 +167,23 @@ pub fn render_image(
     let cam = Camera::new(s.direction(j).to_vector(), spec.width, spec.height);
     let light = pose.to_sample(s.direction(i).to_vector());
     let n = spec.material.size as f64;
-    let gain = 0.9 * 4095.0 * std::f64::consts::PI;
+    let gain = 0.9 * 4095.0 * std::f64::consts::PI; // keep in step with `radiometry`
     let origin = pose.to_sample(sub(cam.centre, pose.translation_mm));
     let mut out = Vec::with_capacity(spec.width * spec.height);
+    let k = spec.supersample.max(1);
     for r in 0..spec.height {
         for c in 0..spec.width {
-            let d_lab = cam.ray(c as f64 + 0.5, r as f64 + 0.5);
-            let d = pose.to_sample(d_lab);
-            let mut radiance = [0.0; 3];
-            if d[2] < 0.0 {
-                let t = -origin[2] / d[2];
-                let (x, y) = (origin[0] + t * d[0], origin[1] + t * d[1]);
-                let h = SAMPLE_MM / 2.0;
-                if x.abs() < h && y.abs() < h {
-                    let view = scale(d, -1.0);
-                    radiance = material.eval_at(
-                        (x + h) / SAMPLE_MM * n,
-                        (y + h) / SAMPLE_MM * n,
-                        view,
-                        light,
-                    );
-                } else if light[2] > 0.0 {
-                    radiance = [plate_albedo(x, y) * light[2] / std::f64::consts::PI; 3];
+            let (mut radiance, mut vig) = ([0.0; 3], 0.0);
+            for sub in 0..k * k {
+                let (du, dv) =
+                    (((sub % k) as f64 + 0.5) / k as f64, ((sub / k) as f64 + 0.5) / k as f64);
+                let d_lab = cam.ray(c as f64 + du, r as f64 + dv);
+                let l = ray_radiance(material, n, origin, pose.to_sample(d_lab), light);
+                for ch in 0..3 {
+                    radiance[ch] += l[ch] / (k * k) as f64;
                 }
+                vig += dot(d_lab, cam.forward).powf(4.0 * spec.vignetting) / (k * k) as f64;
             }
-            let vig = dot(d_lab, cam.forward).powf(4.0 * spec.vignetting);
             let px: [u16; 3] = std::array::from_fn(|ch| {
                 let dn = gain * radiance[ch] * vig;
                 let sigma = (spec.read_noise_dn.powi(2) + spec.shot_noise_per_dn * dn).sqrt();
@@ -227,6 +238,9 @@ pub fn capture(spec: &CaptureSpec, out: &Path, progress: bool) -> Result<Capture
         spec.shot_noise_per_dn,
         spec.vignetting,
     ];
+    if !(1..=16).contains(&spec.supersample) {
+        return Err(Error::Invalid(format!("supersample {} is outside 1..=16", spec.supersample)));
+    }
     if noise.iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
         return Err(Error::Invalid(
             "pose noise, sensor noise and vignetting must be finite and ≥ 0".into(),
@@ -240,6 +254,7 @@ pub fn capture(spec: &CaptureSpec, out: &Path, progress: bool) -> Result<Capture
     let desc = CaptureDescription {
         version: 1,
         sampling: s.name.clone(),
+        rings: s.rings.clone(),
         directions_deg: s.directions().iter().map(|d| [d.theta_deg, d.phi_deg]).collect(),
         naming: "tvTTT_pvPPP/tlTTT_plPPP_tvTTT_pvPPP.png (rounded integer degrees)".into(),
         camera: CameraDescription {
@@ -260,6 +275,10 @@ pub fn capture(spec: &CaptureSpec, out: &Path, progress: bool) -> Result<Capture
             border_offset_mm: BORDER_OFFSET_MM,
             border_width_mm: BORDER_WIDTH_MM,
         },
+        radiometry: RadiometryDescription {
+            reference_white_dn: 0.9 * 4095.0,
+            vignetting_cos_power: 4.0 * spec.vignetting,
+        },
         material: {
             let mut m = json!({"kind": spec.material.kind.name(), "size": spec.material.size, "seed": spec.material.seed});
             if let Some(a) = spec.material.albedo {
@@ -273,6 +292,7 @@ pub fn capture(spec: &CaptureSpec, out: &Path, progress: bool) -> Result<Capture
         "warning": "ground truth for evaluation only; capture processing must not read this file",
         "seed": spec.seed,
         "pose_noise_deg": spec.pose_noise_deg, "pose_noise_mm": spec.pose_noise_mm,
+        "supersample": spec.supersample,
         "read_noise_dn": spec.read_noise_dn, "shot_noise_per_dn": spec.shot_noise_per_dn, "vignetting": spec.vignetting,
         "view_poses": poses.iter().enumerate().map(|(j, p)| json!({"view": j, "rotation": p.rotation, "translation_mm": p.translation_mm})).collect::<Vec<_>>(),
     });

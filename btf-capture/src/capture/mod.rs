@@ -1,0 +1,27 @@
+//! Capture processing (Sattler et al. 2003, §3.2): raw photographs of a sample on its
+//! marker plate become tileable normtextures in a BTF store.
+//!
+//! - [`layout`] — `capture.toml`: sampling, naming, intrinsics, marker layout, radiometry;
+//!   nominal cameras and homographies;
+//! - [`raw`] — raw images (PNG/TIFF with left-aligned `bits`, EXR) as linear DN;
+//! - [`markers`] — sub-pixel point-marker and border-line detection;
+//! - [`homography`] — normalised DLT, consensus outlier rejection, LM refinement;
+//! - [`register`] — one view slot's homography from its images;
+//! - [`rectify`] — resampling onto the output texel grid (bilinear or footprint filter);
+//! - [`blend`] — linear edge blending for tileability;
+//! - [`process`] — the streaming, parallel, resumable driver;
+//! - [`score`] — accuracy against a synthetic capture's ground truth.
+
+pub mod blend;
+pub mod homography;
+pub mod layout;
+pub mod markers;
+pub mod process;
+pub mod raw;
+pub mod rectify;
+pub mod register;
+pub mod score;
+
+pub use layout::CaptureLayout;
+pub use process::{ProcessOptions, ProcessReport, Roi, process};
+pub use rectify::Filter;

@@ -1,0 +1,197 @@
+//! Registration of one view slot: the homography from the sample plane (mm) to the raw
+//! images of that view, which share one plate pose (the robot places the plate once per
+//! view; only the lamp moves).
+//!
+//! The images of the most frontal lights (brightest markers) are averaged, which lowers the
+//! noise by `√k`. Point markers are detected around their nominal positions, matched by
+//! layout index, and an exhaustive 4-subset consensus rejects outliers (H&Z Alg. 4.4);
+//! markers missed at first are looked for again around the consensus prediction. The
+//! centroids are then corrected for the perspective bias of a projected disc, the border
+//! lines are sampled, and Levenberg–Marquardt minimises the point and point-on-line
+//! residuals together (H&Z eq. 4.8); line samples further than `4 · 1.4826 · MAD` from
+//! the fit are dropped and the fit repeated.
+
+use super::homography::{self, LineMatch, PointMatch};
+use super::layout::CaptureLayout;
+use super::markers::{self, Detection, Gray, Miss};
+use nalgebra::Matrix3;
+use serde::{Deserialize, Serialize};
+
+/// The registration of a view slot, as recorded in the store's provenance.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Registration {
+    /// View slot.
+    pub view: usize,
+    /// Homography plate mm → image pixels, rows.
+    pub homography: [[f64; 3]; 3],
+    /// Point markers found (of the layout's).
+    pub markers_found: usize,
+    /// Point markers kept after outlier rejection.
+    pub markers_used: usize,
+    /// Border-line samples used.
+    pub line_samples: usize,
+    /// RMS of the point-marker residuals (pixels).
+    pub marker_rms_px: f64,
+    /// RMS of the line residuals (pixels).
+    pub line_rms_px: f64,
+    /// Registered from the nominal pose (`--fallback nominal`), not from the markers.
+    pub fallback_nominal: bool,
+    /// Markers not used, with the reason.
+    pub missed: Vec<String>,
+}
+
+impl Registration {
+    /// The homography as a matrix.
+    pub fn matrix(&self) -> Matrix3<f64> {
+        let h = &self.homography;
+        Matrix3::from_fn(|r, c| h[r][c])
+    }
+}
+
+fn to_rows(h: &Matrix3<f64>) -> [[f64; 3]; 3] {
+    std::array::from_fn(|r| std::array::from_fn(|c| h[(r, c)]))
+}
+
+/// Knobs of the registration.
+#[derive(Debug, Clone, Copy)]
+pub struct RegisterOptions {
+    /// How far beyond a marker's rim to look for it around its nominal position (mm).
+    pub search_margin_mm: f64,
+    /// Consensus tolerance (pixels).
+    pub consensus_tol_px: f64,
+    /// Use the border lines in the refinement.
+    pub use_lines: bool,
+}
+
+impl Default for RegisterOptions {
+    fn default() -> Self {
+        RegisterOptions { search_margin_mm: 6.0, consensus_tol_px: 2.0, use_lines: true }
+    }
+}
+
+fn describe(miss: Miss) -> &'static str {
+    match miss {
+        Miss::OutsideImage => "outside the image",
+        Miss::NoContrast => "not found (no contrast)",
+        Miss::BadShape => "occluded or merged (wrong shape)",
+        Miss::Outlier => "inconsistent with the other markers (outlier)",
+    }
+}
+
+/// Registers view `view` from its averaged luminance image; `Err` carries a description of
+/// what was missing when fewer than 4 markers agree.
+pub fn register(
+    layout: &CaptureLayout,
+    view: usize,
+    img: &Gray,
+    opt: &RegisterOptions,
+) -> Result<Registration, String> {
+    let plate = &layout.plate;
+    let (marks, radius) = (&plate.point_markers_mm, plate.marker_radius_mm);
+    let nominal = layout.nominal_homography(view);
+    let mut found: Vec<Detection> = marks
+        .iter()
+        .map(|&m| markers::detect_point(img, &nominal, m, radius, opt.search_margin_mm))
+        .collect();
+    let raw = |found: &[Detection]| -> Vec<(usize, PointMatch)> {
+        found
+            .iter()
+            .enumerate()
+            .filter_map(|(k, d)| {
+                d.ok().map(|p| (k, PointMatch { plate_mm: marks[k], image_px: p }))
+            })
+            .collect()
+    };
+    let missed_text = |found: &[Detection]| -> Vec<String> {
+        found
+            .iter()
+            .enumerate()
+            .filter_map(|(k, d)| {
+                d.err().map(|m| format!("marker {k} at {:?} mm {}", marks[k], describe(m)))
+            })
+            .collect()
+    };
+    let first = raw(&found);
+    let pts: Vec<PointMatch> = first.iter().map(|p| p.1).collect();
+    let Some((h1, _)) = homography::consensus(&pts, opt.consensus_tol_px) else {
+        let m = missed_text(&found);
+        return Err(format!(
+            "{} of {} point markers usable (need 4): {}",
+            pts.len(),
+            marks.len(),
+            m.join("; ")
+        ));
+    };
+    for (k, d) in found.iter_mut().enumerate() {
+        if d.is_err() {
+            *d = markers::detect_point(img, &h1, marks[k], radius, 2.0);
+        }
+    }
+    let found_count = found.iter().filter(|d| d.is_ok()).count();
+    let all = raw(&found);
+    let (_, inliers) =
+        homography::consensus(&all.iter().map(|p| p.1).collect::<Vec<_>>(), opt.consensus_tol_px)
+            .ok_or_else(|| "markers disagree after the second search".to_string())?;
+    let outliers: Vec<usize> =
+        all.iter().zip(&inliers).filter(|(_, k)| !**k).map(|(p, _)| p.0).collect();
+    for &k in &outliers {
+        found[k] = Err(Miss::Outlier);
+    }
+    let mut h = h1;
+    let mut lines: Vec<LineMatch> = Vec::new();
+    for _ in 0..2 {
+        let pts = markers::corrected_matches(&h, marks, radius, &found);
+        h = homography::dlt(&pts).unwrap_or(h);
+        if opt.use_lines {
+            let span = plate.sample_mm / 2.0;
+            lines = markers::sample_border_lines(
+                img,
+                &h,
+                plate.border_offset_mm,
+                plate.border_width_mm,
+                span,
+            );
+        }
+        h = homography::refine(&h, &pts, &lines, 1.0);
+        if !lines.is_empty() {
+            lines = drop_line_outliers(&h, lines);
+            h = homography::refine(&h, &pts, &lines, 1.0);
+        }
+    }
+    let pts = markers::corrected_matches(&h, marks, radius, &found);
+    let rms = |e: Vec<f64>| (e.iter().map(|x| x * x).sum::<f64>() / e.len().max(1) as f64).sqrt();
+    Ok(Registration {
+        view,
+        homography: to_rows(&h),
+        markers_found: found_count,
+        markers_used: pts.len(),
+        line_samples: lines.len(),
+        marker_rms_px: rms(pts.iter().map(|m| homography::point_error(&h, m)).collect()),
+        line_rms_px: rms(lines.iter().map(|l| homography::line_error(&h, l)).collect()),
+        fallback_nominal: false,
+        missed: missed_text(&found),
+    })
+}
+
+fn drop_line_outliers(h: &Matrix3<f64>, lines: Vec<LineMatch>) -> Vec<LineMatch> {
+    let mut abs: Vec<f64> = lines.iter().map(|l| homography::line_error(h, l).abs()).collect();
+    abs.sort_by(f64::total_cmp);
+    let mad = abs.get(abs.len() / 2).copied().unwrap_or(0.0);
+    let tol = (4.0 * 1.4826 * mad).max(0.05);
+    lines.into_iter().filter(|l| homography::line_error(h, l).abs() <= tol).collect()
+}
+
+/// The registration used with `--fallback nominal`: the nominal pose, flagged.
+pub fn nominal(layout: &CaptureLayout, view: usize, why: String) -> Registration {
+    Registration {
+        view,
+        homography: to_rows(&layout.nominal_homography(view)),
+        markers_found: 0,
+        markers_used: 0,
+        line_samples: 0,
+        marker_rms_px: 0.0,
+        line_rms_px: 0.0,
+        fallback_nominal: true,
+        missed: vec![why],
+    }
+}

@@ -1,0 +1,292 @@
+//! Accuracy of a processed capture against the virtual gonioreflectometer's ground truth
+//! (`truth.toml`: the true plate pose of every view; the orthographic normtextures of the
+//! material, supplied by the caller).
+//!
+//! **Reprojection error.** For every texel centre `p` (mm) of the output grid, the true
+//! homography `H* = K M [r₁ r₂ t − c]` (eq. 8.1 of H&Z on the plane) takes it into the
+//! image and the estimated one brings it back: `e = |H⁻¹ H* p − p| / texel_mm`, in texels
+//! of the store (its pixels). Mean and max are over all texels of all views.
+//!
+//! **Relative RMSE** of the normtextures: `‖T − T*‖ / ‖T*‖` over all texels, channels,
+//! lights and views, where `T*` is the truth sampled at the same texel centres and folded
+//! by the same edge blend (the blend is linear, so this is the truth of the blended image).
+//!
+//! **Filter comparison.** The same registrations are rectified again with each filter (and
+//! with the true homography, which isolates the filter's own error), timing the resampling
+//! per image and scoring the result against the truth.
+
+use super::blend;
+use super::layout::{CaptureLayout, apply};
+use super::process::normtexture;
+use super::raw;
+use super::rectify::{Filter, Grid, Plan};
+use super::register::Registration;
+use crate::{Error, Result};
+use btf_core::store::BtfStore;
+use nalgebra::{Matrix3, Vector3};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+use std::time::Instant;
+
+/// The truth normtexture of (view, light) on a grid: `grid.n²` RGB texels, row-major.
+pub type TruthFn<'a> = dyn Fn(usize, usize, &Grid) -> Vec<[f32; 3]> + Sync + 'a;
+
+#[derive(Debug, Deserialize)]
+struct TruthToml {
+    view_poses: Vec<PoseToml>,
+}
+
+#[derive(Debug, Deserialize)]
+struct PoseToml {
+    view: usize,
+    rotation: [[f64; 3]; 3],
+    translation_mm: [f64; 3],
+}
+
+/// The true homography of every view from `RAW_DIR/truth.toml`.
+pub fn true_homographies(layout: &CaptureLayout) -> Result<Vec<Matrix3<f64>>> {
+    let path = layout.dir.join("truth.toml");
+    let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
+    let file = path.display().to_string();
+    let t: TruthToml =
+        toml::from_str(&text).map_err(|e| Error::invalid(&file, "toml", e.to_string()))?;
+    let n = layout.sampling.len();
+    if t.view_poses.len() != n || t.view_poses.iter().enumerate().any(|(j, p)| p.view != j) {
+        return Err(Error::invalid(&file, "view_poses", format!("expected views 0..{n} in order")));
+    }
+    Ok(t.view_poses
+        .iter()
+        .map(|p| {
+            let r = Matrix3::from_fn(|i, j| p.rotation[i][j]);
+            layout.homography(p.view, &r, &Vector3::from(p.translation_mm))
+        })
+        .collect())
+}
+
+/// One row of the filter table.
+#[derive(Debug, Clone, Serialize)]
+pub struct FilterRow {
+    /// Filter name.
+    pub filter: String,
+    /// `estimated` (the store's registration) or `true` (the truth's poses).
+    pub homography: String,
+    /// Relative RMSE against the truth.
+    pub rel_rmse: f64,
+    /// Resampling time per image (ms), plan building included.
+    pub ms_per_image: f64,
+    /// Mean taps per texel.
+    pub taps_per_texel: f64,
+}
+
+/// The score of a processed store.
+#[derive(Debug, Clone, Serialize)]
+pub struct Score {
+    /// Mean reprojection error, in texels of the store.
+    pub mean_reprojection_px: f64,
+    /// Maximum reprojection error, in texels of the store.
+    pub max_reprojection_px: f64,
+    /// Relative RMSE of the normtextures against the truth.
+    pub rel_rmse: f64,
+    /// Texel side (mm) of the store.
+    pub texel_mm: f64,
+    /// Per view: `[θ, φ, mean, max]` reprojection (texels).
+    pub per_view: Vec<[f64; 4]>,
+    /// Relative RMSE per view ring: `[θ, rel_rmse]`.
+    pub rel_rmse_by_theta: Vec<[f64; 2]>,
+    /// Views registered from the nominal pose.
+    pub fallback_views: Vec<usize>,
+    /// Filter comparison (empty unless asked for).
+    pub filters: Vec<FilterRow>,
+}
+
+/// What `btf capture process` recorded: the grid and the registrations.
+pub fn recorded(store: &BtfStore) -> Result<(Grid, usize, Vec<Registration>)> {
+    let p = &store.meta().provenance;
+    let file = store.path().display().to_string();
+    let bad = || Error::invalid(&file, "provenance", "not written by `btf capture process`");
+    let g = &p["grid"];
+    let origin: [f64; 2] = serde_json::from_value(g["origin_mm"].clone()).map_err(|_| bad())?;
+    let grid = Grid {
+        origin_mm: origin,
+        texel_mm: g["texel_mm"].as_f64().ok_or_else(bad)?,
+        n: g["n"].as_u64().ok_or_else(bad)? as usize,
+    };
+    let regs: Vec<Registration> =
+        serde_json::from_value(p["registration"].clone()).map_err(|_| bad())?;
+    Ok((grid, store.meta().width, regs))
+}
+
+/// Scores `store` against the capture in `layout`'s folder; `filters` lists the filters to
+/// compare (none for the plain score).
+pub fn score(
+    store: &BtfStore,
+    layout: &CaptureLayout,
+    truth: &TruthFn,
+    filters: &[Filter],
+) -> Result<Score> {
+    let (grid, size, regs) = recorded(store)?;
+    let n = layout.sampling.len();
+    if store.meta().n_views() != n || regs.len() != n {
+        return Err(Error::invalid(
+            &store.path().display().to_string(),
+            "sampling",
+            "differs from the capture's",
+        ));
+    }
+    let truths = true_homographies(layout)?;
+    let mut per_view = Vec::with_capacity(n);
+    let (mut sum, mut count, mut max) = (0.0, 0usize, 0f64);
+    for (j, reg) in regs.iter().enumerate() {
+        let errs = reprojection_texels(&reg.matrix(), &truths[j], &grid);
+        let m = errs.iter().sum::<f64>() / errs.len() as f64;
+        let mx = errs.iter().copied().fold(0.0, f64::max);
+        let d = layout.sampling.direction(j);
+        per_view.push([d.theta_deg, d.phi_deg, m, mx]);
+        (sum, count, max) = (sum + errs.iter().sum::<f64>(), count + errs.len(), max.max(mx));
+    }
+    let stored = |j: usize, i: usize| store.read_image(j, i).map_err(Error::from);
+    let (rel_rmse, by_theta) = rel_rmse(layout, &grid, size, truth, &stored)?;
+    let mut rows = Vec::new();
+    for &f in filters {
+        for (which, hs) in [
+            ("estimated", regs.iter().map(|r| r.matrix()).collect::<Vec<_>>()),
+            ("true", truths.clone()),
+        ] {
+            rows.push(filter_row(layout, &grid, size, truth, f, which, &hs)?);
+        }
+    }
+    Ok(Score {
+        mean_reprojection_px: sum / count.max(1) as f64,
+        max_reprojection_px: max,
+        rel_rmse,
+        texel_mm: grid.texel_mm,
+        per_view,
+        rel_rmse_by_theta: by_theta,
+        fallback_views: regs.iter().filter(|r| r.fallback_nominal).map(|r| r.view).collect(),
+        filters: rows,
+    })
+}
+
+/// Reprojection errors (texels) of `h_est` against `h_true` at the texel centres of `grid`.
+pub fn reprojection_texels(h_est: &Matrix3<f64>, h_true: &Matrix3<f64>, grid: &Grid) -> Vec<f64> {
+    let Some(back) = h_est.try_inverse() else { return vec![f64::INFINITY] };
+    let map = back * h_true;
+    let stride = (grid.n / 128).max(1);
+    let mut out = Vec::new();
+    for row in (0..grid.n).step_by(stride) {
+        for col in (0..grid.n).step_by(stride) {
+            let p = grid.centre_mm(col, row);
+            let q = apply(&map, p);
+            out.push(((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)).sqrt() / grid.texel_mm);
+        }
+    }
+    out
+}
+
+type ImageFn<'a> = dyn Fn(usize, usize) -> Result<Vec<f32>> + Sync + 'a;
+
+fn rel_rmse(
+    layout: &CaptureLayout,
+    grid: &Grid,
+    size: usize,
+    truth: &TruthFn,
+    image: &ImageFn,
+) -> Result<(f64, Vec<[f64; 2]>)> {
+    use rayon::prelude::*;
+    let n = layout.sampling.len();
+    let per_view: Vec<(f64, f64)> = (0..n)
+        .into_par_iter()
+        .map(|j| -> Result<(f64, f64)> {
+            let (mut se, mut st) = (0.0, 0.0);
+            for i in 0..n {
+                let t: Vec<f32> =
+                    blend::fold(&truth(j, i, grid), grid.n, size).into_iter().flatten().collect();
+                let v = image(j, i)?;
+                for (a, b) in v.iter().zip(&t) {
+                    se += ((a - b) as f64).powi(2);
+                    st += (*b as f64).powi(2);
+                }
+            }
+            Ok((se, st))
+        })
+        .collect::<Result<_>>()?;
+    let mut rings: Vec<[f64; 3]> = Vec::new();
+    for (j, (se, st)) in per_view.iter().enumerate() {
+        let th = layout.sampling.direction(j).theta_deg;
+        match rings.iter_mut().find(|r| r[0] == th) {
+            Some(r) => (r[1], r[2]) = (r[1] + se, r[2] + st),
+            None => rings.push([th, *se, *st]),
+        }
+    }
+    let (se, st) = per_view.iter().fold((0.0, 0.0), |a, v| (a.0 + v.0, a.1 + v.1));
+    let ratio = |e: f64, t: f64| if t > 0.0 { (e / t).sqrt() } else { 0.0 };
+    Ok((ratio(se, st), rings.iter().map(|r| [r[0], ratio(r[1], r[2])]).collect()))
+}
+
+fn filter_row(
+    layout: &CaptureLayout,
+    grid: &Grid,
+    size: usize,
+    truth: &TruthFn,
+    filter: Filter,
+    which: &str,
+    hs: &[Matrix3<f64>],
+) -> Result<FilterRow> {
+    let n = layout.sampling.len();
+    let (w, h) = (layout.camera.width, layout.camera.height);
+    let seconds = std::sync::Mutex::new((0.0f64, 0.0f64));
+    // One plan per view slot, built when its first light is read and dropped after its
+    // last, as `process` does; its cost is part of the timing.
+    let plans: Vec<std::sync::Mutex<Option<Plan>>> =
+        (0..n).map(|_| std::sync::Mutex::new(None)).collect();
+    let image = |j: usize, i: usize| -> Result<Vec<f32>> {
+        let path = layout.image_path(j, i);
+        let img = raw::read(&path, layout.camera.bits)?;
+        let t0 = Instant::now();
+        let mut slot = plans[j].lock().expect("plan lock");
+        if slot.is_none() {
+            let plan =
+                Plan::new(&hs[j], grid, w, h, filter, super::process::radiometric_gain(layout))
+                    .map_err(|_| {
+                        Error::invalid(&path.display().to_string(), "roi", "outside the image")
+                    })?;
+            seconds.lock().expect("timer lock").1 += plan.taps_per_texel() * n as f64;
+            *slot = Some(plan);
+        }
+        let out = normtexture(slot.as_ref().expect("plan built"), &img, size);
+        if i + 1 == n {
+            *slot = None;
+        }
+        seconds.lock().expect("timer lock").0 += t0.elapsed().as_secs_f64();
+        Ok(out)
+    };
+    let (rel, _) = rel_rmse(layout, grid, size, truth, &image)?;
+    let (secs, taps) = *seconds.lock().expect("timer lock");
+    let images = (n * n) as f64;
+    Ok(FilterRow {
+        filter: filter.name().into(),
+        homography: which.into(),
+        rel_rmse: rel,
+        ms_per_image: 1e3 * secs / images,
+        taps_per_texel: taps / images,
+    })
+}
+
+/// The filter table as Markdown.
+pub fn filter_table_markdown(rows: &[FilterRow]) -> String {
+    let mut s = String::from(
+        "| filter | homography | rel. RMSE | ms / image | taps / texel |\n|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        s += &format!(
+            "| {} | {} | {:.5} | {:.2} | {:.1} |\n",
+            r.filter, r.homography, r.rel_rmse, r.ms_per_image, r.taps_per_texel
+        );
+    }
+    s
+}
+
+/// Checks that `raw_dir` holds a synthetic capture's ground truth.
+pub fn has_truth(raw_dir: &Path) -> bool {
+    raw_dir.join("truth.toml").is_file()
+}

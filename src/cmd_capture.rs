@@ -1,0 +1,236 @@
+//! `btf capture`: raw captures → BTF store (`process`) and its accuracy against a synthetic
+//! capture's ground truth (`score`). Arguments are validated here; the work is in
+//! `btf_capture::capture`.
+
+use anyhow::{Context, Result, bail};
+use btf_capture::capture::rectify::Grid;
+use btf_capture::capture::{self as cap, CaptureLayout, Filter, ProcessOptions, Roi, score};
+use btf_core::store::BtfStore;
+use btf_core::zarr::DType;
+use std::path::PathBuf;
+
+/// `btf capture` subcommands.
+#[derive(clap::Subcommand)]
+pub enum CaptureCmd {
+    /// Register, rectify, crop and blend raw captures into a BTF store.
+    Process(ProcessArgs),
+    /// Score a processed store against the capture's ground truth (synthetic captures).
+    Score(ScoreArgs),
+}
+
+/// Arguments of `btf capture process`.
+#[derive(clap::Args)]
+pub struct ProcessArgs {
+    /// Folder with capture.toml and the raw images.
+    raw_dir: PathBuf,
+    /// Output BTF store.
+    #[arg(short = 'o', long)]
+    output: PathBuf,
+    /// Texels per side of the normtextures.
+    #[arg(long, default_value_t = 256)]
+    size: usize,
+    /// Pixels per side of the rectified frontal frame of the sample (the ROI's units).
+    #[arg(long, default_value_t = 1024)]
+    rectified_size: usize,
+    /// Region of interest x,y,w,h in rectified pixels (square), `auto` (inset so that no
+    /// texel reads past the sample's edge in any view) or `full` (the whole sample).
+    #[arg(long, default_value = "auto")]
+    roi: String,
+    /// Edge-blend width in output texels (default: size/16).
+    #[arg(long)]
+    blend_width: Option<usize>,
+    /// Resampling filter: footprint (box over the texel's footprint) or bilinear.
+    #[arg(long, default_value = "footprint")]
+    filter: String,
+    /// `nominal`: register slots whose markers fail from the nominal pose, with a warning.
+    #[arg(long)]
+    fallback: Option<String>,
+    /// Keep the images of an interrupted run.
+    #[arg(long)]
+    resume: bool,
+    /// Store element type (f16|f32).
+    #[arg(long, default_value = "f32")]
+    dtype: String,
+    /// Print a JSON summary on standard output.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Arguments of `btf capture score`.
+#[derive(clap::Args)]
+pub struct ScoreArgs {
+    /// The processed BTF store.
+    store: PathBuf,
+    /// The raw capture folder with truth.toml.
+    #[arg(long)]
+    truth: PathBuf,
+    /// Also rectify again with every filter and compare error and time.
+    #[arg(long)]
+    compare_filters: bool,
+    /// Write score.json and filters.md into this folder.
+    #[arg(long)]
+    report: Option<PathBuf>,
+}
+
+/// Runs `btf capture`.
+pub fn run(cmd: CaptureCmd) -> Result<()> {
+    match cmd {
+        CaptureCmd::Process(a) => process(a),
+        CaptureCmd::Score(a) => score_cmd(a),
+    }
+}
+
+fn parse_roi(s: &str) -> Result<Roi> {
+    match s {
+        "full" => return Ok(Roi::Full),
+        "auto" => return Ok(Roi::Auto),
+        _ => {}
+    }
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .with_context(|| format!("--roi '{s}': expected x,y,w,h, auto or full"))?;
+    match v[..] {
+        [x, y, w, h] => Ok(Roi::Rect([x, y, w, h])),
+        _ => bail!("--roi '{s}': expected four numbers x,y,w,h"),
+    }
+}
+
+fn process(a: ProcessArgs) -> Result<()> {
+    let filter = Filter::from_name(&a.filter)
+        .with_context(|| format!("--filter '{}' is not footprint or bilinear", a.filter))?;
+    let fallback_nominal = match a.fallback.as_deref() {
+        None => false,
+        Some("nominal") => true,
+        Some(o) => bail!("--fallback '{o}': only 'nominal' is supported"),
+    };
+    let dtype = match a.dtype.as_str() {
+        "f16" => DType::F16,
+        "f32" => DType::F32,
+        o => bail!("--dtype '{o}' is not f16 or f32"),
+    };
+    let opt = ProcessOptions {
+        size: a.size,
+        rectified_size: a.rectified_size,
+        roi: parse_roi(&a.roi)?,
+        blend_width: a.blend_width.unwrap_or(a.size / 16),
+        filter,
+        fallback_nominal,
+        resume: a.resume,
+        dtype,
+        ..ProcessOptions::default()
+    };
+    let layout = CaptureLayout::read(&a.raw_dir)?;
+    let n = layout.sampling.len() as u64;
+    let bar = crate::progress::bar(n * n, "rectify");
+    let t0 = std::time::Instant::now();
+    let rep = cap::process(&a.raw_dir, &a.output, &opt, &|| bar.inc(1))
+        .with_context(|| format!("cannot process {}", a.raw_dir.display()))?;
+    bar.finish_and_clear();
+    let seconds = t0.elapsed().as_secs_f64();
+    for r in rep.registrations.iter().filter(|r| r.fallback_nominal) {
+        eprintln!(
+            "warning: view slot {} registered from the nominal pose: {}",
+            r.view,
+            r.missed.join("; ")
+        );
+    }
+    let worst = rep.registrations.iter().map(|r| r.marker_rms_px).fold(0.0, f64::max);
+    if a.json {
+        let j = serde_json::json!({
+            "images_written": rep.images_written, "images_kept": rep.images_kept, "seconds": seconds,
+            "views": rep.registrations.len(), "fallback_views": rep.registrations.iter().filter(|r| r.fallback_nominal).map(|r| r.view).collect::<Vec<_>>(),
+            "worst_marker_rms_px": worst, "texel_mm": rep.grid.texel_mm,
+        });
+        println!("{j}");
+    } else {
+        println!(
+            "processed {} images ({} kept) of {} view slots into {} ({}², {} filter) in {:.1} s; worst marker RMS {:.3} px",
+            rep.images_written,
+            rep.images_kept,
+            rep.registrations.len(),
+            a.output.display(),
+            a.size,
+            filter.name(),
+            seconds,
+            worst
+        );
+    }
+    Ok(())
+}
+
+/// The truth normtextures of a synthetic capture: its material evaluated orthographically
+/// at the texel centres of a grid, for the nominal view and light directions.
+fn truth_fn(
+    layout: &CaptureLayout,
+) -> Result<impl Fn(usize, usize, &Grid) -> Vec<[f32; 3]> + Sync + '_> {
+    let m = &layout.material;
+    let kind = m["kind"]
+        .as_str()
+        .context("capture.toml has no [material] kind: not a synthetic capture")?;
+    let mut spec = datasets::MaterialSpec::new(
+        datasets::MaterialKind::from_name(kind)?,
+        m["size"].as_u64().context("material size")? as usize,
+    );
+    spec.seed = m["seed"].as_u64().unwrap_or(1);
+    if let Some(a) =
+        m.get("albedo").and_then(|a| serde_json::from_value::<[f64; 3]>(a.clone()).ok())
+    {
+        spec.albedo = Some(a);
+    }
+    let material = datasets::Material::build(&spec)?;
+    let (s_mm, n_mat) = (layout.plate.sample_mm, spec.size as f64);
+    Ok(move |view: usize, light: usize, g: &Grid| {
+        let v = layout.sampling.direction(view).to_vector();
+        let l = layout.sampling.direction(light).to_vector();
+        (0..g.n * g.n)
+            .map(|k| {
+                let p = g.centre_mm(k % g.n, k / g.n);
+                let (px, py) =
+                    ((p[0] + s_mm / 2.0) / s_mm * n_mat, (p[1] + s_mm / 2.0) / s_mm * n_mat);
+                material.eval_at(px, py, v, l).map(|x| x as f32)
+            })
+            .collect()
+    })
+}
+
+fn score_cmd(a: ScoreArgs) -> Result<()> {
+    let store =
+        BtfStore::open(&a.store).with_context(|| format!("cannot open {}", a.store.display()))?;
+    let layout = CaptureLayout::read(&a.truth)?;
+    let truth = truth_fn(&layout)?;
+    if let Ok(dbg) = std::env::var("BTF_DEBUG_DUMP") {
+        let (grid, size, _) = score::recorded(&store)?;
+        let t: Vec<f32> = btf_capture::capture::blend::fold(&truth(0, 0, &grid), grid.n, size)
+            .into_iter()
+            .flatten()
+            .collect();
+        let e = store.read_image(0, 0)?;
+        let bytes = |v: &[f32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+        std::fs::write(format!("{dbg}.truth.f32"), bytes(&t))?;
+        std::fs::write(format!("{dbg}.est.f32"), bytes(&e))?;
+    }
+    let filters: &[Filter] =
+        if a.compare_filters { &[Filter::Bilinear, Filter::Footprint] } else { &[] };
+    let s = score::score(&store, &layout, &truth, filters).with_context(|| {
+        format!("cannot score {} against {}", a.store.display(), a.truth.display())
+    })?;
+    let json = serde_json::to_string_pretty(&s)?;
+    if let Some(dir) = &a.report {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        std::fs::write(dir.join("score.json"), &json)?;
+        let md = format!(
+            "# Capture score: {}\n\nmean reprojection {:.4} texel, max {:.4} texel (texel = {:.4} mm); rel. RMSE {:.5}\n\n{}",
+            a.store.display(),
+            s.mean_reprojection_px,
+            s.max_reprojection_px,
+            s.texel_mm,
+            s.rel_rmse,
+            score::filter_table_markdown(&s.filters)
+        );
+        std::fs::write(dir.join("filters.md"), md)?;
+    }
+    println!("{json}");
+    Ok(())
+}
