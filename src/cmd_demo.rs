@@ -112,6 +112,9 @@ pub fn run(a: DemoArgs) -> Result<()> {
     let renders = crate::demo_scene::run(&a.out, a.width, &mut |name, done, f| {
         stage(&mut stages, name, done, f)
     })?;
+    let cost = crate::render_sweep::demo_section(&a.out, a.components, &mut |name, done, f| {
+        stage(&mut stages, name, done, f)
+    })?;
 
     let m = btf.meta();
     writeln!(report, "# btf demo\n")?;
@@ -133,6 +136,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
         "What accuracy costs: [sweep/report.md](sweep/report.md)\n\n![error](sweep/error.png)\n"
     )?;
     report.push_str(&renders);
+    report.push_str(&cost);
     writeln!(report, "\n## Stages\n\n| stage | seconds | |\n|---|---:|---|")?;
     for s in &stages {
         writeln!(

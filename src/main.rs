@@ -13,6 +13,7 @@ mod imageio;
 mod plot;
 mod progress;
 mod render_cmd;
+mod render_sweep;
 mod sweep;
 mod synth_cmd;
 
@@ -50,6 +51,8 @@ enum Command {
     Export(cmd_export::ExportArgs),
     /// Render a scene (TOML) on the GPU.
     Render(render_cmd::RenderArgs),
+    /// Time the renderer against plain texturing and its read bound over components × modes.
+    RenderSweep(render_sweep::RenderSweepArgs),
 }
 
 fn main() -> ExitCode {
@@ -64,6 +67,7 @@ fn main() -> ExitCode {
         Command::Export(a) => cmd_export::run(a),
         Command::Synth(c) => synth_cmd::run(c),
         Command::Render(a) => render_cmd::run(a),
+        Command::RenderSweep(a) => render_sweep::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,10 +1,10 @@
 //! `btf render SCENE.toml -o out.png [--exr out.exr] [--width W --height H] [--stats]
-//! [--stats-json]`: renders a scene (TOML, see `examples/scenes/`) headless on the GPU
+//! [--stats-json] [--baseline plain|read-bound]`: renders a scene (TOML, see `examples/scenes/`) headless on the GPU
 //! (lavapipe without one) and writes an sRGB PNG (exposure from the scene) and optionally a
 //! linear EXR.
 
 use anyhow::{Context, Result, bail};
-use btf_render::{Gpu, RenderOptions, Renderer, Scene, Stats};
+use btf_render::{Baseline, Gpu, RenderOptions, Renderer, Scene, Stats};
 use std::path::PathBuf;
 
 /// Arguments of `btf render`.
@@ -36,6 +36,10 @@ pub struct RenderArgs {
     /// Count texture reads per pixel in the BTF pass (adds atomics; for measurements).
     #[arg(long)]
     pub count_reads: bool,
+    /// Draw a cost baseline instead of the BTF: `plain` (mean texture of slot 0) or
+    /// `read-bound` (the BTF pass's reads per pixel, counted first, merely summed).
+    #[arg(long, value_parser = ["plain", "read-bound"])]
+    pub baseline: Option<String>,
 }
 
 /// Runs `btf render`.
@@ -57,7 +61,20 @@ pub fn run(args: RenderArgs) -> Result<()> {
         );
     }
     let gpu = Gpu::new().context("creating a headless GPU device")?;
-    let renderer = Renderer::new(&gpu, &scene, RenderOptions { count_reads: args.count_reads })
+    let baseline = match args.baseline.as_deref() {
+        None => None,
+        Some("plain") => Some(Baseline::Plain),
+        Some(_) => {
+            let counting = RenderOptions { count_reads: true, ..Default::default() };
+            let counted = Renderer::new(&gpu, &scene, counting)
+                .with_context(|| format!("preparing {}", args.scene.display()))?
+                .render(&gpu)?;
+            let reads_per_pixel = counted.stats.reads_per_pixel.unwrap_or(0.0);
+            Some(Baseline::ReadBound { reads_per_pixel })
+        }
+    };
+    let options = RenderOptions { count_reads: args.count_reads, baseline };
+    let renderer = Renderer::new(&gpu, &scene, options)
         .with_context(|| format!("preparing {}", args.scene.display()))?;
     let mut frame = renderer.render(&gpu)?;
     for _ in 1..args.repeat {

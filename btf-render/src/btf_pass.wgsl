@@ -21,9 +21,11 @@ override COUNT_READS: bool = false;
 struct LightRaw {
     // xyz: position (w = 1, point) or direction towards the light (w = 0, directional)
     pos: vec4<f32>,
-    // rgb: intensity or irradiance; w: 0 unshadowed, 1 shadow-volume mask, 2 shadow map
+    // rgb: intensity or irradiance; w: 0 unshadowed, 1 shadow-volume mask, 2 shadow map,
+    // 3 cube shadow map (point light inside the scene; view_proj = the faces' projection)
     color: vec4<f32>,
-    // x: mask / map layer, y: shadow-map texel size, z: depth bias
+    // x: mask / map layer (cube: face +x), y: shadow-map texel size, z: depth bias (cube:
+    // fraction of the light distance)
     shadow: vec4<f32>,
     view_proj: mat4x4<f32>,
 }
@@ -118,14 +120,55 @@ fn shadow_map_visibility(L: LightRaw, world: vec3<f32>) -> f32 {
     if (c.w <= 0.0 || any(uv < vec2<f32>(0.0)) || any(uv > vec2<f32>(1.0)) || ndc.z > 1.0) {
         return 1.0;
     }
+    return pcf(uv, i32(L.shadow.x), ndc.z - L.shadow.z, L.shadow.y);
+}
+
+fn pcf(uv: vec2<f32>, layer: i32, depth: f32, texel: f32) -> f32 {
     var sum = 0.0;
     for (var dy = -1; dy <= 1; dy = dy + 1) {
         for (var dx = -1; dx <= 1; dx = dx + 1) {
-            let o = vec2<f32>(f32(dx), f32(dy)) * L.shadow.y;
-            sum = sum + textureSampleCompareLevel(shadow_maps, shadow_cmp, uv + o, i32(L.shadow.x), ndc.z - L.shadow.z);
+            let o = vec2<f32>(f32(dx), f32(dy)) * texel;
+            sum = sum + textureSampleCompareLevel(shadow_maps, shadow_cmp, uv + o, layer, depth);
         }
     }
     return sum / 9.0;
+}
+
+// Cube faces in layer order +x, −x, +y, −y, +z, −z (mirrors shadow_cube.rs).
+fn cube_face(d: vec3<f32>) -> u32 {
+    let a = abs(d);
+    if (a.x >= a.y && a.x >= a.z) {
+        return select(1u, 0u, d.x >= 0.0);
+    }
+    if (a.y >= a.z) {
+        return select(3u, 2u, d.y >= 0.0);
+    }
+    return select(5u, 4u, d.z >= 0.0);
+}
+
+fn cube_map_visibility(L: LightRaw, world: vec3<f32>) -> f32 {
+    let to_world = world - L.pos.xyz;
+    let face = cube_face(to_world);
+    let s = select(-1.0, 1.0, face % 2u == 0u);
+    var axis = vec3<f32>(0.0, 0.0, s);
+    var up = vec3<f32>(0.0, 1.0, 0.0);
+    if (face < 2u) {
+        axis = vec3<f32>(s, 0.0, 0.0);
+    } else if (face < 4u) {
+        axis = vec3<f32>(0.0, s, 0.0);
+        up = vec3<f32>(0.0, 0.0, 1.0);
+    }
+    // the face's look-at frame (as math::look_at), receiver moved towards the light by the bias
+    let right = normalize(cross(axis, up));
+    let up2 = cross(right, axis);
+    let d = to_world * (1.0 - L.shadow.z);
+    let c = L.view_proj * vec4<f32>(dot(d, right), dot(d, up2), -dot(d, axis), 1.0);
+    if (c.w <= 0.0) {
+        return 1.0;
+    }
+    let ndc = c.xyz / c.w;
+    let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+    return pcf(uv, i32(L.shadow.x) + i32(face), ndc.z, L.shadow.y);
 }
 
 // Visibility of light l at a fragment: smooth boundary (eq. 6) times volume mask or map.
@@ -144,8 +187,10 @@ fn visibility(l: u32, in: VertexOut, back: bool) -> f32 {
     }
     if (L.color.w < 1.5) {
         s = s * textureLoad(shadow_masks, vec2<i32>(in.clip.xy), i32(L.shadow.x), 0).r;
-    } else {
+    } else if (L.color.w < 2.5) {
         s = s * shadow_map_visibility(L, in.world);
+    } else {
+        s = s * cube_map_visibility(L, in.world);
     }
     return s;
 }
@@ -191,6 +236,9 @@ var<private> lw: array<W4, 4>;
 var<private> le: array<vec3<f32>, 4>;
 var<private> n_active: u32;
 var<private> reads: u32;
+// uv derivatives, taken at the entry points (uniform control flow) for mip selection
+var<private> duv_dx: vec2<f32>;
+var<private> duv_dy: vec2<f32>;
 
 fn gather_lights(in: VertexOut, f: Frame3) {
     n_active = 0u;
@@ -231,7 +279,7 @@ fn slot_pixel(j: u32, uv: vec2<f32>) -> vec3<f32> {
             bias = bias + tau * weights[(j * n_l + lw[a].idx[k]) * (g_count + 1u) + g_count].x * le[a];
         }
     }
-    var col = mc * textureSampleLevel(mean_tex, tex_sampler, uv, j, 0.0).rgb + bias;
+    var col = mc * textureSampleGrad(mean_tex, tex_sampler, uv, j, duv_dx, duv_dy).rgb + bias;
     var acc_a = vec4<f32>(0.0);
     var acc_b = vec4<f32>(0.0);
     var acc_c = vec4<f32>(0.0);
@@ -250,9 +298,9 @@ fn slot_pixel(j: u32, uv: vec2<f32>) -> vec3<f32> {
             cc = cc + vec4<f32>(gam.z * e.b, gam.w * e);
         }
         let layer = j * 3u * g_count + 3u * g;
-        acc_a = acc_a + ca * textureSampleLevel(eigen_tex, tex_sampler, uv, layer, 0.0);
-        acc_b = acc_b + cb * textureSampleLevel(eigen_tex, tex_sampler, uv, layer + 1u, 0.0);
-        acc_c = acc_c + cc * textureSampleLevel(eigen_tex, tex_sampler, uv, layer + 2u, 0.0);
+        acc_a = acc_a + ca * textureSampleGrad(eigen_tex, tex_sampler, uv, layer, duv_dx, duv_dy);
+        acc_b = acc_b + cb * textureSampleGrad(eigen_tex, tex_sampler, uv, layer + 1u, duv_dx, duv_dy);
+        acc_c = acc_c + cc * textureSampleGrad(eigen_tex, tex_sampler, uv, layer + 2u, duv_dx, duv_dy);
     }
     reads = reads + 1u + 3u * g_count;
     return col + combine(acc_a, acc_b, acc_c);
@@ -270,6 +318,8 @@ fn fs_pixel(in: VertexOut) -> @location(0) vec4<f32> {
     let v = to_camera(in.world);
     let f = tangent_frame(in, v);
     let uv = tex_uv(in.uv);
+    duv_dx = dpdx(uv);
+    duv_dy = dpdy(uv);
     reads = 0u;
     gather_lights(in, f);
     var rgb = vec3<f32>(0.0);
@@ -300,6 +350,8 @@ fn fs_vertex(in: VertexOut) -> @location(0) vec4<f32> {
     let v = to_camera(in.world);
     let f = tangent_frame(in, v);
     let uv = tex_uv(in.uv);
+    duv_dx = dpdx(uv);
+    duv_dy = dpdy(uv);
     let n_lights = frame.info.x;
     for (var l = 0u; l < n_lights; l = l + 1u) {
         vis[l] = visibility(l, in, f.back);
@@ -335,7 +387,7 @@ fn fs_vertex(in: VertexOut) -> @location(0) vec4<f32> {
                 bias = bias + s * vertex_coef[base + 1u].rgb;
             }
         }
-        var col = mc * textureSampleLevel(mean_tex, tex_sampler, uv, j, 0.0).rgb + bias;
+        var col = mc * textureSampleGrad(mean_tex, tex_sampler, uv, j, duv_dx, duv_dy).rgb + bias;
         var acc_a = vec4<f32>(0.0);
         var acc_b = vec4<f32>(0.0);
         var acc_c = vec4<f32>(0.0);
@@ -356,9 +408,9 @@ fn fs_vertex(in: VertexOut) -> @location(0) vec4<f32> {
                 }
             }
             let layer = j * 3u * g_count + 3u * g;
-            acc_a = acc_a + ca * textureSampleLevel(eigen_tex, tex_sampler, uv, layer, 0.0);
-            acc_b = acc_b + cb * textureSampleLevel(eigen_tex, tex_sampler, uv, layer + 1u, 0.0);
-            acc_c = acc_c + cc * textureSampleLevel(eigen_tex, tex_sampler, uv, layer + 2u, 0.0);
+            acc_a = acc_a + ca * textureSampleGrad(eigen_tex, tex_sampler, uv, layer, duv_dx, duv_dy);
+            acc_b = acc_b + cb * textureSampleGrad(eigen_tex, tex_sampler, uv, layer + 1u, duv_dx, duv_dy);
+            acc_c = acc_c + cc * textureSampleGrad(eigen_tex, tex_sampler, uv, layer + 2u, duv_dx, duv_dy);
         }
         reads = reads + 1u + 3u * g_count;
         rgb = rgb + col + combine(acc_a, acc_b, acc_c);

@@ -13,9 +13,13 @@
 //! - [`btf_pass`], [`interp`], [`per_vertex`]: the reconstruction shader, its interpolation
 //!   weights, and the paper's per-vertex coefficients;
 //! - [`terminator`], [`shadow`], [`shadow_volume`], [`shadow_map`]: eq. 6 and shadows;
-//! - [`renderer`], [`frame`], [`timer`]: pass selection, output images, `--stats`.
+//! - [`renderer`], [`frame`], [`timer`]: pass selection, output images, `--stats`;
+//! - [`mips`]: mip chains of the PCA textures (exact for the linear reconstruction);
+//! - [`plain_texture`], [`read_bound`], [`cost_sweep`]: the cost baselines and the sweep of
+//!   components × evaluation × blending against them.
 
 pub mod btf_pass;
+pub mod cost_sweep;
 pub mod envlight;
 pub mod error;
 pub mod frame;
@@ -24,10 +28,14 @@ pub mod interp;
 pub mod material;
 pub mod math;
 pub mod mesh;
+pub mod mips;
 pub mod per_vertex;
+pub mod plain_texture;
+pub mod read_bound;
 pub mod renderer;
 pub mod scene;
 pub mod shadow;
+pub mod shadow_cube;
 pub mod shadow_map;
 pub mod shadow_volume;
 pub mod tangent;
@@ -37,5 +45,6 @@ pub mod timer;
 pub use error::{Error, Result};
 pub use frame::{Frame, PassStat, Stats};
 pub use gpu::Gpu;
+pub use plain_texture::Baseline;
 pub use renderer::{RenderOptions, Renderer, render_scene};
 pub use scene::Scene;

@@ -221,8 +221,18 @@ pub struct MaterialGpu {
 }
 
 impl MaterialGpu {
-    /// Uploads `data`, checking the device's texture limits first.
+    /// Uploads `data` with full mip chains (`mips.rs`), checking the device's limits first.
     pub fn upload(gpu: &crate::Gpu, data: &MaterialData, name: &str) -> Result<MaterialGpu> {
+        Self::upload_with(gpu, data, name, true)
+    }
+
+    /// Uploads `data`, with mip chains or the base level only.
+    pub fn upload_with(
+        gpu: &crate::Gpu,
+        data: &MaterialData,
+        name: &str,
+        mipmaps: bool,
+    ) -> Result<MaterialGpu> {
         use wgpu::util::DeviceExt;
         let limits = gpu.device.limits();
         let n_v = data.view_sampling.len() as u32;
@@ -242,6 +252,29 @@ impl MaterialGpu {
             Quantization::F16 => wgpu::TextureFormat::Rgba16Float,
             Quantization::U8 => wgpu::TextureFormat::Rgba8Unorm,
         };
+        let levels = if mipmaps { crate::mips::level_count(data.width, data.height) } else { 1 };
+        let (w, h) = (data.width as usize, data.height as usize);
+        use std::borrow::Cow;
+        let mean_layers: Cow<[f16]> = if levels > 1 {
+            Cow::Owned(crate::mips::chain_f16(&data.mean_layers, w, h, n_v as usize))
+        } else {
+            Cow::Borrowed(&data.mean_layers)
+        };
+        let eigen_layers: Cow<[u8]> = match (levels > 1, data.quantization) {
+            (false, _) => Cow::Borrowed(&data.eigen_layers),
+            (true, Quantization::U8) => {
+                Cow::Owned(crate::mips::chain_u8(&data.eigen_layers, w, h, layers as usize))
+            }
+            (true, Quantization::F16) => {
+                let halves: Vec<f16> = data
+                    .eigen_layers
+                    .chunks_exact(2)
+                    .map(|b| f16::from_le_bytes([b[0], b[1]]))
+                    .collect();
+                let chain = crate::mips::chain_f16(&halves, w, h, layers as usize);
+                Cow::Owned(chain.iter().flat_map(|v| v.to_le_bytes()).collect())
+            }
+        };
         let tex = |label: &str, format, layers: u32, bytes: &[u8]| {
             gpu.device.create_texture_with_data(
                 &gpu.queue,
@@ -252,7 +285,7 @@ impl MaterialGpu {
                         height: data.height,
                         depth_or_array_layers: layers,
                     },
-                    mip_level_count: 1,
+                    mip_level_count: levels,
                     sample_count: 1,
                     dimension: wgpu::TextureDimension::D2,
                     format,
@@ -264,21 +297,20 @@ impl MaterialGpu {
             )
         };
         gpu.scoped(&format!("uploading material {name}"), || {
-            let eigen = tex("eigentextures", format, layers, &data.eigen_layers);
+            let eigen = tex("eigentextures", format, layers, &eigen_layers);
             let mean = tex(
                 "means",
                 wgpu::TextureFormat::Rgba16Float,
                 n_v,
-                bytemuck::cast_slice(&data.mean_layers),
+                bytemuck::cast_slice(&mean_layers),
             );
             let weights = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("weights"),
                 contents: bytemuck::cast_slice(&data.weights),
                 usage: wgpu::BufferUsages::STORAGE,
             });
-            let bytes = (data.eigen_layers.len()
-                + data.mean_layers.len() * 2
-                + data.weights.len() * 16) as u64;
+            let bytes =
+                (eigen_layers.len() + mean_layers.len() * 2 + data.weights.len() * 16) as u64;
             MaterialGpu { eigen, mean, weights, bytes }
         })
     }

@@ -13,6 +13,7 @@ use crate::material::{MaterialData, MaterialGpu};
 use crate::math::{self, Mat4, Vec3, v3};
 use crate::mesh::Mesh;
 use crate::per_vertex::{self, VertexEvalInput, VertexLight};
+use crate::plain_texture::{Baseline, BaselinePass};
 use crate::scene::{Evaluation, Light, Projection, Scene, Shadows};
 use crate::shadow::{ShadowInputs, Shadowing};
 use crate::timer::PassTimer;
@@ -26,6 +27,8 @@ use wgpu::util::DeviceExt;
 pub struct RenderOptions {
     /// Count texture reads per pixel in the BTF pass (atomics; slows the pass).
     pub count_reads: bool,
+    /// Draw a cost baseline instead of the BTF shader (same mesh, targets and textures).
+    pub baseline: Option<Baseline>,
 }
 
 struct LoadedMaterial {
@@ -61,6 +64,7 @@ pub struct Renderer {
     draws: Vec<Draw>,
     materials: Vec<LoadedMaterial>,
     btf: BtfPass,
+    baseline: Option<BaselinePass>,
     frame_uniform: wgpu::Buffer,
     frame_group: wgpu::BindGroup,
     counters: wgpu::Buffer,
@@ -166,13 +170,20 @@ impl Renderer {
             address_mode_v: wgpu::AddressMode::Repeat,
             mag_filter: wgpu::FilterMode::Linear,
             min_filter: wgpu::FilterMode::Linear,
+            mipmap_filter: wgpu::MipmapFilterMode::Linear,
+            anisotropy_clamp: if fx.mipmaps { fx.anisotropy } else { 1 },
             ..Default::default()
         });
         let mut materials = Vec::new();
         let mut material_bytes = 0;
         for (k, data) in datas.into_iter().enumerate() {
             let desc = &scene.materials[used[k]];
-            let gpu_mat = MaterialGpu::upload(gpu, &data, &desc.store.display().to_string())?;
+            let gpu_mat = MaterialGpu::upload_with(
+                gpu,
+                &data,
+                &desc.store.display().to_string(),
+                fx.mipmaps,
+            )?;
             material_bytes += gpu_mat.bytes;
             let samplings = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("samplings"),
@@ -213,6 +224,15 @@ impl Renderer {
             contents: bytemuck::cast_slice(&corners),
             usage: wgpu::BufferUsages::VERTEX,
         });
+        let baseline = match options.baseline {
+            None => None,
+            Some(Baseline::Plain) => Some(crate::plain_texture::build(gpu, &btf)?),
+            Some(Baseline::ReadBound { reads_per_pixel }) => {
+                let m = &materials[0].data;
+                let views = m.view_sampling.len();
+                Some(crate::read_bound::build(gpu, &btf, reads_per_pixel, m.groups, views)?)
+            }
+        };
         let shadowing =
             if scene.wants_shadow_pass() { Some(Shadowing::new(gpu, scene, &mesh)?) } else { None };
         let extra_depth = shadowing.as_ref().map_or(0.0, |s| s.extra_camera_depth());
@@ -251,6 +271,7 @@ impl Renderer {
             draws,
             materials,
             btf,
+            baseline,
             frame_uniform,
             frame_group,
             counters,
@@ -271,6 +292,11 @@ impl Renderer {
         &self.camera
     }
 
+    /// Components the materials use (the smallest over materials).
+    pub fn components(&self) -> usize {
+        self.materials.iter().map(|m| m.data.components).min().unwrap_or(0)
+    }
+
     fn frame_raw(&self) -> FrameRaw {
         let fx = &self.scene.effects;
         let mut raw = FrameRaw {
@@ -278,7 +304,7 @@ impl Renderer {
             eye: [self.camera.eye.x, self.camera.eye.y, self.camera.eye.z, 1.0],
             info: [
                 self.scene.lights.len() as u32,
-                self.shadowing.is_some() as u32,
+                (self.shadowing.is_some() && fx.smooth_boundary) as u32,
                 self.materials.iter().map(|m| m.data.groups).max().unwrap_or(1) as u32,
                 0,
             ],
@@ -343,14 +369,15 @@ impl Renderer {
         let mut timer = PassTimer::new(gpu, 16);
         gpu.queue.write_buffer(&self.frame_uniform, 0, bytemuck::bytes_of(&self.frame_raw()));
         gpu.queue.write_buffer(&self.counters, 0, &[0u8; 16]);
-        let per_vertex_group = if self.scene.effects.evaluation == Evaluation::PerVertex {
-            let t = Instant::now();
-            let group = self.per_vertex_bind_group(gpu)?;
-            timer.cpu("per-vertex coefficients (cpu)", t.elapsed().as_secs_f64() * 1e3);
-            Some(group)
-        } else {
-            None
-        };
+        let per_vertex_group =
+            if self.scene.effects.evaluation == Evaluation::PerVertex && self.baseline.is_none() {
+                let t = Instant::now();
+                let group = self.per_vertex_bind_group(gpu)?;
+                timer.cpu("per-vertex coefficients (cpu)", t.elapsed().as_secs_f64() * 1e3);
+                Some(group)
+            } else {
+                None
+            };
         if let Some(s) = &self.shadowing {
             s.encode(
                 gpu,
@@ -380,9 +407,10 @@ impl Renderer {
         let ms_view = color_ms.as_ref().map(|t| t.create_view(&Default::default()));
         let depth_view = depth.create_view(&Default::default());
         let bg = self.scene.output.background;
-        let name = match self.scene.effects.evaluation {
-            Evaluation::PerPixel => "btf (per-pixel)",
-            Evaluation::PerVertex => "btf (per-vertex)",
+        let name = match (&self.baseline, self.scene.effects.evaluation) {
+            (Some(b), _) => b.name.as_str(),
+            (None, Evaluation::PerPixel) => "btf (per-pixel)",
+            (None, Evaluation::PerVertex) => "btf (per-vertex)",
         };
         gpu.scoped("BTF pass", || {
             timer.pass(name, |enc, ts| {
@@ -414,10 +442,15 @@ impl Renderer {
                     occlusion_query_set: None,
                     multiview_mask: None,
                 });
-                pass.set_pipeline(&self.btf.pipeline);
+                pass.set_pipeline(
+                    self.baseline.as_ref().map_or(&self.btf.pipeline, |b| &b.pipeline),
+                );
                 pass.set_bind_group(0, &self.frame_group, &[]);
                 if let Some(g) = &per_vertex_group {
                     pass.set_bind_group(2, &g.2, &[]);
+                }
+                if let Some(g) = self.baseline.as_ref().and_then(|b| b.group.as_ref()) {
+                    pass.set_bind_group(2, g, &[]);
                 }
                 pass.set_vertex_buffer(0, self.corners.slice(..));
                 for d in &self.draws {

@@ -211,6 +211,12 @@ pub struct Effects {
     pub shadow_map_size: u32,
     /// Samples per pixel (1 or 4).
     pub msaa: u32,
+    /// The smooth shadow boundary of eq. 6 (off: shadow volume / map alone, for comparison).
+    pub smooth_boundary: bool,
+    /// Mip-mapped eigentextures and means, trilinear + anisotropic (off: base level only).
+    pub mipmaps: bool,
+    /// Anisotropic filtering with mipmaps, most samples (1 = trilinear, up to 16).
+    pub anisotropy: u16,
 }
 
 impl Default for Effects {
@@ -225,6 +231,9 @@ impl Default for Effects {
             terminator_blur: 0,
             shadow_map_size: 1024,
             msaa: 1,
+            smooth_boundary: true,
+            mipmaps: true,
+            anisotropy: 1,
         }
     }
 }
@@ -318,6 +327,9 @@ impl Scene {
         }
         if !(16..=8192).contains(&e.shadow_map_size) {
             return bad("effects.shadow_map_size".into(), "must be in 16..=8192");
+        }
+        if !(1..=16).contains(&e.anisotropy) {
+            return bad("effects.anisotropy".into(), "must be in 1..=16");
         }
         if e.msaa != 1 && e.msaa != 4 {
             return bad("effects.msaa".into(), "must be 1 or 4");

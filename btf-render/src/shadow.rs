@@ -139,9 +139,15 @@ impl Shadowing {
         let Some(layer) = self.layer_of.get(l).copied().flatten() else { return };
         raw.shadow[0] = layer as f32;
         if let Shadowing_::Map(m) = &self.kind {
+            let ml = &m.lights[layer];
+            raw.shadow[0] = ml.base_layer as f32;
             raw.shadow[1] = m.texel();
             raw.shadow[2] = shadow_map::DEPTH_BIAS;
-            raw.view_proj = math::to_cols(&m.matrices[layer]);
+            raw.view_proj = math::to_cols(&ml.matrix);
+            if ml.cube {
+                raw.color[3] = 3.0; // cube map: six layers from base_layer
+                raw.shadow[2] = crate::shadow_cube::relative_bias(m.size());
+            }
         }
     }
 

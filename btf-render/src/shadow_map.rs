@@ -3,11 +3,12 @@
 //! orthographic around the scene's bounding sphere for a directional light, a perspective
 //! frustum just enclosing the sphere for a point light. Cloth is two-sided, so nothing is
 //! culled. The BTF pass compares with a small depth bias and 3×3 PCF; the smooth boundary
-//! of eq. 6 hides the acne at grazing angles as it hides the volume's zig-zag.
+//! of eq. 6 hides the acne at grazing angles as it hides the volume's zig-zag. A point light
+//! inside the scene's bounding sphere gets a cube map instead (`shadow_cube.rs`, six layers).
 
-use crate::Gpu;
 use crate::math::{self, Mat4, Vec3};
 use crate::scene::Light;
+use crate::{Gpu, shadow_cube};
 use wgpu::util::DeviceExt;
 
 /// WGSL of the pass.
@@ -17,12 +18,25 @@ pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// Bias subtracted from the receiver's depth (normalised depth units).
 pub const DEPTH_BIAS: f32 = 0.002;
 
+/// How one shadowing light's depth is stored.
+#[derive(Debug, Clone, Copy)]
+pub struct MapLight {
+    /// First layer (the only one, or face +x of a cube).
+    pub base_layer: u32,
+    /// World → light clip (single map), or the faces' shared projection (cube).
+    pub matrix: Mat4,
+    /// Six cube faces (a point light inside the scene's bounding sphere).
+    pub cube: bool,
+}
+
 /// The maps of all shadowing lights.
 pub struct ShadowMaps {
-    /// One layer per shadowing light.
+    /// One layer per directional or outside point light, six per inside point light.
     pub texture: wgpu::Texture,
-    /// World → light clip per layer.
+    /// World → light clip per layer (what each layer is rendered with).
     pub matrices: Vec<Mat4>,
+    /// Per shadowing light, in order.
+    pub lights: Vec<MapLight>,
     size: u32,
     pipeline: wgpu::RenderPipeline,
     groups: Vec<wgpu::BindGroup>,
@@ -58,11 +72,41 @@ pub fn light_matrix(light: &Light, center: Vec3, radius: f32) -> Mat4 {
     }
 }
 
+/// Whether a point light at `q` sits inside the scene sphere and so gets a cube map.
+pub fn needs_cube(light: &Light, center: Vec3, radius: f32) -> bool {
+    match light {
+        Light::Point { position, .. } => (math::v3(*position) - center).norm() <= 1.05 * radius,
+        Light::Directional { .. } => false,
+    }
+}
+
+/// Layer matrices of all maps, and where each light's layers are.
+fn layer_matrices(lights: &[&Light], center: Vec3, radius: f32) -> (Vec<Mat4>, Vec<MapLight>) {
+    let mut matrices = Vec::new();
+    let mut out = Vec::new();
+    for l in lights {
+        let base_layer = matrices.len() as u32;
+        if let (true, Light::Point { position, .. }) = (needs_cube(l, center, radius), l) {
+            let q = math::v3(*position);
+            let (near, far) = shadow_cube::near_far((q - center).norm(), radius);
+            let proj = shadow_cube::projection(near, far);
+            matrices.extend((0..shadow_cube::FACES).map(|f| proj * shadow_cube::face_view(q, f)));
+            out.push(MapLight { base_layer, matrix: proj, cube: true });
+        } else {
+            let m = light_matrix(l, center, radius);
+            matrices.push(m);
+            out.push(MapLight { base_layer, matrix: m, cube: false });
+        }
+    }
+    (matrices, out)
+}
+
 impl ShadowMaps {
     /// Builds the maps for `lights` (the shadowing ones, in layer order).
     pub fn new(gpu: &Gpu, lights: &[&Light], center: Vec3, radius: f32, size: u32) -> ShadowMaps {
         let dev = &gpu.device;
-        let layers = lights.len().max(1) as u32;
+        let (matrices, map_lights) = layer_matrices(lights, center, radius);
+        let layers = matrices.len().max(1) as u32;
         let texture = dev.create_texture(&wgpu::TextureDescriptor {
             label: Some("shadow maps"),
             size: wgpu::Extent3d { width: size, height: size, depth_or_array_layers: layers },
@@ -105,7 +149,6 @@ impl ShadowMaps {
             multiview_mask: None,
             cache: None,
         });
-        let matrices: Vec<Mat4> = lights.iter().map(|l| light_matrix(l, center, radius)).collect();
         let groups = matrices
             .iter()
             .map(|m| {
@@ -124,12 +167,17 @@ impl ShadowMaps {
                 })
             })
             .collect();
-        ShadowMaps { texture, matrices, size, pipeline, groups }
+        ShadowMaps { texture, matrices, lights: map_lights, size, pipeline, groups }
     }
 
     /// Texel size in texture coordinates (PCF step).
     pub fn texel(&self) -> f32 {
         1.0 / self.size as f32
+    }
+
+    /// Texels per side of each layer.
+    pub fn size(&self) -> u32 {
+        self.size
     }
 
     /// Renders every layer.

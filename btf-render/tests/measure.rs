@@ -56,10 +56,11 @@ fn frame_time_ratios() {
                 passes = f.stats.passes.iter().map(|p| format!("{} {:.1}", p.name, p.ms)).collect();
             }
         }
-        let counted = Renderer::new(&gpu, &scene, RenderOptions { count_reads: true })
-            .unwrap()
-            .render(&gpu)
-            .unwrap();
+        let counted =
+            Renderer::new(&gpu, &scene, RenderOptions { count_reads: true, ..Default::default() })
+                .unwrap()
+                .render(&gpu)
+                .unwrap();
         eprintln!(
             "{:<58} frame {best:>8.1} ms  reads/px {:>5.1}  [{}]",
             effects.replace('\n', "; "),

@@ -46,7 +46,7 @@ fn only_requested_work_is_done() {
         let f = render_scene(
             &gpu,
             &scene(dir.path(), "plane.obj", effects, SUN, eye),
-            RenderOptions { count_reads: true },
+            RenderOptions { count_reads: true, ..Default::default() },
         )
         .unwrap();
         let names: Vec<String> = f.stats.passes.iter().map(|p| p.name.clone()).collect();

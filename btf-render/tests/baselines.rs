@@ -1,0 +1,156 @@
+//! The cost baselines and the sweep built on them: plain texture mapping reads slot 0's
+//! mean; the read bound makes exactly the reads it is asked for (one mean then the packed
+//! eigentexture layers of each slot, summed, a hashed share of pixels one read more); the
+//! sweep's rows carry the read counts the packing predicts and errors that fall with `c`.
+
+mod common;
+
+use btf_core::eigen::Quantization;
+use btf_render::cost_sweep::{self, SweepConfig};
+use btf_render::material::MaterialData;
+use btf_render::{Baseline, RenderOptions, Scene, render_scene};
+use common::*;
+use half::f16;
+
+const SIZE: u32 = 32;
+
+fn ortho_plane(dir: &std::path::Path) -> Scene {
+    let text = format!(
+        r#"
+        [output]
+        width = {SIZE}
+        height = {SIZE}
+        [[meshes]]
+        path = "plane.obj"
+        [[materials]]
+        store = "m.eigen"
+        [camera]
+        projection = "orthographic"
+        eye = [0.5, 0.5, 3.0]
+        target = [0.5, 0.5, 0.0]
+        ortho_height = 1.0
+        [[lights]]
+        kind = "directional"
+        direction = [0.3, 0.2, 1.0]
+        irradiance = [1.0, 1.0, 1.0]
+        "#
+    );
+    Scene::load(&write(dir, "scene.toml", &text)).unwrap()
+}
+
+fn render(scene: &Scene, gpu: &btf_render::Gpu, baseline: Baseline) -> btf_render::Frame {
+    render_scene(gpu, scene, RenderOptions { baseline: Some(baseline), ..Default::default() })
+        .unwrap()
+}
+
+/// RGBA value of texel `t` in a packed layer of raw little-endian f16 bytes.
+fn texel_f16(bytes: &[u8], layer: usize, texels: usize, t: usize) -> [f32; 4] {
+    let at = |k: usize| {
+        let i = ((layer * texels + t) * 4 + k) * 2;
+        f16::from_le_bytes([bytes[i], bytes[i + 1]]).to_f32()
+    };
+    [at(0), at(1), at(2), at(3)]
+}
+
+#[test]
+fn baselines_read_what_they_claim() {
+    let Some(gpu) = gpu("baselines_read_what_they_claim") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let store = write_store(dir.path(), "m.eigen", Pattern::Checker, 32, 32, 16, Quantization::F16);
+    write(dir.path(), "plane.obj", &plane_obj(2, false));
+    let scene = ortho_plane(dir.path());
+    let data = MaterialData::load(&store, None).unwrap();
+    let texels = (SIZE * SIZE) as usize;
+    // One pixel per texel: pixel (x, y) samples texel (x, y) exactly.
+    let mut mean = Vec::new();
+    let mut bound13 = Vec::new();
+    for t in 0..texels {
+        let m: Vec<f32> = (0..4).map(|k| data.mean_layers[t * 4 + k].to_f32()).collect();
+        let mut acc = [m[0], m[1], m[2], m[3]];
+        for layer in 0..12 {
+            let e = texel_f16(&data.eigen_layers, layer, texels, t);
+            for k in 0..4 {
+                acc[k] += e[k];
+            }
+        }
+        mean.extend_from_slice(&m[..3]);
+        bound13.extend((0..3).map(|k| acc[k] + acc[3] * 1e-6));
+    }
+    let plain = render(&scene, &gpu, Baseline::Plain);
+    let e = assert_close("plain-texture", SIZE, SIZE, &mean, &plain.rgb, 1e-3);
+    let full = render(&scene, &gpu, Baseline::ReadBound { reads_per_pixel: 13.0 });
+    let e13 = assert_close("read-bound-13", SIZE, SIZE, &bound13, &full.rgb, 1e-3);
+    assert!(plain.stats.ran("plain texture") && full.stats.ran("read bound"));
+    // 1.5 reads: the mean everywhere, a first eigentexture layer on about half the pixels.
+    let half = render(&scene, &gpu, Baseline::ReadBound { reads_per_pixel: 1.5 });
+    let one = render(&scene, &gpu, Baseline::ReadBound { reads_per_pixel: 1.0 });
+    let e1 = rel_rmse(&mean, &one.rgb);
+    let differ = (0..texels)
+        .filter(|&t| (0..3).any(|k| (half.rgb[t * 3 + k] - one.rgb[t * 3 + k]).abs() > 1e-4))
+        .count() as f64
+        / texels as f64;
+    eprintln!(
+        "plain vs slot-0 mean {e:.1e}; 13 reads vs CPU sum {e13:.1e}; 1 read vs mean {e1:.1e}; share of pixels with a second read at 1.5: {differ:.3}"
+    );
+    assert!(e1 < 1e-3);
+    // 1024 pixels, binomial(0.5): ±5 standard deviations.
+    assert!((differ - 0.5).abs() < 0.08, "share with an extra read {differ}");
+}
+
+#[test]
+fn sweep_rows_have_predicted_reads_and_falling_error() {
+    let Some(gpu) = gpu("sweep_rows_have_predicted_reads_and_falling_error") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    write_store(dir.path(), "m.eigen", Pattern::Checker, 16, 16, 8, Quantization::F16);
+    write(dir.path(), "plane.obj", &plane_obj(4, false));
+    let text = r#"
+        [output]
+        width = 32
+        height = 32
+        [[meshes]]
+        path = "plane.obj"
+        [[materials]]
+        store = "m.eigen"
+        [camera]
+        eye = [0.5, -0.4, 1.0]
+        target = [0.5, 0.5, 0.0]
+        up = [0.0, 0.0, 1.0]
+        fov_y_deg = 50.0
+        [[lights]]
+        kind = "directional"
+        direction = [0.3, 0.2, 1.0]
+        irradiance = [1.0, 1.0, 1.0]
+    "#;
+    let scene = Scene::load(&write(dir.path(), "scene.toml", text)).unwrap();
+    let config = SweepConfig { components: vec![4, 8, 32], repeats: 1 };
+    let mut calls = 0;
+    let r = cost_sweep::run(&gpu, &scene, &config, &mut |_, _| calls += 1).unwrap();
+    assert_eq!((r.rows.len(), calls, r.reference_components), (8, 8, 8), "32 > stored is skipped");
+    let row = |c: usize, e: &str, b: &str| {
+        r.rows.iter().find(|x| x.components == c && x.evaluation == e && x.blending == b).unwrap()
+    };
+    for x in &r.rows {
+        eprintln!(
+            "c={} {} {}: err {:.2e}, reads {:.2}, btf {:.2} ms, plain {:.2} ms, bound {:.2} ms",
+            x.components,
+            x.evaluation,
+            x.blending,
+            x.rel_rmse,
+            x.reads_per_pixel,
+            x.btf_ms,
+            x.plain_ms,
+            x.read_bound_ms
+        );
+        assert!(x.btf_ms > 0.0 && x.plain_ms > 0.0 && x.read_bound_ms > 0.0);
+        assert!(x.ratio_read_bound.is_finite() && x.ratio_plain.is_finite());
+    }
+    // Nearest view and light: one slot, 1 + 3⌈c/4⌉ reads.
+    assert_eq!(row(4, "per-pixel", "nearest").reads_per_pixel, 4.0);
+    assert_eq!(row(8, "per-pixel", "nearest").reads_per_pixel, 7.0);
+    // The reference setting reproduces the reference; fewer components cost accuracy.
+    assert!(row(8, "per-pixel", "four").rel_rmse < 1e-6);
+    assert!(row(4, "per-pixel", "four").rel_rmse > 1e-3);
+    assert!(row(4, "per-vertex", "four").rel_rmse > row(8, "per-vertex", "four").rel_rmse);
+    assert!(r.per_pixel_reads_le_per_vertex);
+    assert_eq!(r.fits.len(), 4);
+}
