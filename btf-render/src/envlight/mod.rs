@@ -3,8 +3,9 @@
 //!
 //! - [`hemicube`]: pixel directions, exact solid angles (sum 2π) and the shared table
 //!   "pixel → four nearest measured light directions + weights" (eq. 9, §5.2);
-//! - [`bvh`], [`visibility`]: per-vertex visibility maps by ray casting against the mesh,
-//!   cached on disk (§5.2);
+//! - [`bvh`], [`visibility`], `raster`: per-vertex visibility maps — the answer of one ray
+//!   per hemicube pixel, found by projecting the BVH-culled mesh onto the hemicube and
+//!   confirming each covered pixel with the ray test — cached on disk (§5.2);
 //! - [`envmap`]: equirectangular HDR maps and their area-averaged cube form (`L_env`);
 //! - [`weights`]: `g_i` per vertex, `γ*` and the weight vector `U` (eq. 10–12);
 //! - [`eigenweights`]: the PCA over environment rotations and `U(δ)` (eq. 13);
@@ -16,6 +17,7 @@ pub mod eigenweights;
 pub mod envmap;
 pub mod heatmap;
 pub mod hemicube;
+mod raster;
 pub mod scene_env;
 pub mod visibility;
 pub mod weights;
