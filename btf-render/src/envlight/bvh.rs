@@ -128,11 +128,20 @@ impl Bvh {
 
     /// Whether the ray `origin + t·dir`, `t > t_min`, hits any triangle.
     pub fn occluded(&self, origin: [f32; 3], dir: [f32; 3], t_min: f32) -> bool {
-        if self.nodes.is_empty() {
-            return false;
-        }
+        !self.nodes.is_empty() && self.occluded_below(0, origin, dir, t_min)
+    }
+
+    /// [`Bvh::occluded`] restricted to the triangles under node `root` (same tests, so a
+    /// hit there is a hit of the whole query).
+    pub(super) fn occluded_below(
+        &self,
+        root: u32,
+        origin: [f32; 3],
+        dir: [f32; 3],
+        t_min: f32,
+    ) -> bool {
         let inv = dir.map(|d| 1.0 / d);
-        let mut stack = [0u32; 64];
+        let mut stack = [root; 64];
         let mut sp = 1usize;
         while sp > 0 {
             sp -= 1;

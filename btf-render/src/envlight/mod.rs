@@ -7,7 +7,7 @@
 //!   per hemicube pixel, found by projecting the BVH-culled mesh onto the hemicube and
 //!   confirming each covered pixel with the ray test — cached on disk (§5.2);
 //! - [`envmap`]: equirectangular HDR maps and their area-averaged cube form (`L_env`);
-//! - [`weights`]: `g_i` per vertex, `γ*` and the weight vector `U` (eq. 10–12);
+//! - [`weights`], `gather`: `g_i` per vertex, `γ*` and the weight vector `U` (eq. 10–12);
 //! - [`eigenweights`]: the PCA over environment rotations and `U(δ)` (eq. 13);
 //! - [`scene_env`]: an environment light of a scene: state, rotation, per-vertex coefficients;
 //! - [`heatmap`]: green → red error images and small line plots written with `image`.
@@ -15,6 +15,7 @@
 pub mod bvh;
 pub mod eigenweights;
 pub mod envmap;
+mod gather;
 pub mod heatmap;
 pub mod hemicube;
 mod raster;

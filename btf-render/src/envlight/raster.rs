@@ -18,6 +18,10 @@ use super::bvh::{Bvh, Tri, dot, sub, tri_hit};
 use super::hemicube::Hemicube;
 use super::visibility::HemicubeFrame;
 
+/// Nodes with at most this many still-visible pixels under their projection are finished
+/// by casting those pixels' rays through the node's subtree.
+const RAY_CAST_BELOW: usize = 16;
+
 /// One hemicube face: the major axis (with its sign) and the axes of the face coordinates.
 #[derive(Debug, Clone, Copy)]
 struct Face {
@@ -159,7 +163,16 @@ impl<'a> FrameRaster<'a> {
             }
             let node = &nodes[me as usize];
             let Some(rects) = self.box_rects(node.lo, node.hi) else { continue };
-            if rects.iter().flatten().all(|r| self.all_occluded(r)) {
+            let open: usize = rects.iter().flatten().map(|r| self.visible_in(r)).sum();
+            if open == 0 {
+                continue;
+            }
+            if open <= RAY_CAST_BELOW {
+                // Few pixels left under a far node: rays through its subtree are cheaper
+                // than projecting its triangles one by one.
+                for r in rects.iter().flatten() {
+                    self.cast_pixels(r, |o, d, eps| bvh.occluded_below(me, o, d, eps));
+                }
                 continue;
             }
             if node.count > 0 {
@@ -232,35 +245,81 @@ impl<'a> FrameRaster<'a> {
     /// Pixels of face `f` whose centres lie in `u × v` widened by `margin`.
     fn rect(&self, f: usize, u: (f32, f32), v: (f32, f32), margin: f32) -> Option<Rect> {
         let face = self.faces[f];
-        let (cols, rows) = (self.res, face.rows);
-        let lo = |x: f32, min: f32| ((x - margin - min) / self.step - 0.5).ceil().max(0.0);
-        let hi = |x: f32, min: f32, n: usize| {
-            ((x + margin - min) / self.step - 0.5).floor().min(n as f32 - 1.0)
-        };
-        let (c0, c1) = (lo(u.0, -1.0), hi(u.1, -1.0, cols));
-        let (r0, r1) = (lo(v.0, face.v_min), hi(v.1, face.v_min, rows));
-        // NaN (never expected) compares false and keeps the whole face.
-        if c0 > c1 || r0 > r1 {
-            return None;
-        }
-        let clamp = |x: f32, n: usize| if x.is_finite() { x as usize } else { n };
-        Some(Rect {
-            face: f,
-            c0: clamp(c0, 0).min(cols - 1),
-            c1: clamp(c1, cols - 1).min(cols - 1),
-            r0: clamp(r0, 0).min(rows - 1),
-            r1: clamp(r1, rows - 1).min(rows - 1),
-        })
+        let (c0, c1) = self.centre_range(u, -1.0, self.res, margin)?;
+        let (r0, r1) = self.centre_range(v, face.v_min, face.rows, margin)?;
+        Some(Rect { face: f, c0, c1, r0, r1 })
     }
 
-    fn all_occluded(&self, r: &Rect) -> bool {
-        (r.r0..=r.r1).all(|row| {
-            let words = &self.occ[(self.row_base[r.face] + row) * self.wpr..][..self.wpr];
-            (r.c0 / 64..=r.c1 / 64).all(|w| {
-                let m = span_mask(r.c0.max(64 * w) - 64 * w, r.c1.min(64 * w + 63) - 64 * w);
-                words[w] & m == m
+    /// Indices `i < n` of the pixel centres `min + (i + ½)·step` within `[a − margin,
+    /// b + margin]`; NaN bounds keep the whole range.
+    fn centre_range(
+        &self,
+        (a, b): (f32, f32),
+        min: f32,
+        n: usize,
+        margin: f32,
+    ) -> Option<(usize, usize)> {
+        let inv = 1.0 / self.step;
+        let lo = ((a - margin - min) * inv - 0.5).max(-1.0).min(n as f32 + 1.0);
+        let hi = ((b + margin - min) * inv - 0.5).min(n as f32).max(-2.0);
+        // ceil and floor by truncation (both bounded, no libm call).
+        let l = lo as i32 + ((lo as i32 as f32) < lo) as i32;
+        let h = hi as i32 - (hi < hi as i32 as f32) as i32;
+        let (l, h) = (l.max(0), h.min(n as i32 - 1));
+        (l <= h).then_some((l as usize, h as usize))
+    }
+
+    /// The face whose pyramid holds tangent point `p` with room `tol` to its planes.
+    fn face_of(p: &[f32; 3], tol: f32) -> Option<usize> {
+        let [x, y, z] = *p;
+        let (ax, ay) = (x.abs(), y.abs());
+        if z - ax > tol && z - ay > tol {
+            return Some(0);
+        }
+        if z <= tol {
+            return None;
+        }
+        if ax - ay > tol && ax - z > tol {
+            return Some(if x > 0.0 { 1 } else { 2 });
+        }
+        if ay - ax > tol && ay - z > tol {
+            return Some(if y > 0.0 { 3 } else { 4 });
+        }
+        None
+    }
+
+    /// Number of still-visible pixels in `r`.
+    fn visible_in(&self, r: &Rect) -> usize {
+        (r.r0..=r.r1)
+            .map(|row| {
+                let words = &self.occ[(self.row_base[r.face] + row) * self.wpr..][..self.wpr];
+                (r.c0 / 64..=r.c1 / 64)
+                    .map(|w| {
+                        let m =
+                            span_mask(r.c0.max(64 * w) - 64 * w, r.c1.min(64 * w + 63) - 64 * w);
+                        (!words[w] & m).count_ones() as usize
+                    })
+                    .sum::<usize>()
             })
-        })
+            .sum()
+    }
+
+    /// Marks the still-visible pixels of `r` whose ray `hit(origin, dir, eps)` reports.
+    fn cast_pixels(&mut self, r: &Rect, hit: impl Fn([f32; 3], [f32; 3], f32) -> bool) {
+        let face = self.faces[r.face];
+        for row in r.r0..=r.r1 {
+            let base = (self.row_base[r.face] + row) * self.wpr;
+            for c in r.c0..=r.c1 {
+                if self.occ[base + c / 64] >> (c % 64) & 1 == 1 {
+                    continue;
+                }
+                let p = face.start + row * self.res + c;
+                if hit(self.origin, self.frame.to_world(self.cube.dirs[p]), self.eps) {
+                    self.occ[base + c / 64] |= 1 << (c % 64);
+                    self.occluded += 1;
+                }
+            }
+        }
     }
 
     /// Tests one triangle against the still-visible pixels it may cover.
@@ -284,6 +343,22 @@ impl<'a> FrameRaster<'a> {
         }
         let dist2: f32 = (0..3).map(|a| (lo[a].max(0.0) + (-hi[a]).max(0.0)).powi(2)).sum();
         let margin = self.margin(dist2.sqrt(), extent);
+        let [a, b, c] = corners.map(|p| Self::face_of(&p, tol));
+        if let Some(f) = a.filter(|&f| b == Some(f) && c == Some(f)) {
+            // Inside one pyramid (the common case): project the corners.
+            let face = self.faces[f];
+            let (mut u, mut v) = ((f32::MAX, f32::MIN), (f32::MAX, f32::MIN));
+            for p in &corners {
+                let m = face.sign * p[face.major];
+                let (pu, pv) = (p[face.u] / m, p[face.v] / m);
+                u = (u.0.min(pu), u.1.max(pu));
+                v = (v.0.min(pv), v.1.max(pv));
+            }
+            if let Some(r) = self.rect(f, u, v, margin) {
+                self.test_pixels(&r, t);
+            }
+            return;
+        }
         for f in 0..5 {
             let Some((u, v)) = self.face_bounds(f, &corners, tol) else { continue };
             if let Some(r) = self.rect(f, u, v, margin) {
@@ -362,21 +437,7 @@ impl<'a> FrameRaster<'a> {
     }
 
     fn test_pixels(&mut self, r: &Rect, t: &Tri) {
-        let face = self.faces[r.face];
-        for row in r.r0..=r.r1 {
-            let base = (self.row_base[r.face] + row) * self.wpr;
-            for c in r.c0..=r.c1 {
-                if self.occ[base + c / 64] >> (c % 64) & 1 == 1 {
-                    continue;
-                }
-                let p = face.start + row * self.res + c;
-                let dir = self.frame.to_world(self.cube.dirs[p]);
-                if tri_hit(t, self.origin, dir, self.eps) {
-                    self.occ[base + c / 64] |= 1 << (c % 64);
-                    self.occluded += 1;
-                }
-            }
-        }
+        self.cast_pixels(r, |o, d, eps| tri_hit(t, o, d, eps));
     }
 }
 

@@ -138,51 +138,11 @@ pub fn hemicube_pixel(res: usize, x: f32, y: f32, z: f32) -> usize {
 }
 
 /// Rotation by `−δ` about `+z` applied to a world direction (the environment turned by `δ`).
-fn rotate_z(d: [f32; 3], cos: f32, sin: f32) -> [f32; 3] {
+pub(super) fn rotate_z(d: [f32; 3], cos: f32, sin: f32) -> [f32; 3] {
     [cos * d[0] + sin * d[1], -sin * d[0] + cos * d[1], d[2]]
 }
 
 impl WeightSet {
-    /// Gathers `g` for the environment turned by `rotation_deg` about world `+z` (eq. 10).
-    ///
-    /// The same sums as [`WeightSet::gather_reference`], bit for bit, organised for speed:
-    /// a vertex's front frame `(T, B, N)` and back frame `(T, B, −N)` share the tangent
-    /// coordinates `x, y` of every source and see `±z`, so every source is transformed once
-    /// per vertex and lands on exactly one side; the RGB sums of a light are kept together
-    /// so a source adds four 4-lane products instead of twelve scalar ones.
-    pub fn gather(input: &GatherInput, env: &EnvCube, rotation_deg: f64) -> WeightSet {
-        let n_l = input.lights;
-        let n = input.frames.len();
-        let (sin, cos) = rotation_deg.to_radians().sin_cos();
-        let rot = (cos as f32, sin as f32);
-        let sources = Sources::new(env);
-        let mut g = vec![0f32; n * 3 * n_l];
-        let row = 3 * n_l;
-        if let Some(half) = mirrored_half(input.frames) {
-            let (front, back) = g.split_at_mut(half * row);
-            front.par_chunks_mut(row).zip(back.par_chunks_mut(row)).enumerate().for_each_init(
-                || Scratch::new(n_l, sources.len()),
-                |s, (v, (fo, bo))| {
-                    let bits =
-                        [input.visibility.frame_bits(v), input.visibility.frame_bits(half + v)];
-                    s.run(input, &sources, &input.frames[v], bits, rot);
-                    s.write(0, fo);
-                    s.write(1, bo);
-                },
-            );
-        } else {
-            g.par_chunks_mut(row).enumerate().for_each_init(
-                || Scratch::new(n_l, sources.len()),
-                |s, (f, out)| {
-                    let bits = input.visibility.frame_bits(f);
-                    s.run(input, &sources, &input.frames[f], [bits, &[]], rot);
-                    s.write(0, out);
-                },
-            );
-        }
-        WeightSet { frames: n, lights: n_l, g }
-    }
-
     /// Eq. 10 frame by frame, the definition [`WeightSet::gather`] must reproduce: every
     /// source above the frame's horizon is dropped into the hemicube pixel containing it and,
     /// if that pixel is visible, adds `h_i(p) · power` to `g_i`.
@@ -280,111 +240,6 @@ mod tests {
             let cube = Hemicube::new(res as u32).unwrap();
             for (p, d) in cube.dirs.iter().enumerate() {
                 assert_eq!(hemicube_pixel(res, d[0], d[1], d[2]), p, "res {res}");
-            }
-        }
-    }
-}
-
-/// `Some(V)` when the frames are `V` front sides followed by their mirrored back sides
-/// (same origin and tangents, negated normal), as [`HemicubeFrame::of_mesh`] builds them.
-fn mirrored_half(frames: &[HemicubeFrame]) -> Option<usize> {
-    let half = frames.len() / 2;
-    let mirrored = |f: &HemicubeFrame, b: &HemicubeFrame| {
-        f.origin == b.origin
-            && f.axes[0] == b.axes[0]
-            && f.axes[1] == b.axes[1]
-            && f.axes[2].map(|c| -c) == b.axes[2]
-    };
-    (half > 0
-        && frames.len() == 2 * half
-        && (0..half).all(|v| mirrored(&frames[v], &frames[half + v])))
-    .then_some(half)
-}
-
-/// The environment's sources with RGB power padded to four lanes.
-struct Sources<'a> {
-    dirs: &'a [[f32; 3]],
-    power: Vec<[f32; 4]>,
-}
-
-impl<'a> Sources<'a> {
-    fn new(env: &'a EnvCube) -> Sources<'a> {
-        Sources {
-            dirs: &env.dirs,
-            power: env.power.iter().map(|p| [p[0], p[1], p[2], 0.0]).collect(),
-        }
-    }
-
-    fn len(&self) -> usize {
-        self.dirs.len()
-    }
-}
-
-/// Per-thread buffers of the gather: the pixel (and side) of every source, and the RGB
-/// sums per light of the two sides.
-struct Scratch {
-    lights: usize,
-    /// `pixel · 2 + side`, or `u32::MAX` for a source on the horizon.
-    code: Vec<u32>,
-    acc: Vec<[f32; 4]>,
-}
-
-impl Scratch {
-    fn new(lights: usize, sources: usize) -> Scratch {
-        Scratch { lights, code: vec![0; sources], acc: vec![[0.0; 4]; 2 * lights] }
-    }
-
-    /// Accumulates the sources of `frame` (side 0) and of its mirror (side 1, `bits[1]`
-    /// non-empty) for the environment rotated by `(cos δ, sin δ)`.
-    fn run(
-        &mut self,
-        input: &GatherInput,
-        src: &Sources,
-        frame: &HemicubeFrame,
-        bits: [&[u64]; 2],
-        rot: (f32, f32),
-    ) {
-        let res = input.visibility.res as usize;
-        let [t, b, n] = frame.axes.map(|a| rotate_z(a, rot.0, rot.1));
-        let two = !bits[1].is_empty();
-        for (code, d) in self.code.iter_mut().zip(src.dirs) {
-            let z = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
-            *code = if z > 0.0 || (two && z < 0.0) {
-                let x = d[0] * t[0] + d[1] * t[1] + d[2] * t[2];
-                let y = d[0] * b[0] + d[1] * b[1] + d[2] * b[2];
-                let back = (z < 0.0) as u32;
-                (hemicube_pixel(res, x, y, if back == 1 { -z } else { z }) as u32) << 1 | back
-            } else {
-                u32::MAX
-            };
-        }
-        self.acc.fill([0.0; 4]);
-        let n_l = self.lights;
-        for (&code, pw) in self.code.iter().zip(&src.power) {
-            if code == u32::MAX {
-                continue;
-            }
-            let (p, side) = ((code >> 1) as usize, (code & 1) as usize);
-            if bits[side][p / 64] >> (p % 64) & 1 == 0 {
-                continue;
-            }
-            let (idx, h) = (input.table.index[p], input.table.interp[p]);
-            let acc = &mut self.acc[side * n_l..(side + 1) * n_l];
-            for k in 0..4 {
-                let a = &mut acc[idx[k] as usize];
-                for c in 0..4 {
-                    a[c] += h[k] * pw[c];
-                }
-            }
-        }
-    }
-
-    /// Writes side `side`'s sums as rows `(channel) × light`.
-    fn write(&self, side: usize, out: &mut [f32]) {
-        let n_l = self.lights;
-        for (i, a) in self.acc[side * n_l..(side + 1) * n_l].iter().enumerate() {
-            for ch in 0..3 {
-                out[ch * n_l + i] = a[ch];
             }
         }
     }
