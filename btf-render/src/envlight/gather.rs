@@ -117,9 +117,12 @@ struct CodeInput<'a> {
 #[inline(always)]
 fn codes_kernel(c: &CodeInput, out: &mut [u32]) {
     let [t, b, n] = c.axes;
-    let res = c.res;
-    let (half, top, resf, halff) = (res / 2, res * res, res as f32, (res / 2) as f32);
-    let cell = |a: f32, nf: f32, n: usize| ((a * nf) as i32).min(n as i32 - 1) as u32;
+    let res = c.res as f32;
+    let half = (c.res / 2) as f32;
+    let top = res * res;
+    // `(a · n) as usize` of the reference for `a ≥ 0`, kept in floats (exact below 2²⁴) so
+    // that the loop has no integer overflow checks and vectorises.
+    let cell = |a: f32, n: f32| (a * n).floor().min(n - 1.0);
     let src = c.src;
     let it = out.iter_mut().zip(&src.xs).zip(&src.ys).zip(&src.zs);
     for (((code, &dx), &dy), &dz) in it {
@@ -142,15 +145,14 @@ fn codes_kernel(c: &CodeInput, out: &mut [u32]) {
         let u = (un / m + 1.0) * 0.5;
         let v_top = (y / m + 1.0) * 0.5;
         let v_side = z / m;
-        let col = cell(u, resf, res);
-        let face = if xf { (x <= 0.0) as u32 } else { 2 + (y <= 0.0) as u32 };
-        let p_top = cell(v_top, resf, res) * res as u32 + col;
-        let p_side = (top + face as usize * res * half) as u32
-            + cell(v_side, halff, half) * res as u32
-            + col;
+        let col = cell(u, res);
+        let face = if xf { (x <= 0.0) as u32 as f32 } else { 2.0 + (y <= 0.0) as u32 as f32 };
+        let p_top = cell(v_top, res) * res + col;
+        let p_side = top + face * res * half + cell(v_side, half) * res + col;
         let p = if is_top { p_top } else { p_side };
         let keep = zs > 0.0 || (c.two_sided && back);
-        *code = if keep { p << 1 | back as u32 } else { u32::MAX };
+        let coded = 2.0 * p + back as u32 as f32;
+        *code = if keep { coded as u32 } else { u32::MAX };
     }
 }
 
