@@ -7,10 +7,12 @@ mod cmd_export;
 mod cmd_import;
 mod cmd_inspect;
 mod cmd_reconstruct;
+mod cmd_relight;
 mod demo_scene;
 mod imageio;
 mod plot;
 mod progress;
+mod relight_report;
 mod render_cmd;
 mod sweep;
 mod synth_cmd;
@@ -46,6 +48,8 @@ enum Command {
     Export(cmd_export::ExportArgs),
     /// Render a scene (TOML) on the GPU.
     Render(render_cmd::RenderArgs),
+    /// Render a scene under several environment maps and rotations (batch relighting).
+    Relight(cmd_relight::RelightArgs),
 }
 
 fn main() -> ExitCode {
@@ -59,6 +63,7 @@ fn main() -> ExitCode {
         Command::Export(a) => cmd_export::run(a),
         Command::Synth(c) => synth_cmd::run(c),
         Command::Render(a) => render_cmd::run(a),
+        Command::Relight(a) => cmd_relight::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

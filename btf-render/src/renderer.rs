@@ -409,7 +409,9 @@ impl Renderer {
                     ..Default::default()
                 },
                 // Zero power per pixel; its light comes from the per-vertex coefficients.
-                Light::Environment(_) => LightRaw { pos: [0.0, 0.0, 1.0, 0.0], ..Default::default() },
+                Light::Environment(_) => {
+                    LightRaw { pos: [0.0, 0.0, 1.0, 0.0], ..Default::default() }
+                }
             };
             if let Some(s) = &self.shadowing {
                 s.fill_light_raw(l, &mut lr);

@@ -516,9 +516,10 @@ mod tests {
     fn bad_environment_keys_are_named() {
         let e = load(&format!("{MINIMAL}{ENV}visibility_res = 1\n")).unwrap_err().to_string();
         assert!(e.contains("lights[1].visibility_res"), "{e}");
-        let e = load(&format!("{MINIMAL}{ENV}eigenweightsets = {{ rotations = 4, components = 4 }}\n"))
-            .unwrap_err()
-            .to_string();
+        let e =
+            load(&format!("{MINIMAL}{ENV}eigenweightsets = {{ rotations = 4, components = 4 }}\n"))
+                .unwrap_err()
+                .to_string();
         assert!(e.contains("lights[1].eigenweightsets.components"), "{e}");
         let e = load(&format!("{MINIMAL}{ENV}exposure = -1\n")).unwrap_err().to_string();
         assert!(e.contains("lights[1].exposure"), "{e}");
