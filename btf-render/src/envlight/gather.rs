@@ -143,8 +143,8 @@ fn codes_kernel(c: &CodeInput, out: &mut [u32]) {
         };
         let un = if is_top || !xf { x } else { y };
         let u = (un / m + 1.0) * 0.5;
-        let v_top = (y / m + 1.0) * 0.5;
-        let v_side = z / m;
+        let v = (if is_top { y } else { z }) / m;
+        let (v_top, v_side) = ((v + 1.0) * 0.5, v);
         let col = cell(u, res);
         let face = if xf { (x <= 0.0) as u32 as f32 } else { 2.0 + (y <= 0.0) as u32 as f32 };
         let p_top = cell(v_top, res) * res + col;
@@ -152,7 +152,7 @@ fn codes_kernel(c: &CodeInput, out: &mut [u32]) {
         let p = if is_top { p_top } else { p_side };
         let keep = zs > 0.0 || (c.two_sided && back);
         let coded = 2.0 * p + back as u32 as f32;
-        *code = if keep { coded as u32 } else { u32::MAX };
+        *code = if keep { coded as i32 as u32 } else { u32::MAX };
     }
 }
 
@@ -210,9 +210,12 @@ impl Scratch {
             let acc = &mut self.acc[side * n_l..(side + 1) * n_l];
             for k in 0..4 {
                 let a = &mut acc[idx[k] as usize];
-                for c in 0..4 {
-                    a[c] += h[k] * pw[c];
-                }
+                *a = [
+                    a[0] + h[k] * pw[0],
+                    a[1] + h[k] * pw[1],
+                    a[2] + h[k] * pw[2],
+                    a[3] + h[k] * pw[3],
+                ];
             }
         }
     }

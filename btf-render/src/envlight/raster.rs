@@ -20,7 +20,7 @@ use super::visibility::HemicubeFrame;
 
 /// Nodes with at most this many still-visible pixels under their projection are finished
 /// by casting those pixels' rays through the node's subtree.
-const RAY_CAST_BELOW: usize = 16;
+const RAY_CAST_BELOW: usize = 48;
 
 /// One hemicube face: the major axis (with its sign) and the axes of the face coordinates.
 #[derive(Debug, Clone, Copy)]
