@@ -1,6 +1,9 @@
-//! The rendering half of `btf demo`: a garment mesh and an HDR sky are synthesised, a scene
-//! file is written beside them (so a user can edit and re-render it with `btf render`), and
-//! the garment is rendered with the demo's eigen store under a point light with shadows.
+//! The rendering half of `btf demo`: a garment mesh and an HDR sky are synthesised, scene
+//! files are written beside them (so a user can edit and re-render them with `btf render`),
+//! and the garment is rendered with the demo's eigen store under a point light with shadows,
+//! without shadows, and under the sky as an environment light (per-vertex visibility maps
+//! and weights, Sattler et al. 2003 §5; exposure `f` chosen so that the sky's horizontal
+//! irradiance is 1).
 
 use anyhow::{Context, Result};
 use btf_render::{Gpu, RenderOptions, Renderer, Scene};
@@ -25,7 +28,34 @@ fn bounds(mesh: &datasets::Mesh) -> ([f64; 3], [f64; 3]) {
     (lo, hi)
 }
 
-fn scene_toml(width: u32, (lo, hi): ([f64; 3], [f64; 3]), shadows: &str) -> String {
+/// What lights a demo scene.
+#[derive(Clone, Copy)]
+enum Lighting {
+    /// Point light (shadows "volume" or "none") plus a dim directional fill.
+    Point(&'static str),
+    /// The sky as an environment light of exposure `f`.
+    Environment(f64),
+}
+
+/// `1 / E_h`, where `E_h = ∫_{z>0} L cos θ dω` is the sky's horizontal irradiance (mean of
+/// the channels).
+fn unit_irradiance_exposure(env: &datasets::EnvMap) -> f64 {
+    let mut e = 0.0;
+    for row in 0..env.height {
+        let d = env.direction(0, row);
+        if d[2] <= 0.0 {
+            continue;
+        }
+        let w = env.pixel_solid_angle(row) * d[2];
+        for col in 0..env.width {
+            let p = env.pixels[row * env.width + col];
+            e += w * (p[0] + p[1] + p[2]) as f64 / 3.0;
+        }
+    }
+    if e > 0.0 { 1.0 / e } else { 1.0 }
+}
+
+fn scene_toml(width: u32, (lo, hi): ([f64; 3], [f64; 3]), lighting: Lighting) -> String {
     let c = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0, (lo[2] + hi[2]) / 2.0];
     let size = (0..3).map(|k| hi[k] - lo[k]).fold(0f64, f64::max);
     // The garments are z-up with their front facing −y.
@@ -34,8 +64,12 @@ fn scene_toml(width: u32, (lo, hi): ([f64; 3], [f64; 3]), shadows: &str) -> Stri
     let d2 = (0..3).map(|k| (light[k] - c[k]).powi(2)).sum::<f64>();
     // Intensity chosen so the irradiance at the garment's centre is 3 (a bright room).
     let i = 3.0 * d2;
+    let (lights, shadows) = match lighting {
+        Lighting::Point(shadows) => (point_lights(light, i), shadows),
+        Lighting::Environment(f) => (environment_light(f), "none"),
+    };
     format!(
-        r#"# Written by `btf demo`: the demo garment in the demo material under a point light.
+        r#"# Written by `btf demo`: the demo garment in the demo material.
 # Re-render with: btf render {{this file}} -o out.png --stats
 [output]
 width = {width}
@@ -56,17 +90,7 @@ target = [{:.3}, {:.3}, {:.3}]
 up = [0.0, 0.0, 1.0]
 fov_y_deg = 38.0
 
-[[lights]]
-kind = "point"
-position = [{:.3}, {:.3}, {:.3}]
-intensity = [{i:.3}, {:.3}, {:.3}]
-
-[[lights]]
-kind = "directional"
-direction = [0.6, -1.0, 0.3]
-irradiance = [0.25, 0.28, 0.35]
-shadows = false
-
+{lights}
 [effects]
 evaluation = "per-pixel"
 light_interp = "four"
@@ -81,12 +105,42 @@ msaa = 4
         c[0],
         c[1],
         c[2],
+        height = width * 3 / 4,
+    )
+}
+
+fn point_lights(light: [f64; 3], i: f64) -> String {
+    format!(
+        r#"[[lights]]
+kind = "point"
+position = [{:.3}, {:.3}, {:.3}]
+intensity = [{i:.3}, {:.3}, {:.3}]
+
+[[lights]]
+kind = "directional"
+direction = [0.6, -1.0, 0.3]
+irradiance = [0.25, 0.28, 0.35]
+shadows = false
+"#,
         light[0],
         light[1],
         light[2],
         i * 0.97,
         i * 0.9,
-        height = width * 3 / 4,
+    )
+}
+
+fn environment_light(exposure: f64) -> String {
+    format!(
+        r#"[[lights]]
+kind = "environment"
+path = "sky.exr"          # equirectangular, +z up
+rotation_deg = 0.0
+exposure = {exposure:.6e}  # horizontal irradiance of the sky → 1
+visibility_res = 16       # hemicube pixels across the top face, per vertex
+two_sided = true
+cache_dir = "cache"       # visibility maps are kept here
+"#
     )
 }
 
@@ -110,6 +164,7 @@ pub fn run(out: &Path, width: u32, stage: &mut StageFn<'_>) -> Result<String> {
             )?)
         }),
     )?;
+    let env_exposure = unit_irradiance_exposure(&datasets::load_env(&env_path)?);
     let mut md = String::from("## Renders\n\n");
     let gpu = match Gpu::new() {
         Ok(g) => g,
@@ -124,13 +179,18 @@ pub fn run(out: &Path, width: u32, stage: &mut StageFn<'_>) -> Result<String> {
         }
     };
     let b = bounds(&mesh);
-    for (name, shadows) in [("point", "volume"), ("point-noshadow", "none")] {
+    let renders = [
+        ("point", "render point light", Lighting::Point("volume")),
+        ("point-noshadow", "render without shadows", Lighting::Point("none")),
+        ("environment", "render environment", Lighting::Environment(env_exposure)),
+    ];
+    for (name, stage_name, lighting) in renders {
         let scene_path = out.join(format!("scene-{name}.toml"));
         let png = out.join(format!("render-{name}.png"));
-        crate::imageio::write_text(&scene_path, &scene_toml(width, b, shadows))?;
+        crate::imageio::write_text(&scene_path, &scene_toml(width, b, lighting))?;
         let mut stats = None;
         stage(
-            if shadows == "none" { "render without shadows" } else { "render point light" },
+            stage_name,
             false,
             Box::new(|| {
                 let scene = Scene::load(&scene_path)
@@ -151,6 +211,9 @@ pub fn run(out: &Path, width: u32, stage: &mut StageFn<'_>) -> Result<String> {
         )?;
         if let Some(s) = stats {
             writeln!(md, "| pass | ms (lavapipe) |\n|---|---:|")?;
+            for p in &s.setup {
+                writeln!(md, "| {} (setup, once) | {:.2} |", p.name, p.ms)?;
+            }
             for p in &s.passes {
                 writeln!(md, "| {} | {:.2} |", p.name, p.ms)?;
             }
@@ -159,7 +222,7 @@ pub fn run(out: &Path, width: u32, stage: &mut StageFn<'_>) -> Result<String> {
     }
     writeln!(
         md,
-        "Environment lighting of the garment (`sky.exr`) arrives with the environment-relighting work (hemicube visibility, eigenweightsets); the sky is already synthesised here.\n"
+        "The environment render lights the garment by `sky.exr` with per-vertex visibility maps (cached in `cache/`); `btf relight scene-environment.toml --env sky.exr --rotations 12 --eigen 5 -o relight` turns it.\n"
     )?;
     Ok(md)
 }

@@ -8,10 +8,12 @@ mod cmd_export;
 mod cmd_import;
 mod cmd_inspect;
 mod cmd_reconstruct;
+mod cmd_relight;
 mod demo_scene;
 mod imageio;
 mod plot;
 mod progress;
+mod relight_report;
 mod render_cmd;
 mod render_sweep;
 mod sweep;
@@ -53,6 +55,8 @@ enum Command {
     Render(render_cmd::RenderArgs),
     /// Time the renderer against plain texturing and its read bound over components × modes.
     RenderSweep(render_sweep::RenderSweepArgs),
+    /// Render a scene under several environment maps and rotations (batch relighting).
+    Relight(cmd_relight::RelightArgs),
 }
 
 fn main() -> ExitCode {
@@ -68,6 +72,7 @@ fn main() -> ExitCode {
         Command::Synth(c) => synth_cmd::run(c),
         Command::Render(a) => render_cmd::run(a),
         Command::RenderSweep(a) => render_sweep::run(a),
+        Command::Relight(a) => cmd_relight::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

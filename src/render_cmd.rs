@@ -98,6 +98,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
 
 fn print_stats(s: &Stats, gpu: &Gpu) {
     println!("adapter: {} ({:?}); timing: {}", gpu.info.name, gpu.info.backend, s.timing);
+    if !s.setup.is_empty() {
+        println!("setup (once per scene):");
+        for p in &s.setup {
+            println!("  {:<40} {:>10.3} ms", p.name, p.ms);
+        }
+        println!("per frame:");
+    }
     for p in &s.passes {
         println!("  {:<40} {:>10.3} ms", p.name, p.ms);
     }

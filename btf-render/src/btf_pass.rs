@@ -1,6 +1,8 @@
 //! The BTF pass: draws the mesh with the BTF reconstructed per fragment (eq. 2–5) and lit
 //! by up to four point/directional lights, each attenuated by the smooth shadow boundary
-//! (eq. 6) and a shadow-volume mask or shadow map. See `btf_pass.wgsl` for the formula.
+//! (eq. 6) and a shadow-volume mask or shadow map, plus an environment light whose
+//! per-vertex coefficients (eq. 11) are blended across each triangle. See `btf_pass.wgsl`
+//! for the formula.
 //!
 //! Pipeline variants come from [`BtfPassKey`] (evaluation mode, nearest/four blending,
 //! MSAA), the blending choices as WGSL override constants so the unused branch is compiled
@@ -34,6 +36,23 @@ pub struct BtfPassKey {
     pub msaa: u32,
     /// Count texture reads per fragment into the counter buffer (for tests and stats).
     pub count_reads: bool,
+    /// The scene has an environment light (per-vertex coefficients even in per-pixel mode).
+    pub environment: bool,
+}
+
+impl BtfPassKey {
+    /// Whether the pass reads per-vertex coefficients (group 2).
+    pub fn uses_vertex_coefficients(&self) -> bool {
+        self.evaluation == Evaluation::PerVertex || self.environment
+    }
+
+    fn fragment_entry(&self) -> &'static str {
+        match (self.evaluation, self.environment) {
+            (Evaluation::PerVertex, _) => "fs_vertex",
+            (Evaluation::PerPixel, false) => "fs_pixel",
+            (Evaluation::PerPixel, true) => "fs_pixel_env",
+        }
+    }
 }
 
 /// One corner of a triangle (the mesh is drawn unindexed so that each corner knows its
@@ -95,7 +114,7 @@ pub struct BtfPass {
     pub frame_layout: wgpu::BindGroupLayout,
     /// Group 1: one material.
     pub material_layout: wgpu::BindGroupLayout,
-    /// Group 2: per-vertex coefficients (per-vertex mode only).
+    /// Group 2: per-vertex coefficients (per-vertex mode or an environment light).
     pub vertex_layout: Option<wgpu::BindGroupLayout>,
     /// The key it was built for.
     pub key: BtfPassKey,
@@ -151,7 +170,7 @@ impl BtfPass {
                     entry(4, storage(true)),
                 ],
             });
-            let vertex_layout = (key.evaluation == Evaluation::PerVertex).then(|| {
+            let vertex_layout = key.uses_vertex_coefficients().then(|| {
                 dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                     label: Some("btf per-vertex"),
                     entries: &[entry(0, storage(true)), entry(1, storage(true))],
@@ -201,10 +220,7 @@ impl BtfPass {
                 multisample: wgpu::MultisampleState { count: key.msaa, ..Default::default() },
                 fragment: Some(wgpu::FragmentState {
                     module: &module,
-                    entry_point: Some(match key.evaluation {
-                        Evaluation::PerPixel => "fs_pixel",
-                        Evaluation::PerVertex => "fs_vertex",
-                    }),
+                    entry_point: Some(key.fragment_entry()),
                     compilation_options: options,
                     targets: &[Some(color_format(key.msaa).into())],
                 }),

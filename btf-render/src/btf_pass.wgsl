@@ -8,7 +8,9 @@
 // Components come in groups of four packed in three RGBA layers (see material.rs).
 // fs_pixel evaluates directions, slots and weights per fragment; fs_vertex blends the three
 // vertices' per-vertex reconstructions with barycentric weights (the paper's three-pass
-// blending in one pass), merging identical slots so each slot is read once.
+// blending in one pass), merging identical slots so each slot is read once. An environment
+// light (eq. 11: e·γ* folded per vertex on the CPU) is always in the per-vertex layout;
+// fs_pixel_env adds it to the per-pixel lights.
 
 const MAX_LIGHTS: u32 = 4u;
 const NONE: u32 = 0xffffffffu;
@@ -36,7 +38,8 @@ struct FrameRaw {
     eye: vec4<f32>,
     // xyz: direction towards the camera (orthographic)
     to_camera: vec4<f32>,
-    // x: lights, y: smooth boundary on (1/0), z: per-vertex coefficient stride G
+    // x: lights, y: smooth boundary on (1/0), z: per-vertex coefficient stride G,
+    // w: lights in the per-vertex layout
     info: vec4<u32>,
     // x: alpha in radians
     terminator: vec4<f32>,
@@ -342,23 +345,14 @@ fn cand_slot(tri: vec3<u32>, c: u32) -> u32 {
 }
 
 fn coef_base(tri: vec3<u32>, c: u32, l: u32, stride: u32) -> u32 {
-    return ((tri[c / 4u] * frame.info.x + l) * 4u + c % 4u) * stride;
+    return ((tri[c / 4u] * frame.info.w + l) * 4u + c % 4u) * stride;
 }
 
-@fragment
-fn fs_vertex(in: VertexOut) -> @location(0) vec4<f32> {
-    let v = to_camera(in.world);
-    let f = tangent_frame(in, v);
-    let uv = tex_uv(in.uv);
-    duv_dx = dpdx(uv);
-    duv_dy = dpdy(uv);
-    let n_lights = frame.info.x;
-    for (var l = 0u; l < n_lights; l = l + 1u) {
-        vis[l] = visibility(l, in, f.back);
-    }
+// Σ over the triangle's vertices and the `n_entries` lights of the per-vertex layout, each
+// entry weighted by vis[l]: the paper's barycentric blending of per-vertex reconstructions.
+fn vertex_sum(in: VertexOut, uv: vec2<f32>, n_entries: u32) -> vec3<f32> {
     let g_count = samplings.info.x;
     let stride = 2u + 3u * frame.info.z;
-    reads = 0u;
     var rgb = vec3<f32>(0.0);
     for (var c = 0u; c < 12u; c = c + 1u) {
         let j = cand_slot(in.tri, c);
@@ -380,7 +374,7 @@ fn fs_vertex(in: VertexOut) -> @location(0) vec4<f32> {
             if (cand_slot(in.tri, c3) != j) {
                 continue;
             }
-            for (var l = 0u; l < n_lights; l = l + 1u) {
+            for (var l = 0u; l < n_entries; l = l + 1u) {
                 let s = in.bary[c3 / 4u] * vis[l];
                 let base = coef_base(in.tri, c3, l, stride);
                 mc = mc + s * vertex_coef[base].rgb;
@@ -399,7 +393,7 @@ fn fs_vertex(in: VertexOut) -> @location(0) vec4<f32> {
                 if (cand_slot(in.tri, c3) != j) {
                     continue;
                 }
-                for (var l = 0u; l < n_lights; l = l + 1u) {
+                for (var l = 0u; l < n_entries; l = l + 1u) {
                     let s = in.bary[c3 / 4u] * vis[l];
                     let base = coef_base(in.tri, c3, l, stride) + 2u + 3u * g;
                     ca = ca + s * vertex_coef[base];
@@ -415,6 +409,48 @@ fn fs_vertex(in: VertexOut) -> @location(0) vec4<f32> {
         reads = reads + 1u + 3u * g_count;
         rgb = rgb + col + combine(acc_a, acc_b, acc_c);
     }
+    return rgb;
+}
+
+// Per-vertex mode: every light (an environment light included) is in the per-vertex
+// layout, frame.info.w = frame.info.x entries.
+@fragment
+fn fs_vertex(in: VertexOut) -> @location(0) vec4<f32> {
+    let v = to_camera(in.world);
+    let f = tangent_frame(in, v);
+    let uv = tex_uv(in.uv);
+    duv_dx = dpdx(uv);
+    duv_dy = dpdy(uv);
+    for (var l = 0u; l < frame.info.x; l = l + 1u) {
+        vis[l] = visibility(l, in, f.back);
+    }
+    reads = 0u;
+    let rgb = vertex_sum(in, uv, frame.info.w);
+    count_reads();
+    return vec4<f32>(rgb, 1.0);
+}
+
+// Per-pixel mode with an environment light: point/directional lights per pixel (the
+// environment's frame light has zero power), plus the environment's per-vertex
+// coefficients, the only entry of the per-vertex layout (frame.info.w = 1).
+@fragment
+fn fs_pixel_env(in: VertexOut) -> @location(0) vec4<f32> {
+    let v = to_camera(in.world);
+    let f = tangent_frame(in, v);
+    let uv = tex_uv(in.uv);
+    duv_dx = dpdx(uv);
+    duv_dy = dpdy(uv);
+    reads = 0u;
+    gather_lights(in, f);
+    var rgb = vec3<f32>(0.0);
+    if (n_active > 0u) {
+        let views = view_weights(dir_angles(vec3<f32>(dot(v, f.t), dot(v, f.b), dot(v, f.n))), VIEW_FOUR);
+        for (var m = 0u; m < views.n; m = m + 1u) {
+            rgb = rgb + views.w[m] * slot_pixel(views.idx[m], uv);
+        }
+    }
+    vis[0] = 1.0;
+    rgb = rgb + vertex_sum(in, uv, frame.info.w);
     count_reads();
     return vec4<f32>(rgb, 1.0);
 }

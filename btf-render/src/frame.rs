@@ -24,6 +24,10 @@ pub struct Stats {
     pub frame_ms: f64,
     /// How pass times were measured: `gpu-timestamps` or `cpu`.
     pub timing: String,
+    /// One-off costs of preparing the scene (environment visibility, gathers,
+    /// eigenweightsets), not part of `frame_ms`.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub setup: Vec<PassStat>,
     /// Texture reads per covered pixel in the BTF pass (when counted).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub reads_per_pixel: Option<f64>,

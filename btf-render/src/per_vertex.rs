@@ -97,6 +97,9 @@ pub fn compute(
             out.slots[v][m] = j as u32;
         }
         for (l, light) in input.lights.iter().enumerate() {
+            if light.color == [0.0; 3] {
+                continue; // no power (e.g. the slot an environment light fills itself)
+            }
             let (dir, falloff) = if light.point {
                 let d = light.pos_or_dir - p;
                 (d, 1.0 / d.norm_squared().max(1e-12))

@@ -3,12 +3,24 @@
 //!
 //! Only what the scene calls for is built and run (DESIGN.md §3): the smooth shadow
 //! boundary (eq. 6) and a shadow pass only with a shadowing light and `shadows ≠ none`;
-//! per-vertex coefficients only in per-vertex mode; blending work only with `four`.
+//! per-vertex coefficients only in per-vertex mode or with an environment light; visibility
+//! maps, gathers and eigenweightsets only with an environment light; blending work only
+//! with `four`.
+//!
+//! An environment light is always evaluated per vertex, as in the paper (§5.3: `f · ω_m ·
+//! γ*_{k j_m}` per vertex, eq. 11 with the view blending of eq. 5). Its contribution is
+//! *added* to the other lights': in per-vertex mode it is one more light of the per-vertex
+//! layout; in per-pixel mode the point/directional lights stay per pixel and the fragment
+//! shader adds the environment's per-vertex reconstruction (`fs_pixel_env`). The
+//! environment can be turned or swapped without recomputing visibility
+//! ([`Renderer::set_environment_rotation`], [`Renderer::set_environment`]).
 
 use crate::btf_pass::{
     BtfPass, BtfPassKey, CornerVertex, DEPTH_FORMAT, FrameRaw, LightRaw, color_format,
 };
-use crate::frame::{Frame, Stats};
+use crate::envlight::scene_env::{EnvMesh, ViewInput};
+use crate::envlight::{EnvMap, SceneEnvironment};
+use crate::frame::{Frame, PassStat, Stats};
 use crate::material::{MaterialData, MaterialGpu};
 use crate::math::{self, Mat4, Vec3, v3};
 use crate::mesh::Mesh;
@@ -69,10 +81,37 @@ pub struct Renderer {
     frame_group: wgpu::BindGroup,
     counters: wgpu::Buffer,
     shadowing: Option<Shadowing>,
+    environment: Option<EnvState>,
     camera: CameraSetup,
     options: RenderOptions,
     /// Bytes of material data on the GPU.
     pub material_bytes: u64,
+}
+
+/// The environment light at run time and its index in the scene's lights.
+struct EnvState {
+    light: usize,
+    env: SceneEnvironment,
+}
+
+/// Loads the environment map of the scene's environment light (if any) and computes the
+/// visibility maps and weights.
+fn build_environment(
+    scene: &Scene,
+    mesh: &Mesh,
+    tangents: &[[f32; 4]],
+    materials: &[&MaterialData],
+) -> Result<Option<EnvState>> {
+    let Some((light, desc)) = scene.environment() else { return Ok(None) };
+    let map = EnvMap::load(&desc.path)?;
+    let env_mesh = EnvMesh {
+        positions: &mesh.positions,
+        normals: &mesh.normals,
+        tangents,
+        triangles: &mesh.triangles,
+    };
+    let env = SceneEnvironment::new(desc.params(), &map, &env_mesh, materials)?;
+    Ok(Some(EnvState { light, env }))
 }
 
 /// Merges the scene's meshes and assigns each triangle a scene material index.
@@ -162,6 +201,7 @@ impl Renderer {
             light_four: fx.light_interp == InterpMode::Four,
             msaa: fx.msaa,
             count_reads: options.count_reads,
+            environment: scene.environment().is_some(),
         };
         let btf = BtfPass::new(gpu, key)?;
         let sampler = gpu.device.create_sampler(&wgpu::SamplerDescriptor {
@@ -233,6 +273,8 @@ impl Renderer {
                 Some(crate::read_bound::build(gpu, &btf, reads_per_pixel, m.groups, views)?)
             }
         };
+        let mats: Vec<&MaterialData> = materials.iter().map(|m| &m.data).collect();
+        let environment = build_environment(scene, &mesh, &tangents, &mats)?;
         let shadowing =
             if scene.wants_shadow_pass() { Some(Shadowing::new(gpu, scene, &mesh)?) } else { None };
         let extra_depth = shadowing.as_ref().map_or(0.0, |s| s.extra_camera_depth());
@@ -276,10 +318,67 @@ impl Renderer {
             frame_group,
             counters,
             shadowing,
+            environment,
             camera,
             options,
             material_bytes,
         })
+    }
+
+    /// The environment light's run-time state, when the scene has one.
+    pub fn environment(&self) -> Option<&SceneEnvironment> {
+        self.environment.as_ref().map(|e| &e.env)
+    }
+
+    /// Mutable access to the environment (exact or eigenweightset rotations, weights).
+    pub fn environment_mut(&mut self) -> Option<&mut SceneEnvironment> {
+        self.environment.as_mut().map(|e| &mut e.env)
+    }
+
+    fn env_or_err(&mut self) -> Result<&mut SceneEnvironment> {
+        self.environment_mut()
+            .ok_or_else(|| Error::Invalid("the scene has no environment light".into()))
+    }
+
+    /// Turns the environment to `delta_deg` about world `+z` (eigenweightsets: `e` vector
+    /// additions; else one gather). Visibility is kept.
+    pub fn set_environment_rotation(&mut self, delta_deg: f64) -> Result<()> {
+        self.env_or_err()?.set_rotation(delta_deg);
+        Ok(())
+    }
+
+    /// Replaces the environment map (one gather, plus the eigenweightsets when the scene
+    /// asks for them); visibility maps are kept.
+    pub fn set_environment(&mut self, map: &EnvMap) -> Result<()> {
+        self.env_or_err()?.set_environment(map)
+    }
+
+    /// Sets the environment's exposure `f`.
+    pub fn set_environment_exposure(&mut self, f: f32) -> Result<()> {
+        self.env_or_err()?.set_exposure(f);
+        Ok(())
+    }
+
+    /// One-off costs of preparing the scene (visibility maps, gathers, eigenweightsets).
+    pub fn setup_stats(&self) -> Vec<PassStat> {
+        let Some(e) = &self.environment else { return Vec::new() };
+        let t = &e.env.timings;
+        let mut out = vec![PassStat {
+            name: if t.visibility_cached {
+                "env visibility maps (cache)".into()
+            } else {
+                format!("env visibility maps ({} frames, cpu)", e.env.visibility().frames)
+            },
+            ms: t.visibility_ms,
+        }];
+        out.push(PassStat { name: "env gather g (cpu)".into(), ms: t.weights_ms });
+        if let Some(ews) = e.env.eigenweightsets() {
+            out.push(PassStat {
+                name: format!("env eigenweightsets (A = {}, cpu)", ews.rotations),
+                ms: t.eigen_ms,
+            });
+        }
+        out
     }
 
     /// The merged mesh.
@@ -306,7 +405,7 @@ impl Renderer {
                 self.scene.lights.len() as u32,
                 (self.shadowing.is_some() && fx.smooth_boundary) as u32,
                 self.materials.iter().map(|m| m.data.groups).max().unwrap_or(1) as u32,
-                0,
+                self.vertex_entries() as u32,
             ],
             terminator: [fx.terminator_deg.to_radians(), 0.0, 0.0, 0.0],
             ..Default::default()
@@ -335,6 +434,10 @@ impl Renderer {
                     color: [intensity[0], intensity[1], intensity[2], shadow_kind],
                     ..Default::default()
                 },
+                // Zero power per pixel; its light comes from the per-vertex coefficients.
+                Light::Environment(_) => {
+                    LightRaw { pos: [0.0, 0.0, 1.0, 0.0], ..Default::default() }
+                }
             };
             if let Some(s) = &self.shadowing {
                 s.fill_light_raw(l, &mut lr);
@@ -357,8 +460,22 @@ impl Renderer {
                 Light::Point { position, intensity, .. } => {
                     VertexLight { pos_or_dir: v3(*position), point: true, color: *intensity }
                 }
+                // Filled by the environment's own coefficients (zero power skips the fold).
+                Light::Environment(_) => {
+                    VertexLight { pos_or_dir: Vec3::z(), point: false, color: [0.0; 3] }
+                }
             })
             .collect()
+    }
+
+    /// Lights per vertex in the per-vertex layout: all lights in per-vertex mode, the
+    /// environment alone in per-pixel mode.
+    fn vertex_entries(&self) -> usize {
+        match (self.scene.effects.evaluation, &self.environment) {
+            (Evaluation::PerVertex, _) => self.scene.lights.len(),
+            (Evaluation::PerPixel, Some(_)) => 1,
+            (Evaluation::PerPixel, None) => 0,
+        }
     }
 
     /// Renders one frame and reads it back.
@@ -369,15 +486,11 @@ impl Renderer {
         let mut timer = PassTimer::new(gpu, 16);
         gpu.queue.write_buffer(&self.frame_uniform, 0, bytemuck::bytes_of(&self.frame_raw()));
         gpu.queue.write_buffer(&self.counters, 0, &[0u8; 16]);
-        let per_vertex_group =
-            if self.scene.effects.evaluation == Evaluation::PerVertex && self.baseline.is_none() {
-                let t = Instant::now();
-                let group = self.per_vertex_bind_group(gpu)?;
-                timer.cpu("per-vertex coefficients (cpu)", t.elapsed().as_secs_f64() * 1e3);
-                Some(group)
-            } else {
-                None
-            };
+        let per_vertex_group = if self.btf.key.uses_vertex_coefficients() && self.baseline.is_none() {
+            Some(self.per_vertex_bind_group(gpu, &mut timer)?)
+        } else {
+            None
+        };
         if let Some(s) = &self.shadowing {
             s.encode(
                 gpu,
@@ -466,6 +579,7 @@ impl Renderer {
             passes,
             frame_ms,
             timing: if gpu.timestamps { "gpu-timestamps" } else { "cpu" }.into(),
+            setup: self.setup_stats(),
             ..Default::default()
         };
         if self.options.count_reads {
@@ -488,8 +602,11 @@ impl Renderer {
     fn per_vertex_bind_group(
         &self,
         gpu: &Gpu,
+        timer: &mut PassTimer,
     ) -> Result<(wgpu::Buffer, wgpu::Buffer, wgpu::BindGroup)> {
-        let lights = self.vertex_lights();
+        let t = Instant::now();
+        let per_vertex = self.scene.effects.evaluation == Evaluation::PerVertex;
+        let lights = if per_vertex { self.vertex_lights() } else { Vec::new() };
         let mats: Vec<&MaterialData> = self.materials.iter().map(|m| &m.data).collect();
         let input = VertexEvalInput {
             eye: self.camera.eye,
@@ -499,7 +616,7 @@ impl Renderer {
             light_mode: self.scene.effects.light_interp,
             groups_stride: mats.iter().map(|m| m.groups).max().unwrap_or(1),
         };
-        let vc = per_vertex::compute(
+        let mut vc = per_vertex::compute(
             &self.mesh.positions,
             &self.mesh.normals,
             &self.tangents,
@@ -507,6 +624,26 @@ impl Renderer {
             &mats,
             &input,
         );
+        if per_vertex {
+            timer.cpu("per-vertex coefficients (cpu)", t.elapsed().as_secs_f64() * 1e3);
+        }
+        if let Some(e) = &self.environment {
+            let t = Instant::now();
+            let view = ViewInput {
+                eye: self.camera.eye,
+                ortho_to_camera: self.camera.ortho_to_camera,
+                view_mode: self.scene.effects.view_blend,
+                positions: &self.mesh.positions,
+                normals: &self.mesh.normals,
+                tangents: &self.tangents,
+                material_of: &self.vertex_material,
+                materials: &mats,
+            };
+            let (l, entries) = if per_vertex { (e.light, lights.len()) } else { (0, 1) };
+            let stride = per_vertex::stride(input.groups_stride);
+            e.env.fill(&mut vc, &view, l, entries, stride);
+            timer.cpu("env coefficients per vertex (cpu)", t.elapsed().as_secs_f64() * 1e3);
+        }
         let mk = |label, bytes: &[u8]| {
             gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),

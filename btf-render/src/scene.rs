@@ -27,7 +27,7 @@ pub struct Scene {
     pub materials: Vec<MaterialDesc>,
     /// The camera.
     pub camera: Camera,
-    /// Point and directional lights.
+    /// Point, directional and (at most one) environment lights, at most [`MAX_LIGHTS`].
     #[serde(default)]
     pub lights: Vec<Light>,
     /// What to compute and how.
@@ -150,6 +150,9 @@ pub enum Light {
         #[serde(default = "yes")]
         shadows: bool,
     },
+    /// An equirectangular HDR environment with per-vertex visibility (Sattler et al. 2003,
+    /// §5); always evaluated per vertex, added to the other lights.
+    Environment(EnvironmentLight),
 }
 
 fn yes() -> bool {
@@ -157,11 +160,98 @@ fn yes() -> bool {
 }
 
 impl Light {
-    /// Whether this light asks for shadows.
+    /// Whether this light asks for shadows (environment lights have their visibility maps
+    /// instead).
     pub fn casts_shadows(&self) -> bool {
         match self {
             Light::Directional { shadows, .. } | Light::Point { shadows, .. } => *shadows,
+            Light::Environment(_) => false,
         }
+    }
+}
+
+/// An environment light: `L(v) = f · ∫ L_env(R_δ ω) V(ω) BTF(v, ω) dω` (DESIGN.md §3).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EnvironmentLight {
+    /// Equirectangular linear HDR map (`.hdr` or `.exr`, world `+z` up).
+    pub path: PathBuf,
+    /// Rotation of the environment about world `+z`, degrees.
+    #[serde(default)]
+    pub rotation_deg: f64,
+    /// Exposure factor `f` (eq. 11).
+    #[serde(default = "one")]
+    pub exposure: f32,
+    /// Hemicube resolution: pixels across the top face of each vertex's visibility map.
+    #[serde(default = "visibility_res_default")]
+    pub visibility_res: u32,
+    /// Separate visibility maps for the back sides of the cloth.
+    #[serde(default = "yes")]
+    pub two_sided: bool,
+    /// Eigenweightsets (eq. 13) for fast rotation; absent = exact gather per rotation.
+    #[serde(default)]
+    pub eigenweightsets: Option<EigenSets>,
+    /// Folder for the visibility-map cache (absent: no cache).
+    #[serde(default)]
+    pub cache_dir: Option<PathBuf>,
+}
+
+fn visibility_res_default() -> u32 {
+    16
+}
+
+/// Eigenweightset parameters (eq. 13).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EigenSets {
+    /// Rotations `A` of the environment the PCA is built from (equal steps of 360°/A).
+    #[serde(default = "rotations_default")]
+    pub rotations: usize,
+    /// Components `e` kept.
+    #[serde(default = "components_default")]
+    pub components: usize,
+}
+
+fn rotations_default() -> usize {
+    30
+}
+fn components_default() -> usize {
+    5
+}
+
+impl EnvironmentLight {
+    /// The parameters of the run-time environment.
+    pub fn params(&self) -> crate::envlight::EnvironmentParams {
+        crate::envlight::EnvironmentParams {
+            rotation_deg: self.rotation_deg,
+            exposure: self.exposure,
+            visibility_res: self.visibility_res,
+            two_sided: self.two_sided,
+            eigen: self.eigenweightsets.map(|e| (e.rotations, e.components)),
+            cache_dir: self.cache_dir.clone(),
+        }
+    }
+
+    fn validate(&self, key: &str) -> std::result::Result<(), (String, String)> {
+        let bad = |k: &str, what: &str| Err((format!("{key}.{k}"), what.to_string()));
+        if !self.rotation_deg.is_finite() {
+            return bad("rotation_deg", "must be finite");
+        }
+        if !(self.exposure.is_finite() && self.exposure >= 0.0) {
+            return bad("exposure", "must be a number ≥ 0");
+        }
+        if !(2..=256).contains(&self.visibility_res) {
+            return bad("visibility_res", "must be in 2..=256 pixels");
+        }
+        if let Some(e) = self.eigenweightsets {
+            if !(2..=720).contains(&e.rotations) {
+                return bad("eigenweightsets.rotations", "must be in 2..=720");
+            }
+            if e.components == 0 || e.components >= e.rotations {
+                return bad("eigenweightsets.components", "must be in 1..rotations");
+            }
+        }
+        Ok(())
     }
 }
 
@@ -252,6 +342,12 @@ impl Scene {
         for m in &mut scene.materials {
             m.store = dir.join(&m.store);
         }
+        for l in &mut scene.lights {
+            if let Light::Environment(e) = l {
+                e.path = dir.join(&e.path);
+                e.cache_dir = e.cache_dir.as_ref().map(|c| dir.join(c));
+            }
+        }
         scene.validate(path)?;
         Ok(scene)
     }
@@ -296,12 +392,21 @@ impl Scene {
         if self.lights.len() > MAX_LIGHTS {
             return bad("lights".into(), &format!("at most {MAX_LIGHTS} lights"));
         }
+        if self.lights.iter().filter(|l| matches!(l, Light::Environment(_))).count() > 1 {
+            return bad("lights".into(), "at most one environment light");
+        }
         for (i, l) in self.lights.iter().enumerate() {
             let (v, power, key) = match l {
                 Light::Directional { direction, irradiance, .. } => {
                     (direction, irradiance, "irradiance")
                 }
                 Light::Point { position, intensity, .. } => (position, intensity, "intensity"),
+                Light::Environment(e) => {
+                    if let Err((key, what)) = e.validate(&format!("lights[{i}]")) {
+                        return bad(key, &what);
+                    }
+                    continue;
+                }
             };
             if !finite(v) || !finite(power) || power.iter().any(|p| *p < 0.0) {
                 return bad(
@@ -335,6 +440,14 @@ impl Scene {
             return bad("effects.msaa".into(), "must be 1 or 4");
         }
         Ok(())
+    }
+
+    /// The environment light and its index in `lights`, if the scene has one.
+    pub fn environment(&self) -> Option<(usize, &EnvironmentLight)> {
+        self.lights.iter().enumerate().find_map(|(i, l)| match l {
+            Light::Environment(e) => Some((i, e)),
+            _ => None,
+        })
     }
 
     /// True when some light casts shadows and the scene asks for a shadow technique.
@@ -393,5 +506,38 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("lights[0].direction"), "{e}");
+    }
+
+    const ENV: &str = "[[lights]]\nkind = \"environment\"\npath = \"sky.exr\"\n";
+
+    #[test]
+    fn environment_lights_get_defaults_and_resolved_paths() {
+        let s = load(&format!("{MINIMAL}{ENV}rotation_deg = 400\ncache_dir = \"c\"\neigenweightsets = {{ components = 3 }}\n")).unwrap();
+        let (i, e) = s.environment().unwrap();
+        assert_eq!(i, 1);
+        assert!(e.path.is_absolute() && e.path.ends_with("sky.exr"));
+        assert!(e.cache_dir.as_ref().unwrap().is_absolute());
+        assert_eq!((e.exposure, e.visibility_res, e.two_sided), (1.0, 16, true));
+        assert_eq!(e.params().eigen, Some((30, 3)));
+        assert_eq!(e.rotation_deg, 400.0);
+        assert!(!s.wants_shadow_pass());
+        assert!(load(MINIMAL).unwrap().environment().is_none());
+    }
+
+    #[test]
+    fn bad_environment_keys_are_named() {
+        let e = load(&format!("{MINIMAL}{ENV}visibility_res = 1\n")).unwrap_err().to_string();
+        assert!(e.contains("lights[1].visibility_res"), "{e}");
+        let e =
+            load(&format!("{MINIMAL}{ENV}eigenweightsets = {{ rotations = 4, components = 4 }}\n"))
+                .unwrap_err()
+                .to_string();
+        assert!(e.contains("lights[1].eigenweightsets.components"), "{e}");
+        let e = load(&format!("{MINIMAL}{ENV}exposure = -1\n")).unwrap_err().to_string();
+        assert!(e.contains("lights[1].exposure"), "{e}");
+        let e = load(&format!("{MINIMAL}{ENV}sharpness = 1\n")).unwrap_err().to_string();
+        assert!(e.contains("sharpness"), "{e}");
+        let e = load(&format!("{MINIMAL}{ENV}{ENV}")).unwrap_err().to_string();
+        assert!(e.contains("at most one environment light"), "{e}");
     }
 }

@@ -69,6 +69,8 @@ pub fn light_matrix(light: &Light, center: Vec3, radius: f32) -> Mat4 {
                 math::perspective(150.0, 1.0, r * 1e-3, dist + 1.05 * r) * view
             }
         }
+        // Environment lights never cast shadow maps (their visibility maps do the job).
+        Light::Environment(_) => Mat4::identity(),
     }
 }
 

@@ -40,8 +40,12 @@ pub fn prisms(mesh: &Mesh, light: &Light, radius: f32) -> Vec<[f32; 4]> {
             Light::Point { position, .. } => {
                 (p - v3(*position)).try_normalize(0.0).unwrap_or(Vec3::z())
             }
+            Light::Environment(_) => Vec3::zeros(), // never shadow-casting (no prisms below)
         }
     };
+    if matches!(light, Light::Environment(_)) {
+        return Vec::new();
+    }
     let mut out = Vec::with_capacity(mesh.triangles.len() * 24);
     for tri in &mesh.triangles {
         let [mut a, mut b, c] = tri.map(|i| v3(mesh.positions[i as usize]));

@@ -333,3 +333,126 @@ fn non_finite_environment_files_are_refused() {
     assert_eq!((m.width, m.height, m.pixels[5]), (16, 8, [0.5, 1.0, 2.0]));
     assert!(EnvMap::load(&dir.path().join("x.png")).is_err());
 }
+
+/// A 12×12 sheet crumpled by pseudo-random heights about one grid step high: every kind of
+/// near and far occluder at once.
+fn crumpled_sheet() -> Mesh {
+    let n = 12u32;
+    let mut m = Mesh::default();
+    let mut seed = 7u32;
+    for j in 0..=n {
+        for i in 0..=n {
+            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            let z = ((seed >> 8) as f32 / (1 << 24) as f32 - 0.5) * 0.15;
+            m.positions.push([i as f32 / n as f32, j as f32 / n as f32, z]);
+            m.uvs.push([i as f32, j as f32]);
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            let a = j * (n + 1) + i;
+            m.triangles.push([a, a + 1, a + n + 2]);
+            m.triangles.push([a, a + n + 2, a + n + 1]);
+        }
+    }
+    m.triangle_material = vec![0; m.triangles.len()];
+    m.material_names = vec![String::new()];
+    m.normals = vec![[0.0; 3]; m.positions.len()];
+    m.repair_normals(true);
+    m
+}
+
+fn shirt_low() -> Mesh {
+    let dir = tempfile::tempdir().unwrap();
+    let m = datasets::mesh::synth_mesh(
+        datasets::mesh::MeshKind::Shirt,
+        datasets::mesh::Resolution::Low,
+    )
+    .unwrap();
+    let p = dir.path().join("shirt.obj");
+    datasets::mesh::write_obj(&m, &p, "shirt").unwrap();
+    Mesh::load_obj(&p, None).unwrap()
+}
+
+#[test]
+fn fast_visibility_equals_the_ray_cast() {
+    let meshes = [
+        ("sphere", sphere(16), 16),
+        ("corner", corner_mesh(0.1, 0.5, 0.3), 32),
+        ("crumpled sheet", crumpled_sheet(), 16),
+        ("shirt low", shirt_low(), 8),
+    ];
+    for (name, mesh, res) in meshes {
+        let cube = Hemicube::new(res).unwrap();
+        let tangents = compute_tangents(&mesh);
+        let frames = HemicubeFrame::of_mesh(&mesh.positions, &mesh.normals, &tangents, true);
+        let (pos, tris) = (&mesh.positions, &mesh.triangles);
+        let fast = VisibilityMaps::compute(&cube, &frames, pos, tris);
+        let reference = VisibilityMaps::compute_ray_cast(&cube, &frames, pos, tris);
+        let differ: u32 =
+            fast.bits.iter().zip(&reference.bits).map(|(a, b)| (a ^ b).count_ones()).sum();
+        let visible: u32 = reference.bits.iter().map(|w| w.count_ones()).sum();
+        let share = visible as f64 / (frames.len() * cube.len()) as f64;
+        eprintln!(
+            "{name}: {} frames, {differ} differing pixels, visible share {share:.3}",
+            frames.len()
+        );
+        assert_eq!(differ, 0, "{name}: fast visibility differs from the ray cast");
+        // Not a trivial case: both occluded and visible pixels occur.
+        assert!(share > 0.05 && share < 0.95, "{name}: visible share {share}");
+    }
+}
+
+#[test]
+fn fast_gather_reproduces_the_frame_by_frame_sums_bit_for_bit() {
+    let mesh = crumpled_sheet();
+    let (env, _) = sun_env(256, [0.5, 0.3, 0.812]);
+    let cube_env = EnvCube::new(&env, 16);
+    for two_sided in [false, true] {
+        let (mut s, _d) = setup(&mesh, 16, Pattern::Checker, 4);
+        let tangents = compute_tangents(&mesh);
+        s.frames = HemicubeFrame::of_mesh(&mesh.positions, &mesh.normals, &tangents, two_sided);
+        s.vis = VisibilityMaps::compute(&s.cube, &s.frames, &mesh.positions, &mesh.triangles);
+        let input = GatherInput {
+            table: &s.table,
+            visibility: &s.vis,
+            frames: &s.frames,
+            dirs: &s.cube.dirs,
+            lights: s.p.lights,
+        };
+        for delta in [0.0, 37.0] {
+            let fast = WeightSet::gather(&input, &cube_env, delta);
+            let reference = WeightSet::gather_reference(&input, &cube_env, delta);
+            assert!(fast.g.iter().any(|&g| g > 0.0));
+            assert_eq!(fast, reference, "two-sided {two_sided}, δ = {delta}");
+        }
+    }
+}
+
+#[test]
+fn gamma_basis_equals_gamma_star_of_the_reconstruction() {
+    let mesh = crumpled_sheet();
+    let (s, _d) = setup(&mesh, 8, Pattern::Checker, 4);
+    let (env, _) = sun_env(128, [0.5, 0.3, 0.812]);
+    let cube = EnvCube::new(&env, 8);
+    let sets: Vec<WeightSet> = (0..12).map(|a| s.gather(&cube, a as f64 * 30.0)).collect();
+    let ews = EigenWeightSets::build(&sets, &s.p.metric(), 5).unwrap();
+    let picks: Vec<(usize, usize)> = (0..s.frames.len()).map(|f| (f, f % s.p.slots)).collect();
+    let basis = ews.gamma_basis(&s.p, &picks, 5).unwrap();
+    let k3 = 3 * s.p.per_slot();
+    let mut fast = vec![0f32; picks.len() * k3];
+    let mut slow = vec![0f32; k3];
+    for delta in [0.0, 47.0, 200.0] {
+        basis.at(&ews.coefficients_at(delta, 5), &mut fast);
+        let g = ews.reconstruct(delta, 5);
+        for (n, &(f, j)) in picks.iter().enumerate() {
+            g.gamma_star(&s.p, f, j, &mut slow);
+            let scale = slow.iter().fold(1e-6f32, |m, x| m.max(x.abs()));
+            for (a, b) in fast[n * k3..(n + 1) * k3].iter().zip(&slow) {
+                // Same sums in another order: f32 rounding of ~100 terms.
+                assert!((a - b).abs() <= 1e-4 * scale, "δ {delta}, pick {n}: {a} vs {b}");
+            }
+        }
+    }
+    assert!(ews.gamma_basis(&s.p, &[(s.frames.len(), 0)], 5).is_err());
+}

@@ -1,14 +1,21 @@
 //! Measured figures of environment lighting on the synthetic shirts (ignored by default):
 //! `CARGO_PROFILE_DEV_OPT_LEVEL=3 cargo test -p btf-render --test envlight_measure --
-//! --ignored --nocapture` (add `BTF_MEASURE_HIGH=1` for the 9160-vertex shirt). Prints visibility, gather, eigenweightset and full-U timings,
-//! the eigenweightset error table (e = 1…8) and writes the o_k(δ) plot.
+//! --ignored --nocapture` (add `BTF_MEASURE_HIGH=1` for the 9160-vertex shirt). Prints, each
+//! with its baseline measured in the same run: visibility (rasteriser vs the reference ray
+//! cast, bits compared), the gather (vertex-pair vs frame-by-frame, bits compared), the full
+//! `U`, eigenweightsets and a rotation (all of `G` vs the camera's `γ*` only); then the
+//! eigenweightset error table (e = 1…8) and the o_k(δ) plot.
 
 mod common;
 
+use btf_core::InterpMode;
 use btf_core::eigen::Quantization;
 use btf_render::envlight::eigenweights::relative_error;
 use btf_render::envlight::scene_env::EnvMesh;
-use btf_render::envlight::{EnvMap, EnvironmentParams, SceneEnvironment, heatmap};
+use btf_render::envlight::{
+    CoefficientMatrix, EnvCube, EnvMap, EnvironmentParams, GatherInput, Hemicube, HemicubeFrame,
+    LightTable, SceneEnvironment, VisibilityMaps, WeightSet, heatmap,
+};
 use btf_render::material::MaterialData;
 use btf_render::mesh::Mesh;
 use btf_render::tangent::compute_tangents;
@@ -26,6 +33,19 @@ fn shirt(dir: &std::path::Path, res: Resolution) -> Mesh {
     let p = dir.join("shirt.obj");
     datasets::mesh::write_obj(&m, &p, "shirt").unwrap();
     Mesh::load_obj(&p, None).unwrap()
+}
+
+fn ms(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn differing(a: &VisibilityMaps, b: &VisibilityMaps) -> u32 {
+    a.bits.iter().zip(&b.bits).map(|(x, y)| (x ^ y).count_ones()).sum()
 }
 
 #[test]
@@ -50,6 +70,24 @@ fn measure_shirts() {
     for (name, res) in runs {
         let mesh = shirt(dir.path(), res);
         let tangents = compute_tangents(&mesh);
+        let n = mesh.positions.len();
+        eprintln!(
+            "{name}: {n} vertices, {} triangles, hemicube 32², two-sided",
+            mesh.triangles.len()
+        );
+        let cube = Hemicube::new(32).unwrap();
+        let frames = HemicubeFrame::of_mesh(&mesh.positions, &mesh.normals, &tangents, true);
+        let cache = dir.path().join(format!("cache-{n}"));
+        let vis = visibility(name, &cube, &frames, &mesh, &cache);
+        let table = LightTable::new(&cube, &mat.light_sampling, InterpMode::Four).unwrap();
+        let input = GatherInput {
+            table: &table,
+            visibility: &vis,
+            frames: &frames,
+            dirs: &cube.dirs,
+            lights: mat.light_sampling.len(),
+        };
+        gather(name, &input, &env);
         let em = EnvMesh {
             positions: &mesh.positions,
             normals: &mesh.normals,
@@ -62,44 +100,153 @@ fn measure_shirts() {
             visibility_res: 32,
             two_sided: true,
             eigen: Some((30, 5)),
-            cache_dir: None,
+            cache_dir: Some(cache),
         };
         let t = Instant::now();
         let mut s = SceneEnvironment::new(params, &env, &em, &[&mat]).unwrap();
-        let total = t.elapsed().as_secs_f64();
         let tm = s.timings;
-        let n = mesh.positions.len();
+        assert!(tm.visibility_cached);
         eprintln!(
-            "{name}: {n} vertices, {} triangles, res 32, two-sided: visibility {:.0} ms ({:.3} ms/vertex-side), gather {:.1} ms, eigenweightsets (30 gathers + PCA) {:.0} ms, total {total:.2} s",
-            mesh.triangles.len(),
-            tm.visibility_ms,
-            tm.visibility_ms / (2 * n) as f64,
+            "{name}: scene environment {:.2} s: filter + gather {:.1} ms, eigenweightsets (30 gathers + PCA) {:.0} ms",
+            t.elapsed().as_secs_f64(),
             tm.weights_ms,
             tm.eigen_ms
         );
+        let p = CoefficientMatrix::from_material(&mat);
         let t = Instant::now();
-        let u = s.weights().full_u(&btf_render::envlight::CoefficientMatrix::from_material(&mat));
-        eprintln!(
-            "{name}: full U = G·P ({} floats, one sgemm) {:.1} ms",
-            u.len(),
-            t.elapsed().as_secs_f64() * 1e3
-        );
-        let mut rot = vec![];
-        for k in 0..10 {
-            s.set_rotation(7.0 + 13.0 * k as f64);
-            rot.push(s.timings.rotation_ms);
-        }
-        rot.sort_by(f64::total_cmp);
-        eprintln!("{name}: rotation through eigenweightsets (e = 5) median {:.2} ms", rot[5]);
+        let u = s.weights().full_u(&p);
+        eprintln!("{name}: full U = G·P ({} floats, one sgemm) {:.1} ms", u.len(), ms(t));
+        rotation(name, &mut s, &p, &mat, &mesh, &frames);
         if res == Resolution::Low {
-            error_table(&s, dir.path());
+            error_table(&s);
         }
     }
 }
 
-fn error_table(s: &SceneEnvironment, _dir: &std::path::Path) {
+/// Rasteriser (all frames, then through the cache) against the reference ray cast (all
+/// frames of the low shirt, every 8th frame of the high one), bits compared.
+fn visibility(
+    name: &str,
+    cube: &Hemicube,
+    frames: &[HemicubeFrame],
+    mesh: &Mesh,
+    cache: &std::path::Path,
+) -> VisibilityMaps {
+    let (pos, tris) = (&mesh.positions, &mesh.triangles);
+    let t = Instant::now();
+    let (vis, hit) = VisibilityMaps::cached(cache, cube, frames, pos, tris).unwrap();
+    let fast_ms = ms(t);
+    assert!(!hit);
+    let t = Instant::now();
+    let (again, hit) = VisibilityMaps::cached(cache, cube, frames, pos, tris).unwrap();
+    assert!(hit && again == vis);
+    let cached_ms = ms(t);
+    let stride = if frames.len() > 4000 { 8 } else { 1 };
+    let sub: Vec<HemicubeFrame> = frames.iter().step_by(stride).copied().collect();
+    let t = Instant::now();
+    let fast_sub = VisibilityMaps::compute(cube, &sub, pos, tris);
+    let fast_sub_ms = ms(t);
+    let t = Instant::now();
+    let reference = VisibilityMaps::compute_ray_cast(cube, &sub, pos, tris);
+    let ref_ms = ms(t);
+    let visible: u32 = vis.bits.iter().map(|w| w.count_ones()).sum();
+    eprintln!(
+        "{name}: visibility {fast_ms:.0} ms = {:.3} ms per vertex side (cache load {cached_ms:.0} ms); visible share {:.3}",
+        fast_ms / frames.len() as f64,
+        visible as f64 / (frames.len() * cube.len()) as f64
+    );
+    eprintln!(
+        "{name}: same {} frames (every {stride}th): rasteriser {fast_sub_ms:.0} ms, ray cast {ref_ms:.0} ms ({:.1}×), {} differing pixels",
+        sub.len(),
+        ref_ms / fast_sub_ms,
+        differing(&fast_sub, &reference)
+    );
+    vis
+}
+
+/// The vertex-pair gather against the frame-by-frame one, after filtering the map.
+fn gather(name: &str, input: &GatherInput, env: &EnvMap) {
+    let t = Instant::now();
+    let cube = EnvCube::new(env, 32);
+    let filter_ms = ms(t);
+    let mut fast = vec![];
+    let mut g = None;
+    for k in 0..3 {
+        let t = Instant::now();
+        g = Some(WeightSet::gather(input, &cube, 10.0 * k as f64));
+        fast.push(ms(t));
+    }
+    let t = Instant::now();
+    let reference = WeightSet::gather_reference(input, &cube, 20.0);
+    let ref_ms = ms(t);
+    assert_eq!(g.as_ref(), Some(&reference));
+    let fast_ms = median(fast);
+    eprintln!(
+        "{name}: environment change: filter {filter_ms:.1} ms + gather {fast_ms:.1} ms = {:.1} ms; frame-by-frame gather {ref_ms:.1} ms ({:.1}×), bit-identical",
+        filter_ms + fast_ms,
+        ref_ms / fast_ms
+    );
+}
+
+/// A rotation through the eigenweightsets: all of `G` (then `γ*` for the camera's slots)
+/// against the camera's `γ*` only.
+fn rotation(
+    name: &str,
+    s: &mut SceneEnvironment,
+    p: &CoefficientMatrix,
+    mat: &MaterialData,
+    mesh: &Mesh,
+    frames: &[HemicubeFrame],
+) {
+    let n = mesh.positions.len();
+    let eye = [0.0f32, -3.0, 0.5];
+    let mut picks = vec![];
+    for v in 0..n {
+        let to = [0, 1, 2].map(|a| eye[a] - mesh.positions[v][a]);
+        let [t, b, nn] = frames[v].axes;
+        let dot = |a: [f32; 3], b: [f32; 3]| (0..3).map(|i| (a[i] * b[i]) as f64).sum::<f64>();
+        let (z, f) = if dot(to, nn) >= 0.0 { (dot(to, nn), v) } else { (-dot(to, nn), n + v) };
+        let Some(d) = btf_core::Direction::from_vector([dot(to, t), dot(to, b), z]) else {
+            continue;
+        };
+        for &(j, _) in mat.view_sampling.view_weights(d, InterpMode::Four).as_slice() {
+            picks.push((f, j));
+        }
+    }
+    let (mut all_g, mut gammas) = (vec![], vec![]);
+    let k3 = 3 * p.per_slot();
+    let mut out = vec![0f32; picks.len() * k3];
+    for k in 0..5 {
+        let delta = 7.0 + 13.0 * k as f64;
+        s.set_rotation(delta);
+        all_g.push(s.timings.rotation_ms);
+        let t = Instant::now();
+        for (n, &(f, j)) in picks.iter().enumerate() {
+            s.weights().gamma_star(p, f, j, &mut out[n * k3..(n + 1) * k3]);
+        }
+        gammas.push(ms(t));
+    }
+    let ews = s.eigenweightsets().unwrap();
+    let t = Instant::now();
+    let basis = ews.gamma_basis(p, &picks, 5).unwrap();
+    let basis_ms = ms(t);
+    let mut fast = vec![];
+    for k in 0..10 {
+        let t = Instant::now();
+        basis.at(&ews.coefficients_at(7.0 + 13.0 * k as f64, 5), &mut out);
+        fast.push(ms(t));
+    }
+    eprintln!(
+        "{name}: rotation (e = 5): all of G {:.1} ms + γ* of {} view slots {:.1} ms; γ* directly {:.2} ms (basis for this camera {basis_ms:.0} ms)",
+        median(all_g),
+        picks.len(),
+        median(gammas),
+        median(fast)
+    );
+}
+
+fn error_table(s: &SceneEnvironment) {
     let metric = s.metric();
-    let _ = s.eigenweightsets();
     eprintln!(
         "| e | max rel. error at the 30 sampled rotations | max rel. error between them (δ = 6° + 12°·a) |"
     );

@@ -11,21 +11,21 @@
 pub const LEAF_SIZE: usize = 4;
 
 #[derive(Debug, Clone, Copy)]
-struct Node {
-    lo: [f32; 3],
-    hi: [f32; 3],
+pub(super) struct Node {
+    pub(super) lo: [f32; 3],
+    pub(super) hi: [f32; 3],
     /// Leaf: first triangle; inner: index of the right child.
-    start_or_right: u32,
+    pub(super) start_or_right: u32,
     /// Triangles in a leaf, 0 for an inner node.
-    count: u32,
+    pub(super) count: u32,
 }
 
 /// Precomputed triangle: a vertex and two edges.
 #[derive(Debug, Clone, Copy)]
-struct Tri {
-    p0: [f32; 3],
-    e1: [f32; 3],
-    e2: [f32; 3],
+pub(super) struct Tri {
+    pub(super) p0: [f32; 3],
+    pub(super) e1: [f32; 3],
+    pub(super) e2: [f32; 3],
 }
 
 /// The hierarchy.
@@ -35,13 +35,13 @@ pub struct Bvh {
     tris: Vec<Tri>,
 }
 
-fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+pub(super) fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
     [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
-fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
+pub(super) fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
@@ -116,13 +116,32 @@ impl Bvh {
         self.tris.len()
     }
 
+    /// The flat node array (depth-first; the left child follows its parent).
+    pub(super) fn nodes(&self) -> &[Node] {
+        &self.nodes
+    }
+
+    /// The triangles in leaf order.
+    pub(super) fn tris(&self) -> &[Tri] {
+        &self.tris
+    }
+
     /// Whether the ray `origin + t·dir`, `t > t_min`, hits any triangle.
     pub fn occluded(&self, origin: [f32; 3], dir: [f32; 3], t_min: f32) -> bool {
-        if self.nodes.is_empty() {
-            return false;
-        }
+        !self.nodes.is_empty() && self.occluded_below(0, origin, dir, t_min)
+    }
+
+    /// [`Bvh::occluded`] restricted to the triangles under node `root` (same tests, so a
+    /// hit there is a hit of the whole query).
+    pub(super) fn occluded_below(
+        &self,
+        root: u32,
+        origin: [f32; 3],
+        dir: [f32; 3],
+        t_min: f32,
+    ) -> bool {
         let inv = dir.map(|d| 1.0 / d);
-        let mut stack = [0u32; 64];
+        let mut stack = [root; 64];
         let mut sp = 1usize;
         while sp > 0 {
             sp -= 1;
@@ -162,7 +181,7 @@ fn slab_hit(n: &Node, o: [f32; 3], inv: [f32; 3], t_min: f32) -> bool {
     t0 <= t1
 }
 
-fn tri_hit(t: &Tri, o: [f32; 3], d: [f32; 3], t_min: f32) -> bool {
+pub(super) fn tri_hit(t: &Tri, o: [f32; 3], d: [f32; 3], t_min: f32) -> bool {
     let p = cross(d, t.e2);
     let det = dot(t.e1, p);
     if det.abs() < 1e-20 {

@@ -13,10 +13,11 @@
 //! Between the sampled rotations `o_k(δ)` is interpolated by a periodic Catmull–Rom
 //! spline, so rotating by 360° is the identity and the samples are reproduced exactly.
 
-use super::weights::{WeightSet, metric_dot};
+use super::weights::{CoefficientMatrix, WeightSet, gamma_star_of, metric_dot};
 use crate::{Error, Result};
 use btf_core::gemm::{Mat, dgemm};
 use nalgebra::{DMatrix, SymmetricEigen};
+use rayon::prelude::*;
 
 /// The decomposition of `A` weight sets.
 #[derive(Debug, Clone)]
@@ -123,6 +124,74 @@ impl EigenWeightSets {
             g.iter_mut().zip(w).for_each(|(g, &w)| *g += ok * w);
         }
         WeightSet { g, ..self.mean.clone() }
+    }
+}
+
+/// `γ*` of chosen `(frame, slot)` pairs as a function of the rotation: the renderer reads
+/// `γ*` only for the four view slots of the side each vertex shows, so for a fixed camera
+/// a rotation is `γ*(δ) = γ*(Ḡ) + Σ_{k<e} o_k(δ) γ*(W_k)` over those pairs alone — `e + 1`
+/// streams of `3 (c + 2)` floats per pair instead of `e` additions over all of `G` plus a
+/// `γ*` product (`3 · lights · (c + 2)` per pair) afterwards.
+#[derive(Debug, Clone)]
+pub struct GammaBasis {
+    /// Pairs.
+    pub picks: usize,
+    /// Floats per pair, `3 (c + 2)` (layout of [`super::WeightSet::gamma_star`]).
+    pub per_pick: usize,
+    /// Terms per pair: the mean and `e` eigenweightsets.
+    pub terms: usize,
+    /// `[pair][term][per_pick]`.
+    data: Vec<f32>,
+}
+
+impl EigenWeightSets {
+    /// `γ*` of the mean and of the first `e` eigenweightsets for every `(frame, slot)` in
+    /// `picks`, for the coefficients `p`.
+    pub fn gamma_basis(
+        &self,
+        p: &CoefficientMatrix,
+        picks: &[(usize, usize)],
+        e: usize,
+    ) -> Result<GammaBasis> {
+        let (frames, n_l) = (self.mean.frames, self.mean.lights);
+        if p.lights != n_l {
+            return Err(Error::Invalid(format!("{} lights in P, {n_l} in G", p.lights)));
+        }
+        if let Some(&(f, j)) = picks.iter().find(|&&(f, j)| f >= frames || j >= p.slots) {
+            return Err(Error::Invalid(format!("pick (frame {f}, slot {j}) out of range")));
+        }
+        let terms = 1 + e.min(self.kept());
+        let per_pick = 3 * p.per_slot();
+        let row = 3 * n_l;
+        let mut data = vec![0f32; picks.len() * terms * per_pick];
+        data.par_chunks_mut(terms * per_pick).zip(picks.par_iter()).for_each(|(out, &(f, j))| {
+            for (t, dst) in out.chunks_exact_mut(per_pick).enumerate() {
+                let g = if t == 0 { &self.mean.g } else { &self.sets[t - 1] };
+                gamma_star_of(&g[f * row..(f + 1) * row], p, j, dst);
+            }
+        });
+        Ok(GammaBasis { picks: picks.len(), per_pick, terms, data })
+    }
+}
+
+impl GammaBasis {
+    /// `γ*` of every pair for the coefficients `o` (from
+    /// [`EigenWeightSets::coefficients_at`]; extra ones are ignored) into `out`
+    /// (`picks · per_pick`).
+    pub fn at(&self, o: &[f64], out: &mut [f32]) {
+        let o: Vec<f32> = o.iter().take(self.terms - 1).map(|&x| x as f32).collect();
+        let per = self.per_pick;
+        out[..self.picks * per]
+            .par_chunks_mut(per * 256)
+            .zip(self.data.par_chunks(self.terms * per * 256))
+            .for_each(|(dst, src)| {
+                for (d, s) in dst.chunks_exact_mut(per).zip(src.chunks_exact(self.terms * per)) {
+                    d.copy_from_slice(&s[..per]);
+                    for (ok, w) in o.iter().zip(s[per..].chunks_exact(per)) {
+                        d.iter_mut().zip(w).for_each(|(d, &w)| *d += ok * w);
+                    }
+                }
+            });
     }
 }
 

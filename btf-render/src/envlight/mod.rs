@@ -3,10 +3,11 @@
 //!
 //! - [`hemicube`]: pixel directions, exact solid angles (sum 2π) and the shared table
 //!   "pixel → four nearest measured light directions + weights" (eq. 9, §5.2);
-//! - [`bvh`], [`visibility`]: per-vertex visibility maps by ray casting against the mesh,
-//!   cached on disk (§5.2);
+//! - [`bvh`], [`visibility`], `raster`: per-vertex visibility maps — the answer of one ray
+//!   per hemicube pixel, found by projecting the BVH-culled mesh onto the hemicube and
+//!   confirming each covered pixel with the ray test — cached on disk (§5.2);
 //! - [`envmap`]: equirectangular HDR maps and their area-averaged cube form (`L_env`);
-//! - [`weights`]: `g_i` per vertex, `γ*` and the weight vector `U` (eq. 10–12);
+//! - [`weights`], `gather`: `g_i` per vertex, `γ*` and the weight vector `U` (eq. 10–12);
 //! - [`eigenweights`]: the PCA over environment rotations and `U(δ)` (eq. 13);
 //! - [`scene_env`]: an environment light of a scene: state, rotation, per-vertex coefficients;
 //! - [`heatmap`]: green → red error images and small line plots written with `image`.
@@ -14,8 +15,10 @@
 pub mod bvh;
 pub mod eigenweights;
 pub mod envmap;
+mod gather;
 pub mod heatmap;
 pub mod hemicube;
+mod raster;
 pub mod scene_env;
 pub mod visibility;
 pub mod weights;

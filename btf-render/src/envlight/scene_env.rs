@@ -22,6 +22,10 @@ use btf_core::{Direction, InterpMode};
 use std::path::PathBuf;
 use std::time::Instant;
 
+/// Eigenweightsets kept at least (when on and the rank allows), so that error reports for
+/// `e = 1…8` come from the same PCA.
+pub const REPORT_COMPONENTS: usize = 8;
+
 /// What an environment light asks for.
 #[derive(Debug, Clone)]
 pub struct EnvironmentParams {
@@ -166,10 +170,44 @@ impl SceneEnvironment {
             let sets: Vec<WeightSet> =
                 (0..a_n).map(|a| self.gather(a as f64 * 360.0 / a_n as f64)).collect();
             let metric = self.coefficients[0].metric();
-            self.eigen = Some(EigenWeightSets::build(&sets, &metric, e.min(a_n - 1))?);
+            // Keep up to REPORT_COMPONENTS so error tables for e = 1…8 need no second PCA.
+            let keep = e.max(REPORT_COMPONENTS).min(a_n - 1);
+            self.eigen = Some(EigenWeightSets::build(&sets, &metric, keep)?);
             self.timings.eigen_ms = ms(t);
             self.set_rotation(self.params.rotation_deg);
         }
+        Ok(())
+    }
+
+    /// Rotation in use, degrees.
+    pub fn rotation_deg(&self) -> f64 {
+        self.params.rotation_deg
+    }
+
+    /// Eigenweightsets in use `(A, e)`, when on.
+    pub fn eigen_params(&self) -> Option<(usize, usize)> {
+        self.params.eigen
+    }
+
+    /// Turns the environment to `delta_deg` with the exact weights (one full gather),
+    /// whatever the eigenweightset setting — the reference of error measures.
+    pub fn set_rotation_exact(&mut self, delta_deg: f64) {
+        let t = Instant::now();
+        self.params.rotation_deg = delta_deg;
+        self.weights = self.gather(delta_deg);
+        self.timings.rotation_ms = ms(t);
+    }
+
+    /// Turns the environment to `delta_deg` with `e` eigenweightsets (at most those kept);
+    /// an error when eigenweightsets are off.
+    pub fn set_rotation_eigen(&mut self, delta_deg: f64, e: usize) -> Result<()> {
+        let ews = self.eigen.as_ref().ok_or_else(|| {
+            Error::Invalid("eigenweightsets are off for this environment light".into())
+        })?;
+        let t = Instant::now();
+        self.params.rotation_deg = delta_deg;
+        self.weights = ews.reconstruct(delta_deg, e);
+        self.timings.rotation_ms = ms(t);
         Ok(())
     }
 

@@ -2,11 +2,12 @@
 //! pixels of its tangent-space hemicube see the environment past the whole mesh — the
 //! factor `V(x, p_α)` of eq. 9 that gives macroscopic self-shadowing.
 //!
-//! Method: CPU ray casting against a [`Bvh`], one any-hit ray per hemicube pixel, vertices
-//! in parallel with rayon. On this CPU-only machine this beats rasterising 5 hemicube faces
-//! per vertex (on lavapipe every face is a draw of the whole mesh plus a read-back: the
-//! cost grows with vertices × triangles, while a BVH query grows with log(triangles)); the
-//! measured figures are in the crate README. Cloth is double-sided: any triangle occludes,
+//! Definition: one any-hit ray per hemicube pixel centre against the mesh
+//! ([`VisibilityMaps::compute_ray_cast`], a [`Bvh`] query per ray). The fast path
+//! ([`VisibilityMaps::compute`]) gives the same bits by a CPU rasteriser per vertex side:
+//! BVH nodes below the tangent plane or hidden behind already-occluded pixels are skipped,
+//! surviving triangles are projected onto the five faces and only the pixels they may cover
+//! get the ray test (see `raster`). Vertices in parallel with rayon. Cloth is double-sided: any triangle occludes,
 //! whichever way it faces. Rays start a small offset (`1e-4` of the mesh diagonal) above
 //! the vertex along the side's normal so the vertex's own triangles do not shadow it.
 //!
@@ -15,6 +16,7 @@
 
 use super::bvh::Bvh;
 use super::hemicube::Hemicube;
+use super::raster::FrameRaster;
 use crate::math::Vec3;
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -77,8 +79,28 @@ pub struct VisibilityMaps {
 }
 
 impl VisibilityMaps {
-    /// Casts one ray per pixel of every frame against the mesh.
+    /// The maps of every frame: the answer of [`VisibilityMaps::compute_ray_cast`], found by
+    /// projecting the culled mesh onto each hemicube (see `raster`) and testing only the
+    /// still-visible pixels a triangle may cover.
     pub fn compute(
+        cube: &Hemicube,
+        frames: &[HemicubeFrame],
+        positions: &[[f32; 3]],
+        triangles: &[[u32; 3]],
+    ) -> VisibilityMaps {
+        let bvh = Bvh::new(positions, triangles);
+        let eps = offset(positions);
+        let words = cube.len().div_ceil(64);
+        let mut bits = vec![0u64; frames.len() * words];
+        bits.par_chunks_mut(words).zip(frames.par_iter()).for_each_init(
+            || FrameRaster::new(cube),
+            |raster, (out, f)| raster.run(&bvh, f, eps, out),
+        );
+        VisibilityMaps { res: cube.res, frames: frames.len(), words, bits }
+    }
+
+    /// The reference: one any-hit ray per pixel of every frame against the mesh.
+    pub fn compute_ray_cast(
         cube: &Hemicube,
         frames: &[HemicubeFrame],
         positions: &[[f32; 3]],

@@ -138,13 +138,15 @@ pub fn hemicube_pixel(res: usize, x: f32, y: f32, z: f32) -> usize {
 }
 
 /// Rotation by `−δ` about `+z` applied to a world direction (the environment turned by `δ`).
-fn rotate_z(d: [f32; 3], cos: f32, sin: f32) -> [f32; 3] {
+pub(super) fn rotate_z(d: [f32; 3], cos: f32, sin: f32) -> [f32; 3] {
     [cos * d[0] + sin * d[1], -sin * d[0] + cos * d[1], d[2]]
 }
 
 impl WeightSet {
-    /// Gathers `g` for the environment turned by `rotation_deg` about world `+z` (eq. 10).
-    pub fn gather(input: &GatherInput, env: &EnvCube, rotation_deg: f64) -> WeightSet {
+    /// Eq. 10 frame by frame, the definition [`WeightSet::gather`] must reproduce: every
+    /// source above the frame's horizon is dropped into the hemicube pixel containing it and,
+    /// if that pixel is visible, adds `h_i(p) · power` to `g_i`.
+    pub fn gather_reference(input: &GatherInput, env: &EnvCube, rotation_deg: f64) -> WeightSet {
         let n_l = input.lights;
         let (sin, cos) = rotation_deg.to_radians().sin_cos();
         let (sin, cos) = (sin as f32, cos as f32);
@@ -184,21 +186,7 @@ impl WeightSet {
     /// `γ*` of frame `f` and slot `j` (eq. 10): `out[ch · (c+2) + col]` for the columns
     /// `[mean, bias, components]`.
     pub fn gamma_star(&self, p: &CoefficientMatrix, f: usize, j: usize, out: &mut [f32]) {
-        let k = p.per_slot();
-        let cols = p.cols();
-        out[..3 * k].fill(0.0);
-        for ch in 0..3 {
-            let g = self.row(f, ch);
-            let dst = &mut out[ch * k..(ch + 1) * k];
-            for (i, &gi) in g.iter().enumerate() {
-                if gi != 0.0 {
-                    let src = &p.p[i * cols + j * k..][..k];
-                    for (d, s) in dst.iter_mut().zip(src) {
-                        *d += gi * s;
-                    }
-                }
-            }
-        }
+        gamma_star_of(&self.g[f * 3 * self.lights..][..3 * self.lights], p, j, out);
     }
 
     /// The whole of `U` (eq. 12) as one product `G · P`: row `(frame, channel)`, column
@@ -252,6 +240,26 @@ mod tests {
             let cube = Hemicube::new(res as u32).unwrap();
             for (p, d) in cube.dirs.iter().enumerate() {
                 assert_eq!(hemicube_pixel(res, d[0], d[1], d[2]), p, "res {res}");
+            }
+        }
+    }
+}
+
+/// `γ*` of slot `j` (eq. 10) for one frame's gathered radiances `g` (`3 · lights`, rows per
+/// channel): `out[ch · (c+2) + col]` for the columns `[mean, bias, components]`.
+pub fn gamma_star_of(g: &[f32], p: &CoefficientMatrix, j: usize, out: &mut [f32]) {
+    let k = p.per_slot();
+    let cols = p.cols();
+    out[..3 * k].fill(0.0);
+    for ch in 0..3 {
+        let g = &g[ch * p.lights..(ch + 1) * p.lights];
+        let dst = &mut out[ch * k..(ch + 1) * k];
+        for (i, &gi) in g.iter().enumerate() {
+            if gi != 0.0 {
+                let src = &p.p[i * cols + j * k..][..k];
+                for (d, s) in dst.iter_mut().zip(src) {
+                    *d += gi * s;
+                }
             }
         }
     }

@@ -1,0 +1,447 @@
+//! Visibility of one hemicube by projecting the mesh onto it (Sattler et al. 2003, §5.2:
+//! the `V(x, p_α)` of eq. 9), with the answer of one ray per pixel centre.
+//!
+//! Per frame (vertex side) the BVH is walked nearest child first. A node whose box lies
+//! below the tangent plane through the ray origin cannot hold a point `o + t·d` with
+//! `d_z > 0, t > 0`, and is skipped; so is a node whose projection onto every hemicube face
+//! covers only pixels that are already occluded (hierarchical occlusion culling — inside a
+//! closed garment the near wall hides the rest). A surviving triangle is clipped to each
+//! face's pyramid of directions and projected (`u = p_u / p_m`, `v = p_v / p_m`); only the
+//! still-visible pixels whose centres fall into the projected rectangle, widened by a
+//! margin, are tested — with the very ray-triangle test ([`tri_hit`]) and the very ray
+//! (same origin, same `f32` direction) the reference ray caster uses. A pixel is therefore
+//! occluded here exactly when some triangle's test hits, as in the reference; the margin
+//! (`2·10⁻³` face units plus a term growing for triangles close to the origin) only has to
+//! cover the rounding of the projection, which is of order `10⁻⁶`.
+
+use super::bvh::{Bvh, Tri, dot, sub, tri_hit};
+use super::hemicube::Hemicube;
+use super::visibility::HemicubeFrame;
+
+/// Nodes with at most this many still-visible pixels under their projection are finished
+/// by casting those pixels' rays through the node's subtree.
+const RAY_CAST_BELOW: usize = 48;
+
+/// One hemicube face: the major axis (with its sign) and the axes of the face coordinates.
+#[derive(Debug, Clone, Copy)]
+struct Face {
+    major: usize,
+    sign: f32,
+    u: usize,
+    v: usize,
+    v_min: f32,
+    rows: usize,
+    /// First pixel of the face in the hemicube layout.
+    start: usize,
+}
+
+/// The five faces in the layout of [`super::hemicube`].
+fn faces(res: usize) -> [Face; 5] {
+    let (half, top) = (res / 2, res * res);
+    let side = |major, sign, u, k: usize| Face {
+        major,
+        sign,
+        u,
+        v: 2,
+        v_min: 0.0,
+        rows: half,
+        start: top + k * res * half,
+    };
+    [
+        Face { major: 2, sign: 1.0, u: 0, v: 1, v_min: -1.0, rows: res, start: 0 },
+        side(0, 1.0, 1, 0),
+        side(0, -1.0, 1, 1),
+        side(1, 1.0, 0, 2),
+        side(1, -1.0, 0, 3),
+    ]
+}
+
+/// Inclusive pixel rectangle on one face.
+#[derive(Debug, Clone, Copy)]
+struct Rect {
+    face: usize,
+    c0: usize,
+    c1: usize,
+    r0: usize,
+    r1: usize,
+}
+
+/// Range of `q / m` over `q ∈ [q0, q1]`, `m ∈ (max(m0, 0), m1]` (`m1 > 0`).
+fn ratio_range(q0: f32, q1: f32, m0: f32, m1: f32) -> (f32, f32) {
+    let ml = m0.max(0.0);
+    let lo = if q0 >= 0.0 {
+        q0 / m1
+    } else if ml > 0.0 {
+        q0 / ml
+    } else {
+        f32::NEG_INFINITY
+    };
+    let hi = if q1 <= 0.0 {
+        q1 / m1
+    } else if ml > 0.0 {
+        q1 / ml
+    } else {
+        f32::INFINITY
+    };
+    (lo, hi)
+}
+
+/// The rasteriser of one hemicube frame.
+pub(super) struct FrameRaster<'a> {
+    cube: &'a Hemicube,
+    faces: [Face; 5],
+    res: usize,
+    step: f32,
+    /// Words per pixel row of the occlusion mask.
+    wpr: usize,
+    /// Occluded-pixel mask, rows of every face in turn (`3 res` rows).
+    occ: Vec<u64>,
+    row_base: [usize; 5],
+    occluded: usize,
+    frame: HemicubeFrame,
+    origin: [f32; 3],
+    eps: f32,
+}
+
+impl<'a> FrameRaster<'a> {
+    pub(super) fn new(cube: &'a Hemicube) -> FrameRaster<'a> {
+        let res = cube.res as usize;
+        let faces = faces(res);
+        let wpr = res.div_ceil(64);
+        let mut row_base = [0; 5];
+        for f in 1..5 {
+            row_base[f] = row_base[f - 1] + faces[f - 1].rows;
+        }
+        FrameRaster {
+            cube,
+            faces,
+            res,
+            step: 2.0 / res as f32,
+            wpr,
+            occ: vec![0; 3 * res * wpr],
+            row_base,
+            occluded: 0,
+            frame: HemicubeFrame { origin: [0.0; 3], axes: [[0.0; 3]; 3] },
+            origin: [0.0; 3],
+            eps: 0.0,
+        }
+    }
+
+    /// Computes the visibility bits of `frame` into `out` (bit set = pixel sees the sky);
+    /// rays start `eps` above the vertex along the normal and count hits beyond `eps`.
+    pub(super) fn run(&mut self, bvh: &Bvh, frame: &HemicubeFrame, eps: f32, out: &mut [u64]) {
+        self.frame = *frame;
+        self.origin = [0, 1, 2].map(|a| frame.origin[a] + eps * frame.axes[2][a]);
+        self.eps = eps;
+        self.occ.fill(0);
+        self.occluded = 0;
+        self.walk(bvh);
+        out.fill(0);
+        for (f, face) in self.faces.iter().enumerate() {
+            for r in 0..face.rows {
+                let row = &self.occ[(self.row_base[f] + r) * self.wpr..][..self.wpr];
+                let p0 = face.start + r * self.res;
+                for c in 0..self.res {
+                    if row[c / 64] >> (c % 64) & 1 == 0 {
+                        out[(p0 + c) / 64] |= 1 << ((p0 + c) % 64);
+                    }
+                }
+            }
+        }
+    }
+
+    fn walk(&mut self, bvh: &Bvh) {
+        let (nodes, tris) = (bvh.nodes(), bvh.tris());
+        if nodes.is_empty() {
+            return;
+        }
+        let total = self.cube.len();
+        let mut stack = vec![0u32];
+        while let Some(me) = stack.pop() {
+            if self.occluded == total {
+                return;
+            }
+            let node = &nodes[me as usize];
+            let Some(rects) = self.box_rects(node.lo, node.hi) else { continue };
+            let open: usize = rects.iter().flatten().map(|r| self.visible_in(r)).sum();
+            if open == 0 {
+                continue;
+            }
+            if open <= RAY_CAST_BELOW {
+                // Few pixels left under a far node: rays through its subtree are cheaper
+                // than projecting its triangles one by one.
+                for r in rects.iter().flatten() {
+                    self.cast_pixels(r, |o, d, eps| bvh.occluded_below(me, o, d, eps));
+                }
+                continue;
+            }
+            if node.count > 0 {
+                let s = node.start_or_right as usize;
+                for t in &tris[s..s + node.count as usize] {
+                    self.triangle(t);
+                }
+                continue;
+            }
+            let (l, r) = (me + 1, node.start_or_right);
+            let (dl, dr) =
+                (self.centre_dist2(&nodes[l as usize]), self.centre_dist2(&nodes[r as usize]));
+            if dl <= dr {
+                stack.extend([r, l]);
+            } else {
+                stack.extend([l, r]);
+            }
+        }
+    }
+
+    fn centre_dist2(&self, n: &super::bvh::Node) -> f32 {
+        (0..3).map(|a| (0.5 * (n.lo[a] + n.hi[a]) - self.origin[a]).powi(2)).sum()
+    }
+
+    /// Tangent-space coordinates of world point `q` relative to the ray origin.
+    fn tangent(&self, q: [f32; 3]) -> [f32; 3] {
+        let rel = sub(q, self.origin);
+        self.frame.axes.map(|a| dot(rel, a))
+    }
+
+    /// The pixel rectangles of a world box, or `None` when it lies below the tangent plane.
+    fn box_rects(&self, lo: [f32; 3], hi: [f32; 3]) -> Option<[Option<Rect>; 5]> {
+        let centre = self.tangent([0, 1, 2].map(|a| 0.5 * (lo[a] + hi[a])));
+        let half = [0, 1, 2].map(|a| 0.5 * (hi[a] - lo[a]));
+        let mut t_lo = [0f32; 3];
+        let mut t_hi = [0f32; 3];
+        for (a, axis) in self.frame.axes.iter().enumerate() {
+            let e: f32 = (0..3).map(|b| axis[b].abs() * half[b]).sum();
+            let tol = 1e-5 * (centre[a].abs() + e);
+            t_lo[a] = centre[a] - e - tol;
+            t_hi[a] = centre[a] + e + tol;
+        }
+        if t_hi[2] < 0.0 {
+            return None;
+        }
+        let dist2: f32 = (0..3).map(|a| (t_lo[a].max(0.0) + (-t_hi[a]).max(0.0)).powi(2)).sum();
+        let margin = self.margin(dist2.sqrt(), 0.0);
+        Some([0, 1, 2, 3, 4].map(|f| {
+            let face = self.faces[f];
+            let (m0, m1) = if face.sign > 0.0 {
+                (t_lo[face.major], t_hi[face.major])
+            } else {
+                (-t_hi[face.major], -t_lo[face.major])
+            };
+            if m1 <= 0.0 {
+                return None;
+            }
+            let u = ratio_range(t_lo[face.u], t_hi[face.u], m0, m1);
+            let v = ratio_range(t_lo[face.v], t_hi[face.v], m0, m1);
+            self.rect(f, u, v, margin)
+        }))
+    }
+
+    /// Face-coordinate margin for geometry at distance `dist` from the origin with extent
+    /// `extent`: covers the `f32` rounding of the projection and of the reference test.
+    fn margin(&self, dist: f32, extent: f32) -> f32 {
+        2e-3 + 256.0 * f32::EPSILON * (1.0 + extent / dist.max(self.eps))
+    }
+
+    /// Pixels of face `f` whose centres lie in `u × v` widened by `margin`.
+    fn rect(&self, f: usize, u: (f32, f32), v: (f32, f32), margin: f32) -> Option<Rect> {
+        let face = self.faces[f];
+        let (c0, c1) = self.centre_range(u, -1.0, self.res, margin)?;
+        let (r0, r1) = self.centre_range(v, face.v_min, face.rows, margin)?;
+        Some(Rect { face: f, c0, c1, r0, r1 })
+    }
+
+    /// Indices `i < n` of the pixel centres `min + (i + ½)·step` within `[a − margin,
+    /// b + margin]`; NaN bounds keep the whole range.
+    fn centre_range(
+        &self,
+        (a, b): (f32, f32),
+        min: f32,
+        n: usize,
+        margin: f32,
+    ) -> Option<(usize, usize)> {
+        let inv = 1.0 / self.step;
+        let lo = ((a - margin - min) * inv - 0.5).max(-1.0).min(n as f32 + 1.0);
+        let hi = ((b + margin - min) * inv - 0.5).min(n as f32).max(-2.0);
+        // ceil and floor by truncation (both bounded, no libm call).
+        let l = lo as i32 + ((lo as i32 as f32) < lo) as i32;
+        let h = hi as i32 - (hi < hi as i32 as f32) as i32;
+        let (l, h) = (l.max(0), h.min(n as i32 - 1));
+        (l <= h).then_some((l as usize, h as usize))
+    }
+
+    /// The face whose pyramid holds tangent point `p` with room `tol` to its planes.
+    fn face_of(p: &[f32; 3], tol: f32) -> Option<usize> {
+        let [x, y, z] = *p;
+        let (ax, ay) = (x.abs(), y.abs());
+        if z - ax > tol && z - ay > tol {
+            return Some(0);
+        }
+        if z <= tol {
+            return None;
+        }
+        if ax - ay > tol && ax - z > tol {
+            return Some(if x > 0.0 { 1 } else { 2 });
+        }
+        if ay - ax > tol && ay - z > tol {
+            return Some(if y > 0.0 { 3 } else { 4 });
+        }
+        None
+    }
+
+    /// Number of still-visible pixels in `r`.
+    fn visible_in(&self, r: &Rect) -> usize {
+        (r.r0..=r.r1)
+            .map(|row| {
+                let words = &self.occ[(self.row_base[r.face] + row) * self.wpr..][..self.wpr];
+                (r.c0 / 64..=r.c1 / 64)
+                    .map(|w| {
+                        let m =
+                            span_mask(r.c0.max(64 * w) - 64 * w, r.c1.min(64 * w + 63) - 64 * w);
+                        (!words[w] & m).count_ones() as usize
+                    })
+                    .sum::<usize>()
+            })
+            .sum()
+    }
+
+    /// Marks the still-visible pixels of `r` whose ray `hit(origin, dir, eps)` reports.
+    fn cast_pixels(&mut self, r: &Rect, hit: impl Fn([f32; 3], [f32; 3], f32) -> bool) {
+        let face = self.faces[r.face];
+        for row in r.r0..=r.r1 {
+            let base = (self.row_base[r.face] + row) * self.wpr;
+            for c in r.c0..=r.c1 {
+                if self.occ[base + c / 64] >> (c % 64) & 1 == 1 {
+                    continue;
+                }
+                let p = face.start + row * self.res + c;
+                if hit(self.origin, self.frame.to_world(self.cube.dirs[p]), self.eps) {
+                    self.occ[base + c / 64] |= 1 << (c % 64);
+                    self.occluded += 1;
+                }
+            }
+        }
+    }
+
+    /// Tests one triangle against the still-visible pixels it may cover.
+    fn triangle(&mut self, t: &Tri) {
+        let p0 = self.tangent(t.p0);
+        let e1 = self.frame.axes.map(|a| dot(t.e1, a));
+        let e2 = self.frame.axes.map(|a| dot(t.e2, a));
+        let corners = [p0, [0, 1, 2].map(|a| p0[a] + e1[a]), [0, 1, 2].map(|a| p0[a] + e2[a])];
+        let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
+        for c in &corners {
+            for a in 0..3 {
+                lo[a] = lo[a].min(c[a]);
+                hi[a] = hi[a].max(c[a]);
+            }
+        }
+        let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f32::max);
+        let tol =
+            1e-5 * (extent + (0..3).map(|a| lo[a].abs().max(hi[a].abs())).fold(0.0, f32::max));
+        if hi[2] < -tol {
+            return;
+        }
+        let dist2: f32 = (0..3).map(|a| (lo[a].max(0.0) + (-hi[a]).max(0.0)).powi(2)).sum();
+        let margin = self.margin(dist2.sqrt(), extent);
+        let [a, b, c] = corners.map(|p| Self::face_of(&p, tol));
+        if let Some(f) = a.filter(|&f| b == Some(f) && c == Some(f)) {
+            // Inside one pyramid (the common case): project the corners.
+            let face = self.faces[f];
+            let (mut u, mut v) = ((f32::MAX, f32::MIN), (f32::MAX, f32::MIN));
+            for p in &corners {
+                let m = face.sign * p[face.major];
+                let (pu, pv) = (p[face.u] / m, p[face.v] / m);
+                u = (u.0.min(pu), u.1.max(pu));
+                v = (v.0.min(pv), v.1.max(pv));
+            }
+            if let Some(r) = self.rect(f, u, v, margin) {
+                self.test_pixels(&r, t);
+            }
+            return;
+        }
+        for f in 0..5 {
+            let Some((u, v)) = self.face_bounds(f, &corners, tol) else { continue };
+            if let Some(r) = self.rect(f, u, v, margin) {
+                self.test_pixels(&r, t);
+            }
+        }
+    }
+
+    /// Bounds in face coordinates of the part of the triangle inside face `f`'s pyramid.
+    fn face_bounds(
+        &self,
+        f: usize,
+        corners: &[[f32; 3]; 3],
+        tol: f32,
+    ) -> Option<((f32, f32), (f32, f32))> {
+        let face = self.faces[f];
+        let s = face.sign;
+        // Planes through the origin bounding the face's pyramid: value ≥ 0 inside.
+        let planes: [[f32; 3]; 5] = {
+            let mut p = [[0f32; 3]; 5];
+            for (k, (axis, sg)) in
+                [(face.u, 1.0), (face.u, -1.0), (face.v, 1.0), (face.v, -1.0), (2, 0.0)]
+                    .into_iter()
+                    .enumerate()
+            {
+                if k < 4 {
+                    p[k][face.major] = s;
+                    p[k][axis] -= sg;
+                } else {
+                    p[k][2] = 1.0;
+                }
+            }
+            p
+        };
+        let mut poly = [[0f32; 3]; 12];
+        poly[..3].copy_from_slice(corners);
+        let mut n = 3;
+        for plane in &planes {
+            let val = |p: &[f32; 3]| dot(*p, *plane) + tol;
+            if poly[..n].iter().all(|p| val(p) >= 0.0) {
+                continue;
+            }
+            if poly[..n].iter().all(|p| val(p) < 0.0) {
+                return None;
+            }
+            let mut out = [[0f32; 3]; 12];
+            let mut m = 0;
+            for i in 0..n {
+                let (a, b) = (poly[i], poly[(i + 1) % n]);
+                let (va, vb) = (val(&a), val(&b));
+                if va >= 0.0 {
+                    out[m] = a;
+                    m += 1;
+                }
+                if (va >= 0.0) != (vb >= 0.0) && m < 12 {
+                    let w = va / (va - vb);
+                    out[m] = [0, 1, 2].map(|k| a[k] + w * (b[k] - a[k]));
+                    m += 1;
+                }
+            }
+            poly = out;
+            n = m;
+        }
+        let (mut u, mut v) = ((f32::MAX, f32::MIN), (f32::MAX, f32::MIN));
+        for p in &poly[..n] {
+            let m = s * p[face.major];
+            if m <= 4.0 * tol {
+                // A point next to the origin: any direction of the face.
+                return Some(((-1.0, 1.0), (face.v_min, 1.0)));
+            }
+            let (pu, pv) = (p[face.u] / m, p[face.v] / m);
+            u = (u.0.min(pu), u.1.max(pu));
+            v = (v.0.min(pv), v.1.max(pv));
+        }
+        (n > 0).then_some((u, v))
+    }
+
+    fn test_pixels(&mut self, r: &Rect, t: &Tri) {
+        self.cast_pixels(r, |o, d, eps| tri_hit(t, o, d, eps));
+    }
+}
+
+/// Bits `a..=b` of a word (`a ≤ b < 64`).
+fn span_mask(a: usize, b: usize) -> u64 {
+    (u64::MAX >> (63 - b)) & (u64::MAX << a)
+}
