@@ -7,6 +7,7 @@ mod cmd_export;
 mod cmd_import;
 mod cmd_inspect;
 mod cmd_reconstruct;
+mod cmd_thin;
 mod demo_scene;
 mod imageio;
 mod plot;
@@ -46,6 +47,9 @@ enum Command {
     Export(cmd_export::ExportArgs),
     /// Render a scene (TOML) on the GPU.
     Render(render_cmd::RenderArgs),
+    /// Thin semi-transparent cloth: check the slab model against Monte Carlo.
+    #[command(subcommand)]
+    Thin(cmd_thin::ThinCmd),
 }
 
 fn main() -> ExitCode {
@@ -59,6 +63,7 @@ fn main() -> ExitCode {
         Command::Export(a) => cmd_export::run(a),
         Command::Synth(c) => synth_cmd::run(c),
         Command::Render(a) => render_cmd::run(a),
+        Command::Thin(c) => cmd_thin::run(c),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
