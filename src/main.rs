@@ -9,6 +9,7 @@ mod cmd_import;
 mod cmd_inspect;
 mod cmd_reconstruct;
 mod cmd_relight;
+mod cmd_thin;
 mod demo_scene;
 mod imageio;
 mod plot;
@@ -57,6 +58,9 @@ enum Command {
     RenderSweep(render_sweep::RenderSweepArgs),
     /// Render a scene under several environment maps and rotations (batch relighting).
     Relight(cmd_relight::RelightArgs),
+    /// Thin semi-transparent cloth: check the slab model against Monte Carlo.
+    #[command(subcommand)]
+    Thin(cmd_thin::ThinCmd),
 }
 
 fn main() -> ExitCode {
@@ -73,6 +77,7 @@ fn main() -> ExitCode {
         Command::Render(a) => render_cmd::run(a),
         Command::RenderSweep(a) => render_sweep::run(a),
         Command::Relight(a) => cmd_relight::run(a),
+        Command::Thin(c) => cmd_thin::run(c),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -11,7 +11,9 @@
 //! - [`zarr`], [`store`], [`eigen`]: the chunked on-disk BTF and eigen stores;
 //! - [`pca`]: the per-view-slot PCA (eq. 1);
 //! - [`reconstruct`]: CPU reconstruction for any view and light (eq. 2–5);
-//! - [`metrics`]: error measures (relative RMSE, PSNR, Eckart–Young).
+//! - [`metrics`]: error measures (relative RMSE, PSNR, Eckart–Young);
+//! - [`thin_slab`]: thin semi-transparent cloth as an optically thin slab (first-order
+//!   reflection/transmission, direct transmittance, Monte-Carlo reference).
 //!
 //! No GPU code and no image-format crates live here.
 
@@ -27,6 +29,7 @@ pub mod pca;
 pub mod reconstruct;
 pub mod sampling;
 pub mod store;
+pub mod thin_slab;
 pub mod zarr;
 
 pub use direction::Direction;
