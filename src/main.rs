@@ -14,6 +14,7 @@ mod progress;
 mod render_cmd;
 mod sweep;
 mod synth_cmd;
+mod view;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -46,6 +47,8 @@ enum Command {
     Export(cmd_export::ExportArgs),
     /// Render a scene (TOML) on the GPU.
     Render(render_cmd::RenderArgs),
+    /// Inspect a garment interactively (window), or export a turntable (headless).
+    View(view::ViewArgs),
 }
 
 fn main() -> ExitCode {
@@ -59,6 +62,7 @@ fn main() -> ExitCode {
         Command::Export(a) => cmd_export::run(a),
         Command::Synth(c) => synth_cmd::run(c),
         Command::Render(a) => render_cmd::run(a),
+        Command::View(a) => view::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
