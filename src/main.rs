@@ -19,6 +19,7 @@ mod render_cmd;
 mod render_sweep;
 mod sweep;
 mod synth_cmd;
+mod view;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -61,6 +62,8 @@ enum Command {
     /// Thin semi-transparent cloth: check the slab model against Monte Carlo.
     #[command(subcommand)]
     Thin(cmd_thin::ThinCmd),
+    /// Inspect a garment interactively (window), or export a turntable (headless).
+    View(view::ViewArgs),
 }
 
 fn main() -> ExitCode {
@@ -78,6 +81,7 @@ fn main() -> ExitCode {
         Command::RenderSweep(a) => render_sweep::run(a),
         Command::Relight(a) => cmd_relight::run(a),
         Command::Thin(c) => cmd_thin::run(c),
+        Command::View(a) => view::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

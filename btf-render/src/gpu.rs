@@ -46,6 +46,28 @@ impl Gpu {
             }
         }
         let adapter = adapter.ok_or(Error::NoAdapter(last_err))?;
+        Gpu::from_adapter(&adapter)
+    }
+
+    /// A device on an adapter that can present to `surface` (created from `instance`), and
+    /// the adapter (for the surface's capabilities). Used by the interactive viewer.
+    pub fn with_surface(
+        instance: &wgpu::Instance,
+        surface: &wgpu::Surface,
+    ) -> Result<(Gpu, wgpu::Adapter)> {
+        let options = wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: false,
+            compatible_surface: Some(surface),
+            ..Default::default()
+        };
+        let adapter = pollster::block_on(instance.request_adapter(&options))
+            .map_err(|e| Error::NoAdapter(e.to_string()))?;
+        Ok((Gpu::from_adapter(&adapter)?, adapter))
+    }
+
+    /// A device on `adapter` with its own limits and, when offered, timestamp queries.
+    pub fn from_adapter(adapter: &wgpu::Adapter) -> Result<Gpu> {
         let available = adapter.features();
         let wanted =
             wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;

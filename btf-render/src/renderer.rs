@@ -34,6 +34,8 @@ use btf_core::InterpMode;
 use std::time::Instant;
 use wgpu::util::DeviceExt;
 
+mod live;
+
 /// Extra knobs for tests and measurements.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct RenderOptions {

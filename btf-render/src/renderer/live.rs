@@ -1,0 +1,73 @@
+//! Updates of a built [`Renderer`] that an interactive viewer makes between frames, each
+//! recomputing only what depends on it: a camera move rewrites the frame uniform at the next
+//! [`Renderer::render`] (nothing else is rebuilt), a light move rebuilds only the shadow
+//! pass (shadow-map matrices and shadow-volume prisms depend on the light), the offset `α`
+//! of the smooth shadow boundary (eq. 6) is a uniform. Effects that select pipelines or
+//! material data (evaluation mode, blending, components, shadow technique) need
+//! [`Renderer::new`].
+
+use super::{Renderer, camera_setup, frame_bind_group};
+use crate::scene::{Camera, Light, MAX_LIGHTS, Scene};
+use crate::shadow::{ShadowInputs, Shadowing};
+use crate::{Error, Gpu, Result, terminator};
+
+impl Renderer {
+    /// The scene this renderer draws (with the updates made so far).
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// Replaces the camera; the next frame uses it and nothing else is recomputed.
+    pub fn set_camera(&mut self, camera: &Camera) {
+        self.scene.camera = camera.clone();
+        let extra_depth = self.shadowing.as_ref().map_or(0.0, |s| s.extra_camera_depth());
+        self.camera = camera_setup(&self.scene, &self.mesh, extra_depth);
+    }
+
+    /// Replaces the lights (same count and kinds of light as before, so the passes the
+    /// scene asked for stay valid); rebuilds the shadow pass when there is one.
+    pub fn set_lights(&mut self, gpu: &Gpu, lights: &[Light]) -> Result<()> {
+        if lights.len() != self.scene.lights.len() || lights.len() > MAX_LIGHTS {
+            return Err(Error::Invalid(format!(
+                "set_lights: {} lights given, the scene was built with {}",
+                lights.len(),
+                self.scene.lights.len()
+            )));
+        }
+        let same_shadowing = lights
+            .iter()
+            .zip(&self.scene.lights)
+            .all(|(a, b)| a.casts_shadows() == b.casts_shadows());
+        if !same_shadowing {
+            return Err(Error::Invalid(
+                "set_lights: which lights cast shadows must not change".into(),
+            ));
+        }
+        self.scene.lights = lights.to_vec();
+        if self.shadowing.is_some() {
+            let shadowing = Shadowing::new(gpu, &self.scene, &self.mesh)?;
+            let (w, h) = (self.scene.output.width, self.scene.output.height);
+            let inputs: ShadowInputs = shadowing.inputs(gpu, w, h);
+            let boundary = terminator::texture(gpu, self.scene.effects.terminator_blur);
+            self.frame_group = frame_bind_group(
+                gpu,
+                &self.btf,
+                &self.frame_uniform,
+                &boundary,
+                &inputs,
+                &self.counters,
+            );
+            self.shadowing = Some(shadowing);
+        }
+        Ok(())
+    }
+
+    /// Sets the offset `α` of the smooth shadow boundary (eq. 6), degrees in `[0, 90)`.
+    pub fn set_terminator_deg(&mut self, alpha_deg: f32) -> Result<()> {
+        if !(alpha_deg.is_finite() && (0.0..90.0).contains(&alpha_deg)) {
+            return Err(Error::Invalid(format!("terminator offset {alpha_deg}° not in [0, 90)")));
+        }
+        self.scene.effects.terminator_deg = alpha_deg;
+        Ok(())
+    }
+}

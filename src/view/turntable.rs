@@ -1,0 +1,129 @@
+//! Headless companions of the viewer, driving the same [`Viewer`] state as the window:
+//!
+//! - the turntable export (`--turntable N -o DIR`): `N` frames of a full turn as a product
+//!   page shows them. A garment on a turntable turns under a fixed studio; seen from the
+//!   garment, camera, lights and environment turn together by `i · 360°/N`, which is what
+//!   frame `i` renders. PNGs are written atomically; `--resume` keeps finished frames.
+//! - the interaction-latency benchmark (`--bench N`): `N` camera moves, light moves,
+//!   environment rotations and environment swaps, back to back in one run, each timed from
+//!   the change to the frame read back; medians and ratios to the camera move.
+
+use super::ViewArgs;
+use super::camera::turn_light;
+use super::state::{Change, Latency, Viewer};
+use crate::progress;
+use anyhow::{Context, Result, bail};
+use btf_render::{Gpu, Scene};
+use std::path::Path;
+
+fn start(args: &ViewArgs, scene: Scene) -> Result<(Gpu, Viewer)> {
+    let gpu = Gpu::new().context("creating a headless GPU device")?;
+    let mut v = Viewer::new(&gpu, scene, args.env.clone());
+    v.update(&gpu);
+    if let Some(e) = v.errors.first() {
+        bail!("{}: {e}", args.scene.display());
+    }
+    if let Some(e) = &v.env.error {
+        bail!("{e}");
+    }
+    Ok((gpu, v))
+}
+
+/// Writes `n` turntable frames to `out/turntable-NNNN.png`.
+pub fn export(args: &ViewArgs, scene: Scene, n: u32, out: &Path) -> Result<()> {
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    let (gpu, mut v) = start(args, scene)?;
+    let (home_camera, home_lights) = (v.orbit.home.clone(), v.lights.clone());
+    let (pivot, up) = (home_camera.target, home_camera.up);
+    let env0 = v.env.rotation_deg;
+    let bar = progress::bar(n as u64, "turntable");
+    for i in 0..n {
+        let path = out.join(format!("turntable-{i:04}.png"));
+        if args.resume && path.exists() {
+            bar.inc(1);
+            continue;
+        }
+        let angle_deg = i as f32 * 360.0 / n as f32;
+        v.orbit.camera = home_camera.clone();
+        v.orbit.orbit(angle_deg, 0.0);
+        v.camera_changed();
+        v.lights = home_lights.clone();
+        for l in &mut v.lights {
+            turn_light(l, pivot, up, angle_deg, 0.0);
+        }
+        v.rotate_env(env0 + angle_deg - v.env.rotation_deg);
+        v.update(&gpu);
+        if let Some(e) = v.errors.last() {
+            bail!("turntable frame {i} ({angle_deg}°): {e}");
+        }
+        v.save_frame(&path)?;
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    println!("{n} turntable frames in {}", out.display());
+    Ok(())
+}
+
+fn median(mut xs: Vec<f64>) -> f64 {
+    if xs.is_empty() {
+        return f64::NAN;
+    }
+    xs.sort_by(f64::total_cmp);
+    let m = xs.len() / 2;
+    if xs.len() % 2 == 1 { xs[m] } else { 0.5 * (xs[m - 1] + xs[m]) }
+}
+
+/// Times `n` interactions of each kind and prints a table and one JSON line.
+pub fn bench(args: &ViewArgs, scene: Scene, n: u32) -> Result<()> {
+    let (gpu, mut v) = start(args, scene)?;
+    let envs = v.env.files.len();
+    type Step = fn(&mut Viewer, u32, usize);
+    let kinds: [(Change, Step); 4] = [
+        (Change::Camera, |v, _, _| v.drag_camera(10.0, 0.0)),
+        (Change::Light, |v, _, _| v.drag_lights(10.0, 0.0)),
+        (Change::EnvRotation, |v, _, _| v.rotate_env(15.0)),
+        (Change::EnvSwap, |v, i, envs| v.select_env(i as usize % envs.max(1))),
+    ];
+    let mut rows: Vec<(Change, Vec<Latency>)> = Vec::new();
+    for (kind, step) in kinds {
+        if kind == Change::EnvSwap && envs == 0 {
+            continue;
+        }
+        let mut lats = Vec::new();
+        for i in 0..n + 1 {
+            step(&mut v, i, envs);
+            let lat = v.update(&gpu).context("no frame rendered")?;
+            if i > 0 {
+                lats.push(lat); // the first of each kind warms caches
+            }
+        }
+        rows.push((kind, lats));
+    }
+    if let Some(e) = v.errors.last() {
+        bail!("{e}");
+    }
+    let camera = median(rows[0].1.iter().map(Latency::total_ms).collect());
+    println!("adapter: {} ({:?}); {n} interactions each, medians", gpu.info.name, gpu.info.backend);
+    println!(
+        "{:<24} {:>10} {:>10} {:>10} {:>8}",
+        "change", "total ms", "update", "render", "ratio"
+    );
+    let mut json = Vec::new();
+    for (kind, lats) in &rows {
+        let total = median(lats.iter().map(Latency::total_ms).collect());
+        let update = median(lats.iter().map(|l| l.update_ms).collect());
+        let render = median(lats.iter().map(|l| l.render_ms).collect());
+        let ratio = total / camera;
+        println!("{:<24} {total:>10.2} {update:>10.2} {render:>10.2} {ratio:>8.2}", kind.name());
+        json.push(format!(
+            r#"{{"change":"{}","total_ms":{total:.3},"update_ms":{update:.3},"render_ms":{render:.3},"ratio_to_camera":{ratio:.3}}}"#,
+            kind.name()
+        ));
+    }
+    println!(
+        "environment lighting of the garment: {}",
+        if v.env.lighting { "on" } else { "off (no environment light in this renderer/scene)" }
+    );
+    println!("[{}]", json.join(","));
+    Ok(())
+}
