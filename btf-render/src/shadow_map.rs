@@ -78,7 +78,7 @@ pub fn light_matrix(light: &Light, center: Vec3, radius: f32) -> Mat4 {
 pub fn needs_cube(light: &Light, center: Vec3, radius: f32) -> bool {
     match light {
         Light::Point { position, .. } => (math::v3(*position) - center).norm() <= 1.05 * radius,
-        Light::Directional { .. } => false,
+        Light::Directional { .. } | Light::Environment(_) => false,
     }
 }
 

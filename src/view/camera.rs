@@ -165,6 +165,8 @@ pub fn turn_light(light: &mut Light, pivot: V3, up: V3, d_yaw_deg: f32, d_pitch_
         Light::Directional { direction, .. } => {
             *direction = turn(*direction, up, d_yaw_deg, d_pitch_deg);
         }
+        // An environment turns by its rotation (eigenweightsets), not by a light drag.
+        Light::Environment(_) => {}
     }
 }
 
