@@ -1,8 +1,9 @@
 //! Compression benchmarks (criterion): the per-slot PCA on one realistic 256² view slot, and
 //! the whole 81 × 81 BTF compressed from its store (the store named by `BTF_BENCH_STORE`,
-//! e.g. `btf synth material --kind corduroy --size 256 --f16 -o /tmp/bench/corduroy256.btf`;
-//! without it that benchmark is skipped). The baseline (scikit-learn's PCA on the same
-//! slots, exported with `btf export --format npy`) runs in the same session through
+//! e.g. `btf synth material --kind corduroy --size 256 -o /tmp/bench/corduroy256.btf`, an
+//! f32 store of 5.16 GB; without it that benchmark is skipped). The baseline
+//! (scikit-learn's PCA on the same slots, exported with `btf export --format npy` or
+//! `benches/export_slots_npy.py`) runs in the same session through
 //! `benches/sklearn_baseline.py`; BENCHMARKS.md has the commands and figures.
 #![allow(missing_docs)] // criterion_group! generates undocumented items
 

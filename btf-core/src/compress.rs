@@ -4,7 +4,7 @@
 
 use crate::eigen::{EigenMeta, EigenWriter, Quantization};
 use crate::metrics::{psnr_db, rel_rmse_from};
-use crate::pca::{max_components, pca_slot};
+use crate::pca::{PcaScratch, max_components, pca_slot_in};
 use crate::store::{BtfStore, SlotData};
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -107,15 +107,26 @@ pub fn compress(
     let writer = EigenWriter::create(output, emeta, params.resume)?;
     // One worker per thread, each with its own slot buffers for the whole run (a slot is
     // 64 MB at 256²: allocating and faulting it in per slot would cost more than reading it).
-    let one = |v: usize, slot: &mut SlotData, raw: &mut Vec<u8>| -> Result<(SlotReport, bool)> {
+    let one = |v: usize,
+               slot: &mut SlotData,
+               raw: &mut Vec<u8>,
+               scratch: &mut PcaScratch|
+     -> Result<(SlotReport, bool)> {
         let done = writer.has_slot(v).then(|| writer.read_stats(v)).flatten();
         if let Some(r) = done.and_then(|s| serde_json::from_value(s).ok()) {
             progress();
             return Ok((r, true));
         }
         let t0 = Instant::now();
-        input.read_slot_into(v, slot, raw)?;
-        let r = pca_slot(slot, c, params.quantization)?;
+        // The PCA checks every value in its first pass; on a non-finite one, the store's
+        // own check of that image names the texel too.
+        input.read_slot_into_unchecked(v, slot, raw)?;
+        let r = pca_slot_in(slot, c, params.quantization, scratch).map_err(|e| match &e {
+            Error::NonFinite { view, light, .. } => {
+                input.read_image(*view, *light).err().unwrap_or(e)
+            }
+            _ => e,
+        })?;
         writer.write_slot(v, &r.stored)?;
         let report = SlotReport {
             view: v,
@@ -139,14 +150,14 @@ pub fn compress(
         .into_par_iter()
         .map(|_| {
             let mut slot = SlotData { view: 0, n_lights: 0, texel_values: 0, data: Vec::new() };
-            let mut raw = Vec::new();
+            let (mut raw, mut scratch) = (Vec::new(), PcaScratch::default());
             let mut done = Vec::new();
             loop {
                 let v = next.fetch_add(1, Ordering::Relaxed);
                 if v >= n_views || failed.load(Ordering::Relaxed) {
                     return Ok(done);
                 }
-                match one(v, &mut slot, &mut raw) {
+                match one(v, &mut slot, &mut raw, &mut scratch) {
                     Ok(r) => done.push(r),
                     Err(e) => {
                         failed.store(true, Ordering::Relaxed);
@@ -190,4 +201,68 @@ pub fn compress(
         warnings,
         slots,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::store::{BtfMeta, BtfWriter};
+    use crate::zarr::DType;
+
+    fn tiny_store(path: &Path) {
+        let s = crate::Sampling::new(
+            "custom",
+            vec![
+                crate::Ring { theta_deg: 0.0, count: 1, phi_offset_deg: 0.0 },
+                crate::Ring { theta_deg: 40.0, count: 4, phi_offset_deg: 0.0 },
+            ],
+        )
+        .unwrap();
+        let w =
+            BtfWriter::create(path, BtfMeta::new(s.clone(), s, 4, 3), DType::F32, false).unwrap();
+        for v in 0..5 {
+            for l in 0..5 {
+                let img: Vec<f32> =
+                    (0..36).map(|k| 1.0 + ((v * 7 + l * 3 + k) % 11) as f32 * 0.1).collect();
+                w.write_image(v, l, &img).unwrap();
+            }
+        }
+        w.finish().unwrap();
+    }
+
+    #[test]
+    fn non_finite_input_is_named_down_to_the_texel_and_scratch_reuse_changes_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("m.btf");
+        tiny_store(&p);
+        let store = BtfStore::open(&p).unwrap();
+        let params = CompressParams { components: 3, ..Default::default() };
+        let r = compress(&store, &dir.path().join("a.eig"), params, &|| {}).unwrap();
+        // Same statistics slot by slot as a fresh PCA per slot.
+        let mut scratch = crate::pca::PcaScratch::default();
+        for s in &r.slots {
+            let slot = store.read_slot(s.view).unwrap();
+            let fresh = crate::pca::pca_slot(&slot, 3, Quantization::F16).unwrap();
+            let reused = pca_slot_in(&slot, 3, Quantization::F16, &mut scratch).unwrap();
+            assert_eq!((fresh.sse_stored, fresh.sse), (s.sse_stored, s.sse));
+            assert_eq!(fresh.stored.eigentextures, reused.stored.eigentextures);
+            assert_eq!(fresh.stored.weights, reused.stored.weights);
+        }
+        // A NaN with a valid checksum at view 3, light 2, value 17 (texel y=1, x=1, green).
+        let chunk = p.join("normtextures/c/3/2/0/0/0");
+        let mut raw = std::fs::read(&chunk).unwrap();
+        raw.truncate(36 * 4);
+        raw[17 * 4..18 * 4].copy_from_slice(&f32::NAN.to_le_bytes());
+        let crc = crc32c::crc32c(&raw);
+        raw.extend_from_slice(&crc.to_le_bytes());
+        std::fs::write(&chunk, &raw).unwrap();
+        let store = BtfStore::open(&p).unwrap();
+        let err = compress(&store, &dir.path().join("b.eig"), params, &|| {}).unwrap_err();
+        let msg = err.to_string();
+        assert!(
+            msg.contains("view slot 3, light 2") && msg.contains("y=1, x=1, channel 2"),
+            "{msg}"
+        );
+        assert!(!dir.path().join("b.eig").exists());
+    }
 }

@@ -334,7 +334,7 @@ impl BtfStore {
 
     /// Reads one normtexture into `out` (`texel_values` floats), refusing non-finite data.
     pub fn read_image_into(&self, view: usize, light: usize, out: &mut [f32]) -> Result<()> {
-        self.read_image_buffered(view, light, out, &mut Vec::new())
+        self.read_image_buffered(view, light, out, &mut Vec::new(), true)
     }
 
     fn read_image_buffered(
@@ -343,6 +343,7 @@ impl BtfStore {
         light: usize,
         out: &mut [f32],
         raw: &mut Vec<u8>,
+        check: bool,
     ) -> Result<()> {
         if view >= self.meta.n_views() || light >= self.meta.n_lights() {
             return Err(Error::Invalid(format!("image ({view}, {light}) is outside the sampling")));
@@ -361,7 +362,7 @@ impl BtfStore {
             self.arr.read_chunk_into(&idx, raw).map_err(name)?;
             zarr::decode_to_f32(raw, self.dtype(), out);
         }
-        check_finite(out, view, light, self.meta.width)
+        if check { check_finite(out, view, light, self.meta.width) } else { Ok(()) }
     }
 
     /// Reads one normtexture.
@@ -386,13 +387,35 @@ impl BtfStore {
         slot: &mut SlotData,
         raw: &mut Vec<u8>,
     ) -> Result<()> {
+        self.read_slot_checked(view, slot, raw, true)
+    }
+
+    /// [`BtfStore::read_slot_into`] without the finiteness check (checksums are still
+    /// verified), for a caller that checks every value itself before using any: the PCA
+    /// does, in its first pass.
+    pub fn read_slot_into_unchecked(
+        &self,
+        view: usize,
+        slot: &mut SlotData,
+        raw: &mut Vec<u8>,
+    ) -> Result<()> {
+        self.read_slot_checked(view, slot, raw, false)
+    }
+
+    fn read_slot_checked(
+        &self,
+        view: usize,
+        slot: &mut SlotData,
+        raw: &mut Vec<u8>,
+        check: bool,
+    ) -> Result<()> {
         let n = self.meta.texel_values();
         slot.view = view;
         slot.n_lights = self.meta.n_lights();
         slot.texel_values = n;
         slot.data.resize(n * slot.n_lights, 0.0);
         for (l, row) in slot.data.chunks_exact_mut(n).enumerate() {
-            self.read_image_buffered(view, l, row, raw)?;
+            self.read_image_buffered(view, l, row, raw, check)?;
         }
         Ok(())
     }
