@@ -2,8 +2,9 @@
 //! the `V(x, p_α)` of eq. 9), with the answer of one ray per pixel centre.
 //!
 //! Per frame (vertex side) the BVH is walked nearest child first. A node whose box lies
-//! below the tangent plane through the ray origin cannot hold a point `o + t·d` with
-//! `d_z > 0, t > 0`, and is skipped; so is a node whose projection onto every hemicube face
+//! below the cone of the lowest pixel rays around the ray origin (`z < 0.9 · min_p(d_z /
+//! |d_xy|) · |xy|`, which includes everything below the tangent plane) cannot hold a point
+//! `o + t·d` of any pixel ray, and is skipped; so is a node whose projection onto every hemicube face
 //! covers only pixels that are already occluded (hierarchical occlusion culling — inside a
 //! closed garment the near wall hides the rest). A surviving triangle is clipped to each
 //! face's pyramid of directions and projected (`u = p_u / p_m`, `v = p_v / p_m`); only the
@@ -101,6 +102,9 @@ pub(super) struct FrameRaster<'a> {
     frame: HemicubeFrame,
     origin: [f32; 3],
     eps: f32,
+    /// 0.9 × the smallest `z / √(x² + y²)` of any pixel centre: geometry below this cone
+    /// around the origin lies under every pixel's ray.
+    cone: f32,
 }
 
 impl<'a> FrameRaster<'a> {
@@ -124,6 +128,8 @@ impl<'a> FrameRaster<'a> {
             frame: HemicubeFrame { origin: [0.0; 3], axes: [[0.0; 3]; 3] },
             origin: [0.0; 3],
             eps: 0.0,
+            cone: 0.9
+                * cube.dirs.iter().map(|d| d[2] / d[0].hypot(d[1])).fold(f32::INFINITY, f32::min),
         }
     }
 
@@ -215,7 +221,7 @@ impl<'a> FrameRaster<'a> {
             t_lo[a] = centre[a] - e - tol;
             t_hi[a] = centre[a] + e + tol;
         }
-        if t_hi[2] < 0.0 {
+        if t_hi[2] < self.cone * xy_distance(&t_lo, &t_hi) {
             return None;
         }
         let dist2: f32 = (0..3).map(|a| (t_lo[a].max(0.0) + (-t_hi[a]).max(0.0)).powi(2)).sum();
@@ -338,7 +344,7 @@ impl<'a> FrameRaster<'a> {
         let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f32::max);
         let tol =
             1e-5 * (extent + (0..3).map(|a| lo[a].abs().max(hi[a].abs())).fold(0.0, f32::max));
-        if hi[2] < -tol {
+        if hi[2] + tol < self.cone * (xy_distance(&lo, &hi) - tol) {
             return;
         }
         let dist2: f32 = (0..3).map(|a| (lo[a].max(0.0) + (-hi[a]).max(0.0)).powi(2)).sum();
@@ -439,6 +445,12 @@ impl<'a> FrameRaster<'a> {
     fn test_pixels(&mut self, r: &Rect, t: &Tri) {
         self.cast_pixels(r, |o, d, eps| tri_hit(t, o, d, eps));
     }
+}
+
+/// Distance from the tangent-space `z` axis to the box `lo..hi` (0 when it crosses it).
+fn xy_distance(lo: &[f32; 3], hi: &[f32; 3]) -> f32 {
+    let gap = |a: usize| lo[a].max(-hi[a]).max(0.0);
+    gap(0).hypot(gap(1))
 }
 
 /// Bits `a..=b` of a word (`a ≤ b < 64`).
