@@ -135,7 +135,7 @@ fn environment_light(exposure: f64) -> String {
         r#"[[lights]]
 kind = "environment"
 path = "sky.exr"          # equirectangular, +z up
-rotation_deg = 0.0
+rotation_deg = 240.0      # turns the sun (azimuth 30°) round to the garment's front
 exposure = {exposure:.6e}  # horizontal irradiance of the sky → 1
 visibility_res = 16       # hemicube pixels across the top face, per vertex
 two_sided = true

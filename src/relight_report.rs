@@ -7,7 +7,9 @@
 //!   periodic interpolation of `o_k(δ)` is least exact), as mean and maximum, plus the
 //!   relative RMS error of the rendered image at the first midpoint;
 //! - `STEM-heat-eE.png`: green → red error heat maps of those renders against the render
-//!   with exact weights (Fig. 13), full scale = 10 % of the exact image's mean radiance;
+//!   with exact weights (Fig. 13): per pixel the length of the RGB error, full scale = 20 %
+//!   of the exact image's mean radiance over the garment (pixels that differ from the
+//!   background; background pixels are black);
 //! - `STEM-coefficients.{png,csv}`: `o_k(δ)` over `δ ∈ [0°, 360°)` (Fig. 12).
 //!
 //! The `.md` table is written last: its presence marks the report finished.
@@ -15,7 +17,7 @@
 use crate::plot::{Plot, Series};
 use anyhow::{Context, Result};
 use btf_render::envlight::eigenweights::relative_error;
-use btf_render::envlight::heatmap::error_heatmap;
+use btf_render::envlight::heatmap::green_red;
 use btf_render::envlight::scene_env::REPORT_COMPONENTS;
 use btf_render::{Gpu, Renderer};
 use serde::Serialize;
@@ -84,8 +86,15 @@ fn heat_maps(
     let env = renderer.environment_mut().context("no environment light")?;
     env.set_rotation_exact(delta);
     let reference = renderer.render(gpu)?;
-    let lit: Vec<f32> = reference.rgb.iter().copied().filter(|v| *v > 0.0).collect();
-    let mean = lit.iter().sum::<f32>() / lit.len().max(1) as f32;
+    let bg = renderer.scene().output.background;
+    let garment: Vec<bool> = reference.rgb.chunks_exact(3).map(|p| p != bg).collect();
+    let (sum, n) = reference
+        .rgb
+        .chunks_exact(3)
+        .zip(&garment)
+        .filter(|(_, g)| **g)
+        .fold((0f32, 0usize), |(s, n), (p, _)| (s + (p[0] + p[1] + p[2]) / 3.0, n + 1));
+    let full_scale = (0.2 * sum / n.max(1) as f32).max(f32::MIN_POSITIVE);
     let ref_norm = reference.rgb.iter().map(|v| (*v as f64).powi(2)).sum::<f64>().sqrt();
     for row in rows.iter_mut() {
         renderer
@@ -95,7 +104,16 @@ fn heat_maps(
         let frame = renderer.render(gpu)?;
         let diff = reference.rgb.iter().zip(&frame.rgb).map(|(a, b)| ((a - b) as f64).powi(2));
         row.image_rel_rmse = diff.sum::<f64>().sqrt() / ref_norm.max(f64::MIN_POSITIVE);
-        let heat = error_heatmap(&reference.rgb, &frame.rgb, 0.1 * mean);
+        let heat: Vec<u8> = reference
+            .rgb
+            .chunks_exact(3)
+            .zip(frame.rgb.chunks_exact(3))
+            .zip(&garment)
+            .flat_map(|((r, a), &g)| {
+                let d = (0..3).map(|c| (r[c] - a[c]).powi(2)).sum::<f32>().sqrt();
+                if g || a != bg { green_red(d / full_scale) } else { [0, 0, 0] }
+            })
+            .collect();
         let img =
             image::RgbImage::from_raw(frame.width, frame.height, heat).context("heat map size")?;
         crate::imageio::write_png(&dir.join(format!("{stem}-heat-e{}.png", row.e)), &img)?;

@@ -43,6 +43,17 @@ fn demo_runs_end_to_end_and_resumes() {
             .count();
         let frac = lit as f64 / (96.0 * 72.0);
         assert!(frac > 0.05 && frac < 0.9, "lit fraction {frac}");
+        // Under the sky (exposure: horizontal irradiance 1) the garment is lit as well, and
+        // the report lists the environment's one-off costs.
+        let img = image::open(out.join("render-environment.png")).unwrap().to_rgb8();
+        let bg = img.get_pixel(0, 0).0;
+        let lit = img
+            .pixels()
+            .filter(|p| p.0.iter().zip(bg).map(|(a, b)| *a as i32 - b as i32).sum::<i32>() > 30)
+            .count();
+        let frac = lit as f64 / (96.0 * 72.0);
+        assert!(frac > 0.05 && frac < 0.9, "environment: lit fraction {frac}");
+        assert!(stdout.contains("env visibility maps"), "{stdout}");
     } else {
         assert!(!gpu_required, "BTF_REQUIRE_GPU=1 but the demo rendered nothing");
     }

@@ -210,7 +210,7 @@ fn environment_adds_to_a_directional_light() {
     for eval in ["per-pixel", "per-vertex"] {
         let both = scene(eval, "sky.exr", sun);
         let env_only = scene(eval, "sky.exr", "");
-        let sun_only = both.replace("kind = \"environment\"", "kind = \"environment\"").replace(
+        let sun_only = both.replace(
             "[[lights]]\nkind = \"environment\"\npath = \"sky.exr\"\nvisibility_res = 16\n",
             "",
         );

@@ -383,6 +383,11 @@ impl Renderer {
         out
     }
 
+    /// The scene this renderer was built from.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
     /// The merged mesh.
     pub fn mesh(&self) -> &Mesh {
         &self.mesh

@@ -379,6 +379,9 @@ fn fast_visibility_equals_the_ray_cast() {
     let meshes = [
         ("sphere", sphere(16), 16),
         ("corner", corner_mesh(0.1, 0.5, 0.3), 32),
+        // Rows of two mask words (96 = 64 + 32) and the smallest cube.
+        ("corner", corner_mesh(0.1, 0.5, 0.3), 96),
+        ("sphere", sphere(8), 2),
         ("crumpled sheet", crumpled_sheet(), 16),
         ("shirt low", shirt_low(), 8),
     ];

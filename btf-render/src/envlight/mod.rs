@@ -19,6 +19,7 @@ mod gather;
 pub mod heatmap;
 pub mod hemicube;
 mod raster;
+mod raster_face;
 pub mod scene_env;
 pub mod visibility;
 pub mod weights;

@@ -2,8 +2,9 @@
 //! the `V(x, p_α)` of eq. 9), with the answer of one ray per pixel centre.
 //!
 //! Per frame (vertex side) the BVH is walked nearest child first. A node whose box lies
-//! below the tangent plane through the ray origin cannot hold a point `o + t·d` with
-//! `d_z > 0, t > 0`, and is skipped; so is a node whose projection onto every hemicube face
+//! below the cone of the lowest pixel rays around the ray origin (`z < 0.9 · min_p(d_z /
+//! |d_xy|) · |xy|`, which includes everything below the tangent plane) cannot hold a point
+//! `o + t·d` of any pixel ray, and is skipped; so is a node whose projection onto every hemicube face
 //! covers only pixels that are already occluded (hierarchical occlusion culling — inside a
 //! closed garment the near wall hides the rest). A surviving triangle is clipped to each
 //! face's pyramid of directions and projected (`u = p_u / p_m`, `v = p_v / p_m`); only the
@@ -16,75 +17,14 @@
 
 use super::bvh::{Bvh, Tri, dot, sub, tri_hit};
 use super::hemicube::Hemicube;
+use super::raster_face::{
+    Face, Rect, face_bounds, face_of, faces, ratio_range, span_mask, xy_distance,
+};
 use super::visibility::HemicubeFrame;
 
 /// Nodes with at most this many still-visible pixels under their projection are finished
 /// by casting those pixels' rays through the node's subtree.
 const RAY_CAST_BELOW: usize = 48;
-
-/// One hemicube face: the major axis (with its sign) and the axes of the face coordinates.
-#[derive(Debug, Clone, Copy)]
-struct Face {
-    major: usize,
-    sign: f32,
-    u: usize,
-    v: usize,
-    v_min: f32,
-    rows: usize,
-    /// First pixel of the face in the hemicube layout.
-    start: usize,
-}
-
-/// The five faces in the layout of [`super::hemicube`].
-fn faces(res: usize) -> [Face; 5] {
-    let (half, top) = (res / 2, res * res);
-    let side = |major, sign, u, k: usize| Face {
-        major,
-        sign,
-        u,
-        v: 2,
-        v_min: 0.0,
-        rows: half,
-        start: top + k * res * half,
-    };
-    [
-        Face { major: 2, sign: 1.0, u: 0, v: 1, v_min: -1.0, rows: res, start: 0 },
-        side(0, 1.0, 1, 0),
-        side(0, -1.0, 1, 1),
-        side(1, 1.0, 0, 2),
-        side(1, -1.0, 0, 3),
-    ]
-}
-
-/// Inclusive pixel rectangle on one face.
-#[derive(Debug, Clone, Copy)]
-struct Rect {
-    face: usize,
-    c0: usize,
-    c1: usize,
-    r0: usize,
-    r1: usize,
-}
-
-/// Range of `q / m` over `q ∈ [q0, q1]`, `m ∈ (max(m0, 0), m1]` (`m1 > 0`).
-fn ratio_range(q0: f32, q1: f32, m0: f32, m1: f32) -> (f32, f32) {
-    let ml = m0.max(0.0);
-    let lo = if q0 >= 0.0 {
-        q0 / m1
-    } else if ml > 0.0 {
-        q0 / ml
-    } else {
-        f32::NEG_INFINITY
-    };
-    let hi = if q1 <= 0.0 {
-        q1 / m1
-    } else if ml > 0.0 {
-        q1 / ml
-    } else {
-        f32::INFINITY
-    };
-    (lo, hi)
-}
 
 /// The rasteriser of one hemicube frame.
 pub(super) struct FrameRaster<'a> {
@@ -101,6 +41,9 @@ pub(super) struct FrameRaster<'a> {
     frame: HemicubeFrame,
     origin: [f32; 3],
     eps: f32,
+    /// 0.9 × the smallest `z / √(x² + y²)` of any pixel centre: geometry below this cone
+    /// around the origin lies under every pixel's ray.
+    cone: f32,
 }
 
 impl<'a> FrameRaster<'a> {
@@ -124,6 +67,8 @@ impl<'a> FrameRaster<'a> {
             frame: HemicubeFrame { origin: [0.0; 3], axes: [[0.0; 3]; 3] },
             origin: [0.0; 3],
             eps: 0.0,
+            cone: 0.9
+                * cube.dirs.iter().map(|d| d[2] / d[0].hypot(d[1])).fold(f32::INFINITY, f32::min),
         }
     }
 
@@ -215,7 +160,7 @@ impl<'a> FrameRaster<'a> {
             t_lo[a] = centre[a] - e - tol;
             t_hi[a] = centre[a] + e + tol;
         }
-        if t_hi[2] < 0.0 {
+        if t_hi[2] < self.cone * xy_distance(&t_lo, &t_hi) {
             return None;
         }
         let dist2: f32 = (0..3).map(|a| (t_lo[a].max(0.0) + (-t_hi[a]).max(0.0)).powi(2)).sum();
@@ -269,25 +214,6 @@ impl<'a> FrameRaster<'a> {
         (l <= h).then_some((l as usize, h as usize))
     }
 
-    /// The face whose pyramid holds tangent point `p` with room `tol` to its planes.
-    fn face_of(p: &[f32; 3], tol: f32) -> Option<usize> {
-        let [x, y, z] = *p;
-        let (ax, ay) = (x.abs(), y.abs());
-        if z - ax > tol && z - ay > tol {
-            return Some(0);
-        }
-        if z <= tol {
-            return None;
-        }
-        if ax - ay > tol && ax - z > tol {
-            return Some(if x > 0.0 { 1 } else { 2 });
-        }
-        if ay - ax > tol && ay - z > tol {
-            return Some(if y > 0.0 { 3 } else { 4 });
-        }
-        None
-    }
-
     /// Number of still-visible pixels in `r`.
     fn visible_in(&self, r: &Rect) -> usize {
         (r.r0..=r.r1)
@@ -338,12 +264,12 @@ impl<'a> FrameRaster<'a> {
         let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f32::max);
         let tol =
             1e-5 * (extent + (0..3).map(|a| lo[a].abs().max(hi[a].abs())).fold(0.0, f32::max));
-        if hi[2] < -tol {
+        if hi[2] + tol < self.cone * (xy_distance(&lo, &hi) - tol) {
             return;
         }
         let dist2: f32 = (0..3).map(|a| (lo[a].max(0.0) + (-hi[a]).max(0.0)).powi(2)).sum();
         let margin = self.margin(dist2.sqrt(), extent);
-        let [a, b, c] = corners.map(|p| Self::face_of(&p, tol));
+        let [a, b, c] = corners.map(|p| face_of(&p, tol));
         if let Some(f) = a.filter(|&f| b == Some(f) && c == Some(f)) {
             // Inside one pyramid (the common case): project the corners.
             let face = self.faces[f];
@@ -360,88 +286,14 @@ impl<'a> FrameRaster<'a> {
             return;
         }
         for f in 0..5 {
-            let Some((u, v)) = self.face_bounds(f, &corners, tol) else { continue };
+            let Some((u, v)) = face_bounds(&self.faces[f], &corners, tol) else { continue };
             if let Some(r) = self.rect(f, u, v, margin) {
                 self.test_pixels(&r, t);
             }
         }
     }
 
-    /// Bounds in face coordinates of the part of the triangle inside face `f`'s pyramid.
-    fn face_bounds(
-        &self,
-        f: usize,
-        corners: &[[f32; 3]; 3],
-        tol: f32,
-    ) -> Option<((f32, f32), (f32, f32))> {
-        let face = self.faces[f];
-        let s = face.sign;
-        // Planes through the origin bounding the face's pyramid: value ≥ 0 inside.
-        let planes: [[f32; 3]; 5] = {
-            let mut p = [[0f32; 3]; 5];
-            for (k, (axis, sg)) in
-                [(face.u, 1.0), (face.u, -1.0), (face.v, 1.0), (face.v, -1.0), (2, 0.0)]
-                    .into_iter()
-                    .enumerate()
-            {
-                if k < 4 {
-                    p[k][face.major] = s;
-                    p[k][axis] -= sg;
-                } else {
-                    p[k][2] = 1.0;
-                }
-            }
-            p
-        };
-        let mut poly = [[0f32; 3]; 12];
-        poly[..3].copy_from_slice(corners);
-        let mut n = 3;
-        for plane in &planes {
-            let val = |p: &[f32; 3]| dot(*p, *plane) + tol;
-            if poly[..n].iter().all(|p| val(p) >= 0.0) {
-                continue;
-            }
-            if poly[..n].iter().all(|p| val(p) < 0.0) {
-                return None;
-            }
-            let mut out = [[0f32; 3]; 12];
-            let mut m = 0;
-            for i in 0..n {
-                let (a, b) = (poly[i], poly[(i + 1) % n]);
-                let (va, vb) = (val(&a), val(&b));
-                if va >= 0.0 {
-                    out[m] = a;
-                    m += 1;
-                }
-                if (va >= 0.0) != (vb >= 0.0) && m < 12 {
-                    let w = va / (va - vb);
-                    out[m] = [0, 1, 2].map(|k| a[k] + w * (b[k] - a[k]));
-                    m += 1;
-                }
-            }
-            poly = out;
-            n = m;
-        }
-        let (mut u, mut v) = ((f32::MAX, f32::MIN), (f32::MAX, f32::MIN));
-        for p in &poly[..n] {
-            let m = s * p[face.major];
-            if m <= 4.0 * tol {
-                // A point next to the origin: any direction of the face.
-                return Some(((-1.0, 1.0), (face.v_min, 1.0)));
-            }
-            let (pu, pv) = (p[face.u] / m, p[face.v] / m);
-            u = (u.0.min(pu), u.1.max(pu));
-            v = (v.0.min(pv), v.1.max(pv));
-        }
-        (n > 0).then_some((u, v))
-    }
-
     fn test_pixels(&mut self, r: &Rect, t: &Tri) {
         self.cast_pixels(r, |o, d, eps| tri_hit(t, o, d, eps));
     }
-}
-
-/// Bits `a..=b` of a word (`a ≤ b < 64`).
-fn span_mask(a: usize, b: usize) -> u64 {
-    (u64::MAX >> (63 - b)) & (u64::MAX << a)
 }

@@ -229,22 +229,6 @@ pub fn metric_dot(a: &[f32], b: &[f32], n: usize, metric: &[f64]) -> f64 {
     s
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::envlight::Hemicube;
-
-    #[test]
-    fn pixel_of_a_direction_is_the_pixel_whose_centre_it_is() {
-        for res in [2usize, 8, 16] {
-            let cube = Hemicube::new(res as u32).unwrap();
-            for (p, d) in cube.dirs.iter().enumerate() {
-                assert_eq!(hemicube_pixel(res, d[0], d[1], d[2]), p, "res {res}");
-            }
-        }
-    }
-}
-
 /// `γ*` of slot `j` (eq. 10) for one frame's gathered radiances `g` (`3 · lights`, rows per
 /// channel): `out[ch · (c+2) + col]` for the columns `[mean, bias, components]`.
 pub fn gamma_star_of(g: &[f32], p: &CoefficientMatrix, j: usize, out: &mut [f32]) {
@@ -260,6 +244,22 @@ pub fn gamma_star_of(g: &[f32], p: &CoefficientMatrix, j: usize, out: &mut [f32]
                 for (d, s) in dst.iter_mut().zip(src) {
                     *d += gi * s;
                 }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::envlight::Hemicube;
+
+    #[test]
+    fn pixel_of_a_direction_is_the_pixel_whose_centre_it_is() {
+        for res in [2usize, 8, 16] {
+            let cube = Hemicube::new(res as u32).unwrap();
+            for (p, d) in cube.dirs.iter().enumerate() {
+                assert_eq!(hemicube_pixel(res, d[0], d[1], d[2]), p, "res {res}");
             }
         }
     }
