@@ -158,13 +158,11 @@ impl Orbit {
 /// Turns a light about the up axis through `pivot` (point lights) or its direction
 /// (directional lights): `d_yaw_deg` about up, `d_pitch_deg` in elevation.
 pub fn turn_light(light: &mut Light, pivot: V3, up: V3, d_yaw_deg: f32, d_pitch_deg: f32) {
-    match light {
-        Light::Point { position, .. } => {
-            *position = add(pivot, turn(sub(*position, pivot), up, d_yaw_deg, d_pitch_deg));
-        }
-        Light::Directional { direction, .. } => {
-            *direction = turn(*direction, up, d_yaw_deg, d_pitch_deg);
-        }
+    // `if let` rather than `match`: other kinds of light (an environment) are left alone.
+    if let Light::Point { position, .. } = light {
+        *position = add(pivot, turn(sub(*position, pivot), up, d_yaw_deg, d_pitch_deg));
+    } else if let Light::Directional { direction, .. } = light {
+        *direction = turn(*direction, up, d_yaw_deg, d_pitch_deg);
     }
 }
 
