@@ -32,7 +32,8 @@ fn have(tool: &str) -> bool {
         .is_ok_and(|o| o.status.success())
 }
 
-/// A shirt in a small synthetic corduroy, under a point light, 320×240, black background;
+/// A shirt in a small synthetic corduroy, under a point light, 320×240, on a purple
+/// background (sRGB (108, 0, 108) at exposure 1.5, a colour the beige fabric never takes);
 /// two environments and one missing file (listed first, so start-up meets it).
 fn garment_scene(d: &Dir) -> PathBuf {
     d.ok(&["synth", "material", "--kind", "corduroy", "--size", "8", "-o", "m.btf"]);
@@ -45,6 +46,7 @@ fn garment_scene(d: &Dir) -> PathBuf {
 width = 320
 height = 240
 exposure = 1.5
+background = [0.1, 0.0, 0.1]
 
 [[meshes]]
 path = "shirt.obj"
@@ -69,6 +71,9 @@ intensity = [12.0, 12.0, 12.0]
     path
 }
 
+/// sRGB level of the background's red and blue: linear 0.1 × exposure 1.5.
+const BACKGROUND_SRGB: u8 = 108;
+
 /// An 8-bit RGB image.
 struct Shot {
     w: usize,
@@ -81,9 +86,10 @@ impl Shot {
         let img = image::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgb8();
         Shot { w: img.width() as usize, h: img.height() as usize, rgb: img.into_raw() }
     }
-    /// Pixels of the garment: brighter than the black background.
+    /// Pixels of the garment: not the background colour (±2 levels).
     fn mask(&self) -> Vec<bool> {
-        self.rgb.chunks_exact(3).map(|p| p.iter().any(|&c| c >= 3)).collect()
+        let bg = [BACKGROUND_SRGB, 0, BACKGROUND_SRGB];
+        self.rgb.chunks_exact(3).map(|p| (0..3).any(|k| p[k].abs_diff(bg[k]) > 2)).collect()
     }
     fn coverage(&self) -> f64 {
         let m = self.mask();
@@ -231,14 +237,14 @@ impl Viewer {
 
 /// Sends `WM_DELETE_WINDOW`, as a window manager's close button does.
 fn close_window(display: &str, window: u32) {
-    use x11rb::connection::Connection;
     use x11rb::protocol::xproto::{ClientMessageEvent, ConnectionExt, EventMask};
     let (conn, _) = x11rb::connect(Some(display)).expect("X connection");
     let atom = |name: &[u8]| conn.intern_atom(false, name).unwrap().reply().unwrap().atom;
     let (protocols, delete) = (atom(b"WM_PROTOCOLS"), atom(b"WM_DELETE_WINDOW"));
     let ev = ClientMessageEvent::new(32, window, protocols, [delete, 0, 0, 0, 0]);
-    conn.send_event(false, window, EventMask::NO_EVENT, ev).unwrap();
-    conn.flush().unwrap();
+    conn.send_event(false, window, EventMask::NO_EVENT, ev).unwrap().check().unwrap();
+    // A round trip, so the server has handled the request before the connection closes.
+    conn.get_input_focus().unwrap().reply().unwrap();
 }
 
 #[test]
@@ -295,7 +301,7 @@ fn window_draws_turns_lights_and_closes() {
     let relit = v.shot(&d);
     let (xor, shading) = (relit.silhouette_xor(&turned), relit.shading_difference(&turned));
     eprintln!("light drag: silhouette xor {xor:.4}, shading {shading:.2}/255");
-    assert!(xor < 0.005 && shading > 2.0, "light drag: xor {xor:.4}, shading {shading:.2}");
+    assert!(xor == 0.0 && shading > 2.0, "light drag: xor {xor:.4}, shading {shading:.2}");
 
     // Next environment (the sky) loads; rotating it by 60°.
     v.xdotool(&["key", "e"]);
@@ -356,10 +362,14 @@ fn turntable_writes_a_full_turn() {
     for (i, f) in frames.iter().enumerate() {
         assert!(f.coverage() > 0.05, "frame {i} covers {:.3}", f.coverage());
     }
-    // 90° apart: the silhouettes differ.
+    // Every frame differs from the first; at 90° and 270° the silhouette does (at 180° the
+    // back's outline is nearly the front's mirror image).
     for i in 1..4 {
-        let xor = frames[i].silhouette_xor(&frames[0]);
-        assert!(xor > 0.03, "frame {i} vs 0: silhouette xor {xor:.3}");
+        let (changed, xor) =
+            (frames[i].changed(&frames[0], 8), frames[i].silhouette_xor(&frames[0]));
+        eprintln!("turntable frame {i} vs 0: changed {changed:.3}, silhouette xor {xor:.3}");
+        assert!(changed > 0.05, "frame {i} vs 0: changed {changed:.3}");
+        assert!(i == 2 || xor > 0.03, "frame {i} vs 0: silhouette xor {xor:.3}");
     }
     // No temporary files are left; `--resume` redoes only the missing frame.
     let names: Vec<String> = std::fs::read_dir(d.path("tt"))

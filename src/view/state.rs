@@ -335,9 +335,7 @@ impl Viewer {
     pub fn update(&mut self, gpu: &Gpu) -> Option<Latency> {
         let change = self.pending.take()?;
         let (_, update_ms) = env::timed(|| self.apply(gpu, change));
-        let Some(r) = self.renderer.as_ref() else {
-            return None;
-        };
+        let r = self.renderer.as_ref()?;
         let (frame, render_ms) = env::timed(|| r.render(gpu));
         match frame {
             Ok(f) => {

@@ -5,7 +5,7 @@
 //!   garment, camera, lights and environment turn together by `i · 360°/N`, which is what
 //!   frame `i` renders. PNGs are written atomically; `--resume` keeps finished frames.
 //! - the interaction-latency benchmark (`--bench N`): `N` camera moves, light moves,
-//!   environment rotations and environment swaps, back to back in one run, each timed from
+//!   environment rotations and environment swaps, interleaved in one run, each timed from
 //!   the change to the frame read back; medians and ratios to the camera move.
 
 use super::ViewArgs;
@@ -84,20 +84,19 @@ pub fn bench(args: &ViewArgs, scene: Scene, n: u32) -> Result<()> {
         (Change::EnvRotation, |v, _, _| v.rotate_env(15.0)),
         (Change::EnvSwap, |v, i, envs| v.select_env(i as usize % envs.max(1))),
     ];
-    let mut rows: Vec<(Change, Vec<Latency>)> = Vec::new();
-    for (kind, step) in kinds {
-        if kind == Change::EnvSwap && envs == 0 {
-            continue;
-        }
-        let mut lats = Vec::new();
-        for i in 0..n + 1 {
+    let kinds: Vec<(Change, Step)> =
+        kinds.into_iter().filter(|(k, _)| *k != Change::EnvSwap || envs > 0).collect();
+    // Round robin, so that a change of machine load affects every kind alike; the first
+    // round warms caches and is not counted.
+    let mut rows: Vec<(Change, Vec<Latency>)> = kinds.iter().map(|(k, _)| (*k, vec![])).collect();
+    for i in 0..n + 1 {
+        for (r, (_, step)) in kinds.iter().enumerate() {
             step(&mut v, i, envs);
             let lat = v.update(&gpu).context("no frame rendered")?;
             if i > 0 {
-                lats.push(lat); // the first of each kind warms caches
+                rows[r].1.push(lat);
             }
         }
-        rows.push((kind, lats));
     }
     if let Some(e) = v.errors.last() {
         bail!("{e}");
