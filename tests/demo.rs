@@ -54,6 +54,12 @@ fn demo_runs_end_to_end_and_resumes() {
         let frac = lit as f64 / (96.0 * 72.0);
         assert!(frac > 0.05 && frac < 0.9, "environment: lit fraction {frac}");
         assert!(stdout.contains("env visibility maps"), "{stdout}");
+        // Render cost sweep: c = 4, 8 × two evaluations × two blendings, with its checks.
+        let cost = std::fs::read_to_string(out.join("render-cost/render-cost.csv")).unwrap();
+        assert_eq!(cost.lines().count(), 1 + 8, "{cost}");
+        assert!(out.join("render-cost/eq6-on-off.png").exists());
+        let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+        assert!(report.contains("× read bound") && report.contains("render-cost/render-cost.png"));
     } else {
         assert!(!gpu_required, "BTF_REQUIRE_GPU=1 but the demo rendered nothing");
     }

@@ -339,44 +339,67 @@ fn fs_pixel(in: VertexOut) -> @location(0) vec4<f32> {
 // ---- per-vertex evaluation (the paper's blending) ----
 
 var<private> vis: array<f32, 4>;
-
-fn cand_slot(tri: vec3<u32>, c: u32) -> u32 {
-    return vertex_slots[tri[c / 4u]][c % 4u];
-}
+// the 12 candidate slots of the triangle's vertices (NONE where the vertex weighs 0)
+var<private> cand: array<u32, 12>;
+// per member (vertex holding the current slot, ≤ 3) and entry, index m·4 + l:
+// coefficient offset and barycentric × visibility
+var<private> m_base: array<u32, 12>;
+var<private> m_scale: array<f32, 12>;
 
 fn coef_base(tri: vec3<u32>, c: u32, l: u32, stride: u32) -> u32 {
     return ((tri[c / 4u] * frame.info.w + l) * 4u + c % 4u) * stride;
 }
 
+// Collects the vertices whose slot set holds cand[c]; returns how many (≤ 3).
+fn collect_members(in: VertexOut, c: u32, stride: u32, n_entries: u32) -> u32 {
+    let j = cand[c];
+    var n_m = 0u;
+    for (var c3 = c; c3 < 12u; c3 = c3 + 1u) {
+        if (cand[c3] != j || n_m >= 3u) {
+            continue;
+        }
+        for (var l = 0u; l < n_entries; l = l + 1u) {
+            m_base[n_m * 4u + l] = coef_base(in.tri, c3, l, stride);
+            m_scale[n_m * 4u + l] = in.bary[c3 / 4u] * vis[l];
+        }
+        n_m = n_m + 1u;
+    }
+    return n_m;
+}
+
 // Σ over the triangle's vertices and the `n_entries` lights of the per-vertex layout, each
-// entry weighted by vis[l]: the paper's barycentric blending of per-vertex reconstructions.
+// entry weighted by vis[l]: the paper's barycentric blending of per-vertex reconstructions,
+// each distinct slot read once.
 fn vertex_sum(in: VertexOut, uv: vec2<f32>, n_entries: u32) -> vec3<f32> {
     let g_count = samplings.info.x;
     let stride = 2u + 3u * frame.info.z;
+    var sets: array<vec4<u32>, 3>;
+    sets[0] = vertex_slots[in.tri.x];
+    sets[1] = vertex_slots[in.tri.y];
+    sets[2] = vertex_slots[in.tri.z];
+    for (var c = 0u; c < 12u; c = c + 1u) {
+        cand[c] = select(sets[c / 4u][c % 4u], NONE, in.bary[c / 4u] <= 0.0);
+    }
     var rgb = vec3<f32>(0.0);
     for (var c = 0u; c < 12u; c = c + 1u) {
-        let j = cand_slot(in.tri, c);
-        if (j == NONE || in.bary[c / 4u] <= 0.0) {
+        let j = cand[c];
+        if (j == NONE) {
             continue;
         }
         var seen = false;
         for (var c2 = 0u; c2 < c; c2 = c2 + 1u) {
-            if (cand_slot(in.tri, c2) == j && in.bary[c2 / 4u] > 0.0) {
-                seen = true;
-            }
+            seen = seen || cand[c2] == j;
         }
         if (seen) {
             continue;
         }
+        let n_m = collect_members(in, c, stride, n_entries);
         var mc = vec3<f32>(0.0);
         var bias = vec3<f32>(0.0);
-        for (var c3 = c; c3 < 12u; c3 = c3 + 1u) {
-            if (cand_slot(in.tri, c3) != j) {
-                continue;
-            }
+        for (var m = 0u; m < n_m; m = m + 1u) {
             for (var l = 0u; l < n_entries; l = l + 1u) {
-                let s = in.bary[c3 / 4u] * vis[l];
-                let base = coef_base(in.tri, c3, l, stride);
+                let s = m_scale[m * 4u + l];
+                let base = m_base[m * 4u + l];
                 mc = mc + s * vertex_coef[base].rgb;
                 bias = bias + s * vertex_coef[base + 1u].rgb;
             }
@@ -389,13 +412,10 @@ fn vertex_sum(in: VertexOut, uv: vec2<f32>, n_entries: u32) -> vec3<f32> {
             var ca = vec4<f32>(0.0);
             var cb = vec4<f32>(0.0);
             var cc = vec4<f32>(0.0);
-            for (var c3 = c; c3 < 12u; c3 = c3 + 1u) {
-                if (cand_slot(in.tri, c3) != j) {
-                    continue;
-                }
+            for (var m = 0u; m < n_m; m = m + 1u) {
                 for (var l = 0u; l < n_entries; l = l + 1u) {
-                    let s = in.bary[c3 / 4u] * vis[l];
-                    let base = coef_base(in.tri, c3, l, stride) + 2u + 3u * g;
+                    let s = m_scale[m * 4u + l];
+                    let base = m_base[m * 4u + l] + 2u + 3u * g;
                     ca = ca + s * vertex_coef[base];
                     cb = cb + s * vertex_coef[base + 1u];
                     cc = cc + s * vertex_coef[base + 2u];

@@ -12,7 +12,8 @@
 //! - [`material`]: eigen stores packed for the GPU;
 //! - [`btf_pass`], [`interp`], [`per_vertex`]: the reconstruction shader, its interpolation
 //!   weights, and the paper's per-vertex coefficients;
-//! - [`terminator`], [`shadow`], [`shadow_volume`], [`shadow_map`]: eq. 6 and shadows;
+//! - [`terminator`], [`shadow`], [`shadow_volume`], [`shadow_map`], [`shadow_cube`]: eq. 6
+//!   and shadows (cube maps for point lights inside the scene);
 //! - [`renderer`], [`frame`], [`timer`]: pass selection, output images, `--stats`;
 //! - [`mips`]: mip chains of the PCA textures (exact for the linear reconstruction);
 //! - [`plain_texture`], [`read_bound`], [`cost_sweep`]: the cost baselines and the sweep of

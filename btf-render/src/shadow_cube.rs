@@ -15,7 +15,7 @@ pub const FACES: usize = 6;
 
 /// Axis (the face's viewing direction) of face `f`.
 pub fn axis(f: usize) -> Vec3 {
-    let s = if f % 2 == 0 { 1.0 } else { -1.0 };
+    let s = if f.is_multiple_of(2) { 1.0 } else { -1.0 };
     match f / 2 {
         0 => Vec3::new(s, 0.0, 0.0),
         1 => Vec3::new(0.0, s, 0.0),

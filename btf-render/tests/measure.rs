@@ -87,3 +87,70 @@ fn frame_time_ratios() {
         eprintln!("    ratio to unshadowed: {:.2}", t / base);
     }
 }
+
+/// The cost sweep of `btf render-sweep` on the sphere-over-plane mesh at 256², c = 4…32
+/// (`BTF_SWEEP_SIZE` overrides the size): prints the rows, the linear fits and the checks.
+#[test]
+#[ignore = "a measurement on lavapipe: run for BENCHMARKS.md"]
+fn cost_sweep_against_baselines() {
+    use btf_render::cost_sweep::{SweepConfig, run};
+    let Some(gpu) = gpu("cost_sweep_against_baselines") else { return };
+    let size: u32 =
+        std::env::var("BTF_SWEEP_SIZE").ok().and_then(|s| s.parse().ok()).unwrap_or(256);
+    let dir = tempfile::tempdir().unwrap();
+    write_store(dir.path(), "m.eigen", Pattern::Checker, 64, 64, 32, Quantization::F16);
+    let obj = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../examples/scenes/sphere-on-plane.obj"
+    ))
+    .unwrap();
+    write(dir.path(), "mesh.obj", &obj);
+    let text = format!(
+        r#"
+        [output]
+        width = {size}
+        height = {size}
+        [[meshes]]
+        path = "mesh.obj"
+        [[materials]]
+        store = "m.eigen"
+        uv_scale = 2.0
+        [camera]
+        eye = [0.0, 1.8, 2.6]
+        target = [0.0, 0.4, 0.0]
+        [[lights]]
+        kind = "point"
+        position = [1.2, 2.2, 0.8]
+        intensity = [4.0, 4.0, 4.0]
+        "#
+    );
+    let scene = Scene::load(&write(dir.path(), "scene.toml", &text)).unwrap();
+    let config = SweepConfig { components: vec![4, 8, 16, 32], repeats: 5 };
+    let r = run(&gpu, &scene, &config, &mut |d, n| eprint!("\r{d}/{n}")).unwrap();
+    eprintln!();
+    eprintln!(
+        "| c | evaluation | blending | rel. RMSE | reads/px | BTF ms | plain ms | bound ms | × plain | × bound |"
+    );
+    for x in &r.rows {
+        eprintln!(
+            "| {} | {} | {} | {:.2e} | {:.1} | {:.2} | {:.2} | {:.2} | {:.1} | {:.2} |",
+            x.components,
+            x.evaluation,
+            x.blending,
+            x.rel_rmse,
+            x.reads_per_pixel,
+            x.btf_ms,
+            x.plain_ms,
+            x.read_bound_ms,
+            x.ratio_plain,
+            x.ratio_read_bound
+        );
+    }
+    for f in &r.fits {
+        eprintln!("fit {}: {:.3} + {:.4}·c ms, R² {:.4}", f.mode, f.intercept, f.slope, f.r2);
+    }
+    eprintln!(
+        "worst × read bound {:.2}; per-pixel reads ≤ per-vertex: {}",
+        r.worst_read_bound_ratio, r.per_pixel_reads_le_per_vertex
+    );
+}
