@@ -200,17 +200,6 @@ fn score_cmd(a: ScoreArgs) -> Result<()> {
         BtfStore::open(&a.store).with_context(|| format!("cannot open {}", a.store.display()))?;
     let layout = CaptureLayout::read(&a.truth)?;
     let truth = truth_fn(&layout)?;
-    if let Ok(dbg) = std::env::var("BTF_DEBUG_DUMP") {
-        let (grid, size, _) = score::recorded(&store)?;
-        let t: Vec<f32> = btf_capture::capture::blend::fold(&truth(0, 0, &grid), grid.n, size)
-            .into_iter()
-            .flatten()
-            .collect();
-        let e = store.read_image(0, 0)?;
-        let bytes = |v: &[f32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
-        std::fs::write(format!("{dbg}.truth.f32"), bytes(&t))?;
-        std::fs::write(format!("{dbg}.est.f32"), bytes(&e))?;
-    }
     let filters: &[Filter] =
         if a.compare_filters { &[Filter::Bilinear, Filter::Footprint] } else { &[] };
     let s = score::score(&store, &layout, &truth, filters).with_context(|| {
