@@ -48,6 +48,10 @@ pub struct ProcessArgs {
     /// Keep the images of an interrupted run.
     #[arg(long)]
     resume: bool,
+    /// Registration features: `markers` (point markers) or `markers+lines` (plus border-line
+    /// samples; experimental: biased in some views, see btf-capture/README.md).
+    #[arg(long, default_value = "markers")]
+    registration: String,
     /// Store element type (f16|f32).
     #[arg(long, default_value = "f32")]
     dtype: String,
@@ -110,7 +114,12 @@ fn process(a: ProcessArgs) -> Result<()> {
         "f32" => DType::F32,
         o => bail!("--dtype '{o}' is not f16 or f32"),
     };
-    let opt = ProcessOptions {
+    let use_lines = match a.registration.as_str() {
+        "markers+lines" => true,
+        "markers" => false,
+        o => bail!("--registration '{o}' is not markers+lines or markers"),
+    };
+    let mut opt = ProcessOptions {
         size: a.size,
         rectified_size: a.rectified_size,
         roi: parse_roi(&a.roi)?,
@@ -121,6 +130,7 @@ fn process(a: ProcessArgs) -> Result<()> {
         dtype,
         ..ProcessOptions::default()
     };
+    opt.register.use_lines = use_lines;
     let layout = CaptureLayout::read(&a.raw_dir)?;
     let n = layout.sampling.len() as u64;
     let bar = crate::progress::bar(n * n, "rectify");
