@@ -48,6 +48,10 @@ pub struct ProcessArgs {
     /// Keep the images of an interrupted run.
     #[arg(long)]
     resume: bool,
+    /// Registration features: `markers` (point markers) or `markers+lines` (plus border-line
+    /// samples; experimental: biased in some views, see btf-capture/README.md).
+    #[arg(long, default_value = "markers")]
+    registration: String,
     /// Store element type (f16|f32).
     #[arg(long, default_value = "f32")]
     dtype: String,
@@ -110,7 +114,12 @@ fn process(a: ProcessArgs) -> Result<()> {
         "f32" => DType::F32,
         o => bail!("--dtype '{o}' is not f16 or f32"),
     };
-    let opt = ProcessOptions {
+    let use_lines = match a.registration.as_str() {
+        "markers+lines" => true,
+        "markers" => false,
+        o => bail!("--registration '{o}' is not markers+lines or markers"),
+    };
+    let mut opt = ProcessOptions {
         size: a.size,
         rectified_size: a.rectified_size,
         roi: parse_roi(&a.roi)?,
@@ -121,6 +130,7 @@ fn process(a: ProcessArgs) -> Result<()> {
         dtype,
         ..ProcessOptions::default()
     };
+    opt.register.use_lines = use_lines;
     let layout = CaptureLayout::read(&a.raw_dir)?;
     let n = layout.sampling.len() as u64;
     let bar = crate::progress::bar(n * n, "rectify");
@@ -200,17 +210,6 @@ fn score_cmd(a: ScoreArgs) -> Result<()> {
         BtfStore::open(&a.store).with_context(|| format!("cannot open {}", a.store.display()))?;
     let layout = CaptureLayout::read(&a.truth)?;
     let truth = truth_fn(&layout)?;
-    if let Ok(dbg) = std::env::var("BTF_DEBUG_DUMP") {
-        let (grid, size, _) = score::recorded(&store)?;
-        let t: Vec<f32> = btf_capture::capture::blend::fold(&truth(0, 0, &grid), grid.n, size)
-            .into_iter()
-            .flatten()
-            .collect();
-        let e = store.read_image(0, 0)?;
-        let bytes = |v: &[f32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
-        std::fs::write(format!("{dbg}.truth.f32"), bytes(&t))?;
-        std::fs::write(format!("{dbg}.est.f32"), bytes(&e))?;
-    }
     let filters: &[Filter] =
         if a.compare_filters { &[Filter::Bilinear, Filter::Footprint] } else { &[] };
     let s = score::score(&store, &layout, &truth, filters).with_context(|| {

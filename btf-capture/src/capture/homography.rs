@@ -56,11 +56,11 @@ pub fn dlt(matches: &[PointMatch]) -> Option<Matrix3<f64>> {
     }
     let svd = a.svd(false, true);
     let v_t = svd.v_t?;
-    let (imin, smin) =
-        svd.singular_values
-            .iter()
-            .enumerate()
-            .fold((0, f64::INFINITY), |b, (i, &s)| if s < b.1 { (i, s) } else { b });
+    let (imin, smin) = svd
+        .singular_values
+        .iter()
+        .enumerate()
+        .fold((0, f64::INFINITY), |b, (i, &s)| if s < b.1 { (i, s) } else { b });
     let s_sorted = {
         let mut s: Vec<f64> = svd.singular_values.iter().copied().collect();
         s.sort_by(f64::total_cmp);

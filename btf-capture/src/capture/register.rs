@@ -59,13 +59,14 @@ pub struct RegisterOptions {
     pub search_margin_mm: f64,
     /// Consensus tolerance (pixels).
     pub consensus_tol_px: f64,
-    /// Use the border lines in the refinement.
+    /// Use the border lines in the refinement (off by default: their samples are biased
+    /// by up to a quarter pixel in some views, see the crate README).
     pub use_lines: bool,
 }
 
 impl Default for RegisterOptions {
     fn default() -> Self {
-        RegisterOptions { search_margin_mm: 6.0, consensus_tol_px: 2.0, use_lines: true }
+        RegisterOptions { search_margin_mm: 6.0, consensus_tol_px: 2.0, use_lines: false }
     }
 }
 
