@@ -47,8 +47,10 @@ impl Gpu {
         }
         let adapter = adapter.ok_or(Error::NoAdapter(last_err))?;
         let available = adapter.features();
-        let wanted =
-            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
+        // FLOAT32_BLENDABLE: the thin-cloth pass blends into the f32 colour target.
+        let wanted = wgpu::Features::TIMESTAMP_QUERY
+            | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
+            | wgpu::Features::FLOAT32_BLENDABLE;
         let required_features = available & wanted;
         let desc = wgpu::DeviceDescriptor {
             label: Some("btf-render"),

@@ -13,7 +13,8 @@
 //! - [`btf_pass`], [`interp`], [`per_vertex`]: the reconstruction shader, its interpolation
 //!   weights, and the paper's per-vertex coefficients;
 //! - [`terminator`], [`shadow`], [`shadow_volume`], [`shadow_map`]: eq. 6 and shadows;
-//! - [`renderer`], [`frame`], [`timer`]: pass selection, output images, `--stats`.
+//! - [`renderer`], [`frame`], [`timer`]: pass selection, output images, `--stats`;
+//! - [`transmission`]: thin semi-transparent cloth (front-/back-lit, view-dependent alpha).
 
 pub mod btf_pass;
 pub mod envlight;
@@ -33,6 +34,7 @@ pub mod shadow_volume;
 pub mod tangent;
 pub mod terminator;
 pub mod timer;
+pub mod transmission;
 
 pub use error::{Error, Result};
 pub use frame::{Frame, PassStat, Stats};
