@@ -45,7 +45,8 @@ fn default_albedo() -> Albedo {
 pub enum TauTexture {
     /// Luminance of the frontal view slot's mean texture, normalised to mean 1.
     BtfMean,
-    /// A grey image (PNG/EXR); relative paths are resolved against the scene's folder.
+    /// A grey image (PNG, TIFF, …; values in `[0, 1]`); relative paths are resolved
+    /// against the scene's folder.
     Image(PathBuf),
 }
 
