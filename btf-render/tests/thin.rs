@@ -107,6 +107,14 @@ fn back_lit_sheet_is_direct_transmission_plus_single_scattering() {
         &top_scene(dir.path(), &["sheet.obj"], &mat, &directional([0.3, 0.0, -1.0], e)),
     );
     assert_pixels("back-lit HG", &f, |i| BG[i % 3] as f64 * t + sheet * p, 1e-4);
+    // In a per-vertex scene the thin material is still evaluated per pixel, with an
+    // opaque per-vertex material bound beside it.
+    write(dir.path(), "floor.obj", &sheet_obj(2, -0.5, "floor"));
+    let mats = mat + &material("floor", "m.eigen", "");
+    let light = directional([0.3, 0.0, -1.0], e) + "[effects]\nevaluation = \"per-vertex\"\n";
+    let f = render(&gpu, &top_scene(dir.path(), &["floor.obj", "sheet.obj"], &mats, &light));
+    // The floor below is lit from below too: black, so only the sheet's own light shows.
+    assert_pixels("per-vertex scene", &f, |_| sheet * p, 1e-4);
 }
 
 #[test]

@@ -207,16 +207,12 @@ fn pipeline(
 ) -> Result<wgpu::RenderPipeline> {
     let dev = &gpu.device;
     gpu.scoped("building the thin-cloth pass", || {
-        let empty = dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("unused"),
-            entries: &[],
-        });
         let layout = dev.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("thin"),
             bind_group_layouts: &[
                 Some(&btf.frame_layout),
                 Some(&btf.material_layout),
-                Some(&empty),
+                None, // group 2: per-vertex coefficients of the opaque pass, unused here
                 Some(thin),
             ],
             immediate_size: 0,
