@@ -69,8 +69,10 @@ impl Gpu {
     /// A device on `adapter` with its own limits and, when offered, timestamp queries.
     pub fn from_adapter(adapter: &wgpu::Adapter) -> Result<Gpu> {
         let available = adapter.features();
-        let wanted =
-            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
+        // FLOAT32_BLENDABLE: the thin-cloth pass blends into the f32 colour target.
+        let wanted = wgpu::Features::TIMESTAMP_QUERY
+            | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
+            | wgpu::Features::FLOAT32_BLENDABLE;
         let required_features = available & wanted;
         let desc = wgpu::DeviceDescriptor {
             label: Some("btf-render"),

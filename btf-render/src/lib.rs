@@ -17,7 +17,8 @@
 //! - [`renderer`], [`frame`], [`timer`]: pass selection, output images, `--stats`;
 //! - [`mips`]: mip chains of the PCA textures (exact for the linear reconstruction);
 //! - [`plain_texture`], [`read_bound`], [`cost_sweep`]: the cost baselines and the sweep of
-//!   components × evaluation × blending against them.
+//!   components × evaluation × blending against them;
+//! - [`transmission`]: thin semi-transparent cloth (front-/back-lit, view-dependent alpha).
 
 pub mod btf_pass;
 pub mod cost_sweep;
@@ -42,6 +43,7 @@ pub mod shadow_volume;
 pub mod tangent;
 pub mod terminator;
 pub mod timer;
+pub mod transmission;
 
 pub use error::{Error, Result};
 pub use frame::{Frame, PassStat, Stats};

@@ -67,6 +67,9 @@ impl Mesh {
         let mtl: String = scan.usemtl.iter().map(|m| format!("newmtl {m}\n")).collect();
         let opts =
             tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
+        // tobj calls the material loader only for an `mtllib` line and otherwise drops every
+        // `usemtl`; the materials we need are just the names, so declare a library first.
+        let text = format!("mtllib usemtl-names.mtl\n{text}");
         let (models, _) = tobj::load_obj_buf(&mut text.as_bytes(), &opts, |_| {
             tobj::load_mtl_buf(&mut mtl.as_bytes())
         })

@@ -29,6 +29,7 @@ use crate::plain_texture::{Baseline, BaselinePass};
 use crate::scene::{Evaluation, Light, Projection, Scene, Shadows};
 use crate::shadow::{ShadowInputs, Shadowing};
 use crate::timer::PassTimer;
+use crate::transmission::ThinPass;
 use crate::{Error, Gpu, Result, tangent, terminator};
 use btf_core::InterpMode;
 use std::time::Instant;
@@ -84,6 +85,7 @@ pub struct Renderer {
     counters: wgpu::Buffer,
     shadowing: Option<Shadowing>,
     environment: Option<EnvState>,
+    thin: Option<ThinPass>,
     camera: CameraSetup,
     options: RenderOptions,
     /// Bytes of material data on the GPU.
@@ -261,6 +263,18 @@ impl Renderer {
                 });
             }
         }
+        let thin = thin_pass(
+            gpu,
+            scene,
+            &btf,
+            key,
+            &materials,
+            &used,
+            &corners,
+            &order,
+            &slot_of_desc,
+            &tri_desc,
+        )?;
         let corners = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("corners"),
             contents: bytemuck::cast_slice(&corners),
@@ -321,6 +335,7 @@ impl Renderer {
             counters,
             shadowing,
             environment,
+            thin,
             camera,
             options,
             material_bytes,
@@ -526,6 +541,12 @@ impl Renderer {
         let color_view = color.create_view(&Default::default());
         let ms_view = color_ms.as_ref().map(|t| t.create_view(&Default::default()));
         let depth_view = depth.create_view(&Default::default());
+        let thin_draws = self.thin.as_ref().map(|t| {
+            let t0 = Instant::now();
+            let draws = t.prepare(gpu, &self.camera);
+            timer.cpu("thin-cloth sort (cpu)", t0.elapsed().as_secs_f64() * 1e3);
+            draws
+        });
         let bg = self.scene.output.background;
         let name = match (&self.baseline, self.scene.effects.evaluation) {
             (Some(b), _) => b.name.as_str(),
@@ -574,8 +595,14 @@ impl Renderer {
                 }
                 pass.set_vertex_buffer(0, self.corners.slice(..));
                 for d in &self.draws {
+                    if self.thin.as_ref().is_some_and(|t| t.is_thin(d.material)) {
+                        continue;
+                    }
                     pass.set_bind_group(1, &self.materials[d.material].bind_group, &[]);
                     pass.draw(d.first..d.first + d.count, 0..1);
+                }
+                if let (Some(t), Some(d)) = (&self.thin, &thin_draws) {
+                    t.draw(&mut pass, &self.frame_group, |m| &self.materials[m].bind_group, d);
                 }
             })
         })??;
@@ -675,6 +702,34 @@ impl Renderer {
         });
         Ok((coef, slots, group))
     }
+}
+
+/// The thin-cloth pass, when some material used has a `transmission` effect.
+fn thin_pass(
+    gpu: &Gpu,
+    scene: &Scene,
+    btf: &BtfPass,
+    key: BtfPassKey,
+    materials: &[LoadedMaterial],
+    used: &[usize],
+    corners: &[CornerVertex],
+    order: &[usize],
+    slot_of_desc: &[usize],
+    tri_desc: &[usize],
+) -> Result<Option<ThinPass>> {
+    let descs: Vec<_> = materials
+        .iter()
+        .zip(used)
+        .map(|(m, &d)| {
+            let desc = &scene.materials[d];
+            (desc.transmission.as_ref(), &m.data, desc.store.display().to_string())
+        })
+        .collect();
+    if descs.iter().all(|d| d.0.is_none()) {
+        return Ok(None);
+    }
+    let slot_of_triangle: Vec<usize> = order.iter().map(|&t| slot_of_desc[tri_desc[t]]).collect();
+    Ok(Some(ThinPass::new(gpu, btf, key, &descs, corners, &slot_of_triangle)?))
 }
 
 fn frame_bind_group(

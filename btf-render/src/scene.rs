@@ -79,6 +79,9 @@ pub struct MaterialDesc {
     /// Texture repetitions per unit of UV.
     #[serde(default = "one")]
     pub uv_scale: f32,
+    /// Thin semi-transparent cloth (`transmission = { tau = …, albedo = …, phase = … }`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transmission: Option<crate::transmission::TransmissionDesc>,
 }
 
 fn one() -> f32 {
@@ -341,6 +344,9 @@ impl Scene {
         }
         for m in &mut scene.materials {
             m.store = dir.join(&m.store);
+            if let Some(t) = &mut m.transmission {
+                t.resolve(dir);
+            }
         }
         for l in &mut scene.lights {
             if let Light::Environment(e) = l {
@@ -374,6 +380,9 @@ impl Scene {
         for (i, m) in self.materials.iter().enumerate() {
             if !(m.uv_scale.is_finite() && m.uv_scale > 0.0) {
                 return bad(format!("materials[{i}].uv_scale"), "must be a positive number");
+            }
+            if let Some(t) = &m.transmission {
+                t.validate(path, &format!("materials[{i}].transmission"))?;
             }
         }
         let c = &self.camera;

@@ -1,0 +1,129 @@
+
+// ---- Thin semi-transparent cloth (transmission/mod.rs; thin-cloth paper eq. 7–9) ----
+// Appended to interp.wgsl + btf_pass.wgsl; reuses vs_main, tangent_frame, slot_pixel.
+// Output: rgb = Σ_front share(τ, μ, μ₀) · BTF · E  +  Σ_back ϖ₀ p/(4π) · F_t(τ, μ, μ₀) · μ₀ · E,
+// alpha = e^{−τ/μ}; blended as L = L_dst · alpha + L_src (eq. 9).
+
+struct ThinRaw {
+    // x: τ₁ (scale of the texture), y: Henyey–Greenstein g, z: 1 = τ texture bound
+    params: vec4<f32>,
+    // rgb: single-scattering albedo ϖ₀
+    albedo: vec4<f32>,
+}
+
+@group(3) @binding(0) var<uniform> thin: ThinRaw;
+@group(3) @binding(1) var tau_tex: texture_2d<f32>;
+
+const THIN_MIN_COS: f32 = 1e-4;
+
+// φ₁(x) = (1 − e^{−x})/x, by its series below 0.1 (truncation < x⁵/720 ≈ 1.4e-8).
+fn thin_phi1(x: f32) -> f32 {
+    if (x < 0.1) {
+        return 1.0 - x * (0.5 - x * (1.0 / 6.0 - x * (1.0 / 24.0 - x / 120.0)));
+    }
+    return (1.0 - exp(-x)) / x;
+}
+
+// f_r(τ) / f_r(∞) = 1 − e^{−τ(1/μ + 1/μ₀)}, without cancellation for small τ.
+fn thin_reflection_share(tau: f32, mu: f32, mu0: f32) -> f32 {
+    let x = tau / mu + tau / mu0;
+    return x * thin_phi1(x);
+}
+
+// [e^{−τ/μ} − e^{−τ/μ₀}] / (μ − μ₀), the removable singularity at μ = μ₀ by the series.
+fn thin_transmission_factor(tau: f32, mu: f32, mu0: f32) -> f32 {
+    let a = tau / mu;
+    let b = tau / mu0;
+    let d = tau * abs(mu0 - mu) / (mu * mu0);
+    if (d > 1.0) {
+        return (exp(-a) - exp(-b)) / (mu - mu0);
+    }
+    return a * exp(-min(a, b)) / mu0 * thin_phi1(d);
+}
+
+fn thin_phase(cos_scatter: f32) -> f32 {
+    let g = thin.params.y;
+    if (abs(g) < 1e-4) {
+        return 1.0;
+    }
+    let d = max(1.0 + g * g - 2.0 * g * cos_scatter, 1e-6);
+    return (1.0 - g * g) / (d * sqrt(d));
+}
+
+fn thin_tau(uv: vec2<f32>) -> f32 {
+    if (thin.params.z > 0.5) {
+        return thin.params.x * textureSampleLevel(tau_tex, tex_sampler, uv, 0.0).r;
+    }
+    return thin.params.x;
+}
+
+// gather_lights of the BTF pass with each front light's irradiance scaled by the share of
+// the thick-cloth reflection that a slab of thickness τ reflects.
+fn gather_lights_thin(in: VertexOut, f: Frame3, tau: f32, mu: f32) {
+    n_active = 0u;
+    for (var l = 0u; l < frame.info.x; l = l + 1u) {
+        let ld = light_dir(l, in.world);
+        let a = dir_angles(vec3<f32>(dot(ld.xyz, f.t), dot(ld.xyz, f.b), dot(ld.xyz, f.n)));
+        let w = light_weights(a, LIGHT_FOUR);
+        if (w.n == 0u) {
+            continue;
+        }
+        let mu0 = max(dot(ld.xyz, f.n), THIN_MIN_COS);
+        let share = thin_reflection_share(tau, mu, mu0);
+        let e = frame.lights[l].color.rgb * ld.w * visibility(l, in, f.back) * share;
+        if (all(e == vec3<f32>(0.0))) {
+            continue;
+        }
+        lw[n_active] = w;
+        le[n_active] = e;
+        n_active = n_active + 1u;
+    }
+}
+
+// Shadowing of the transmitted light: shadow maps only (a shadow-volume mask belongs to
+// the nearest surface of the pixel and the cloth's own prisms; the eq. 6 boundary would
+// remove exactly the back-lit light we want).
+fn thin_back_visibility(l: u32, in: VertexOut) -> f32 {
+    let L = frame.lights[l];
+    if (L.color.w > 1.5) {
+        return shadow_map_visibility(L, in.world);
+    }
+    return 1.0;
+}
+
+fn thin_transmitted(in: VertexOut, f: Frame3, v: vec3<f32>, tau: f32, mu: f32) -> vec3<f32> {
+    var rgb = vec3<f32>(0.0);
+    for (var l = 0u; l < frame.info.x; l = l + 1u) {
+        let ld = light_dir(l, in.world);
+        let mu0 = -dot(ld.xyz, f.n);
+        if (mu0 <= 0.0) {
+            continue;
+        }
+        // cos Θ = −l·v: the beam travels along −l and leaves towards v.
+        let k = thin_phase(-dot(ld.xyz, v)) / (4.0 * PI)
+            * thin_transmission_factor(tau, mu, max(mu0, THIN_MIN_COS)) * mu0;
+        rgb = rgb + k * thin_back_visibility(l, in) * frame.lights[l].color.rgb * ld.w;
+    }
+    return thin.albedo.rgb * rgb;
+}
+
+@fragment
+fn fs_thin(in: VertexOut) -> @location(0) vec4<f32> {
+    let v = to_camera(in.world);
+    let f = tangent_frame(in, v);
+    let uv = tex_uv(in.uv);
+    let mu = max(dot(v, f.n), THIN_MIN_COS);
+    let tau = thin_tau(uv);
+    reads = 0u;
+    gather_lights_thin(in, f, tau, mu);
+    var rgb = vec3<f32>(0.0);
+    if (n_active > 0u) {
+        let views = view_weights(dir_angles(vec3<f32>(dot(v, f.t), dot(v, f.b), dot(v, f.n))), VIEW_FOUR);
+        for (var m = 0u; m < views.n; m = m + 1u) {
+            rgb = rgb + views.w[m] * slot_pixel(views.idx[m], uv);
+        }
+    }
+    rgb = rgb + thin_transmitted(in, f, v, tau, mu);
+    count_reads();
+    return vec4<f32>(rgb, exp(-tau / mu));
+}

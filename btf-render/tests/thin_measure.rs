@@ -1,0 +1,86 @@
+//! Frame-time cost of the transmission effect on lavapipe, and the paper's demo: a point
+//! light circling a curtain in front of a wall (run with `cargo test -p btf-render --test
+//! thin_measure -- --ignored --nocapture`). Per light position the same scene is rendered
+//! with the curtain opaque and with `transmission`, back to back; the frames of the orbit
+//! go to `CARGO_TARGET_TMPDIR/thin-orbit/`. Asserts nothing about speed.
+
+mod common;
+
+use btf_core::eigen::Quantization;
+use btf_render::{RenderOptions, Renderer, Scene};
+use common::*;
+
+fn best_ms(r: &Renderer, gpu: &btf_render::Gpu, repeats: usize) -> (f64, btf_render::Frame) {
+    let mut best = (f64::MAX, r.render(gpu).unwrap());
+    for _ in 0..repeats {
+        let f = r.render(gpu).unwrap();
+        if f.stats.frame_ms < best.0 {
+            best = (f.stats.frame_ms, f);
+        }
+    }
+    best
+}
+
+#[test]
+#[ignore = "a measurement on lavapipe: run for BENCHMARKS.md"]
+fn transmission_cost_and_orbit() {
+    let Some(gpu) = gpu("transmission_cost_and_orbit") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    write_store(dir.path(), "voile.eigen", Pattern::Checker, 64, 64, 16, Quantization::F16);
+    write_store(dir.path(), "wall.eigen", Pattern::Ribs, 64, 64, 16, Quantization::F16);
+    let mesh =
+        datasets::synth_mesh(datasets::MeshKind::Curtain, datasets::Resolution::Low).unwrap();
+    datasets::write_obj(&mesh, &dir.path().join("curtain.obj"), "curtain").unwrap();
+    let wall = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../examples/scenes/wall.obj"
+    ))
+    .unwrap();
+    write(dir.path(), "wall.obj", &wall);
+    let out = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("thin-orbit");
+    std::fs::create_dir_all(&out).unwrap();
+    let steps = 8;
+    let (mut sum_opaque, mut sum_thin, mut sum_sort) = (0.0, 0.0, 0.0);
+    for k in 0..steps {
+        let a = std::f32::consts::TAU * k as f32 / steps as f32;
+        let pos = [0.9 * a.sin(), -0.9 * a.cos() + 0.1, 1.0];
+        let scene = |t: &str| {
+            let text = format!(
+                "[output]\nwidth = 256\nheight = 256\n\
+                 [[meshes]]\npath = \"curtain.obj\"\n[[meshes]]\npath = \"wall.obj\"\n\
+                 [[materials]]\nname = \"wall\"\nstore = \"wall.eigen\"\nuv_scale = 2.0\n\
+                 [[materials]]\nstore = \"voile.eigen\"\nuv_scale = 6.0\n{t}\n\
+                 [camera]\neye = [0.0, -2.6, 0.75]\ntarget = [0.0, 0.0, 0.75]\nup = [0.0, 0.0, 1.0]\n\
+                 [[lights]]\nkind = \"point\"\nposition = {pos:?}\nintensity = [0.6, 0.6, 0.6]\n"
+            );
+            Scene::load(&write(dir.path(), "scene.toml", &text)).unwrap()
+        };
+        let opaque = Renderer::new(&gpu, &scene(""), RenderOptions::default()).unwrap();
+        let thin = Renderer::new(
+            &gpu,
+            &scene("transmission = { tau = 2.0, tau_texture = \"btf-mean\", albedo = 1.0 }"),
+            RenderOptions::default(),
+        )
+        .unwrap();
+        let (t_opaque, _) = best_ms(&opaque, &gpu, 3);
+        let (t_thin, frame) = best_ms(&thin, &gpu, 3);
+        let sort = frame.stats.ms_of("thin-cloth sort");
+        frame.write_png(&out.join(format!("orbit-{k:02}.png")), 3.0).unwrap();
+        eprintln!(
+            "light {k}: opaque {t_opaque:.1} ms, transmission {t_thin:.1} ms (sort {sort:.3} ms), ratio {:.3}",
+            t_thin / t_opaque
+        );
+        sum_opaque += t_opaque;
+        sum_thin += t_thin;
+        sum_sort += sort;
+    }
+    eprintln!(
+        "mean over the orbit: opaque {:.1} ms, transmission {:.1} ms, ratio {:.3}, sort {:.3} ms; {} triangles of curtain; frames in {}",
+        sum_opaque / steps as f64,
+        sum_thin / steps as f64,
+        sum_thin / sum_opaque,
+        sum_sort / steps as f64,
+        mesh.triangles.len(),
+        out.display()
+    );
+}
