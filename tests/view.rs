@@ -65,6 +65,14 @@ fov_y_deg = 38.0
 kind = "point"
 position = [-0.9, -1.6, 1.5]
 intensity = [12.0, 12.0, 12.0]
+
+[[lights]]
+kind = "environment"
+path = "studio.exr"
+exposure = 0.5
+visibility_res = 8
+eigenweightsets = { rotations = 12, components = 4 }
+cache_dir = "cache"
 "#;
     let path = d.path("scene.toml");
     std::fs::write(&path, scene).unwrap();

@@ -74,25 +74,31 @@ pub fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
     (out, t.elapsed().as_secs_f64() * 1e3)
 }
 
-// The two hooks into the renderer's environment light. The renderer of this build has no
-// environment light kind in its scenes yet (it is being added beside this viewer), so both
-// report "not lit"; the file is still loaded and checked, so a bad file is reported. With
-// it, the bodies become: `if renderer.environment().is_none() { return Ok(false) }` then
-// `renderer.set_environment(env)` / `renderer.set_environment_rotation(rotation_deg as
-// f64)`, errors mapped to strings, and `Ok(true)`.
+// The two hooks into the renderer's environment light: a scene without one is not lit by
+// an environment (the file is still loaded and checked above, so a bad file is reported);
+// with one, a swap is one gather over the cached visibility and a rotation goes through the
+// eigenweightsets when the scene asks for them.
 fn apply_environment(
-    _renderer: &mut Renderer,
+    renderer: &mut Renderer,
     _gpu: &Gpu,
-    _path: &Path,
-    _env: &EnvMap,
+    path: &Path,
+    env: &EnvMap,
 ) -> Result<bool, String> {
-    Ok(false)
+    if renderer.environment().is_none() {
+        return Ok(false);
+    }
+    renderer.set_environment(env).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(true)
 }
 
 fn apply_rotation(
-    _renderer: &mut Renderer,
+    renderer: &mut Renderer,
     _gpu: &Gpu,
-    _rotation_deg: f32,
+    rotation_deg: f32,
 ) -> Result<bool, String> {
-    Ok(false)
+    if renderer.environment().is_none() {
+        return Ok(false);
+    }
+    renderer.set_environment_rotation(rotation_deg as f64).map_err(|e| e.to_string())?;
+    Ok(true)
 }

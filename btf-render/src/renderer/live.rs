@@ -7,16 +7,11 @@
 //! [`Renderer::new`].
 
 use super::{Renderer, camera_setup, frame_bind_group};
-use crate::scene::{Camera, Light, MAX_LIGHTS, Scene};
+use crate::scene::{Camera, Light, MAX_LIGHTS};
 use crate::shadow::{ShadowInputs, Shadowing};
 use crate::{Error, Gpu, Result, terminator};
 
 impl Renderer {
-    /// The scene this renderer draws (with the updates made so far).
-    pub fn scene(&self) -> &Scene {
-        &self.scene
-    }
-
     /// Replaces the camera; the next frame uses it and nothing else is recomputed.
     pub fn set_camera(&mut self, camera: &Camera) {
         self.scene.camera = camera.clone();
