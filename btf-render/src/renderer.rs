@@ -508,7 +508,8 @@ impl Renderer {
         let mut timer = PassTimer::new(gpu, 16);
         gpu.queue.write_buffer(&self.frame_uniform, 0, bytemuck::bytes_of(&self.frame_raw()));
         gpu.queue.write_buffer(&self.counters, 0, &[0u8; 16]);
-        let per_vertex_group = if self.btf.key.uses_vertex_coefficients() && self.baseline.is_none() {
+        let per_vertex_group = if self.btf.key.uses_vertex_coefficients() && self.baseline.is_none()
+        {
             Some(self.per_vertex_bind_group(gpu, &mut timer)?)
         } else {
             None

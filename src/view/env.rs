@@ -91,11 +91,7 @@ fn apply_environment(
     Ok(true)
 }
 
-fn apply_rotation(
-    renderer: &mut Renderer,
-    _gpu: &Gpu,
-    rotation_deg: f32,
-) -> Result<bool, String> {
+fn apply_rotation(renderer: &mut Renderer, _gpu: &Gpu, rotation_deg: f32) -> Result<bool, String> {
     if renderer.environment().is_none() {
         return Ok(false);
     }

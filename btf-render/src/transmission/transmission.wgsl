@@ -112,6 +112,9 @@ fn fs_thin(in: VertexOut) -> @location(0) vec4<f32> {
     let v = to_camera(in.world);
     let f = tangent_frame(in, v);
     let uv = tex_uv(in.uv);
+    // uv derivatives for the BTF's mip selection (slot_pixel), taken in uniform control flow
+    duv_dx = dpdx(uv);
+    duv_dy = dpdy(uv);
     let mu = max(dot(v, f.n), THIN_MIN_COS);
     let tau = thin_tau(uv);
     reads = 0u;
