@@ -167,8 +167,11 @@ fn write_plots(r: &SweepResult, out: &Path) -> Result<()> {
             })
             .collect::<Vec<_>>()
     };
+    let mut cs: Vec<usize> = r.rows.iter().map(|x| x.components).collect();
+    cs.dedup();
+    let counts = cs.iter().map(|c| c.to_string()).collect::<Vec<_>>().join(", ");
     let accuracy = Plot {
-        title: "Accuracy vs BTF pass time (points: c = 4, 8, 16, 32)".into(),
+        title: format!("Accuracy vs BTF pass time (points: c = {counts})"),
         x_label: "BTF pass ms".into(),
         y_label: "rel. RMSE".into(),
         log_y: true,
