@@ -74,6 +74,30 @@ pub struct CornerVertex {
     pub corner: u32,
 }
 
+/// Vertex attributes of [`CornerVertex`], in `@location` order.
+const CORNER_ATTRS: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x4, 3 => Float32x2, 4 => Uint32x3, 5 => Uint32];
+
+/// The one vertex buffer every mesh pass reads: the merged mesh's [`CornerVertex`]es.
+pub fn corner_buffer_layout() -> wgpu::VertexBufferLayout<'static> {
+    wgpu::VertexBufferLayout {
+        array_stride: std::mem::size_of::<CornerVertex>() as u64,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &CORNER_ATTRS,
+    }
+}
+
+/// Depth test of the mesh passes (less-than against [`DEPTH_FORMAT`]); `write` is off for
+/// blended passes that must not hide what lies behind them.
+pub fn mesh_depth_state(write: bool) -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format: DEPTH_FORMAT,
+        depth_write_enabled: Some(write),
+        depth_compare: Some(wgpu::CompareFunction::Less),
+        stencil: Default::default(),
+        bias: Default::default(),
+    }
+}
+
 /// GPU mirror of one light (`LightRaw` in WGSL).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, bytemuck::Pod, bytemuck::Zeroable)]
@@ -194,8 +218,10 @@ impl BtfPass {
                 ("LIGHT_FOUR", key.light_four as u32 as f64),
                 ("COUNT_READS", key.count_reads as u32 as f64),
             ];
-            let options = wgpu::PipelineCompilationOptions { constants: &constants, zero_initialize_workgroup_memory: true };
-            let attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x4, 3 => Float32x2, 4 => Uint32x3, 5 => Uint32];
+            let options = wgpu::PipelineCompilationOptions {
+                constants: &constants,
+                zero_initialize_workgroup_memory: true,
+            };
             let pipeline = dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some("btf"),
                 layout: Some(&layout),
@@ -203,20 +229,10 @@ impl BtfPass {
                     module: &module,
                     entry_point: Some("vs_main"),
                     compilation_options: options.clone(),
-                    buffers: &[Some(wgpu::VertexBufferLayout {
-                        array_stride: std::mem::size_of::<CornerVertex>() as u64,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &attrs,
-                    })],
+                    buffers: &[Some(corner_buffer_layout())],
                 },
                 primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Less),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
+                depth_stencil: Some(mesh_depth_state(true)),
                 multisample: wgpu::MultisampleState { count: key.msaa, ..Default::default() },
                 fragment: Some(wgpu::FragmentState {
                     module: &module,

@@ -7,7 +7,7 @@
 //! Also holds the pipeline builder both baselines use (`plain_texture.wgsl` is the shared
 //! vertex stage; `read_bound.rs` adds its fragment stage).
 
-use crate::btf_pass::{BtfPass, CornerVertex, DEPTH_FORMAT, color_format};
+use crate::btf_pass::{BtfPass, color_format, corner_buffer_layout, mesh_depth_state};
 use crate::{Gpu, Result};
 
 /// WGSL of the plain-texture baseline (with the `Samplings` block of `interp.wgsl`).
@@ -59,7 +59,6 @@ pub fn pipeline(
             label: Some(fragment),
             source: wgpu::ShaderSource::Wgsl(source.into()),
         });
-        let attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x4, 3 => Float32x2, 4 => Uint32x3, 5 => Uint32];
         dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(fragment),
             layout: Some(&layout),
@@ -67,20 +66,10 @@ pub fn pipeline(
                 module: &module,
                 entry_point: Some("vs_base"),
                 compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: std::mem::size_of::<CornerVertex>() as u64,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &attrs,
-                })],
+                buffers: &[Some(corner_buffer_layout())],
             },
             primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
+            depth_stencil: Some(mesh_depth_state(true)),
             multisample: wgpu::MultisampleState { count: btf.key.msaa, ..Default::default() },
             fragment: Some(wgpu::FragmentState {
                 module: &module,

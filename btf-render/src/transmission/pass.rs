@@ -7,7 +7,9 @@
 //! holds the slab parameters and the τ texture of one material.
 
 use super::desc::{TauTexture, TransmissionDesc};
-use crate::btf_pass::{BtfPass, BtfPassKey, CornerVertex, DEPTH_FORMAT, color_format};
+use crate::btf_pass::{
+    BtfPass, BtfPassKey, CornerVertex, color_format, corner_buffer_layout, mesh_depth_state,
+};
 use crate::material::MaterialData;
 use crate::renderer::CameraSetup;
 use crate::{Error, Gpu, Result};
@@ -230,7 +232,6 @@ fn pipeline(
             constants: &constants,
             zero_initialize_workgroup_memory: true,
         };
-        let attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x4, 3 => Float32x2, 4 => Uint32x3, 5 => Uint32];
         // L = L_src · 1 + L_dst · alpha_src; the target's alpha is left as it is.
         let blend = wgpu::BlendState {
             color: wgpu::BlendComponent {
@@ -251,20 +252,10 @@ fn pipeline(
                 module: &module,
                 entry_point: Some("vs_main"),
                 compilation_options: options.clone(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: std::mem::size_of::<CornerVertex>() as u64,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &attrs,
-                })],
+                buffers: &[Some(corner_buffer_layout())],
             },
             primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(false),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
+            depth_stencil: Some(mesh_depth_state(false)),
             multisample: wgpu::MultisampleState { count: key.msaa, ..Default::default() },
             fragment: Some(wgpu::FragmentState {
                 module: &module,
