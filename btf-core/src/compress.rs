@@ -4,7 +4,7 @@
 
 use crate::eigen::{EigenMeta, EigenWriter, Quantization};
 use crate::metrics::{psnr_db, rel_rmse_from};
-use crate::pca::{PcaScratch, max_components, pca_slot_in};
+use crate::pca::{PcaScratch, SlotRows, max_components, pca_rows_in, pca_slot_in};
 use crate::store::{BtfStore, SlotData};
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -119,14 +119,25 @@ pub fn compress(
         }
         let t0 = Instant::now();
         // The PCA checks every value in its first pass; on a non-finite one, the store's
-        // own check of that image names the texel too.
-        input.read_slot_into_unchecked(v, slot, raw)?;
-        let r = pca_slot_in(slot, c, params.quantization, scratch).map_err(|e| match &e {
+        // own check of that image names the texel too (or finds the chunk corrupt).
+        let name_texel = |e: Error| match &e {
             Error::NonFinite { view, light, .. } => {
                 input.read_image(*view, *light).err().unwrap_or(e)
             }
             _ => e,
-        })?;
+        };
+        let q = params.quantization;
+        // f32 chunks are mapped and read in place, their checksums folded into the first
+        // pass; other dtypes are decoded into the worker's buffer.
+        let r = if let Some(mapped) = input.map_slot(v)? {
+            let rows =
+                SlotRows { view: v, rows: mapped.rows()?, texel_values: meta.texel_values() };
+            pca_rows_in(&rows, c, q, scratch, Some(&|crcs: &[u32]| mapped.verify(crcs)))
+        } else {
+            input.read_slot_into_unchecked(v, slot, raw)?;
+            pca_slot_in(slot, c, q, scratch)
+        }
+        .map_err(name_texel)?;
         writer.write_slot(v, &r.stored)?;
         let report = SlotReport {
             view: v,
@@ -210,6 +221,10 @@ mod tests {
     use crate::zarr::DType;
 
     fn tiny_store(path: &Path) {
+        tiny_store_as(path, DType::F32);
+    }
+
+    fn tiny_store_as(path: &Path, dtype: DType) {
         let s = crate::Sampling::new(
             "custom",
             vec![
@@ -218,8 +233,7 @@ mod tests {
             ],
         )
         .unwrap();
-        let w =
-            BtfWriter::create(path, BtfMeta::new(s.clone(), s, 4, 3), DType::F32, false).unwrap();
+        let w = BtfWriter::create(path, BtfMeta::new(s.clone(), s, 4, 3), dtype, false).unwrap();
         for v in 0..5 {
             for l in 0..5 {
                 let img: Vec<f32> =
@@ -264,5 +278,50 @@ mod tests {
             "{msg}"
         );
         assert!(!dir.path().join("b.eig").exists());
+    }
+
+    #[test]
+    fn mapped_f32_and_decoded_f16_stores_compress_alike_and_truncation_is_named() {
+        // The tiny store's values are multiples of 0.1 in [1, 2]: not all f16-exact, so
+        // round them through f16 first by writing an f16 store and an f32 copy of it.
+        let dir = tempfile::tempdir().unwrap();
+        let (p16, p32) = (dir.path().join("h.btf"), dir.path().join("f.btf"));
+        tiny_store_as(&p16, DType::F16);
+        let h = BtfStore::open(&p16).unwrap();
+        let w = BtfWriter::create(&p32, h.meta().clone(), DType::F32, false).unwrap();
+        for v in 0..5 {
+            for l in 0..5 {
+                w.write_image(v, l, &h.read_image(v, l).unwrap()).unwrap();
+            }
+        }
+        w.finish().unwrap();
+        let f = BtfStore::open(&p32).unwrap();
+        assert!(f.map_slot(0).unwrap().is_some() && h.map_slot(0).unwrap().is_none());
+        let params = CompressParams { components: 3, ..Default::default() };
+        let a = compress(&h, &dir.path().join("h.eig"), params, &|| {}).unwrap();
+        let b = compress(&f, &dir.path().join("f.eig"), params, &|| {}).unwrap();
+        for (x, y) in a.slots.iter().zip(&b.slots) {
+            assert_eq!((x.sse_stored, x.sse, x.energy), (y.sse_stored, y.sse, y.energy));
+        }
+        let (ea, eb) = (
+            crate::eigen::EigenStore::open(&dir.path().join("h.eig")).unwrap(),
+            crate::eigen::EigenStore::open(&dir.path().join("f.eig")).unwrap(),
+        );
+        for v in 0..5 {
+            let (sa, sb) = (ea.read_slot(v).unwrap(), eb.read_slot(v).unwrap());
+            assert_eq!(sa.weights, sb.weights, "slot {v}");
+            assert_eq!(sa.basis, sb.basis, "slot {v}");
+        }
+        // A chunk cut short is refused before mapping, with its file, slot and light.
+        let chunk = p32.join("normtextures/c/2/1/0/0/0");
+        let bytes = std::fs::read(&chunk).unwrap();
+        std::fs::write(&chunk, &bytes[..bytes.len() - 6]).unwrap();
+        let f = BtfStore::open(&p32).unwrap();
+        let msg = compress(&f, &dir.path().join("g.eig"), params, &|| {}).unwrap_err().to_string();
+        assert!(
+            msg.contains("view slot 2, light 1") && msg.contains("bytes") && msg.contains("c/2/1"),
+            "{msg}"
+        );
+        assert!(!dir.path().join("g.eig").exists());
     }
 }

@@ -24,6 +24,7 @@ pub mod error;
 pub mod gemm;
 pub mod interp;
 pub mod kernels;
+pub mod mapped;
 pub mod metrics;
 pub mod pca;
 pub mod reconstruct;

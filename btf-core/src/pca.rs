@@ -16,10 +16,14 @@
 
 use crate::eigen::{Quantization, QuantizedSlot, dequantize, quantize};
 use crate::gemm::{Mat, dgemm};
-use crate::kernels::{Block, DotAcc, LANES, LIFT_COMPONENTS, lift_rows, load_shifted};
+use crate::kernels::{
+    Block, DotAcc, LANES, LIFT_COMPONENTS, lift_rows, load_shifted, prefetch_rows,
+};
 use crate::store::SlotData;
 use crate::{Error, Result};
 use nalgebra::{DMatrix, SymmetricEigen};
+
+mod fused;
 
 /// Columns per block in the streaming passes: 81 rows of them fit the L2 cache in `f64`,
 /// and each row's 4 KB of `f32` input are one long run for the hardware prefetcher.
@@ -64,6 +68,30 @@ pub struct PcaScratch {
     basis: Vec<f64>,
 }
 
+/// The light images of one view slot as row slices: of a [`SlotData`] in memory, or of a
+/// store's mapped chunks ([`crate::mapped::MappedSlot`]).
+#[derive(Debug, Clone)]
+pub struct SlotRows<'a> {
+    /// View slot index.
+    pub view: usize,
+    /// One row of `texel_values` values per light.
+    pub rows: Vec<&'a [f32]>,
+    /// Floats per row.
+    pub texel_values: usize,
+}
+
+impl<'a> SlotRows<'a> {
+    /// The rows of a slot held in memory.
+    pub fn of(slot: &'a SlotData) -> Self {
+        let m = slot.texel_values;
+        let rows = (0..slot.n_lights).map(|i| &slot.data[i * m..(i + 1) * m]).collect();
+        SlotRows { view: slot.view, rows, texel_values: m }
+    }
+}
+
+/// Checks the CRC32C of every row (light `l` at index `l`) that the first pass computed.
+pub type ChecksumCheck<'a> = &'a dyn Fn(&[u32]) -> Result<()>;
+
 /// [`pca_slot`] with caller-owned working memory.
 pub fn pca_slot_in(
     slot: &SlotData,
@@ -72,18 +100,45 @@ pub fn pca_slot_in(
     scratch: &mut PcaScratch,
 ) -> Result<SlotPca> {
     let (n, m) = (slot.n_lights, slot.texel_values);
-    let c = components;
-    if c == 0 || c > n {
-        return Err(Error::Invalid(format!("components {c} not in 1..={n}")));
-    }
     if slot.data.len() != n * m {
         return Err(Error::Invalid(format!(
             "slot holds {} values, {n}×{m} expected",
             slot.data.len()
         )));
     }
-    // Pass 1: the centred Gram matrix, mean, energy and peak.
-    let first = first_pass(slot)?;
+    pca_rows_in(&SlotRows::of(slot), components, quantization, scratch, None)
+}
+
+/// [`pca_slot_in`] on row slices. With `checksums`, the first pass also computes the
+/// CRC32C of every row's bytes on the way (the bytes it reads anyway) and hands them to
+/// `checksums` before anything is derived from the data.
+pub fn pca_rows_in(
+    slot: &SlotRows<'_>,
+    components: usize,
+    quantization: Quantization,
+    scratch: &mut PcaScratch,
+    checksums: Option<ChecksumCheck<'_>>,
+) -> Result<SlotPca> {
+    let (n, m) = (slot.rows.len(), slot.texel_values);
+    let c = components;
+    if c == 0 || c > n {
+        return Err(Error::Invalid(format!("components {c} not in 1..={n}")));
+    }
+    if m == 0 {
+        return Err(Error::Invalid(format!("view slot {}: images have no values", slot.view)));
+    }
+    if let Some(l) = slot.rows.iter().position(|r| r.len() != m) {
+        return Err(Error::Invalid(format!(
+            "view slot {}, light {l}: {} values, {m} expected",
+            slot.view,
+            slot.rows[l].len()
+        )));
+    }
+    // Pass 1: the centred Gram matrix, mean, energy and peak (and the checksums).
+    let first = first_pass(slot, checksums.is_some())?;
+    if let Some(check) = checksums {
+        check(&first.crcs)?;
+    }
     let gram = &first.gram;
     let eig = SymmetricEigen::new(DMatrix::from_row_slice(n, n, gram));
     let mut order: Vec<usize> = (0..n).collect();
@@ -101,22 +156,32 @@ pub fn pca_slot_in(
         }
     }
 
-    // Pass 2: eigentextures B = liftᵀX̃ in f64, with deterministic signs.
-    let basis = lift_pass(slot, &mut lift, c, effective, std::mem::take(&mut scratch.basis));
-    let (raw, scale_offset) = quantize(&basis.rows_f32(), c, quantization);
-    let stored_basis = dequantize(&raw, &scale_offset, quantization);
+    // Passes 2 and 3: the eigentextures B = liftᵀX̃ with deterministic signs, their stored
+    // (quantised) form S = B + E, and what the weights on S need from the data: X̃Eᵀ and
+    // SSᵀ. For f16 both come from one sweep ([`fused`]); 8-bit scales need all of B first.
+    let (raw, scale_offset, cross, bgram) = match quantization {
+        Quantization::F16 => {
+            let f = fused::lift_store_f16(&slot.rows, m, &mut lift, c, effective);
+            (f.raw, f.scale_offset, f.cross, f.bgram)
+        }
+        Quantization::U8 => {
+            let basis =
+                lift_pass(slot, &mut lift, c, effective, std::mem::take(&mut scratch.basis));
+            let (raw, scale_offset) = quantize(&basis.rows_f32(), c, quantization);
+            let stored_basis = dequantize(&raw, &scale_offset, quantization);
+            let (cross, bgram) = stored_pass(slot, &basis, &stored_basis, c);
+            scratch.basis = basis.data;
+            (raw, scale_offset, cross, bgram)
+        }
+    };
 
     // The exact basis is B = liftᵀX̃, so its projections X̃Bᵀ = G·lift and its Gram matrix
-    // BBᵀ = liftᵀ·G·lift follow from the small Gram matrix alone, in f64.
+    // BBᵀ = liftᵀ·G·lift follow from the small Gram matrix alone, in f64; those of the
+    // stored basis are X̃Sᵀ = G·lift + X̃Eᵀ.
     let mut proj_exact = vec![0f64; n * c];
     dgemm(1.0, Mat::new(gram, n, n), Mat::new(&lift, n, c), 0.0, &mut proj_exact, c);
     let mut bgram_exact = vec![0f64; c * c];
     dgemm(1.0, Mat::new(&lift, n, c).t(), Mat::new(&proj_exact, n, c), 0.0, &mut bgram_exact, c);
-
-    // Pass 3: the stored basis S = B + E. Its projections X̃Sᵀ = G·lift + X̃Eᵀ need only the
-    // small correction X̃Eᵀ from the data, and its Gram matrix SSᵀ only the basis.
-    let (cross, bgram) = stored_pass(slot, &basis, &stored_basis, c);
-    scratch.basis = basis.data;
     let mut proj = proj_exact.clone();
     for k in 0..c {
         let row = &cross[k * n..(k + 1) * n];
@@ -159,15 +224,18 @@ struct FirstPass {
     energy: f64,
     /// Largest value.
     peak: f32,
+    /// CRC32C of every row's bytes, when asked for.
+    crcs: Vec<u32>,
 }
 
 /// The Gram matrix of the centred images, without centring them: any shift `s` gives
 /// `X̃ = C·(X − 1sᵀ)` with `C = I − 11ᵀ/n`, so `X̃X̃ᵀ = C·YYᵀ·C` for `Y = X − 1sᵀ`. With
 /// `s = x_0` (the first light image) `Y` is exact in `f64` and of the data's spread, not its
 /// mean, so no precision is lost to a large mean.
-fn first_pass(slot: &SlotData) -> Result<FirstPass> {
-    let (n, m, x) = (slot.n_lights, slot.texel_values, &slot.data[..]);
-    let shift = slot.row(0);
+fn first_pass(slot: &SlotRows<'_>, with_crc: bool) -> Result<FirstPass> {
+    let (n, m, x) = (slot.rows.len(), slot.texel_values, &slot.rows[..]);
+    let shift = x[0];
+    let mut crcs = vec![0u32; if with_crc { n } else { 0 }];
     let mut gram = DotAcc::new(n, n, true);
     let mut mean = vec![0f32; m];
     let (mut energy, mut peak) = (0f64, f32::MIN);
@@ -176,15 +244,20 @@ fn first_pass(slot: &SlotData) -> Result<FirstPass> {
     for c0 in (0..m).step_by(BLOCK) {
         let w = BLOCK.min(m - c0);
         colsum[..w].fill(0.0);
-        let st = load_shifted(x, n, m, c0, w, Some(shift), &mut blk, Some(&mut colsum))
+        // The checksum reads the block's bytes into the cache just before the load does.
+        for (crc, row) in crcs.iter_mut().zip(x) {
+            *crc = crc32c::crc32c_append(*crc, bytemuck::cast_slice(&row[c0..c0 + w]));
+        }
+        let st = load_shifted(x, c0, w, Some(shift), &mut blk, Some(&mut colsum))
             .expect("statistics were asked for");
         if !st.finite {
             for i in 0..n {
-                crate::store::check_finite(slot.row(i), slot.view, i, 0)?;
+                crate::store::check_finite(x[i], slot.view, i, 0)?;
             }
         }
         energy += st.energy;
         peak = peak.max(st.peak);
+        prefetch_rows(x, c0 + w, BLOCK);
         gram.add(&blk, &blk);
         for t in 0..w {
             mean[c0 + t] = (shift[c0 + t] as f64 + colsum[t] / n as f64) as f32;
@@ -205,7 +278,7 @@ fn first_pass(slot: &SlotData) -> Result<FirstPass> {
             g[i * n + j] += all_mean - row_mean[i] - row_mean[j];
         }
     }
-    Ok(FirstPass { gram: g, mean, energy, peak })
+    Ok(FirstPass { gram: g, mean, energy, peak, crcs })
 }
 
 /// Eigentextures in `f64`, `cp` rows (a multiple of the lift tile) of `mp` columns (a
@@ -251,13 +324,13 @@ fn max_min(row: &[f64], hi: &mut f64, lo: &mut f64) {
 /// the sign of each eigentexture (and its lift column) fixed so that its largest-magnitude
 /// entry is positive.
 fn lift_pass(
-    slot: &SlotData,
+    slot: &SlotRows<'_>,
     lift: &mut [f64],
     c: usize,
     effective: usize,
     mut data: Vec<f64>,
 ) -> Basis {
-    let (n, m, x) = (slot.n_lights, slot.texel_values, &slot.data[..]);
+    let (n, m, x) = (slot.rows.len(), slot.texel_values, &slot.rows[..]);
     let cp = c.div_ceil(LIFT_COMPONENTS) * LIFT_COMPONENTS;
     let mp = m.div_ceil(LANES) * LANES;
     let mut coef = vec![0f64; n * cp];
@@ -273,7 +346,7 @@ fn lift_pass(
     let (mut hi, mut lo) = (vec![0f64; c], vec![0f64; c]);
     for c0 in (0..m).step_by(BLOCK) {
         let w = BLOCK.min(m - c0);
-        load_shifted(x, n, m, c0, w, Some(slot.row(0)), &mut blk, None);
+        load_shifted(x, c0, w, Some(x[0]), &mut blk, None);
         lift_rows(&blk, &coef, cp, &mut data, mp, c0);
         for k in 0..effective {
             max_min(&data[k * mp + c0..k * mp + c0 + w], &mut hi[k], &mut lo[k]);
@@ -299,15 +372,21 @@ fn lift_pass(
 
 /// For the stored basis `S` (`c × m`) and the exact one `B`: `E·Yᵀ` (`c × n`, with
 /// `E = S − B`; centring it gives `X̃Eᵀ`, transposed) and `SSᵀ` (`c × c`), in `f64`.
-fn stored_pass(slot: &SlotData, basis: &Basis, stored: &[f32], c: usize) -> (Vec<f64>, Vec<f64>) {
-    let (n, m, x) = (slot.n_lights, slot.texel_values, &slot.data[..]);
+fn stored_pass(
+    slot: &SlotRows<'_>,
+    basis: &Basis,
+    stored: &[f32],
+    c: usize,
+) -> (Vec<f64>, Vec<f64>) {
+    let (n, m, x) = (slot.rows.len(), slot.texel_values, &slot.rows[..]);
+    let stored: Vec<&[f32]> = stored.chunks_exact(m).collect();
     let mp = basis.mp;
     let (mut cross_acc, mut bgram_acc) = (DotAcc::new(c, n, false), DotAcc::new(c, c, true));
     let (mut yb, mut sb, mut eb) = (Block::default(), Block::default(), Block::default());
     for c0 in (0..m).step_by(BLOCK) {
         let w = BLOCK.min(m - c0);
-        load_shifted(x, n, m, c0, w, Some(slot.row(0)), &mut yb, None);
-        load_shifted(stored, c, m, c0, w, None, &mut sb, None);
+        load_shifted(x, c0, w, Some(x[0]), &mut yb, None);
+        load_shifted(&stored, c0, w, None, &mut sb, None);
         eb.shape(c, w);
         for k in 0..c {
             let b = &basis.data[k * mp + c0..k * mp + c0 + w];

@@ -390,6 +390,30 @@ impl BtfStore {
         self.read_slot_checked(view, slot, raw, true)
     }
 
+    /// Maps the chunks of view slot `view` read-only when they hold little-endian `f32`
+    /// (the in-memory layout), for a caller that reads the slot several times and checks
+    /// the checksums itself ([`crate::mapped`]); `None` for a dtype that must be decoded.
+    pub fn map_slot(&self, view: usize) -> Result<Option<crate::mapped::MappedSlot>> {
+        if self.dtype() != DType::F32 || !cfg!(target_endian = "little") {
+            return Ok(None);
+        }
+        if view >= self.meta.n_views() {
+            return Err(Error::Invalid(format!("view slot {view} is outside the sampling")));
+        }
+        let chunks = (0..self.meta.n_lights())
+            .map(|l| {
+                self.arr.map_chunk(&[view as u64, l as u64, 0, 0, 0]).map_err(|e| match e {
+                    Error::Corrupt { path, what } => Error::Corrupt {
+                        path,
+                        what: format!("view slot {view}, light {l}: {what}"),
+                    },
+                    other => other,
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Some(crate::mapped::MappedSlot::new(view, chunks)))
+    }
+
     /// [`BtfStore::read_slot_into`] without the finiteness check (checksums are still
     /// verified), for a caller that checks every value itself before using any: the PCA
     /// does, in its first pass.

@@ -363,6 +363,12 @@ impl ZarrArray {
         Ok(())
     }
 
+    /// Maps one chunk read-only (size checked; the checksum is left to the caller, who can
+    /// fold it into its own pass over the bytes, see [`crate::mapped`]).
+    pub fn map_chunk(&self, idx: &[u64]) -> Result<crate::mapped::MappedChunk> {
+        crate::mapped::MappedChunk::open(&self.chunk_path(idx), self.meta.chunk_bytes()?)
+    }
+
     /// True when the chunk exists with the right size (checksum not verified; used to resume).
     pub fn has_chunk(&self, idx: &[u64]) -> bool {
         let expect = self.meta.chunk_bytes().unwrap_or(0);

@@ -9,8 +9,7 @@ use std::arch::x86_64::*;
 /// NaN-aware maximum and the energy sum scalar).
 #[target_feature(enable = "avx512f")]
 pub(super) fn load_shifted(
-    x: &[f32],
-    m: usize,
+    x: &[&[f32]],
     c0: usize,
     w: usize,
     shift: Option<&[f32]>,
@@ -18,7 +17,7 @@ pub(super) fn load_shifted(
     colsum: Option<&mut [f64]>,
 ) -> Option<super::LoadStats> {
     let (Some(cs), Some(sh)) = (colsum, shift) else {
-        return super::load_shifted_body(x, m, c0, w, shift, blk, None);
+        return super::load_shifted_body(x, c0, w, shift, blk, None);
     };
     let body = w - w % 16;
     let mut e = _mm512_setzero_pd();
@@ -28,7 +27,7 @@ pub(super) fn load_shifted(
     let sh = &sh[c0..c0 + w];
     let cs = &mut cs[..w];
     for i in 0..blk.rows {
-        let src = &x[i * m + c0..i * m + c0 + w];
+        let src = &x[i][c0..c0 + w];
         let dst = &mut blk.row_mut(i)[..w];
         for t in (0..body).step_by(16) {
             // SAFETY: t + 16 ≤ body ≤ w, the length of src, sh, dst and cs.
@@ -65,7 +64,7 @@ pub(super) fn load_shifted(
     };
     // The last w mod 16 columns, one by one.
     for i in 0..blk.rows {
-        let src = &x[i * m + c0..i * m + c0 + w];
+        let src = &x[i][c0..c0 + w];
         let dst = blk.row_mut(i);
         for t in body..w {
             let v = src[t];

@@ -12,10 +12,15 @@ fn values(len: usize, seed: u64) -> Vec<f32> {
         .collect()
 }
 
+/// The rows of a row-major `rows × m` matrix.
+fn rows_of(x: &[f32], rows: usize, m: usize) -> Vec<&[f32]> {
+    x.chunks_exact(m).take(rows).collect()
+}
+
 /// A `rows × w` block of the given values (no shift).
 fn block(x: &[f32], rows: usize, m: usize, c0: usize, w: usize) -> Block {
     let mut b = Block::default();
-    load_shifted(x, rows, m, c0, w, None, &mut b, None);
+    load_shifted(&rows_of(x, rows, m), c0, w, None, &mut b, None);
     b
 }
 
@@ -99,8 +104,16 @@ fn load_shifted_is_exact_and_reports_statistics_for_both_kernels() {
     for simd in [false, true] {
         let mut b = Block::default();
         let mut colsum = vec![0.5; w];
-        let st = load_shifted_with(&x, n, m, c0, w, Some(&shift), &mut b, Some(&mut colsum), simd)
-            .unwrap();
+        let st = load_shifted_with(
+            &rows_of(&x, n, m),
+            c0,
+            w,
+            Some(&shift),
+            &mut b,
+            Some(&mut colsum),
+            simd,
+        )
+        .unwrap();
         let mut energy = 0f64;
         for i in 0..n {
             for t in 0..b.stride {
@@ -122,9 +135,16 @@ fn load_shifted_is_exact_and_reports_statistics_for_both_kernels() {
         for (pos, bad) in [(2 * m + c0 + 12, f32::NAN), (m + c0 + 35, f32::INFINITY)] {
             let mut y = x.clone();
             y[pos] = bad;
-            let st =
-                load_shifted_with(&y, n, m, c0, w, Some(&shift), &mut b, Some(&mut colsum), simd)
-                    .unwrap();
+            let st = load_shifted_with(
+                &rows_of(&y, n, m),
+                c0,
+                w,
+                Some(&shift),
+                &mut b,
+                Some(&mut colsum),
+                simd,
+            )
+            .unwrap();
             assert!(!st.finite, "simd {simd}: {bad} at {pos}");
         }
     }

@@ -242,3 +242,29 @@ fn large_mean_costs_no_precision() {
         assert_eq!(r.stored.mean[t], mean[t] as f32, "texel value {t}");
     }
 }
+
+#[test]
+fn f16_basis_is_the_rounded_exact_basis_at_a_power_of_two_scale() {
+    // The fused pass rounds at unit scale and renormalises by powers of two: every stored
+    // row then has its largest magnitude in (½, 1], a power-of-two scale, and equals the
+    // f16 rounding of the exact (u8 path's f64) basis up to that scale.
+    let (n, m) = (10, 3 * 20 * 11);
+    let input = slot_data(n, m, 21);
+    let c = 5;
+    let r = pca_slot(&input, c, Quantization::F16).unwrap();
+    let es = as_slot(&r, c, Quantization::F16);
+    let exact = pca_slot(&input, c, Quantization::U8).unwrap();
+    let ex = as_slot(&exact, c, Quantization::U8);
+    for k in 0..c {
+        let s = r.stored.scale_offset[k][0];
+        assert_eq!(s, 2f32.powi(s.log2().round() as i32), "component {k}: scale {s}");
+        let row = es.basis_row(k);
+        let top = row.iter().fold(0f32, |a, v| a.max(v.abs()));
+        assert!(top > 0.5 * s && top <= s, "component {k}: {top} vs scale {s}");
+        // Same direction as the u8 path's basis, to its 8-bit precision.
+        let (ur, us) = (ex.basis_row(k), exact.stored.scale_offset[k][0]);
+        for t in 0..m {
+            assert!((row[t] - ur[t]).abs() <= us * 0.51 + s * 1e-3, "({k}, {t})");
+        }
+    }
+}

@@ -1,0 +1,143 @@
+//! Passes 2 and 3 of the per-slot PCA (Sattler et al. 2003, eq. 1) in one sweep over the
+//! data, for `f16` eigentextures: each block of columns is lifted to the eigentextures
+//! `B = (C·lift)ᵀY`, rounded to `f16` and turned into the stored basis `S` and its error
+//! `E = S − B` while the block of `Y` is still in the cache, so the correction `E·Yᵀ` and
+//! the Gram matrix `SSᵀ` that the least-squares weights need come from the same read.
+//!
+//! That needs the rounding to be fixed before the whole of `B` is known. It is: the
+//! eigentextures have unit norm, so every entry is at most 1 in magnitude and rounds to
+//! `f16` at unit scale without overflow. Afterwards each row is renormalised by a power of
+//! two `2^e ≥ max |B_k|` (its largest magnitude then lies in `(½, 1]`, and the stored scale
+//! is `2^e`) and given the deterministic sign; multiplying an `f16` by `±2^{−e} ≥ 1` is
+//! exact, so `S` is the same before and after, and so are `E·Yᵀ` and `SSᵀ` up to the signs,
+//! which are applied to them exactly. The rounding error is at most `2^{−11}` of an entry
+//! for normal values and `2^{−25}` for entries below `2^{−14}` (the `f16` subnormals),
+//! which stays below `2^{−11}` of the row's largest magnitude for rows of fewer than
+//! `2^{28}` values (that largest magnitude is at least `1/√m`).
+
+use super::{BLOCK, max_min};
+use crate::kernels::{Block, DotAcc, LIFT_COMPONENTS, lift_rows, load_shifted, prefetch_rows};
+use half::f16;
+use half::slice::HalfFloatSliceExt;
+
+/// What the fused pass yields.
+pub(super) struct Fused {
+    /// `c` rows of `m` little-endian `f16` values, signs fixed.
+    pub raw: Vec<u8>,
+    /// `[2^e, 0]` per component.
+    pub scale_offset: Vec<[f32; 2]>,
+    /// `E·Yᵀ` (`c × n`, row-major), signs applied.
+    pub cross: Vec<f64>,
+    /// `SSᵀ` (`c × c`, full), signs applied.
+    pub bgram: Vec<f64>,
+}
+
+/// The fused lift and stored-basis pass over the rows `x` (`m` values each), with the
+/// lifting matrix `lift` (`n × c`, column `k` = `v_k/√λ_k`; its columns' signs are fixed
+/// here as the eigentextures' are).
+pub(super) fn lift_store_f16(
+    x: &[&[f32]],
+    m: usize,
+    lift: &mut [f64],
+    c: usize,
+    effective: usize,
+) -> Fused {
+    let n = x.len();
+    let cp = c.div_ceil(LIFT_COMPONENTS) * LIFT_COMPONENTS;
+    let mut coef = vec![0f64; n * cp];
+    for k in 0..c {
+        let mean = (0..n).map(|i| lift[i * c + k]).sum::<f64>() / n as f64;
+        for i in 0..n {
+            coef[i * cp + k] = lift[i * c + k] - mean;
+        }
+    }
+    let mut halves = vec![f16::ZERO; c * m];
+    let (mut yb, mut sb, mut eb) = (Block::default(), Block::default(), Block::default());
+    let mut lifted = vec![0f64; cp * BLOCK];
+    let (mut narrow, mut wide) = (vec![0f32; BLOCK], vec![0f64; BLOCK]);
+    let (mut cross_acc, mut bgram_acc) = (DotAcc::new(c, n, false), DotAcc::new(c, c, true));
+    let (mut hi, mut lo) = (vec![0f64; c], vec![0f64; c]);
+    for c0 in (0..m).step_by(BLOCK) {
+        let w = BLOCK.min(m - c0);
+        load_shifted(x, c0, w, Some(x[0]), &mut yb, None);
+        let ws = yb.stride;
+        prefetch_rows(x, c0 + w, BLOCK);
+        lift_rows(&yb, &coef, cp, &mut lifted, ws, 0);
+        sb.shape(c, w);
+        eb.shape(c, w);
+        for k in 0..c {
+            let b = &lifted[k * ws..k * ws + w];
+            if k < effective {
+                max_min(b, &mut hi[k], &mut lo[k]);
+            }
+            // f64 → f32 → f16 at unit scale, back to f64 exactly: the stored value.
+            narrow[..w].iter_mut().zip(b).for_each(|(o, &v)| *o = v as f32);
+            let h = &mut halves[k * m + c0..k * m + c0 + w];
+            h.convert_from_f32_slice(&narrow[..w]);
+            h.convert_to_f64_slice(&mut wide[..w]);
+            sb.row_mut(k)[..w].copy_from_slice(&wide[..w]);
+            for ((e, &s), &b) in eb.row_mut(k)[..w].iter_mut().zip(&wide[..w]).zip(b) {
+                *e = s - b;
+            }
+        }
+        cross_acc.add(&eb, &yb);
+        bgram_acc.add(&sb, &sb);
+    }
+    let mut cross = vec![0f64; c * n];
+    cross_acc.finish(&mut cross, n);
+    let mut bgram = vec![0f64; c * c];
+    bgram_acc.finish(&mut bgram, c);
+    for i in 0..c {
+        for j in 0..i {
+            bgram[i * c + j] = bgram[j * c + i];
+        }
+    }
+    let mut sign = vec![1f64; c];
+    let mut scale_offset = vec![[1f32, 0.0]; c];
+    for k in 0..effective {
+        let row = &mut halves[k * m..(k + 1) * m];
+        // The entry of largest magnitude; on a tie of ±, the first stored one of them.
+        let big = if hi[k] != -lo[k] {
+            if hi[k] > -lo[k] { hi[k] } else { lo[k] }
+        } else {
+            let top = row.iter().map(|h| h.to_f32().abs()).fold(0f32, f32::max);
+            row.iter().map(|h| h.to_f64()).find(|v| v.abs() as f32 == top).unwrap_or(0.0)
+        };
+        sign[k] = if big < 0.0 { -1.0 } else { 1.0 };
+        let largest = hi[k].max(-lo[k]);
+        let e = if largest > 0.0 { largest.log2().ceil().min(0.0) as i32 } else { 0 };
+        scale_offset[k] = [2f32.powi(e), 0.0];
+        renormalise(row, sign[k] as f32 * 2f32.powi(-e), &mut narrow);
+        if sign[k] < 0.0 {
+            for i in 0..n {
+                lift[i * c + k] = -lift[i * c + k];
+            }
+        }
+    }
+    for k in 0..c {
+        cross[k * n..(k + 1) * n].iter_mut().for_each(|v| *v *= sign[k]);
+        for j in 0..c {
+            bgram[k * c + j] *= sign[k] * sign[j];
+        }
+    }
+    let raw = if cfg!(target_endian = "little") {
+        bytemuck::cast_slice(&halves).to_vec()
+    } else {
+        halves.iter().flat_map(|h| h.to_le_bytes()).collect()
+    };
+    Fused { raw, scale_offset, cross, bgram }
+}
+
+/// Multiplies `f16` values by `factor` (`±2^j`, `j ≥ 0`, so exact while the results stay
+/// at most 1 in magnitude), through `f32` in pieces of `buf`'s length.
+fn renormalise(row: &mut [f16], factor: f32, buf: &mut [f32]) {
+    if factor == 1.0 {
+        return;
+    }
+    for piece in row.chunks_mut(buf.len()) {
+        let b = &mut buf[..piece.len()];
+        piece.convert_to_f32_slice(b);
+        b.iter_mut().for_each(|v| *v *= factor);
+        piece.convert_from_f32_slice(b);
+    }
+}
