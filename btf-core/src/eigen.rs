@@ -3,10 +3,11 @@
 //! group chunked per view slot.
 //!
 //! Eigentextures are stored quantised, `f16` (default) or `u8`, each component with its own
-//! `(scale, offset)`: the value is `stored · scale + offset`. For `f16` the scale is the
-//! component's largest magnitude, so the stored values span `[-1, 1]` where half precision is
-//! densest; for `u8` the range `[min, max]` maps onto 0‥255. Means and weights are `f32`,
-//! eigenvalues `f64`.
+//! `(scale, offset)`: the value is `stored · scale + offset`. For `f16` the scale is about
+//! the component's largest magnitude — exactly that magnitude from [`quantize`], the next
+//! power of two above it from the compressor's fused pass (`pca/fused.rs`) — so the stored
+//! values lie in `[-1, 1]` where half precision is densest; for `u8` the range `[min, max]`
+//! maps onto 0‥255. Means and weights are `f32`, eigenvalues `f64`.
 
 use crate::sampling::Sampling;
 use crate::store::{BtfMeta, StoreTxn, read_meta};
