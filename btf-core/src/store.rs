@@ -128,7 +128,13 @@ impl StoreTxn {
         let mut attrs = attributes;
         attrs["complete"] = json!(true);
         zarr::write_group(&self.partial, &attrs)?;
-        if self.final_path.exists() {
+        if self.final_path.exists() && exchange(&self.partial, &self.final_path).is_ok() {
+            // One atomic step swapped the new store in; the old one now sits at `partial`.
+            let p = &self.partial;
+            let _ = if p.is_dir() { fs::remove_dir_all(p) } else { fs::remove_file(p) };
+        } else if self.final_path.exists() {
+            // No atomic exchange here (another OS, or a file system without it): two
+            // renames, with the old store kept under a side name until the new one is in.
             let old = self.final_path.with_file_name(format!(
                 "{}.old-{}",
                 self.final_path.file_name().unwrap().to_string_lossy(),
@@ -144,6 +150,19 @@ impl StoreTxn {
         }
         Ok(())
     }
+}
+
+/// Swaps the names `a` and `b` atomically (Linux `renameat2(RENAME_EXCHANGE)`), so a store
+/// being replaced is never absent, not even for the instant between two renames.
+#[cfg(any(target_os = "linux", target_os = "android"))]
+fn exchange(a: &Path, b: &Path) -> std::io::Result<()> {
+    use rustix::fs::{CWD, RenameFlags, renameat_with};
+    renameat_with(CWD, a, CWD, b, RenameFlags::EXCHANGE).map_err(std::io::Error::from)
+}
+
+#[cfg(not(any(target_os = "linux", target_os = "android")))]
+fn exchange(_: &Path, _: &Path) -> std::io::Result<()> {
+    Err(std::io::ErrorKind::Unsupported.into())
 }
 
 /// Checks that every value is finite; names the slot, light and texel otherwise.
@@ -501,6 +520,29 @@ mod tests {
         let err = w.finish().unwrap_err().to_string();
         assert!(err.contains("never written"), "{err}");
         assert_eq!(BtfStore::open(&p).unwrap().read_image(0, 0).unwrap()[1], 1.0);
+    }
+
+    #[test]
+    fn replacing_a_store_swaps_it_in_and_leaves_nothing_beside_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("m.btf");
+        write_store(&p, 1.0);
+        write_store(&p, 2.0);
+        assert_eq!(BtfStore::open(&p).unwrap().read_image(2, 3).unwrap()[5], 470.0);
+        let names: Vec<String> = fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(names, ["m.btf"]);
+        // The exchange itself: both names stay occupied, contents swapped.
+        let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+        fs::write(&a, "new").unwrap();
+        fs::create_dir(&b).unwrap();
+        match exchange(&a, &b) {
+            Ok(()) => assert!(a.is_dir() && fs::read_to_string(&b).unwrap() == "new"),
+            // ext4, xfs, btrfs and tmpfs all support the exchange on Linux.
+            Err(e) => assert!(!cfg!(target_os = "linux"), "no atomic exchange: {e}"),
+        }
     }
 
     #[test]
