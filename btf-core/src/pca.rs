@@ -333,13 +333,7 @@ fn lift_pass(
     let (n, m, x) = (slot.rows.len(), slot.texel_values, &slot.rows[..]);
     let cp = c.div_ceil(LIFT_COMPONENTS) * LIFT_COMPONENTS;
     let mp = m.div_ceil(LANES) * LANES;
-    let mut coef = vec![0f64; n * cp];
-    for k in 0..c {
-        let mean = (0..n).map(|i| lift[i * c + k]).sum::<f64>() / n as f64;
-        for i in 0..n {
-            coef[i * cp + k] = lift[i * c + k] - mean;
-        }
-    }
+    let coef = centred_coef(lift, n, c, cp);
     // Every value is written by the lift below: no need to clear a reused buffer.
     data.resize(cp * mp, 0.0);
     let mut blk = Block::default();
@@ -398,16 +392,34 @@ fn stored_pass(
         cross_acc.add(&eb, &yb);
         bgram_acc.add(&sb, &sb);
     }
-    let mut cross = vec![0f64; c * n];
-    cross_acc.finish(&mut cross, n);
-    let mut bgram = vec![0f64; c * c];
-    bgram_acc.finish(&mut bgram, c);
+    finish_correction(&cross_acc, &bgram_acc, c, n)
+}
+
+/// `E·Yᵀ` (`c × n`) and the full, symmetric `SSᵀ` (`c × c`) from their accumulators.
+fn finish_correction(cross: &DotAcc, bgram: &DotAcc, c: usize, n: usize) -> (Vec<f64>, Vec<f64>) {
+    let mut cross_out = vec![0f64; c * n];
+    cross.finish(&mut cross_out, n);
+    let mut bgram_out = vec![0f64; c * c];
+    bgram.finish(&mut bgram_out, c);
     for i in 0..c {
         for j in 0..i {
-            bgram[i * c + j] = bgram[j * c + i];
+            bgram_out[i * c + j] = bgram_out[j * c + i];
         }
     }
-    (cross, bgram)
+    (cross_out, bgram_out)
+}
+
+/// The lift's columns centred (`C·lift`, zero column sums, so the images' shift cancels),
+/// `cp` columns wide (zero past `c`).
+fn centred_coef(lift: &[f64], n: usize, c: usize, cp: usize) -> Vec<f64> {
+    let mut coef = vec![0f64; n * cp];
+    for k in 0..c {
+        let mean = (0..n).map(|i| lift[i * c + k]).sum::<f64>() / n as f64;
+        for i in 0..n {
+            coef[i * cp + k] = lift[i * c + k] - mean;
+        }
+    }
+    coef
 }
 
 /// Least-squares weights of each centred image on a basis, given the projections `q_i`

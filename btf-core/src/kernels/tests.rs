@@ -104,16 +104,11 @@ fn load_shifted_is_exact_and_reports_statistics_for_both_kernels() {
     for simd in [false, true] {
         let mut b = Block::default();
         let mut colsum = vec![0.5; w];
-        let st = load_shifted_with(
-            &rows_of(&x, n, m),
-            c0,
-            w,
-            Some(&shift),
-            &mut b,
-            Some(&mut colsum),
-            simd,
-        )
-        .unwrap();
+        let load = |x: &[f32], b: &mut Block, colsum: &mut [f64]| {
+            load_shifted_with(&rows_of(x, n, m), c0, w, Some(&shift), b, Some(colsum), simd)
+                .unwrap()
+        };
+        let st = load(&x, &mut b, &mut colsum);
         let mut energy = 0f64;
         for i in 0..n {
             for t in 0..b.stride {
@@ -135,16 +130,7 @@ fn load_shifted_is_exact_and_reports_statistics_for_both_kernels() {
         for (pos, bad) in [(2 * m + c0 + 12, f32::NAN), (m + c0 + 35, f32::INFINITY)] {
             let mut y = x.clone();
             y[pos] = bad;
-            let st = load_shifted_with(
-                &rows_of(&y, n, m),
-                c0,
-                w,
-                Some(&shift),
-                &mut b,
-                Some(&mut colsum),
-                simd,
-            )
-            .unwrap();
+            let st = load(&y, &mut b, &mut colsum);
             assert!(!st.finite, "simd {simd}: {bad} at {pos}");
         }
     }

@@ -15,7 +15,7 @@
 //! which stays below `2^{−11}` of the row's largest magnitude for rows of fewer than
 //! `2^{28}` values (that largest magnitude is at least `1/√m`).
 
-use super::{BLOCK, max_min};
+use super::{BLOCK, centred_coef, finish_correction, max_min};
 use crate::kernels::{Block, DotAcc, LIFT_COMPONENTS, lift_rows, load_shifted, prefetch_rows};
 use half::f16;
 use half::slice::HalfFloatSliceExt;
@@ -44,13 +44,7 @@ pub(super) fn lift_store_f16(
 ) -> Fused {
     let n = x.len();
     let cp = c.div_ceil(LIFT_COMPONENTS) * LIFT_COMPONENTS;
-    let mut coef = vec![0f64; n * cp];
-    for k in 0..c {
-        let mean = (0..n).map(|i| lift[i * c + k]).sum::<f64>() / n as f64;
-        for i in 0..n {
-            coef[i * cp + k] = lift[i * c + k] - mean;
-        }
-    }
+    let coef = centred_coef(lift, n, c, cp);
     let mut halves = vec![f16::ZERO; c * m];
     let (mut yb, mut sb, mut eb) = (Block::default(), Block::default(), Block::default());
     let mut lifted = vec![0f64; cp * BLOCK];
@@ -83,15 +77,7 @@ pub(super) fn lift_store_f16(
         cross_acc.add(&eb, &yb);
         bgram_acc.add(&sb, &sb);
     }
-    let mut cross = vec![0f64; c * n];
-    cross_acc.finish(&mut cross, n);
-    let mut bgram = vec![0f64; c * c];
-    bgram_acc.finish(&mut bgram, c);
-    for i in 0..c {
-        for j in 0..i {
-            bgram[i * c + j] = bgram[j * c + i];
-        }
-    }
+    let (mut cross, mut bgram) = finish_correction(&cross_acc, &bgram_acc, c, n);
     let mut sign = vec![1f64; c];
     let mut scale_offset = vec![[1f32, 0.0]; c];
     for k in 0..effective {
