@@ -86,23 +86,29 @@ fn csv(r: &SweepResult) -> String {
         "components,evaluation,blending,rel_rmse,reads_per_pixel,btf_ms,frame_ms,plain_ms,read_bound_ms,ratio_plain,ratio_read_bound\n",
     );
     for x in &r.rows {
-        let _ = writeln!(
-            s,
-            "{},{},{},{:.6e},{:.3},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}",
-            x.components,
-            x.evaluation,
-            x.blending,
-            x.rel_rmse,
-            x.reads_per_pixel,
-            x.btf_ms,
-            x.frame_ms,
-            x.plain_ms,
-            x.read_bound_ms,
-            x.ratio_plain,
-            x.ratio_read_bound
-        );
+        let _ = writeln!(s, "{}", row_cells(x, false).join(","));
     }
     s
+}
+
+/// One row's cells: full precision for the CSV, rounded for reading in the Markdown table.
+fn row_cells(x: &cost_sweep::CostRow, rounded: bool) -> [String; 11] {
+    let f =
+        |v: f64, short: usize, long: usize| format!("{v:.*}", if rounded { short } else { long });
+    let e = if rounded { format!("{:.2e}", x.rel_rmse) } else { format!("{:.6e}", x.rel_rmse) };
+    [
+        x.components.to_string(),
+        x.evaluation.clone(),
+        x.blending.clone(),
+        e,
+        f(x.reads_per_pixel, 1, 3),
+        f(x.btf_ms, 2, 4),
+        f(x.frame_ms, 2, 4),
+        f(x.plain_ms, 2, 4),
+        f(x.read_bound_ms, 2, 4),
+        f(x.ratio_plain, 1, 4),
+        f(x.ratio_read_bound, 2, 4),
+    ]
 }
 
 /// The sweep as Markdown: the table, the linear fits and the target checks.
@@ -116,21 +122,7 @@ pub fn markdown(r: &SweepResult) -> String {
     s.push_str("| c | evaluation | blending | rel. RMSE | reads/px | BTF pass ms | frame ms | plain ms | read bound ms | × plain | × read bound |\n");
     s.push_str("|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     for x in &r.rows {
-        let _ = writeln!(
-            s,
-            "| {} | {} | {} | {:.2e} | {:.1} | {:.2} | {:.2} | {:.2} | {:.2} | {:.1} | {:.2} |",
-            x.components,
-            x.evaluation,
-            x.blending,
-            x.rel_rmse,
-            x.reads_per_pixel,
-            x.btf_ms,
-            x.frame_ms,
-            x.plain_ms,
-            x.read_bound_ms,
-            x.ratio_plain,
-            x.ratio_read_bound
-        );
+        let _ = writeln!(s, "| {} |", row_cells(x, true).join(" | "));
     }
     s.push_str("\nBTF pass time against components (least squares `ms = a + b·c`):\n\n");
     s.push_str("| mode | a (ms) | b (ms per component) | R² |\n|---|---:|---:|---:|\n");
