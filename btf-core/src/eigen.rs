@@ -3,11 +3,11 @@
 //! group chunked per view slot.
 //!
 //! Eigentextures are stored quantised, `f16` (default) or `u8`, each component with its own
-//! `(scale, offset)`: the value is `stored · scale + offset`. For `f16` the scale is about
-//! the component's largest magnitude — exactly that magnitude from [`quantize`], the next
-//! power of two above it from the compressor's fused pass (`pca/fused.rs`) — so the stored
-//! values lie in `[-1, 1]` where half precision is densest; for `u8` the range `[min, max]`
-//! maps onto 0‥255. Means and weights are `f32`, eigenvalues `f64`.
+//! `(scale, offset)`: the value is `stored · scale + offset`. For `f16` the scale is the
+//! power of two at or above the component's largest magnitude ([`f16_scale`]), so the
+//! stored values lie in `[-1, 1]` where half precision is densest and a store re-quantised
+//! after a round trip (export, import) keeps its bits; for `u8` the range `[min, max]` maps
+//! onto 0‥255. Means and weights are `f32`, eigenvalues `f64`.
 
 use crate::sampling::Sampling;
 use crate::store::{BtfMeta, StoreTxn, read_meta};
@@ -209,7 +209,7 @@ pub fn quantize(basis: &[f32], components: usize, q: Quantization) -> (Vec<u8>, 
         match q {
             Quantization::F16 => {
                 let m = row.iter().fold(0f32, |a, v| a.max(v.abs()));
-                let scale = if m > 0.0 { m } else { 1.0 };
+                let scale = f16_scale(m);
                 let scaled: Vec<f32> = row.iter().map(|v| v / scale).collect();
                 // The slice conversion (F16C where the CPU has it), little-endian bytes.
                 let mut halves = vec![half::f16::ZERO; row.len()];
@@ -231,6 +231,14 @@ pub fn quantize(basis: &[f32], components: usize, q: Quantization) -> (Vec<u8>, 
         }
     }
     (raw, so)
+}
+
+/// The `f16` scale of a component whose largest magnitude is `largest`: the power of two
+/// at or above it (1 for an all-zero component). Dividing by it is exact, so quantising
+/// what [`dequantize`] returns gives back the same halves, and the compressor's fused pass
+/// (which rounds first and rescales after) stores exactly what this would.
+pub fn f16_scale(largest: f32) -> f32 {
+    if largest > 0.0 && largest.is_finite() { 2f32.powi(largest.log2().ceil() as i32) } else { 1.0 }
 }
 
 /// Inverse of [`quantize`].
@@ -477,6 +485,11 @@ mod tests {
             let back = dequantize(&raw, &so, q);
             let err = basis.iter().zip(&back).map(|(a, b)| (a - b).abs()).fold(0f32, f32::max);
             assert!(err <= tol * 1.01, "{q:?}: {err} > {tol}");
+            if q == Quantization::F16 {
+                // Power-of-two scales: quantising the dequantised values keeps every bit.
+                assert!(so.iter().all(|[s, _]| *s == f16_scale(*s)), "{so:?}");
+                assert_eq!(quantize(&back, 2, q), (raw, so), "f16 re-quantisation");
+            }
         }
     }
 }

@@ -90,10 +90,12 @@ pub(super) fn lift_store_f16(
             row.iter().map(|h| h.to_f64()).find(|v| v.abs() as f32 == top).unwrap_or(0.0)
         };
         sign[k] = if big < 0.0 { -1.0 } else { 1.0 };
-        let largest = hi[k].max(-lo[k]);
-        let e = if largest > 0.0 { largest.log2().ceil().min(0.0) as i32 } else { 0 };
-        scale_offset[k] = [2f32.powi(e), 0.0];
-        renormalise(row, sign[k] as f32 * 2f32.powi(-e), &mut narrow);
+        // The scale `quantize` would choose, from the largest magnitude of the f32 values
+        // it would see; at most 1 (an f32 unit-norm row has no entry above 1 + 2⁻²⁴ ulp).
+        let largest = (hi[k].max(-lo[k]) as f32).min(1.0);
+        let scale = crate::eigen::f16_scale(largest);
+        scale_offset[k] = [scale, 0.0];
+        renormalise(row, sign[k] as f32 / scale, &mut narrow);
         if sign[k] < 0.0 {
             for i in 0..n {
                 lift[i * c + k] = -lift[i * c + k];
