@@ -29,9 +29,10 @@ use crate::plain_texture::{Baseline, BaselinePass};
 use crate::scene::{Evaluation, Light, Projection, Scene, Shadows};
 use crate::shadow::{ShadowInputs, Shadowing};
 use crate::timer::PassTimer;
-use crate::transmission::ThinPass;
+use crate::transmission::{ThinEnv, ThinPass};
 use crate::{Error, Gpu, Result, tangent, terminator};
 use btf_core::InterpMode;
+use std::sync::Mutex;
 use std::time::Instant;
 use wgpu::util::DeviceExt;
 
@@ -86,6 +87,9 @@ pub struct Renderer {
     shadowing: Option<Shadowing>,
     environment: Option<EnvState>,
     thin: Option<ThinPass>,
+    /// `(rotation, exposure, revision)` of the environment the thin-cloth tables were
+    /// computed for.
+    thin_env_key: Mutex<Option<(f64, f32, u64)>>,
     camera: CameraSetup,
     options: RenderOptions,
     /// Bytes of material data on the GPU.
@@ -274,6 +278,7 @@ impl Renderer {
             &order,
             &slot_of_desc,
             &tri_desc,
+            mesh.positions.len(),
         )?;
         let corners = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("corners"),
@@ -336,6 +341,7 @@ impl Renderer {
             shadowing,
             environment,
             thin,
+            thin_env_key: Mutex::new(None),
             camera,
             options,
             material_bytes,
@@ -542,6 +548,7 @@ impl Renderer {
         let color_view = color.create_view(&Default::default());
         let ms_view = color_ms.as_ref().map(|t| t.create_view(&Default::default()));
         let depth_view = depth.create_view(&Default::default());
+        self.update_thin_env_tables(gpu, &mut timer)?;
         let thin_draws = self.thin.as_ref().map(|t| {
             let t0 = Instant::now();
             let draws = t.prepare(gpu, &self.camera);
@@ -603,7 +610,9 @@ impl Renderer {
                     pass.draw(d.first..d.first + d.count, 0..1);
                 }
                 if let (Some(t), Some(d)) = (&self.thin, &thin_draws) {
-                    t.draw(&mut pass, &self.frame_group, |m| &self.materials[m].bind_group, d);
+                    let vertex_group = per_vertex_group.as_ref().map(|g| &g.2);
+                    let material = |m: usize| &self.materials[m].bind_group;
+                    t.draw(&mut pass, &self.frame_group, vertex_group, material, d);
                 }
             })
         })??;
@@ -632,6 +641,28 @@ impl Renderer {
             stats.reads_per_pixel = Some(if c[1] > 0 { c[0] as f64 / c[1] as f64 } else { 0.0 });
         }
         Ok(Frame { width: w, height: h, rgb, stats })
+    }
+
+    /// Recomputes and uploads the thin-cloth environment tables when the environment,
+    /// its rotation or its exposure changed since the last frame.
+    fn update_thin_env_tables(&self, gpu: &Gpu, timer: &mut PassTimer) -> Result<()> {
+        let (Some(thin), Some(e)) = (&self.thin, &self.environment) else { return Ok(()) };
+        let key = (e.env.rotation_deg(), e.env.exposure(), e.env.revision());
+        let mut last = self.thin_env_key.lock().map_err(|_| Error::Gpu("poisoned lock".into()))?;
+        if *last == Some(key) {
+            return Ok(());
+        }
+        let t = Instant::now();
+        let slab_of: Vec<_> = self
+            .vertex_material
+            .iter()
+            .map(|&m| if m == usize::MAX { None } else { thin.slab(m) })
+            .collect();
+        let tables = crate::transmission::env::tables(&e.env, &slab_of)?;
+        thin.write_env_tables(gpu, &tables)?;
+        timer.cpu("thin-cloth env tables (cpu)", t.elapsed().as_secs_f64() * 1e3);
+        *last = Some(key);
+        Ok(())
     }
 
     fn per_vertex_bind_group(
@@ -717,6 +748,7 @@ fn thin_pass(
     order: &[usize],
     slot_of_desc: &[usize],
     tri_desc: &[usize],
+    vertices: usize,
 ) -> Result<Option<ThinPass>> {
     let descs: Vec<_> = materials
         .iter()
@@ -729,8 +761,20 @@ fn thin_pass(
     if descs.iter().all(|d| d.0.is_none()) {
         return Ok(None);
     }
+    let env = match scene.environment() {
+        None => None,
+        Some((light, e)) => {
+            for (desc, _, name) in &descs {
+                if let Some(d) = desc {
+                    crate::transmission::env::check_supported(d, name, e.two_sided)?;
+                }
+            }
+            let entry = if key.evaluation == Evaluation::PerVertex { light as u32 } else { 0 };
+            Some(ThinEnv { vertices, entry })
+        }
+    };
     let slot_of_triangle: Vec<usize> = order.iter().map(|&t| slot_of_desc[tri_desc[t]]).collect();
-    Ok(Some(ThinPass::new(gpu, btf, key, &descs, corners, &slot_of_triangle)?))
+    Ok(Some(ThinPass::new(gpu, btf, key, &descs, corners, &slot_of_triangle, env)?))
 }
 
 fn frame_bind_group(
