@@ -100,6 +100,8 @@ pub struct Renderer {
 struct EnvState {
     light: usize,
     env: SceneEnvironment,
+    /// The map itself, kept when the scene draws it as the background.
+    map: Option<EnvMap>,
 }
 
 /// Loads the environment map of the scene's environment light (if any) and computes the
@@ -119,7 +121,8 @@ fn build_environment(
         triangles: &mesh.triangles,
     };
     let env = SceneEnvironment::new(desc.params(), &map, &env_mesh, materials)?;
-    Ok(Some(EnvState { light, env }))
+    let map = scene.output.show_environment.then_some(map);
+    Ok(Some(EnvState { light, env, map }))
 }
 
 /// Merges the scene's meshes and assigns each triangle a scene material index.
@@ -373,7 +376,11 @@ impl Renderer {
     /// Replaces the environment map (one gather, plus the eigenweightsets when the scene
     /// asks for them); visibility maps are kept.
     pub fn set_environment(&mut self, map: &EnvMap) -> Result<()> {
-        self.env_or_err()?.set_environment(map)
+        self.env_or_err()?.set_environment(map)?;
+        if let Some(e) = self.environment.as_mut().filter(|e| e.map.is_some()) {
+            e.map = Some(map.clone());
+        }
+        Ok(())
     }
 
     /// Sets the environment's exposure `f`.
@@ -542,7 +549,12 @@ impl Renderer {
             })
         };
         let att = wgpu::TextureUsages::RENDER_ATTACHMENT;
-        let color = target(color_format(msaa), 1, att | wgpu::TextureUsages::COPY_SRC);
+        let color = target(
+            color_format(msaa),
+            1,
+            att | wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::COPY_DST,
+        );
+        let background = self.write_env_background(gpu, &color, &mut timer);
         let color_ms = (msaa > 1).then(|| target(color_format(msaa), msaa, att));
         let depth = target(DEPTH_FORMAT, msaa, att);
         let color_view = color.create_view(&Default::default());
@@ -570,12 +582,16 @@ impl Renderer {
                         depth_slice: None,
                         resolve_target: ms_view.as_ref().map(|_| &color_view),
                         ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color {
-                                r: bg[0] as f64,
-                                g: bg[1] as f64,
-                                b: bg[2] as f64,
-                                a: 1.0,
-                            }),
+                            load: if background {
+                                wgpu::LoadOp::Load
+                            } else {
+                                wgpu::LoadOp::Clear(wgpu::Color {
+                                    r: bg[0] as f64,
+                                    g: bg[1] as f64,
+                                    b: bg[2] as f64,
+                                    a: 1.0,
+                                })
+                            },
                             store: wgpu::StoreOp::Store,
                         },
                     })],
@@ -641,6 +657,55 @@ impl Renderer {
             stats.reads_per_pixel = Some(if c[1] > 0 { c[0] as f64 / c[1] as f64 } else { 0.0 });
         }
         Ok(Frame { width: w, height: h, rgb, stats })
+    }
+
+    /// Writes the environment background into `color` when the scene shows it; returns
+    /// whether it did.
+    fn write_env_background(
+        &self,
+        gpu: &Gpu,
+        color: &wgpu::Texture,
+        timer: &mut PassTimer,
+    ) -> bool {
+        let Some((e, map)) = self.environment.as_ref().and_then(|e| Some((e, e.map.as_ref()?)))
+        else {
+            return false;
+        };
+        if !self.scene.output.show_environment {
+            return false;
+        }
+        let t = Instant::now();
+        let (w, h) = (self.scene.output.width, self.scene.output.height);
+        let rot = e.env.rotation_deg();
+        let img = crate::env_background::image(map, &self.camera, (w, h), rot, e.env.exposure());
+        gpu.queue.write_texture(
+            color.as_image_copy(),
+            bytemuck::cast_slice(&img),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(w * 16),
+                rows_per_image: Some(h),
+            },
+            wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+        );
+        timer.cpu("environment background (cpu)", t.elapsed().as_secs_f64() * 1e3);
+        true
+    }
+
+    /// The environment background of the current camera, rotation and exposure (linear
+    /// RGB, row-major from the top), when the scene shows it.
+    pub fn environment_background(&self) -> Option<Vec<f32>> {
+        let e = self.environment.as_ref()?;
+        let map = e.map.as_ref()?;
+        let size = (self.scene.output.width, self.scene.output.height);
+        let img = crate::env_background::image(
+            map,
+            &self.camera,
+            size,
+            e.env.rotation_deg(),
+            e.env.exposure(),
+        );
+        Some(img.iter().flat_map(|p| [p[0], p[1], p[2]]).collect())
     }
 
     /// Recomputes and uploads the thin-cloth environment tables when the environment,

@@ -214,6 +214,14 @@ fn half_space_furnaces_give_the_slab_albedos() {
         eprintln!("front-lit μ = {mu:.3}: share = {share:.4}, worst relative error {e:.2e}");
         assert!(e < 0.01, "front-lit at μ = {mu}: {e}");
     }
+    // The environment drawn behind the sheet shows through with the same alpha: seen from
+    // above, the rays behind the sheet go down into the unit half of below.exr.
+    let mut scene = sheet_scene(dir.path(), "below.exr", &thin, 0.0, "");
+    scene.output.show_environment = true;
+    let f = render(&gpu, &scene);
+    let (alpha, t) = (direct_transmittance(tau, 1.0), hemispherical_transmission(tau, albedo, 1.0));
+    let e = worst_rel(&f, |_| alpha + t);
+    assert!(e < 0.01, "environment background: {e}");
     // Per-vertex scenes keep the environment's own entry: a directional light first (its
     // per-vertex BTF term must not leak into the thin sheet), lit from above.
     let (mu0, e_dir) = (1.0 / 1.09f64.sqrt(), 2.0);
