@@ -91,20 +91,39 @@ pub fn side_terms(
     frame: usize,
     slab: &SlabParams,
 ) -> [[f64; 3]; 1 + MU_NODES] {
+    let tau = slab.tau;
+    let nodes: [(f64, f64); MU_NODES] = std::array::from_fn(|k| {
+        let mu = mu_node(k);
+        let e = if tau <= 0.0 {
+            1.0
+        } else if mu > 0.0 {
+            (-tau / mu).exp()
+        } else {
+            0.0
+        };
+        (mu, e)
+    });
     let mut irr = [0f64; 3];
     let mut a = [0f64; 3];
     let mut t = [[0f64; 3]; MU_NODES];
     env.visible_sources(frame, |d, power| {
         let mu0 = d[2] as f64;
-        let e0 = (-slab.tau / mu0).exp();
+        let e0 = (-tau / mu0).exp();
+        let p = power.map(|c| c as f64);
         for c in 0..3 {
-            irr[c] += power[c] as f64 * mu0;
-            a[c] += power[c] as f64 * mu0 * e0;
+            irr[c] += p[c] * mu0;
+            a[c] += p[c] * mu0 * e0;
         }
-        for (k, tk) in t.iter_mut().enumerate() {
-            let ft = transmission_factor(slab.tau, mu_node(k), mu0) * mu0;
+        for (tk, &(mu, e)) in t.iter_mut().zip(&nodes) {
+            // F_t by the raw quotient where it is well conditioned (the same branch as
+            // `transmission_factor`, with the node's exponential precomputed), else the series.
+            let ft = if mu == 0.0 || tau * (mu0 - mu).abs() > mu * mu0 {
+                (e - e0) / (mu - mu0)
+            } else {
+                transmission_factor(tau, mu, mu0)
+            } * mu0;
             for c in 0..3 {
-                tk[c] += ft * power[c] as f64;
+                tk[c] += ft * p[c];
             }
         }
     });
@@ -158,5 +177,35 @@ mod tests {
         let (tau, mu0) = (0.2f64, 0.5f64);
         let f = transmission_factor(tau, 0.0, mu0);
         assert!((f - (-tau / mu0).exp() / mu0).abs() < 1e-12, "{f}");
+    }
+
+    #[test]
+    fn fast_kernel_equals_the_slab_function_on_both_branches() {
+        // side_terms' quotient with precomputed node exponentials against
+        // transmission_factor, near and far from μ = μ₀ and at the grazing node.
+        for tau in [0.0, 1e-6, 0.05, 0.6, 5.0, 1e4] {
+            for k in 0..MU_NODES {
+                let mu = mu_node(k);
+                let e = if tau <= 0.0 {
+                    1.0
+                } else if mu > 0.0 {
+                    (-tau / mu).exp()
+                } else {
+                    0.0
+                };
+                for mu0 in [1e-4, 0.1, mu + 1e-7, 0.5, 0.999, 1.0] {
+                    let e0 = (-tau / mu0).exp();
+                    let reference = transmission_factor(tau, mu, mu0);
+                    if mu == 0.0 || tau * (mu0 - mu).abs() > mu * mu0 {
+                        let fast = (e - e0) / (mu - mu0);
+                        let err = (fast - reference).abs() / reference.abs().max(1e-300);
+                        assert!(
+                            err < 1e-12 || fast == reference,
+                            "τ {tau} μ {mu} μ₀ {mu0}: {fast} vs {reference}"
+                        );
+                    }
+                }
+            }
+        }
     }
 }
