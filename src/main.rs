@@ -20,6 +20,7 @@ mod render_sweep;
 mod sweep;
 mod synth_cmd;
 mod thin_demo;
+mod thin_demo_material;
 mod thin_demo_report;
 mod view;
 

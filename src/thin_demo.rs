@@ -39,6 +39,11 @@ pub struct DemoArgs {
     /// Components per view slot.
     #[arg(short = 'c', long, default_value_t = 8)]
     components: usize,
+    /// Curtain material: `woven` (datasets mesostructure BTF, synthesised and compressed;
+    /// the uncompressed store is removed afterwards) or `weave-lambert` (a Lambertian
+    /// basket weave written straight into an eigen store, in milliseconds).
+    #[arg(long, default_value = "woven")]
+    material: String,
     /// Optical thickness τ₁ of the curtain.
     #[arg(long, default_value_t = 0.6)]
     tau: f64,
@@ -107,6 +112,12 @@ pub fn run(a: DemoArgs) -> Result<()> {
     }
     if !(16..=2048).contains(&a.size) {
         bail!("--size must be in 16..=2048, got {}", a.size);
+    }
+    if a.material != "woven" && a.material != "weave-lambert" {
+        bail!("--material must be woven or weave-lambert, got '{}'", a.material);
+    }
+    if !(4..=512).contains(&a.texels) {
+        bail!("--texels must be in 4..=512, got {}", a.texels);
     }
     if !(a.tau.is_finite() && a.tau > 0.0 && a.tau <= 10.0) {
         bail!("--tau must be in (0, 10], got {}", a.tau);
@@ -181,7 +192,10 @@ fn make_inputs(a: &DemoArgs) -> Result<f64> {
         datasets::write_exr(&sky, &sky_path)?;
     }
     let (btf_path, eig_path) = (a.out.join("voile.btf"), a.out.join("voile.eig"));
-    if EigenStore::open(&eig_path).is_err() {
+    let done = EigenStore::open(&eig_path).is_ok();
+    if !done && a.material == "weave-lambert" {
+        crate::thin_demo_material::write_weave_lambert(&eig_path, a.texels, a.components)?;
+    } else if !done {
         eprintln!("[thin demo] synthesising and compressing the woven material …");
         let spec = datasets::MaterialSpec::new(datasets::MaterialKind::Woven, a.texels);
         let opts = datasets::GenerateOptions {
@@ -196,6 +210,9 @@ fn make_inputs(a: &DemoArgs) -> Result<f64> {
             resume: true,
         };
         compress_with_progress(&BtfStore::open(&btf_path)?, &eig_path, params)?;
+        // 81 × 81 chunk files, only needed to compress.
+        std::fs::remove_dir_all(&btf_path)
+            .with_context(|| format!("cannot remove {}", btf_path.display()))?;
     }
     // The sky's horizontal irradiance → 0.5, so the point light stands out.
     Ok(0.5 * crate::demo_scene::unit_irradiance_exposure(&datasets::load_env(&sky_path)?))

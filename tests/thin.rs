@@ -66,7 +66,7 @@ fn thin_demo_orbits_a_light_round_the_curtain() {
     let run = || {
         Command::new(env!("CARGO_BIN_EXE_btf"))
             .args(["thin", "demo", "-o", "out", "--frames", "4", "--size", "48"])
-            .args(["--texels", "8", "-c", "4", "--tau", "0.6"])
+            .args(["--texels", "8", "-c", "4", "--tau", "0.6", "--material", "weave-lambert"])
             .current_dir(dir.path())
             .env("BTF_NO_PROGRESS", "1")
             .output()

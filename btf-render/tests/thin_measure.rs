@@ -142,7 +142,10 @@ fn transmission_cost_under_an_environment() {
             t_o = t_o.min(opaque.render(&gpu).unwrap().stats.frame_ms);
             t_t = t_t.min(thin.render(&gpu).unwrap().stats.frame_ms);
         }
-        eprintln!("light {k}: opaque {t_o:.1} ms, transmission {t_t:.1} ms, ratio {:.3}", t_t / t_o);
+        eprintln!(
+            "light {k}: opaque {t_o:.1} ms, transmission {t_t:.1} ms, ratio {:.3}",
+            t_t / t_o
+        );
         sum_opaque += t_o;
         sum_thin += t_t;
     }
