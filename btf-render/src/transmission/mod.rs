@@ -48,6 +48,7 @@
 pub mod desc;
 pub mod env;
 pub mod pass;
+mod pipeline;
 
 pub use desc::{Albedo, PhaseDesc, TauTexture, TransmissionDesc};
 pub use pass::{ThinDraw, ThinEnv, ThinPass};
