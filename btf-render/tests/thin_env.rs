@@ -280,3 +280,22 @@ fn curtain_limits_under_an_environment() {
         assert!(err.contains(key) && err.contains("voile.eigen"), "{err}");
     }
 }
+
+#[test]
+fn show_environment_needs_an_environment_light_and_no_msaa() {
+    let dir = tempfile::tempdir().unwrap();
+    let load = |lights: &str, msaa: u32| {
+        let text = format!(
+            "[output]\nshow_environment = true\n[[meshes]]\npath = \"a.obj\"\n[[materials]]\nstore = \"m.eigen\"\n\
+             [camera]\neye = [0.0, -2.0, 0.0]\ntarget = [0.0, 0.0, 0.0]\nup = [0.0, 0.0, 1.0]\n{lights}\
+             [effects]\nmsaa = {msaa}\n"
+        );
+        Scene::load(&write(dir.path(), "s.toml", &text)).map(|_| ()).map_err(|e| e.to_string())
+    };
+    let env = "[[lights]]\nkind = \"environment\"\npath = \"sky.exr\"\n";
+    assert!(load(env, 1).is_ok());
+    let e = load("", 1).unwrap_err();
+    assert!(e.contains("output.show_environment") && e.contains("environment light"), "{e}");
+    let e = load(env, 4).unwrap_err();
+    assert!(e.contains("output.show_environment") && e.contains("msaa"), "{e}");
+}
