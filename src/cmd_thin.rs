@@ -1,6 +1,7 @@
 //! `btf thin validate`: the first-order thin-slab terms against a Monte-Carlo solution
 //! of the same slab, as a table of relative errors per optical thickness (the check of
-//! `btf_core::thin_slab`, thin-cloth paper eq. 4–5).
+//! `btf_core::thin_slab`, thin-cloth paper eq. 4–5); `btf thin demo`: the curtain scene
+//! of `crate::thin_demo`.
 
 use anyhow::{Context, Result, bail};
 use btf_core::thin_slab::monte_carlo::{
@@ -13,6 +14,9 @@ use std::path::PathBuf;
 pub enum ThinCmd {
     /// First-order reflection/transmission vs Monte Carlo for a range of thicknesses.
     Validate(ValidateArgs),
+    /// A curtain in front of a sky with a point light circling it: frames, contact sheet,
+    /// frame-time and front-/back-lit report.
+    Demo(crate::thin_demo::DemoArgs),
 }
 
 /// Arguments of `btf thin validate`.
@@ -42,6 +46,7 @@ pub struct ValidateArgs {
 pub fn run(c: ThinCmd) -> Result<()> {
     match c {
         ThinCmd::Validate(a) => validate(a),
+        ThinCmd::Demo(a) => crate::thin_demo::run(a),
     }
 }
 

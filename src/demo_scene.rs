@@ -39,7 +39,7 @@ enum Lighting {
 
 /// `1 / E_h`, where `E_h = ∫_{z>0} L cos θ dω` is the sky's horizontal irradiance (mean of
 /// the channels).
-fn unit_irradiance_exposure(env: &datasets::EnvMap) -> f64 {
+pub fn unit_irradiance_exposure(env: &datasets::EnvMap) -> f64 {
     let mut e = 0.0;
     for row in 0..env.height {
         let d = env.direction(0, row);

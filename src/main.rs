@@ -19,6 +19,9 @@ mod render_cmd;
 mod render_sweep;
 mod sweep;
 mod synth_cmd;
+mod thin_demo;
+mod thin_demo_material;
+mod thin_demo_report;
 mod view;
 
 use clap::{Parser, Subcommand};

@@ -18,10 +18,12 @@
 //! - [`mips`]: mip chains of the PCA textures (exact for the linear reconstruction);
 //! - [`plain_texture`], [`read_bound`], [`cost_sweep`]: the cost baselines and the sweep of
 //!   components × evaluation × blending against them;
-//! - [`transmission`]: thin semi-transparent cloth (front-/back-lit, view-dependent alpha).
+//! - [`transmission`]: thin semi-transparent cloth (front-/back-lit, view-dependent alpha);
+//! - [`env_background`]: the environment map drawn behind the scene.
 
 pub mod btf_pass;
 pub mod cost_sweep;
+pub mod env_background;
 pub mod envlight;
 pub mod error;
 pub mod frame;

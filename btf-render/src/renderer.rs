@@ -29,9 +29,10 @@ use crate::plain_texture::{Baseline, BaselinePass};
 use crate::scene::{Evaluation, Light, Projection, Scene, Shadows};
 use crate::shadow::{ShadowInputs, Shadowing};
 use crate::timer::PassTimer;
-use crate::transmission::ThinPass;
+use crate::transmission::{ThinEnv, ThinPass};
 use crate::{Error, Gpu, Result, tangent, terminator};
 use btf_core::InterpMode;
+use std::sync::Mutex;
 use std::time::Instant;
 use wgpu::util::DeviceExt;
 
@@ -86,6 +87,9 @@ pub struct Renderer {
     shadowing: Option<Shadowing>,
     environment: Option<EnvState>,
     thin: Option<ThinPass>,
+    /// `(rotation, exposure, revision)` of the environment the thin-cloth tables were
+    /// computed for.
+    thin_env_key: Mutex<Option<(f64, f32, u64)>>,
     camera: CameraSetup,
     options: RenderOptions,
     /// Bytes of material data on the GPU.
@@ -96,6 +100,8 @@ pub struct Renderer {
 struct EnvState {
     light: usize,
     env: SceneEnvironment,
+    /// The map itself, kept when the scene draws it as the background.
+    map: Option<EnvMap>,
 }
 
 /// Loads the environment map of the scene's environment light (if any) and computes the
@@ -115,7 +121,8 @@ fn build_environment(
         triangles: &mesh.triangles,
     };
     let env = SceneEnvironment::new(desc.params(), &map, &env_mesh, materials)?;
-    Ok(Some(EnvState { light, env }))
+    let map = scene.output.show_environment.then_some(map);
+    Ok(Some(EnvState { light, env, map }))
 }
 
 /// Merges the scene's meshes and assigns each triangle a scene material index.
@@ -274,6 +281,7 @@ impl Renderer {
             &order,
             &slot_of_desc,
             &tri_desc,
+            mesh.positions.len(),
         )?;
         let corners = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("corners"),
@@ -336,6 +344,7 @@ impl Renderer {
             shadowing,
             environment,
             thin,
+            thin_env_key: Mutex::new(None),
             camera,
             options,
             material_bytes,
@@ -367,7 +376,11 @@ impl Renderer {
     /// Replaces the environment map (one gather, plus the eigenweightsets when the scene
     /// asks for them); visibility maps are kept.
     pub fn set_environment(&mut self, map: &EnvMap) -> Result<()> {
-        self.env_or_err()?.set_environment(map)
+        self.env_or_err()?.set_environment(map)?;
+        if let Some(e) = self.environment.as_mut().filter(|e| e.map.is_some()) {
+            e.map = Some(map.clone());
+        }
+        Ok(())
     }
 
     /// Sets the environment's exposure `f`.
@@ -536,12 +549,18 @@ impl Renderer {
             })
         };
         let att = wgpu::TextureUsages::RENDER_ATTACHMENT;
-        let color = target(color_format(msaa), 1, att | wgpu::TextureUsages::COPY_SRC);
+        let color = target(
+            color_format(msaa),
+            1,
+            att | wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::COPY_DST,
+        );
+        let background = self.write_env_background(gpu, &color, &mut timer);
         let color_ms = (msaa > 1).then(|| target(color_format(msaa), msaa, att));
         let depth = target(DEPTH_FORMAT, msaa, att);
         let color_view = color.create_view(&Default::default());
         let ms_view = color_ms.as_ref().map(|t| t.create_view(&Default::default()));
         let depth_view = depth.create_view(&Default::default());
+        self.update_thin_env_tables(gpu, &mut timer)?;
         let thin_draws = self.thin.as_ref().map(|t| {
             let t0 = Instant::now();
             let draws = t.prepare(gpu, &self.camera);
@@ -563,12 +582,16 @@ impl Renderer {
                         depth_slice: None,
                         resolve_target: ms_view.as_ref().map(|_| &color_view),
                         ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color {
-                                r: bg[0] as f64,
-                                g: bg[1] as f64,
-                                b: bg[2] as f64,
-                                a: 1.0,
-                            }),
+                            load: if background {
+                                wgpu::LoadOp::Load
+                            } else {
+                                wgpu::LoadOp::Clear(wgpu::Color {
+                                    r: bg[0] as f64,
+                                    g: bg[1] as f64,
+                                    b: bg[2] as f64,
+                                    a: 1.0,
+                                })
+                            },
                             store: wgpu::StoreOp::Store,
                         },
                     })],
@@ -603,7 +626,9 @@ impl Renderer {
                     pass.draw(d.first..d.first + d.count, 0..1);
                 }
                 if let (Some(t), Some(d)) = (&self.thin, &thin_draws) {
-                    t.draw(&mut pass, &self.frame_group, |m| &self.materials[m].bind_group, d);
+                    let vertex_group = per_vertex_group.as_ref().map(|g| &g.2);
+                    let material = |m: usize| &self.materials[m].bind_group;
+                    t.draw(&mut pass, &self.frame_group, vertex_group, material, d);
                 }
             })
         })??;
@@ -632,6 +657,77 @@ impl Renderer {
             stats.reads_per_pixel = Some(if c[1] > 0 { c[0] as f64 / c[1] as f64 } else { 0.0 });
         }
         Ok(Frame { width: w, height: h, rgb, stats })
+    }
+
+    /// Writes the environment background into `color` when the scene shows it; returns
+    /// whether it did.
+    fn write_env_background(
+        &self,
+        gpu: &Gpu,
+        color: &wgpu::Texture,
+        timer: &mut PassTimer,
+    ) -> bool {
+        let Some((e, map)) = self.environment.as_ref().and_then(|e| Some((e, e.map.as_ref()?)))
+        else {
+            return false;
+        };
+        if !self.scene.output.show_environment {
+            return false;
+        }
+        let t = Instant::now();
+        let (w, h) = (self.scene.output.width, self.scene.output.height);
+        let rot = e.env.rotation_deg();
+        let img = crate::env_background::image(map, &self.camera, (w, h), rot, e.env.exposure());
+        gpu.queue.write_texture(
+            color.as_image_copy(),
+            bytemuck::cast_slice(&img),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(w * 16),
+                rows_per_image: Some(h),
+            },
+            wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+        );
+        timer.cpu("environment background (cpu)", t.elapsed().as_secs_f64() * 1e3);
+        true
+    }
+
+    /// The environment background of the current camera, rotation and exposure (linear
+    /// RGB, row-major from the top), when the scene shows it.
+    pub fn environment_background(&self) -> Option<Vec<f32>> {
+        let e = self.environment.as_ref()?;
+        let map = e.map.as_ref()?;
+        let size = (self.scene.output.width, self.scene.output.height);
+        let img = crate::env_background::image(
+            map,
+            &self.camera,
+            size,
+            e.env.rotation_deg(),
+            e.env.exposure(),
+        );
+        Some(img.iter().flat_map(|p| [p[0], p[1], p[2]]).collect())
+    }
+
+    /// Recomputes and uploads the thin-cloth environment tables when the environment,
+    /// its rotation or its exposure changed since the last frame.
+    fn update_thin_env_tables(&self, gpu: &Gpu, timer: &mut PassTimer) -> Result<()> {
+        let (Some(thin), Some(e)) = (&self.thin, &self.environment) else { return Ok(()) };
+        let key = (e.env.rotation_deg(), e.env.exposure(), e.env.revision());
+        let mut last = self.thin_env_key.lock().map_err(|_| Error::Gpu("poisoned lock".into()))?;
+        if *last == Some(key) {
+            return Ok(());
+        }
+        let t = Instant::now();
+        let slab_of: Vec<_> = self
+            .vertex_material
+            .iter()
+            .map(|&m| if m == usize::MAX { None } else { thin.slab(m) })
+            .collect();
+        let tables = crate::transmission::env::tables(&e.env, &slab_of)?;
+        thin.write_env_tables(gpu, &tables)?;
+        timer.cpu("thin-cloth env tables (cpu)", t.elapsed().as_secs_f64() * 1e3);
+        *last = Some(key);
+        Ok(())
     }
 
     fn per_vertex_bind_group(
@@ -717,6 +813,7 @@ fn thin_pass(
     order: &[usize],
     slot_of_desc: &[usize],
     tri_desc: &[usize],
+    vertices: usize,
 ) -> Result<Option<ThinPass>> {
     let descs: Vec<_> = materials
         .iter()
@@ -729,8 +826,20 @@ fn thin_pass(
     if descs.iter().all(|d| d.0.is_none()) {
         return Ok(None);
     }
+    let env = match scene.environment() {
+        None => None,
+        Some((light, e)) => {
+            for (desc, _, name) in &descs {
+                if let Some(d) = desc {
+                    crate::transmission::env::check_supported(d, name, e.two_sided)?;
+                }
+            }
+            let entry = if key.evaluation == Evaluation::PerVertex { light as u32 } else { 0 };
+            Some(ThinEnv { vertices, entry })
+        }
+    };
     let slot_of_triangle: Vec<usize> = order.iter().map(|&t| slot_of_desc[tri_desc[t]]).collect();
-    Ok(Some(ThinPass::new(gpu, btf, key, &descs, corners, &slot_of_triangle)?))
+    Ok(Some(ThinPass::new(gpu, btf, key, &descs, corners, &slot_of_triangle, env)?))
 }
 
 fn frame_bind_group(

@@ -47,11 +47,20 @@ pub struct Output {
     pub exposure: f32,
     /// Linear background radiance.
     pub background: [f32; 3],
+    /// Draw the environment light's map (rotated, times its exposure) behind the scene
+    /// instead of `background` (needs an environment light and `effects.msaa = 1`).
+    pub show_environment: bool,
 }
 
 impl Default for Output {
     fn default() -> Self {
-        Output { width: 512, height: 512, exposure: 1.0, background: [0.0; 3] }
+        Output {
+            width: 512,
+            height: 512,
+            exposure: 1.0,
+            background: [0.0; 3],
+            show_environment: false,
+        }
     }
 }
 
@@ -447,6 +456,12 @@ impl Scene {
         }
         if e.msaa != 1 && e.msaa != 4 {
             return bad("effects.msaa".into(), "must be 1 or 4");
+        }
+        if o.show_environment && self.environment().is_none() {
+            return bad("output.show_environment".into(), "needs an environment light");
+        }
+        if o.show_environment && e.msaa != 1 {
+            return bad("output.show_environment".into(), "needs effects.msaa = 1");
         }
         Ok(())
     }

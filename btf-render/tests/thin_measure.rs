@@ -84,3 +84,76 @@ fn transmission_cost_and_orbit() {
         out.display()
     );
 }
+
+/// The same orbit with the curtain in front of a synthetic sky that lights it and shows
+/// through it (environment light + `show_environment`, no wall): opaque and thin curtain
+/// (scalar τ₁ = 0.6, as the environment terms need) rendered back to back per light
+/// position, plus the one-off cost of the thin-cloth environment tables and of a rotation.
+#[test]
+#[ignore = "a measurement on lavapipe: run for BENCHMARKS.md"]
+fn transmission_cost_under_an_environment() {
+    let Some(gpu) = gpu("transmission_cost_under_an_environment") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    write_store(dir.path(), "voile.eigen", Pattern::Checker, 64, 64, 16, Quantization::F16);
+    let mesh =
+        datasets::synth_mesh(datasets::MeshKind::Curtain, datasets::Resolution::Low).unwrap();
+    datasets::write_obj(&mesh, &dir.path().join("curtain.obj"), "curtain").unwrap();
+    let sky = datasets::synth_env(datasets::EnvKind::Sky, &Default::default(), 256).unwrap();
+    datasets::write_exr(&sky, &dir.path().join("sky.exr")).unwrap();
+    let scene = |t: &str| {
+        let text = format!(
+            "[output]\nwidth = 256\nheight = 256\nshow_environment = true\n\
+             [[meshes]]\npath = \"curtain.obj\"\n\
+             [[materials]]\nstore = \"voile.eigen\"\nuv_scale = 6.0\n{t}\n\
+             [camera]\neye = [0.0, -2.6, 0.75]\ntarget = [0.0, 0.0, 0.75]\nup = [0.0, 0.0, 1.0]\n\
+             [[lights]]\nkind = \"point\"\nposition = [0.0, -0.8, 1.0]\nintensity = [1.5, 1.5, 1.5]\nshadows = false\n\
+             [[lights]]\nkind = \"environment\"\npath = \"sky.exr\"\nexposure = 0.05\nvisibility_res = 16\ncache_dir = \"cache\"\n"
+        );
+        Scene::load(&write(dir.path(), "scene.toml", &text)).unwrap()
+    };
+    let mut opaque = Renderer::new(&gpu, &scene(""), RenderOptions::default()).unwrap();
+    let mut thin = Renderer::new(
+        &gpu,
+        &scene("transmission = { tau = 0.6, albedo = 0.9 }"),
+        RenderOptions::default(),
+    )
+    .unwrap();
+    let first = thin.render(&gpu).unwrap();
+    let tables_ms = first.stats.ms_of("thin-cloth env tables");
+    thin.set_environment_rotation(30.0).unwrap();
+    let rotated = thin.render(&gpu).unwrap();
+    let rotation_ms = rotated.stats.ms_of("thin-cloth env tables");
+    thin.set_environment_rotation(0.0).unwrap();
+    thin.render(&gpu).unwrap();
+    let steps = 8;
+    let (mut sum_opaque, mut sum_thin) = (0.0, 0.0);
+    for k in 0..steps {
+        let a = std::f32::consts::TAU * k as f32 / steps as f32;
+        let pos = [0.9 * a.sin(), -0.9 * a.cos() + 0.1, 1.0];
+        for r in [&mut opaque, &mut thin] {
+            let mut lights = r.scene().lights.clone();
+            if let btf_render::scene::Light::Point { position, .. } = &mut lights[0] {
+                *position = pos;
+            }
+            r.set_lights(&gpu, &lights).unwrap();
+        }
+        let (mut t_o, mut t_t) = (f64::MAX, f64::MAX);
+        for _ in 0..3 {
+            t_o = t_o.min(opaque.render(&gpu).unwrap().stats.frame_ms);
+            t_t = t_t.min(thin.render(&gpu).unwrap().stats.frame_ms);
+        }
+        eprintln!(
+            "light {k}: opaque {t_o:.1} ms, transmission {t_t:.1} ms, ratio {:.3}",
+            t_t / t_o
+        );
+        sum_opaque += t_o;
+        sum_thin += t_t;
+    }
+    eprintln!(
+        "environment: mean over the orbit: opaque {:.1} ms, transmission {:.1} ms, ratio {:.3}; thin-cloth env tables {tables_ms:.1} ms once ({rotation_ms:.1} ms after a rotation), {} vertices",
+        sum_opaque / steps as f64,
+        sum_thin / steps as f64,
+        sum_thin / sum_opaque,
+        mesh.positions.len()
+    );
+}

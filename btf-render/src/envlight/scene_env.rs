@@ -13,7 +13,7 @@ use super::eigenweights::EigenWeightSets;
 use super::envmap::{EnvCube, EnvMap};
 use super::hemicube::{Hemicube, LightTable};
 use super::visibility::{HemicubeFrame, VisibilityMaps};
-use super::weights::{CoefficientMatrix, GatherInput, WeightSet};
+use super::weights::{CoefficientMatrix, GatherInput, WeightSet, hemicube_pixel, rotate_z};
 use crate::material::MaterialData;
 use crate::math::Vec3;
 use crate::per_vertex::VertexCoefficients;
@@ -82,6 +82,8 @@ pub struct SceneEnvironment {
     env: EnvCube,
     weights: WeightSet,
     eigen: Option<EigenWeightSets>,
+    /// Counts [`SceneEnvironment::set_environment`] calls (caches keyed on the map).
+    revision: u64,
     /// Timings of the preparation.
     pub timings: EnvTimings,
 }
@@ -132,6 +134,7 @@ impl SceneEnvironment {
             env: env_cube,
             weights,
             eigen: None,
+            revision: 0,
             timings,
         };
         s.set_environment(env)?;
@@ -162,6 +165,7 @@ impl SceneEnvironment {
     pub fn set_environment(&mut self, env: &EnvMap) -> Result<()> {
         let t = Instant::now();
         self.env = EnvCube::new(env, Self::cube_res(self.params.visibility_res));
+        self.revision += 1;
         self.weights = self.gather(self.params.rotation_deg);
         self.timings.weights_ms = ms(t);
         self.eigen = None;
@@ -226,6 +230,49 @@ impl SceneEnvironment {
     /// Sets the exposure `f`.
     pub fn set_exposure(&mut self, f: f32) {
         self.params.exposure = f;
+    }
+
+    /// Exposure factor `f` in use.
+    pub fn exposure(&self) -> f32 {
+        self.params.exposure
+    }
+
+    /// Whether the back sides have hemicubes of their own (frames `V + v`).
+    pub fn two_sided(&self) -> bool {
+        self.params.two_sided
+    }
+
+    /// Vertices of the mesh (front frames `0..V`).
+    pub fn vertices(&self) -> usize {
+        self.vertices
+    }
+
+    /// Changes with every new environment map (not with rotation or exposure).
+    pub fn revision(&self) -> u64 {
+        self.revision
+    }
+
+    /// Calls `visit(tangent direction, power)` for every source of the current
+    /// environment and rotation that lies above frame `f`'s horizon and falls into a
+    /// visible pixel of its hemicube — the terms of eq. 10 before the pixel → light table
+    /// (power `∫ L dω` of the source, without the exposure).
+    pub fn visible_sources(&self, f: usize, mut visit: impl FnMut([f32; 3], [f32; 3])) {
+        let (sin, cos) = self.params.rotation_deg.to_radians().sin_cos();
+        let [t, b, n] = self.frames[f].axes.map(|a| rotate_z(a, cos as f32, sin as f32));
+        let bits = self.vis.frame_bits(f);
+        let res = self.vis.res as usize;
+        let dot = |d: &[f32; 3], a: [f32; 3]| d[0] * a[0] + d[1] * a[1] + d[2] * a[2];
+        for (d, pw) in self.env.dirs.iter().zip(&self.env.power) {
+            let z = dot(d, n);
+            if z <= 0.0 {
+                continue;
+            }
+            let (x, y) = (dot(d, t), dot(d, b));
+            let p = hemicube_pixel(res, x, y, z);
+            if bits[p / 64] >> (p % 64) & 1 == 1 {
+                visit([x, y, z], *pw);
+            }
+        }
     }
 
     /// The current weights `g`.

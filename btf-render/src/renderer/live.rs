@@ -65,4 +65,16 @@ impl Renderer {
         self.scene.effects.terminator_deg = alpha_deg;
         Ok(())
     }
+
+    /// Switches between the environment background and `output.background` (only for a
+    /// scene built with `output.show_environment = true`, which keeps the map).
+    pub fn set_show_environment(&mut self, on: bool) -> Result<()> {
+        if self.environment.as_ref().is_none_or(|e| e.map.is_none()) {
+            return Err(Error::Invalid(
+                "set_show_environment: the scene was built without output.show_environment".into(),
+            ));
+        }
+        self.scene.output.show_environment = on;
+        Ok(())
+    }
 }

@@ -8,7 +8,9 @@
 //! # or: tau_texture = "btf-mean" | "tau.png", albedo = [0.9, 0.8, 0.7], phase = { hg = 0.3 }
 //! ```
 
+use crate::material::MaterialData;
 use crate::{Error, Result};
+use half::f16;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -164,4 +166,41 @@ impl TransmissionDesc {
             *p = dir.join(&*p);
         }
     }
+}
+
+/// Luminance of the frontal view slot's mean texture, divided by its average (all ones
+/// for a black mean).
+pub fn btf_mean_thickness(data: &MaterialData) -> (u32, u32, Vec<f16>) {
+    let n = (data.width * data.height) as usize;
+    let lum: Vec<f32> = data.mean_layers[..n * 4]
+        .chunks_exact(4)
+        .map(|p| 0.2126 * p[0].to_f32() + 0.7152 * p[1].to_f32() + 0.0722 * p[2].to_f32())
+        .map(|l| l.max(0.0))
+        .collect();
+    let avg = lum.iter().map(|&l| l as f64).sum::<f64>() / n.max(1) as f64;
+    let texels = if avg > 0.0 {
+        lum.iter().map(|&l| f16::from_f32((l as f64 / avg) as f32)).collect()
+    } else {
+        vec![f16::ONE; n]
+    };
+    (data.width, data.height, texels)
+}
+
+/// A grey image's values in `[0, 1]` (8/16-bit: `v / max`; float: as stored, refused
+/// outside `[0, 1]` or non-finite).
+pub fn image_thickness(path: &std::path::Path) -> Result<(u32, u32, Vec<f16>)> {
+    let img = image::open(path)
+        .map_err(|e| Error::Invalid(format!("{}: tau_texture: {e}", path.display())))?;
+    let grey = img.to_luma32f();
+    if let Some((i, v)) =
+        grey.iter().enumerate().find(|(_, v)| !(v.is_finite() && (0.0..=1.0).contains(*v)))
+    {
+        return Err(Error::Invalid(format!(
+            "{}: tau_texture pixel x={}, y={} is {v}; values must be in [0, 1]",
+            path.display(),
+            i as u32 % grey.width(),
+            i as u32 / grey.width()
+        )));
+    }
+    Ok((grey.width(), grey.height(), grey.iter().map(|&v| f16::from_f32(v)).collect()))
 }

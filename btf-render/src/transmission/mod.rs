@@ -34,13 +34,21 @@
 //! them after the opaque geometry with depth test and no depth write: exact for layers
 //! that do not interpenetrate (a triangle straddling another can be wrong by one layer).
 //!
+//! **Environment lights** ([`env`]): per vertex side, the transmission through the slab
+//! (`∫ f_t L V μ₀ dω₀` over the far hemisphere, tabulated at 16 view cosines) and the
+//! irradiance-weighted `e^{−τ₁/μ₀}` that scales the BTF's environment term on the near
+//! side, from the environment's visibility maps; isotropic scattering and scalar `τ₁`
+//! only.
+//!
 //! Limitations: thin cloth casts opaque shadows (shadow passes treat every triangle
 //! alike); the transmitted term is shadowed by shadow maps only; transmissive materials
 //! are always evaluated per pixel; multiple scattering between layers is not modelled
 //! (the paper's eq. 7–8 are local).
 
 pub mod desc;
+pub mod env;
 pub mod pass;
+mod pipeline;
 
 pub use desc::{Albedo, PhaseDesc, TauTexture, TransmissionDesc};
-pub use pass::{ThinDraw, ThinPass};
+pub use pass::{ThinDraw, ThinEnv, ThinPass};

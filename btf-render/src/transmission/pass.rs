@@ -3,13 +3,15 @@
 //! (thin-cloth paper eq. 9; the shading is in `transmission.wgsl`).
 //!
 //! Depth is tested against the opaque geometry but not written, so layers behind a thin
-//! sheet stay visible. Bind groups 0 and 1 are the BTF pass's (frame, material); group 3
-//! holds the slab parameters and the τ texture of one material.
+//! sheet stay visible. Bind groups 0 and 1 are the BTF pass's (frame, material); group 2,
+//! with an environment light, its per-vertex coefficients (the BTF's environment term);
+//! group 3 holds the slab parameters and the τ texture of one material and the
+//! per-vertex environment tables of [`super::env`].
 
-use super::desc::{TauTexture, TransmissionDesc};
-use crate::btf_pass::{
-    BtfPass, BtfPassKey, CornerVertex, color_format, corner_buffer_layout, mesh_depth_state,
-};
+use super::desc::{TauTexture, TransmissionDesc, btf_mean_thickness, image_thickness};
+use super::env::{SlabParams, VEC4_PER_VERTEX};
+use super::pipeline::{pipeline, thin_layout};
+use crate::btf_pass::{BtfPass, BtfPassKey, CornerVertex};
 use crate::material::MaterialData;
 use crate::renderer::CameraSetup;
 use crate::{Error, Gpu, Result};
@@ -27,7 +29,8 @@ pub const SOURCE: &str = concat!(
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ThinRaw {
-    /// `τ₁`, Henyey–Greenstein `g`, τ texture bound (1/0), unused.
+    /// `τ₁`, Henyey–Greenstein `g`, τ texture bound (1/0), the environment's entry in the
+    /// per-vertex layout.
     pub params: [f32; 4],
     /// Albedo `ϖ₀` (RGB), unused.
     pub albedo: [f32; 4],
@@ -51,10 +54,24 @@ pub struct ThinDraw {
     pub count: u32,
 }
 
+/// What the pass needs when the scene has an environment light.
+#[derive(Debug, Clone, Copy)]
+pub struct ThinEnv {
+    /// Vertices of the merged mesh (size of the environment tables).
+    pub vertices: usize,
+    /// Index of the environment in the per-vertex coefficient layout (its light index in
+    /// per-vertex mode, 0 in per-pixel mode).
+    pub entry: u32,
+}
+
 /// Pipeline, per-material parameters and the triangles to sort.
 pub struct ThinPass {
     pipeline: wgpu::RenderPipeline,
     materials: Vec<Option<ThinMaterial>>,
+    slabs: Vec<Option<SlabParams>>,
+    /// Per-vertex environment tables (16 bytes when there is no environment light).
+    env_tables: wgpu::Buffer,
+    environment: bool,
     /// `(material slot, three corners)` of every thin triangle.
     triangles: Vec<(usize, [CornerVertex; 3])>,
     corners: wgpu::Buffer,
@@ -63,7 +80,8 @@ pub struct ThinPass {
 impl ThinPass {
     /// Builds the pass for the materials with a `transmission` effect; `descs[slot]` is
     /// the effect of material slot `slot` (`None`: opaque), `corners` the renderer's
-    /// corner list with `material_of_triangle` per triangle.
+    /// corner list with `material_of_triangle` per triangle; `env` when the scene has an
+    /// environment light.
     pub fn new(
         gpu: &Gpu,
         btf: &BtfPass,
@@ -71,6 +89,7 @@ impl ThinPass {
         descs: &[(Option<&TransmissionDesc>, &MaterialData, String)],
         corners: &[CornerVertex],
         material_of_triangle: &[usize],
+        env: Option<ThinEnv>,
     ) -> Result<ThinPass> {
         if key.msaa == 1 && !gpu.device.features().contains(wgpu::Features::FLOAT32_BLENDABLE) {
             return Err(Error::Unsupported(
@@ -78,14 +97,24 @@ impl ThinPass {
             ));
         }
         let layout = thin_layout(&gpu.device);
-        let pipeline = pipeline(gpu, btf, &layout, key)?;
+        let pipeline = pipeline(gpu, btf, &layout, key, env.is_some())?;
+        let env_tables = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("thin environment tables"),
+            size: (env.map_or(1, |e| e.vertices * VEC4_PER_VERTEX).max(1) * 16) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let entry = env.map_or(0, |e| e.entry);
         let mut materials = Vec::new();
         for (desc, data, name) in descs {
             materials.push(match desc {
-                Some(d) => Some(ThinMaterial::new(gpu, &layout, d, data, name)?),
+                Some(d) => {
+                    Some(ThinMaterial::new(gpu, &layout, d, data, name, &env_tables, entry)?)
+                }
                 None => None,
             });
         }
+        let slabs = descs.iter().map(|(d, _, _)| d.map(SlabParams::of)).collect();
         let triangles: Vec<(usize, [CornerVertex; 3])> = corners
             .chunks_exact(3)
             .zip(material_of_triangle)
@@ -98,7 +127,33 @@ impl ThinPass {
             usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        Ok(ThinPass { pipeline, materials, triangles, corners })
+        Ok(ThinPass {
+            pipeline,
+            materials,
+            slabs,
+            env_tables,
+            environment: env.is_some(),
+            triangles,
+            corners,
+        })
+    }
+
+    /// Slab parameters of material slot `m` (`None`: opaque).
+    pub fn slab(&self, m: usize) -> Option<SlabParams> {
+        self.slabs.get(m).copied().flatten()
+    }
+
+    /// Uploads the per-vertex environment tables of [`super::env::tables`].
+    pub fn write_env_tables(&self, gpu: &Gpu, tables: &[[f32; 4]]) -> Result<()> {
+        if !self.environment || (tables.len() * 16) as u64 != self.env_tables.size() {
+            return Err(Error::Invalid(format!(
+                "thin-cloth environment tables: {} vec4 for a buffer of {} bytes",
+                tables.len(),
+                self.env_tables.size()
+            )));
+        }
+        gpu.queue.write_buffer(&self.env_tables, 0, bytemuck::cast_slice(tables));
+        Ok(())
     }
 
     /// Whether material slot `m` is drawn by this pass (and not by the opaque one).
@@ -126,11 +181,13 @@ impl ThinPass {
         draws
     }
 
-    /// Records the sorted draws into the BTF render pass (after the opaque geometry).
+    /// Records the sorted draws into the BTF render pass (after the opaque geometry);
+    /// `vertex_group` is the per-vertex coefficients' group (needed with an environment).
     pub fn draw<'a>(
         &'a self,
         pass: &mut wgpu::RenderPass<'a>,
         frame_group: &'a wgpu::BindGroup,
+        vertex_group: Option<&'a wgpu::BindGroup>,
         material_group: impl Fn(usize) -> &'a wgpu::BindGroup,
         draws: &[ThinDraw],
     ) {
@@ -139,6 +196,9 @@ impl ThinPass {
         }
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, frame_group, &[]);
+        if let (true, Some(g)) = (self.environment, vertex_group) {
+            pass.set_bind_group(2, g, &[]);
+        }
         pass.set_vertex_buffer(0, self.corners.slice(..));
         for d in draws {
             let Some(m) = &self.materials[d.material] else { continue };
@@ -172,107 +232,6 @@ pub fn back_to_front(triangles: &[(usize, [CornerVertex; 3])], camera: &CameraSe
     order
 }
 
-fn thin_layout(dev: &wgpu::Device) -> wgpu::BindGroupLayout {
-    let vis = wgpu::ShaderStages::FRAGMENT;
-    dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("thin material"),
-        entries: &[
-            wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: vis,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            },
-            wgpu::BindGroupLayoutEntry {
-                binding: 1,
-                visibility: vis,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
-                },
-                count: None,
-            },
-        ],
-    })
-}
-
-fn pipeline(
-    gpu: &Gpu,
-    btf: &BtfPass,
-    thin: &wgpu::BindGroupLayout,
-    key: BtfPassKey,
-) -> Result<wgpu::RenderPipeline> {
-    let dev = &gpu.device;
-    gpu.scoped("building the thin-cloth pass", || {
-        let layout = dev.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("thin"),
-            bind_group_layouts: &[
-                Some(&btf.frame_layout),
-                Some(&btf.material_layout),
-                None, // group 2: per-vertex coefficients of the opaque pass, unused here
-                Some(thin),
-            ],
-            immediate_size: 0,
-        });
-        let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("transmission.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(SOURCE.into()),
-        });
-        let constants = [
-            ("VIEW_FOUR", key.view_four as u32 as f64),
-            ("LIGHT_FOUR", key.light_four as u32 as f64),
-            ("COUNT_READS", 0.0),
-        ];
-        let options = wgpu::PipelineCompilationOptions {
-            constants: &constants,
-            zero_initialize_workgroup_memory: true,
-        };
-        // L = L_src · 1 + L_dst · alpha_src; the target's alpha is left as it is.
-        let blend = wgpu::BlendState {
-            color: wgpu::BlendComponent {
-                src_factor: wgpu::BlendFactor::One,
-                dst_factor: wgpu::BlendFactor::SrcAlpha,
-                operation: wgpu::BlendOperation::Add,
-            },
-            alpha: wgpu::BlendComponent {
-                src_factor: wgpu::BlendFactor::Zero,
-                dst_factor: wgpu::BlendFactor::One,
-                operation: wgpu::BlendOperation::Add,
-            },
-        };
-        dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("thin"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: options.clone(),
-                buffers: &[Some(corner_buffer_layout())],
-            },
-            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            depth_stencil: Some(mesh_depth_state(false)),
-            multisample: wgpu::MultisampleState { count: key.msaa, ..Default::default() },
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_thin"),
-                compilation_options: options,
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: color_format(key.msaa),
-                    blend: Some(blend),
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        })
-    })
-}
-
 impl ThinMaterial {
     fn new(
         gpu: &Gpu,
@@ -280,6 +239,8 @@ impl ThinMaterial {
         desc: &TransmissionDesc,
         data: &MaterialData,
         name: &str,
+        env_tables: &wgpu::Buffer,
+        env_entry: u32,
     ) -> Result<ThinMaterial> {
         let (w, h, texels) = match &desc.tau_texture {
             None => (1, 1, vec![f16::ONE]),
@@ -288,7 +249,12 @@ impl ThinMaterial {
         };
         let a = desc.albedo.rgb();
         let raw = ThinRaw {
-            params: [desc.tau, desc.phase.g(), desc.tau_texture.is_some() as u32 as f32, 0.0],
+            params: [
+                desc.tau,
+                desc.phase.g(),
+                desc.tau_texture.is_some() as u32 as f32,
+                env_entry as f32,
+            ],
             albedo: [a[0], a[1], a[2], 0.0],
         };
         gpu.scoped(&format!("uploading the transmission of {name}"), || {
@@ -322,48 +288,12 @@ impl ThinMaterial {
                         binding: 1,
                         resource: wgpu::BindingResource::TextureView(&view),
                     },
+                    wgpu::BindGroupEntry { binding: 2, resource: env_tables.as_entire_binding() },
                 ],
             });
             ThinMaterial { group, _uniform: uniform, _tau: tau }
         })
     }
-}
-
-/// Luminance of the frontal view slot's mean texture, divided by its average (all ones
-/// for a black mean).
-pub fn btf_mean_thickness(data: &MaterialData) -> (u32, u32, Vec<f16>) {
-    let n = (data.width * data.height) as usize;
-    let lum: Vec<f32> = data.mean_layers[..n * 4]
-        .chunks_exact(4)
-        .map(|p| 0.2126 * p[0].to_f32() + 0.7152 * p[1].to_f32() + 0.0722 * p[2].to_f32())
-        .map(|l| l.max(0.0))
-        .collect();
-    let avg = lum.iter().map(|&l| l as f64).sum::<f64>() / n.max(1) as f64;
-    let texels = if avg > 0.0 {
-        lum.iter().map(|&l| f16::from_f32((l as f64 / avg) as f32)).collect()
-    } else {
-        vec![f16::ONE; n]
-    };
-    (data.width, data.height, texels)
-}
-
-/// A grey image's values in `[0, 1]` (8/16-bit: `v / max`; float: as stored, refused
-/// outside `[0, 1]` or non-finite).
-pub fn image_thickness(path: &std::path::Path) -> Result<(u32, u32, Vec<f16>)> {
-    let img = image::open(path)
-        .map_err(|e| Error::Invalid(format!("{}: tau_texture: {e}", path.display())))?;
-    let grey = img.to_luma32f();
-    if let Some((i, v)) =
-        grey.iter().enumerate().find(|(_, v)| !(v.is_finite() && (0.0..=1.0).contains(*v)))
-    {
-        return Err(Error::Invalid(format!(
-            "{}: tau_texture pixel x={}, y={} is {v}; values must be in [0, 1]",
-            path.display(),
-            i as u32 % grey.width(),
-            i as u32 / grey.width()
-        )));
-    }
-    Ok((grey.width(), grey.height(), grey.iter().map(|&v| f16::from_f32(v)).collect()))
 }
 
 #[cfg(test)]

@@ -5,7 +5,8 @@
 // alpha = e^{−τ/μ}; blended as L = L_dst · alpha + L_src (eq. 9).
 
 struct ThinRaw {
-    // x: τ₁ (scale of the texture), y: Henyey–Greenstein g, z: 1 = τ texture bound
+    // x: τ₁ (scale of the texture), y: Henyey–Greenstein g, z: 1 = τ texture bound,
+    // w: the environment's entry in the per-vertex layout
     params: vec4<f32>,
     // rgb: single-scattering albedo ϖ₀
     albedo: vec4<f32>,
@@ -13,6 +14,8 @@ struct ThinRaw {
 
 @group(3) @binding(0) var<uniform> thin: ThinRaw;
 @group(3) @binding(1) var tau_tex: texture_2d<f32>;
+// Per vertex and side (0 = +N, 1 = −N): A_s, then T_s(μ_k) at μ_k = (k/15)² (env.rs).
+@group(3) @binding(2) var<storage, read> thin_env: array<vec4<f32>>;
 
 const THIN_MIN_COS: f32 = 1e-4;
 
@@ -127,6 +130,63 @@ fn fs_thin(in: VertexOut) -> @location(0) vec4<f32> {
         }
     }
     rgb = rgb + thin_transmitted(in, f, v, tau, mu);
+    count_reads();
+    return vec4<f32>(rgb, exp(-tau / mu));
+}
+
+// ---- environment light on thin cloth (transmission/env.rs) ----
+
+const THIN_MU_NODES: u32 = 16u;
+
+fn thin_env_row(vtx: u32, side: u32, i: u32) -> vec3<f32> {
+    return thin_env[(vtx * 2u + side) * (1u + THIN_MU_NODES) + i].rgb;
+}
+
+// Barycentric blend of the three vertices' A (eye side) and T(μ) (far side, linear in √μ).
+fn thin_env_terms(in: VertexOut, f: Frame3, mu: f32) -> array<vec3<f32>, 2> {
+    let eye = select(0u, 1u, f.back);
+    let far = 1u - eye;
+    let u = sqrt(clamp(mu, 0.0, 1.0)) * f32(THIN_MU_NODES - 1u);
+    let k = min(u32(floor(u)), THIN_MU_NODES - 2u);
+    let t = u - f32(k);
+    var a = vec3<f32>(0.0);
+    var tr = vec3<f32>(0.0);
+    for (var c = 0u; c < 3u; c = c + 1u) {
+        let vtx = in.tri[c];
+        a = a + in.bary[c] * thin_env_row(vtx, eye, 0u);
+        tr = tr + in.bary[c] * mix(thin_env_row(vtx, far, 1u + k), thin_env_row(vtx, far, 2u + k), t);
+    }
+    return array<vec3<f32>, 2>(a, tr);
+}
+
+// fs_thin plus the environment: its BTF term (the per-vertex coefficients, entry
+// thin.params.w alone) scaled by 1 − e^{−τ/μ}·A, and the transmitted T(μ).
+@fragment
+fn fs_thin_env(in: VertexOut) -> @location(0) vec4<f32> {
+    let v = to_camera(in.world);
+    let f = tangent_frame(in, v);
+    let uv = tex_uv(in.uv);
+    duv_dx = dpdx(uv);
+    duv_dy = dpdy(uv);
+    let mu = max(dot(v, f.n), THIN_MIN_COS);
+    let tau = thin_tau(uv);
+    reads = 0u;
+    gather_lights_thin(in, f, tau, mu);
+    var rgb = vec3<f32>(0.0);
+    if (n_active > 0u) {
+        let views = view_weights(dir_angles(vec3<f32>(dot(v, f.t), dot(v, f.b), dot(v, f.n))), VIEW_FOUR);
+        for (var m = 0u; m < views.n; m = m + 1u) {
+            rgb = rgb + views.w[m] * slot_pixel(views.idx[m], uv);
+        }
+    }
+    rgb = rgb + thin_transmitted(in, f, v, tau, mu);
+    let entry = u32(thin.params.w);
+    for (var l = 0u; l < 4u; l = l + 1u) {
+        vis[l] = select(0.0, 1.0, l == entry);
+    }
+    let terms = thin_env_terms(in, f, mu);
+    let share = vec3<f32>(1.0) - exp(-tau / mu) * terms[0];
+    rgb = rgb + share * vertex_sum(in, uv, frame.info.w) + terms[1];
     count_reads();
     return vec4<f32>(rgb, exp(-tau / mu));
 }
