@@ -38,6 +38,11 @@ pub struct BtfPassKey {
     pub count_reads: bool,
     /// The scene has an environment light (per-vertex coefficients even in per-pixel mode).
     pub environment: bool,
+    /// Shadow technique whose visibility code the shader contains: 0 none (no shadowing
+    /// light), 1 shadow-volume masks, 2 shadow maps (flat and cube).
+    pub shadows: u32,
+    /// The smooth shadow boundary (eq. 6) is applied to shadowing lights.
+    pub smooth_boundary: bool,
 }
 
 impl BtfPassKey {
@@ -217,6 +222,8 @@ impl BtfPass {
                 ("VIEW_FOUR", key.view_four as u32 as f64),
                 ("LIGHT_FOUR", key.light_four as u32 as f64),
                 ("COUNT_READS", key.count_reads as u32 as f64),
+                ("SHADOWS", key.shadows as f64),
+                ("SMOOTH_BOUNDARY", key.smooth_boundary as u32 as f64),
             ];
             let options = wgpu::PipelineCompilationOptions {
                 constants: &constants,

@@ -19,6 +19,11 @@ const PI: f32 = 3.14159265358979;
 override VIEW_FOUR: bool = true;
 override LIGHT_FOUR: bool = true;
 override COUNT_READS: bool = false;
+// Which visibility code exists (lavapipe runs both sides of every branch, so code for a
+// shadow technique the scene does not use is compiled out, not skipped): 0 no shadowing
+// light, 1 shadow-volume masks, 2 shadow maps (flat and cube); SMOOTH_BOUNDARY: eq. 6 on.
+override SHADOWS: u32 = 0u;
+override SMOOTH_BOUNDARY: bool = false;
 
 struct LightRaw {
     // xyz: position (w = 1, point) or direction towards the light (w = 0, directional)
@@ -38,7 +43,7 @@ struct FrameRaw {
     eye: vec4<f32>,
     // xyz: direction towards the camera (orthographic)
     to_camera: vec4<f32>,
-    // x: lights, y: smooth boundary on (1/0), z: per-vertex coefficient stride G,
+    // x: lights, y: smooth boundary on (1/0; the shader is specialised by SMOOTH_BOUNDARY), z: per-vertex coefficient stride G,
     // w: lights in the per-vertex layout
     info: vec4<u32>,
     // x: alpha in radians
@@ -176,19 +181,22 @@ fn cube_map_visibility(L: LightRaw, world: vec3<f32>) -> f32 {
 
 // Visibility of light l at a fragment: smooth boundary (eq. 6) times volume mask or map.
 fn visibility(l: u32, in: VertexOut, back: bool) -> f32 {
+    if (SHADOWS == 0u) {
+        return 1.0;
+    }
     let L = frame.lights[l];
     if (L.color.w < 0.5) {
         return 1.0;
     }
     var s = 1.0;
-    if (frame.info.y == 1u) {
+    if (SMOOTH_BOUNDARY) {
         var u = in.u_front[l];
         if (back) {
             u = in.u_back[l];
         }
         s = textureSampleLevel(terminator_tex, linear_clamp, vec2<f32>(u, 0.5), 0.0).r;
     }
-    if (L.color.w < 1.5) {
+    if (SHADOWS == 1u) {
         s = s * textureLoad(shadow_masks, vec2<i32>(in.clip.xy), i32(L.shadow.x), 0).r;
     } else if (L.color.w < 2.5) {
         s = s * shadow_map_visibility(L, in.world);
@@ -338,70 +346,90 @@ fn fs_pixel(in: VertexOut) -> @location(0) vec4<f32> {
 
 // ---- per-vertex evaluation (the paper's blending) ----
 
-var<private> vis: array<f32, 4>;
-// the 12 candidate slots of the triangle's vertices (NONE where the vertex weighs 0)
-var<private> cand: array<u32, 12>;
-// per member (vertex holding the current slot, ≤ 3) and entry, index m·4 + l:
-// coefficient offset and barycentric × visibility
-var<private> m_base: array<u32, 12>;
-var<private> m_scale: array<f32, 12>;
+var<private> vis: vec4<f32>;
 
-fn coef_base(tri: vec3<u32>, c: u32, l: u32, stride: u32) -> u32 {
-    return ((tri[c / 4u] * frame.info.w + l) * 4u + c % 4u) * stride;
+// 1, 2, 4, 8 where `b` holds: the four slots of a vertex as four bits.
+fn pack_bits(b: vec4<bool>) -> u32 {
+    return dot(select(vec4<u32>(0u), vec4<u32>(1u, 2u, 4u, 8u), b), vec4<u32>(1u));
 }
 
-// Collects the vertices whose slot set holds cand[c]; returns how many (≤ 3).
-fn collect_members(in: VertexOut, c: u32, stride: u32, n_entries: u32) -> u32 {
-    let j = cand[c];
-    var n_m = 0u;
-    for (var c3 = c; c3 < 12u; c3 = c3 + 1u) {
-        if (cand[c3] != j || n_m >= 3u) {
-            continue;
-        }
-        for (var l = 0u; l < n_entries; l = l + 1u) {
-            m_base[n_m * 4u + l] = coef_base(in.tri, c3, l, stride);
-            m_scale[n_m * 4u + l] = in.bary[c3 / 4u] * vis[l];
-        }
-        n_m = n_m + 1u;
-    }
-    return n_m;
+// Per component of `j`: whether `held` holds it.
+fn in_set(held: vec4<u32>, j: vec4<u32>) -> vec4<bool> {
+    return (j == held.xxxx) | (j == held.yyyy) | (j == held.zzzz) | (j == held.wwww);
+}
+
+// Component m of v (v[m] with a computed m, as selects).
+fn component(v: vec4<u32>, m: u32) -> u32 {
+    return dot(select(vec4<u32>(0u), v, vec4<u32>(m) == vec4<u32>(0u, 1u, 2u, 3u)), vec4<u32>(1u));
+}
+
+// The triangle's slot sets, with vertices that weigh nothing at this fragment (barycentric
+// ≤ 0) emptied.
+struct SlotSets {
+    s0: vec4<u32>,
+    s1: vec4<u32>,
+    s2: vec4<u32>,
+}
+
+fn slot_sets(in: VertexOut) -> SlotSets {
+    let none = vec4<u32>(NONE);
+    return SlotSets(
+        select(vertex_slots[in.tri.x], none, in.bary.x <= 0.0),
+        select(vertex_slots[in.tri.y], none, in.bary.y <= 0.0),
+        select(vertex_slots[in.tri.z], none, in.bary.z <= 0.0),
+    );
+}
+
+// Bit 4k + m: vertex k's slot m is the first occurrence of its slot (a vertex's own slots
+// are distinct, so only an earlier vertex can repeat it). Vector compares, no branches:
+// lavapipe runs both sides of every branch, so the shader loops over these bits instead of
+// masking twelve candidates.
+fn first_occurrences(s: SlotSets) -> u32 {
+    let none = vec4<u32>(NONE);
+    let f0 = s.s0 != none;
+    let f1 = (s.s1 != none) & !in_set(s.s0, s.s1);
+    let f2 = (s.s2 != none) & !in_set(s.s0, s.s2) & !in_set(s.s1, s.s2);
+    return pack_bits(f0) | (pack_bits(f1) << 4u) | (pack_bits(f2) << 8u);
 }
 
 // Σ over the triangle's vertices and the `n_entries` lights of the per-vertex layout, each
 // entry weighted by vis[l]: the paper's barycentric blending of per-vertex reconstructions,
-// each distinct slot read once.
+// each distinct slot read once. Per slot j, its members are the vertices holding it (bit k
+// of `members`) at coefficient offset base[k] (light 0; light l adds l·4·stride).
 fn vertex_sum(in: VertexOut, uv: vec2<f32>, n_entries: u32) -> vec3<f32> {
     let g_count = samplings.info.x;
     let stride = 2u + 3u * frame.info.z;
-    var sets: array<vec4<u32>, 3>;
-    sets[0] = vertex_slots[in.tri.x];
-    sets[1] = vertex_slots[in.tri.y];
-    sets[2] = vertex_slots[in.tri.z];
-    for (var c = 0u; c < 12u; c = c + 1u) {
-        cand[c] = select(sets[c / 4u][c % 4u], NONE, in.bary[c / 4u] <= 0.0);
-    }
+    let light_step = 4u * stride;
+    let s = slot_sets(in);
+    var todo = first_occurrences(s);
     var rgb = vec3<f32>(0.0);
-    for (var c = 0u; c < 12u; c = c + 1u) {
-        let j = cand[c];
-        if (j == NONE) {
-            continue;
+    loop {
+        if (todo == 0u) {
+            break;
         }
-        var seen = false;
-        for (var c2 = 0u; c2 < c; c2 = c2 + 1u) {
-            seen = seen || cand[c2] == j;
-        }
-        if (seen) {
-            continue;
-        }
-        let n_m = collect_members(in, c, stride, n_entries);
+        let e = firstTrailingBit(todo);
+        todo = todo & (todo - 1u);
+        let k_first = e / 4u;
+        let j = component(select(select(s.s2, s.s1, k_first == 1u), s.s0, k_first == 0u), e % 4u);
+        let jv = vec4<u32>(j);
+        let hit = vec3<u32>(pack_bits(s.s0 == jv), pack_bits(s.s1 == jv), pack_bits(s.s2 == jv));
+        let members = pack_bits(vec4<bool>(hit != vec3<u32>(0u), false));
+        // slot index m of each member = trailing bit of its hit mask
+        let base = ((in.tri * frame.info.w) * 4u + firstTrailingBit(hit)) * stride;
         var mc = vec3<f32>(0.0);
         var bias = vec3<f32>(0.0);
-        for (var m = 0u; m < n_m; m = m + 1u) {
+        var todo_m = members;
+        loop {
+            if (todo_m == 0u) {
+                break;
+            }
+            let k = firstTrailingBit(todo_m);
+            todo_m = todo_m & (todo_m - 1u);
             for (var l = 0u; l < n_entries; l = l + 1u) {
-                let s = m_scale[m * 4u + l];
-                let base = m_base[m * 4u + l];
-                mc = mc + s * vertex_coef[base].rgb;
-                bias = bias + s * vertex_coef[base + 1u].rgb;
+                let w = in.bary[k] * vis[l];
+                let b = base[k] + l * light_step;
+                mc = mc + w * vertex_coef[b].rgb;
+                bias = bias + w * vertex_coef[b + 1u].rgb;
             }
         }
         var col = mc * textureSampleGrad(mean_tex, tex_sampler, uv, j, duv_dx, duv_dy).rgb + bias;
@@ -412,13 +440,19 @@ fn vertex_sum(in: VertexOut, uv: vec2<f32>, n_entries: u32) -> vec3<f32> {
             var ca = vec4<f32>(0.0);
             var cb = vec4<f32>(0.0);
             var cc = vec4<f32>(0.0);
-            for (var m = 0u; m < n_m; m = m + 1u) {
+            var todo_g = members;
+            loop {
+                if (todo_g == 0u) {
+                    break;
+                }
+                let k = firstTrailingBit(todo_g);
+                todo_g = todo_g & (todo_g - 1u);
                 for (var l = 0u; l < n_entries; l = l + 1u) {
-                    let s = m_scale[m * 4u + l];
-                    let base = m_base[m * 4u + l] + 2u + 3u * g;
-                    ca = ca + s * vertex_coef[base];
-                    cb = cb + s * vertex_coef[base + 1u];
-                    cc = cc + s * vertex_coef[base + 2u];
+                    let w = in.bary[k] * vis[l];
+                    let b = base[k] + l * light_step + 2u + 3u * g;
+                    ca = ca + w * vertex_coef[b];
+                    cb = cb + w * vertex_coef[b + 1u];
+                    cc = cc + w * vertex_coef[b + 2u];
                 }
             }
             let layer = j * 3u * g_count + 3u * g;
