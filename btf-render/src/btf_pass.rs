@@ -43,6 +43,8 @@ pub struct BtfPassKey {
     pub shadows: u32,
     /// The smooth shadow boundary (eq. 6) is applied to shadowing lights.
     pub smooth_boundary: bool,
+    /// Lights of the scene (`≤ MAX_LIGHTS`; fixed for a renderer's life).
+    pub lights: u32,
 }
 
 impl BtfPassKey {
@@ -224,6 +226,7 @@ impl BtfPass {
                 ("COUNT_READS", key.count_reads as u32 as f64),
                 ("SHADOWS", key.shadows as f64),
                 ("SMOOTH_BOUNDARY", key.smooth_boundary as u32 as f64),
+                ("N_LIGHTS", key.lights as f64),
             ];
             let options = wgpu::PipelineCompilationOptions {
                 constants: &constants,

@@ -21,9 +21,14 @@ override LIGHT_FOUR: bool = true;
 override COUNT_READS: bool = false;
 // Which visibility code exists (lavapipe runs both sides of every branch, so code for a
 // shadow technique the scene does not use is compiled out, not skipped): 0 no shadowing
-// light, 1 shadow-volume masks, 2 shadow maps (flat and cube); SMOOTH_BOUNDARY: eq. 6 on.
-override SHADOWS: u32 = 0u;
-override SMOOTH_BOUNDARY: bool = false;
+// light, 1 shadow-volume masks, 2 shadow maps (flat and cube), 3 any (chosen per light at
+// run time). SMOOTH_BOUNDARY false: eq. 6 off; true: as frame.info.y says.
+override SHADOWS: u32 = 3u;
+override SMOOTH_BOUNDARY: bool = true;
+// The scene's lights (frame.info.x, fixed per renderer): constant loops over lights unroll,
+// so per-light data lives in registers, not in dynamically indexed arrays. Entries beyond
+// the active lights have weight 0, so the default (all four) is correct, only slower.
+override N_LIGHTS: u32 = 4u;
 
 struct LightRaw {
     // xyz: position (w = 1, point) or direction towards the light (w = 0, directional)
@@ -43,7 +48,7 @@ struct FrameRaw {
     eye: vec4<f32>,
     // xyz: direction towards the camera (orthographic)
     to_camera: vec4<f32>,
-    // x: lights, y: smooth boundary on (1/0; the shader is specialised by SMOOTH_BOUNDARY), z: per-vertex coefficient stride G,
+    // x: lights, y: smooth boundary on (1/0), z: per-vertex coefficient stride G,
     // w: lights in the per-vertex layout
     info: vec4<u32>,
     // x: alpha in radians
@@ -189,14 +194,14 @@ fn visibility(l: u32, in: VertexOut, back: bool) -> f32 {
         return 1.0;
     }
     var s = 1.0;
-    if (SMOOTH_BOUNDARY) {
+    if (SMOOTH_BOUNDARY && frame.info.y == 1u) {
         var u = in.u_front[l];
         if (back) {
             u = in.u_back[l];
         }
         s = textureSampleLevel(terminator_tex, linear_clamp, vec2<f32>(u, 0.5), 0.0).r;
     }
-    if (SHADOWS == 1u) {
+    if (SHADOWS == 1u || (SHADOWS == 3u && L.color.w < 1.5)) {
         s = s * textureLoad(shadow_masks, vec2<i32>(in.clip.xy), i32(L.shadow.x), 0).r;
     } else if (L.color.w < 2.5) {
         s = s * shadow_map_visibility(L, in.world);
@@ -243,31 +248,31 @@ fn tangent_frame(in: VertexOut, v: vec3<f32>) -> Frame3 {
 
 // ---- per-pixel evaluation ----
 
+// per light: weights τ (eq. 3) and e_l; a light that does not reach the fragment keeps
+// weight 0 (its indices stay valid rows), so the sums need no compaction
 var<private> lw: array<W4, 4>;
 var<private> le: array<vec3<f32>, 4>;
+// lights in lw / le when they are filled compacted (the transmission pass)
 var<private> n_active: u32;
 var<private> reads: u32;
 // uv derivatives, taken at the entry points (uniform control flow) for mip selection
 var<private> duv_dx: vec2<f32>;
 var<private> duv_dy: vec2<f32>;
 
-fn gather_lights(in: VertexOut, f: Frame3) {
-    n_active = 0u;
-    for (var l = 0u; l < frame.info.x; l = l + 1u) {
+// Fills lw / le; returns whether any light reaches the fragment.
+fn gather_lights(in: VertexOut, f: Frame3) -> bool {
+    var lit_any = false;
+    for (var l = 0u; l < N_LIGHTS; l = l + 1u) {
         let ld = light_dir(l, in.world);
         let a = dir_angles(vec3<f32>(dot(ld.xyz, f.t), dot(ld.xyz, f.b), dot(ld.xyz, f.n)));
         let w = light_weights(a, LIGHT_FOUR);
-        if (w.n == 0u) {
-            continue;
-        }
         let e = frame.lights[l].color.rgb * ld.w * visibility(l, in, f.back);
-        if (all(e == vec3<f32>(0.0))) {
-            continue;
-        }
-        lw[n_active] = w;
-        le[n_active] = e;
-        n_active = n_active + 1u;
+        let lit = w.n > 0u && any(e != vec3<f32>(0.0));
+        lw[l] = W4(w.idx, select(vec4<f32>(0.0), w.w, lit), w.n);
+        le[l] = select(vec3<f32>(0.0), e, lit);
+        lit_any = lit_any || lit;
     }
+    return lit_any;
 }
 
 fn combine(acc_a: vec4<f32>, acc_b: vec4<f32>, acc_c: vec4<f32>) -> vec3<f32> {
@@ -278,17 +283,29 @@ fn combine(acc_a: vec4<f32>, acc_b: vec4<f32>, acc_c: vec4<f32>) -> vec3<f32> {
     );
 }
 
+// Rows of the weight buffer for slot j and the four light weights of `w`, plus `at`.
+fn weight_rows(j: u32, w: W4, at: u32) -> vec4<u32> {
+    let n_l = samplings.info.y;
+    return (vec4<u32>(j * n_l) + w.idx) * (samplings.info.x + 1u) + vec4<u32>(at);
+}
+
+// Σ_n τ_n · weights[row_n] over the light weights (one term for nearest light interpolation).
+fn tau_sum(w: W4, rows: vec4<u32>) -> vec4<f32> {
+    var sum = w.w.x * weights[rows.x];
+    if (LIGHT_FOUR) {
+        sum = sum + w.w.y * weights[rows.y] + w.w.z * weights[rows.z] + w.w.w * weights[rows.w];
+    }
+    return sum;
+}
+
 fn slot_pixel(j: u32, uv: vec2<f32>) -> vec3<f32> {
     let g_count = samplings.info.x;
-    let n_l = samplings.info.y;
     var mc = vec3<f32>(0.0);
     var bias = vec3<f32>(0.0);
-    for (var a = 0u; a < n_active; a = a + 1u) {
-        for (var k = 0u; k < lw[a].n; k = k + 1u) {
-            let tau = lw[a].w[k];
-            mc = mc + tau * le[a];
-            bias = bias + tau * weights[(j * n_l + lw[a].idx[k]) * (g_count + 1u) + g_count].x * le[a];
-        }
+    for (var a = 0u; a < N_LIGHTS; a = a + 1u) {
+        let w = lw[a];
+        mc = mc + dot(w.w, vec4<f32>(1.0)) * le[a];
+        bias = bias + tau_sum(w, weight_rows(j, w, g_count)).x * le[a];
     }
     var col = mc * textureSampleGrad(mean_tex, tex_sampler, uv, j, duv_dx, duv_dy).rgb + bias;
     var acc_a = vec4<f32>(0.0);
@@ -298,11 +315,8 @@ fn slot_pixel(j: u32, uv: vec2<f32>) -> vec3<f32> {
         var ca = vec4<f32>(0.0);
         var cb = vec4<f32>(0.0);
         var cc = vec4<f32>(0.0);
-        for (var a = 0u; a < n_active; a = a + 1u) {
-            var gam = vec4<f32>(0.0);
-            for (var k = 0u; k < lw[a].n; k = k + 1u) {
-                gam = gam + lw[a].w[k] * weights[(j * n_l + lw[a].idx[k]) * (g_count + 1u) + g];
-            }
+        for (var a = 0u; a < N_LIGHTS; a = a + 1u) {
+            let gam = tau_sum(lw[a], weight_rows(j, lw[a], g));
             let e = le[a];
             ca = ca + vec4<f32>(gam.x * e, gam.y * e.r);
             cb = cb + vec4<f32>(gam.y * e.gb, gam.z * e.rg);
@@ -332,9 +346,9 @@ fn fs_pixel(in: VertexOut) -> @location(0) vec4<f32> {
     duv_dx = dpdx(uv);
     duv_dy = dpdy(uv);
     reads = 0u;
-    gather_lights(in, f);
+    let lit = gather_lights(in, f);
     var rgb = vec3<f32>(0.0);
-    if (n_active > 0u) {
+    if (lit) {
         let views = view_weights(dir_angles(vec3<f32>(dot(v, f.t), dot(v, f.b), dot(v, f.n))), VIEW_FOUR);
         for (var m = 0u; m < views.n; m = m + 1u) {
             rgb = rgb + views.w[m] * slot_pixel(views.idx[m], uv);
@@ -475,11 +489,11 @@ fn fs_vertex(in: VertexOut) -> @location(0) vec4<f32> {
     let uv = tex_uv(in.uv);
     duv_dx = dpdx(uv);
     duv_dy = dpdy(uv);
-    for (var l = 0u; l < frame.info.x; l = l + 1u) {
+    for (var l = 0u; l < N_LIGHTS; l = l + 1u) {
         vis[l] = visibility(l, in, f.back);
     }
     reads = 0u;
-    let rgb = vertex_sum(in, uv, frame.info.w);
+    let rgb = vertex_sum(in, uv, N_LIGHTS);
     count_reads();
     return vec4<f32>(rgb, 1.0);
 }
@@ -495,16 +509,16 @@ fn fs_pixel_env(in: VertexOut) -> @location(0) vec4<f32> {
     duv_dx = dpdx(uv);
     duv_dy = dpdy(uv);
     reads = 0u;
-    gather_lights(in, f);
+    let lit = gather_lights(in, f);
     var rgb = vec3<f32>(0.0);
-    if (n_active > 0u) {
+    if (lit) {
         let views = view_weights(dir_angles(vec3<f32>(dot(v, f.t), dot(v, f.b), dot(v, f.n))), VIEW_FOUR);
         for (var m = 0u; m < views.n; m = m + 1u) {
             rgb = rgb + views.w[m] * slot_pixel(views.idx[m], uv);
         }
     }
     vis[0] = 1.0;
-    rgb = rgb + vertex_sum(in, uv, frame.info.w);
+    rgb = rgb + vertex_sum(in, uv, 1u);
     count_reads();
     return vec4<f32>(rgb, 1.0);
 }

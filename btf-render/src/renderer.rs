@@ -212,6 +212,7 @@ impl Renderer {
                 (true, Shadows::Map) => 2,
             },
             smooth_boundary: scene.wants_shadow_pass() && fx.smooth_boundary,
+            lights: scene.lights.len() as u32,
         };
         let btf = BtfPass::new(gpu, key)?;
         let sampler = gpu.device.create_sampler(&wgpu::SamplerDescriptor {
