@@ -154,13 +154,6 @@ fn time_setting(gpu: &Gpu, scene: &Scene, reads: f64, repeats: usize) -> Result<
             t[3].push(b.stats.ms_of("read bound"));
         }
     }
-    if std::env::var("BTF_DEV_MIN").is_ok() {
-        let ratios: Vec<f64> = t[0].iter().zip(&t[3]).map(|(a, b)| a / b).collect(); // DEVHACK
-        let r = median(ratios);
-        let mut m = t.map(|v| v.into_iter().fold(f64::INFINITY, f64::min));
-        m[3] = m[0] / r;
-        return Ok(m);
-    }
     Ok(t.map(median))
 }
 
