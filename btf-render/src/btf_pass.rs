@@ -53,6 +53,10 @@ impl BtfPassKey {
         self.evaluation == Evaluation::PerVertex || self.environment
     }
 
+    fn vertex_entry(&self) -> &'static str {
+        if self.uses_vertex_coefficients() { "vs_vertex" } else { "vs_main" }
+    }
+
     fn fragment_entry(&self) -> &'static str {
         match (self.evaluation, self.environment) {
             (Evaluation::PerVertex, _) => "fs_vertex",
@@ -237,7 +241,7 @@ impl BtfPass {
                 layout: Some(&layout),
                 vertex: wgpu::VertexState {
                     module: &module,
-                    entry_point: Some("vs_main"),
+                    entry_point: Some(key.vertex_entry()),
                     compilation_options: options.clone(),
                     buffers: &[Some(corner_buffer_layout())],
                 },

@@ -93,6 +93,10 @@ struct VertexOut {
     @location(5) u_back: vec4<f32>,
     @location(6) bary: vec3<f32>,
     @location(7) @interpolate(flat) tri: vec3<u32>,
+    // the three vertices' view slots (vs_vertex only; zero from vs_main)
+    @location(8) @interpolate(flat) slots0: vec4<u32>,
+    @location(9) @interpolate(flat) slots1: vec4<u32>,
+    @location(10) @interpolate(flat) slots2: vec4<u32>,
 }
 
 fn light_dir(l: u32, world: vec3<f32>) -> vec4<f32> {
@@ -107,6 +111,21 @@ fn light_dir(l: u32, world: vec3<f32>) -> vec4<f32> {
 
 @vertex
 fn vs_main(v: CornerIn) -> VertexOut {
+    return corner_out(v);
+}
+
+// vs_main plus the triangle's slot sets for the per-vertex layout: loaded once per corner
+// instead of once per fragment (flat varyings cost lavapipe next to nothing per fragment).
+@vertex
+fn vs_vertex(v: CornerIn) -> VertexOut {
+    var out = corner_out(v);
+    out.slots0 = vertex_slots[v.tri.x];
+    out.slots1 = vertex_slots[v.tri.y];
+    out.slots2 = vertex_slots[v.tri.z];
+    return out;
+}
+
+fn corner_out(v: CornerIn) -> VertexOut {
     var out: VertexOut;
     out.clip = frame.view_proj * vec4<f32>(v.position, 1.0);
     out.world = v.position;
@@ -388,9 +407,9 @@ struct SlotSets {
 fn slot_sets(in: VertexOut) -> SlotSets {
     let none = vec4<u32>(NONE);
     return SlotSets(
-        select(vertex_slots[in.tri.x], none, in.bary.x <= 0.0),
-        select(vertex_slots[in.tri.y], none, in.bary.y <= 0.0),
-        select(vertex_slots[in.tri.z], none, in.bary.z <= 0.0),
+        select(in.slots0, none, in.bary.x <= 0.0),
+        select(in.slots1, none, in.bary.y <= 0.0),
+        select(in.slots2, none, in.bary.z <= 0.0),
     );
 }
 
