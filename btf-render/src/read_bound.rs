@@ -10,7 +10,7 @@
 //! average, `⌊s⌋` slots everywhere and one more on a hashed fraction `s − ⌊s⌋` of the pixels,
 //! the same total. Its loops hold no branch and no integer division: lavapipe executes both
 //! sides of every branch, so an earlier form (one read per iteration, mean or eigentexture
-//! by an `if`) executed two samples per read and timed 1.5–2× its reads.
+//! by an `if`) executed two samples per read and timed 1.25–2× its reads.
 
 use crate::btf_pass::BtfPass;
 use crate::plain_texture::{BaselinePass, pipeline};

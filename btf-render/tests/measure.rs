@@ -89,7 +89,9 @@ fn frame_time_ratios() {
 }
 
 /// The cost sweep of `btf render-sweep` on the sphere-over-plane mesh at 256², c = 4…32
-/// (`BTF_SWEEP_SIZE` overrides the size): prints the rows, the linear fits and the checks.
+/// (`BTF_SWEEP_SIZE` overrides the size, `BTF_SWEEP_COMPONENTS=4,32` the component counts,
+/// `BTF_SWEEP_REPEATS` the timed frames per cell): prints the rows, the linear fits and the
+/// checks.
 #[test]
 #[ignore = "a measurement on lavapipe: run for BENCHMARKS.md"]
 fn cost_sweep_against_baselines() {
