@@ -12,8 +12,12 @@ use crate::Gpu;
 use crate::Result;
 use crate::scene::Evaluation;
 
-/// WGSL of the pass (with the shared interpolation functions).
-pub const SOURCE: &str = concat!(include_str!("interp.wgsl"), include_str!("btf_pass.wgsl"));
+/// WGSL of the pass (with the shared interpolation functions and the per-vertex evaluation).
+pub const SOURCE: &str = concat!(
+    include_str!("interp.wgsl"),
+    include_str!("btf_pass.wgsl"),
+    include_str!("btf_vertex.wgsl")
+);
 
 /// Format of the linear HDR colour target: `f32` without MSAA, `f16` (multisample-capable
 /// everywhere) with it.
