@@ -12,8 +12,12 @@ use crate::Gpu;
 use crate::Result;
 use crate::scene::Evaluation;
 
-/// WGSL of the pass (with the shared interpolation functions).
-pub const SOURCE: &str = concat!(include_str!("interp.wgsl"), include_str!("btf_pass.wgsl"));
+/// WGSL of the pass (with the shared interpolation functions and the per-vertex evaluation).
+pub const SOURCE: &str = concat!(
+    include_str!("interp.wgsl"),
+    include_str!("btf_pass.wgsl"),
+    include_str!("btf_vertex.wgsl")
+);
 
 /// Format of the linear HDR colour target: `f32` without MSAA, `f16` (multisample-capable
 /// everywhere) with it.
@@ -38,12 +42,23 @@ pub struct BtfPassKey {
     pub count_reads: bool,
     /// The scene has an environment light (per-vertex coefficients even in per-pixel mode).
     pub environment: bool,
+    /// Shadow technique whose visibility code the shader contains: 0 none (no shadowing
+    /// light), 1 shadow-volume masks, 2 shadow maps (flat and cube).
+    pub shadows: u32,
+    /// The smooth shadow boundary (eq. 6) is applied to shadowing lights.
+    pub smooth_boundary: bool,
+    /// Lights of the scene (`≤ MAX_LIGHTS`; fixed for a renderer's life).
+    pub lights: u32,
 }
 
 impl BtfPassKey {
     /// Whether the pass reads per-vertex coefficients (group 2).
     pub fn uses_vertex_coefficients(&self) -> bool {
         self.evaluation == Evaluation::PerVertex || self.environment
+    }
+
+    fn vertex_entry(&self) -> &'static str {
+        if self.uses_vertex_coefficients() { "vs_vertex" } else { "vs_main" }
     }
 
     fn fragment_entry(&self) -> &'static str {
@@ -217,6 +232,9 @@ impl BtfPass {
                 ("VIEW_FOUR", key.view_four as u32 as f64),
                 ("LIGHT_FOUR", key.light_four as u32 as f64),
                 ("COUNT_READS", key.count_reads as u32 as f64),
+                ("SHADOWS", key.shadows as f64),
+                ("SMOOTH_BOUNDARY", key.smooth_boundary as u32 as f64),
+                ("N_LIGHTS", key.lights as f64),
             ];
             let options = wgpu::PipelineCompilationOptions {
                 constants: &constants,
@@ -227,7 +245,7 @@ impl BtfPass {
                 layout: Some(&layout),
                 vertex: wgpu::VertexState {
                     module: &module,
-                    entry_point: Some("vs_main"),
+                    entry_point: Some(key.vertex_entry()),
                     compilation_options: options.clone(),
                     buffers: &[Some(corner_buffer_layout())],
                 },

@@ -6,11 +6,11 @@
 //   γ_kj = Σ_l e_l Σ_n τ_ln p'_{i_n,k,j}
 // with e_l = RGB irradiance (directional) or intensity / d² (point) times visibility.
 // Components come in groups of four packed in three RGBA layers (see material.rs).
-// fs_pixel evaluates directions, slots and weights per fragment; fs_vertex blends the three
-// vertices' per-vertex reconstructions with barycentric weights (the paper's three-pass
-// blending in one pass), merging identical slots so each slot is read once. An environment
-// light (eq. 11: e·γ* folded per vertex on the CPU) is always in the per-vertex layout;
-// fs_pixel_env adds it to the per-pixel lights.
+// fs_pixel evaluates directions, slots and weights per fragment; fs_vertex (btf_vertex.wgsl,
+// appended) blends the three vertices' per-vertex reconstructions with barycentric weights
+// (the paper's three-pass blending in one pass), merging identical slots so each slot is
+// read once. An environment light (eq. 11: e·γ* folded per vertex on the CPU) is always in
+// the per-vertex layout; fs_pixel_env (btf_vertex.wgsl) adds it to the per-pixel lights.
 
 const MAX_LIGHTS: u32 = 4u;
 const NONE: u32 = 0xffffffffu;
@@ -19,6 +19,16 @@ const PI: f32 = 3.14159265358979;
 override VIEW_FOUR: bool = true;
 override LIGHT_FOUR: bool = true;
 override COUNT_READS: bool = false;
+// Which visibility code exists (lavapipe runs both sides of every branch, so code for a
+// shadow technique the scene does not use is compiled out, not skipped): 0 no shadowing
+// light, 1 shadow-volume masks, 2 shadow maps (flat and cube), 3 any (chosen per light at
+// run time). SMOOTH_BOUNDARY false: eq. 6 off; true: as frame.info.y says.
+override SHADOWS: u32 = 3u;
+override SMOOTH_BOUNDARY: bool = true;
+// The scene's lights (frame.info.x, fixed per renderer): constant loops over lights unroll,
+// so per-light data lives in registers, not in dynamically indexed arrays. Entries beyond
+// the active lights have weight 0, so the default (all four) is correct, only slower.
+override N_LIGHTS: u32 = 4u;
 
 struct LightRaw {
     // xyz: position (w = 1, point) or direction towards the light (w = 0, directional)
@@ -60,10 +70,6 @@ struct FrameRaw {
 @group(1) @binding(3) var tex_sampler: sampler;
 @group(1) @binding(4) var<storage, read> weights: array<vec4<f32>>;
 
-// per-vertex mode: per (vertex, light, slot m): mean coefficient, bias, 3G coefficient vec4
-@group(2) @binding(0) var<storage, read> vertex_coef: array<vec4<f32>>;
-@group(2) @binding(1) var<storage, read> vertex_slots: array<vec4<u32>>;
-
 struct CornerIn {
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
@@ -83,6 +89,10 @@ struct VertexOut {
     @location(5) u_back: vec4<f32>,
     @location(6) bary: vec3<f32>,
     @location(7) @interpolate(flat) tri: vec3<u32>,
+    // the three vertices' view slots (vs_vertex only; zero from vs_main)
+    @location(8) @interpolate(flat) slots0: vec4<u32>,
+    @location(9) @interpolate(flat) slots1: vec4<u32>,
+    @location(10) @interpolate(flat) slots2: vec4<u32>,
 }
 
 fn light_dir(l: u32, world: vec3<f32>) -> vec4<f32> {
@@ -97,6 +107,10 @@ fn light_dir(l: u32, world: vec3<f32>) -> vec4<f32> {
 
 @vertex
 fn vs_main(v: CornerIn) -> VertexOut {
+    return corner_out(v);
+}
+
+fn corner_out(v: CornerIn) -> VertexOut {
     var out: VertexOut;
     out.clip = frame.view_proj * vec4<f32>(v.position, 1.0);
     out.world = v.position;
@@ -176,19 +190,22 @@ fn cube_map_visibility(L: LightRaw, world: vec3<f32>) -> f32 {
 
 // Visibility of light l at a fragment: smooth boundary (eq. 6) times volume mask or map.
 fn visibility(l: u32, in: VertexOut, back: bool) -> f32 {
+    if (SHADOWS == 0u) {
+        return 1.0;
+    }
     let L = frame.lights[l];
     if (L.color.w < 0.5) {
         return 1.0;
     }
     var s = 1.0;
-    if (frame.info.y == 1u) {
+    if (SMOOTH_BOUNDARY && frame.info.y == 1u) {
         var u = in.u_front[l];
         if (back) {
             u = in.u_back[l];
         }
         s = textureSampleLevel(terminator_tex, linear_clamp, vec2<f32>(u, 0.5), 0.0).r;
     }
-    if (L.color.w < 1.5) {
+    if (SHADOWS == 1u || (SHADOWS == 3u && L.color.w < 1.5)) {
         s = s * textureLoad(shadow_masks, vec2<i32>(in.clip.xy), i32(L.shadow.x), 0).r;
     } else if (L.color.w < 2.5) {
         s = s * shadow_map_visibility(L, in.world);
@@ -235,31 +252,31 @@ fn tangent_frame(in: VertexOut, v: vec3<f32>) -> Frame3 {
 
 // ---- per-pixel evaluation ----
 
+// per light: weights τ (eq. 3) and e_l; a light that does not reach the fragment keeps
+// weight 0 (its indices stay valid rows), so the sums need no compaction
 var<private> lw: array<W4, 4>;
 var<private> le: array<vec3<f32>, 4>;
+// lights in lw / le when they are filled compacted (the transmission pass)
 var<private> n_active: u32;
 var<private> reads: u32;
 // uv derivatives, taken at the entry points (uniform control flow) for mip selection
 var<private> duv_dx: vec2<f32>;
 var<private> duv_dy: vec2<f32>;
 
-fn gather_lights(in: VertexOut, f: Frame3) {
-    n_active = 0u;
-    for (var l = 0u; l < frame.info.x; l = l + 1u) {
+// Fills lw / le; returns whether any light reaches the fragment.
+fn gather_lights(in: VertexOut, f: Frame3) -> bool {
+    var lit_any = false;
+    for (var l = 0u; l < N_LIGHTS; l = l + 1u) {
         let ld = light_dir(l, in.world);
         let a = dir_angles(vec3<f32>(dot(ld.xyz, f.t), dot(ld.xyz, f.b), dot(ld.xyz, f.n)));
         let w = light_weights(a, LIGHT_FOUR);
-        if (w.n == 0u) {
-            continue;
-        }
         let e = frame.lights[l].color.rgb * ld.w * visibility(l, in, f.back);
-        if (all(e == vec3<f32>(0.0))) {
-            continue;
-        }
-        lw[n_active] = w;
-        le[n_active] = e;
-        n_active = n_active + 1u;
+        let lit = w.n > 0u && any(e != vec3<f32>(0.0));
+        lw[l] = W4(w.idx, select(vec4<f32>(0.0), w.w, lit), w.n);
+        le[l] = select(vec3<f32>(0.0), e, lit);
+        lit_any = lit_any || lit;
     }
+    return lit_any;
 }
 
 fn combine(acc_a: vec4<f32>, acc_b: vec4<f32>, acc_c: vec4<f32>) -> vec3<f32> {
@@ -270,17 +287,29 @@ fn combine(acc_a: vec4<f32>, acc_b: vec4<f32>, acc_c: vec4<f32>) -> vec3<f32> {
     );
 }
 
+// Rows of the weight buffer for slot j and the four light weights of `w`, plus `at`.
+fn weight_rows(j: u32, w: W4, at: u32) -> vec4<u32> {
+    let n_l = samplings.info.y;
+    return (vec4<u32>(j * n_l) + w.idx) * (samplings.info.x + 1u) + vec4<u32>(at);
+}
+
+// Σ_n τ_n · weights[row_n] over the light weights (one term for nearest light interpolation).
+fn tau_sum(w: W4, rows: vec4<u32>) -> vec4<f32> {
+    var sum = w.w.x * weights[rows.x];
+    if (LIGHT_FOUR) {
+        sum = sum + w.w.y * weights[rows.y] + w.w.z * weights[rows.z] + w.w.w * weights[rows.w];
+    }
+    return sum;
+}
+
 fn slot_pixel(j: u32, uv: vec2<f32>) -> vec3<f32> {
     let g_count = samplings.info.x;
-    let n_l = samplings.info.y;
     var mc = vec3<f32>(0.0);
     var bias = vec3<f32>(0.0);
-    for (var a = 0u; a < n_active; a = a + 1u) {
-        for (var k = 0u; k < lw[a].n; k = k + 1u) {
-            let tau = lw[a].w[k];
-            mc = mc + tau * le[a];
-            bias = bias + tau * weights[(j * n_l + lw[a].idx[k]) * (g_count + 1u) + g_count].x * le[a];
-        }
+    for (var a = 0u; a < N_LIGHTS; a = a + 1u) {
+        let w = lw[a];
+        mc = mc + dot(w.w, vec4<f32>(1.0)) * le[a];
+        bias = bias + tau_sum(w, weight_rows(j, w, g_count)).x * le[a];
     }
     var col = mc * textureSampleGrad(mean_tex, tex_sampler, uv, j, duv_dx, duv_dy).rgb + bias;
     var acc_a = vec4<f32>(0.0);
@@ -290,11 +319,8 @@ fn slot_pixel(j: u32, uv: vec2<f32>) -> vec3<f32> {
         var ca = vec4<f32>(0.0);
         var cb = vec4<f32>(0.0);
         var cc = vec4<f32>(0.0);
-        for (var a = 0u; a < n_active; a = a + 1u) {
-            var gam = vec4<f32>(0.0);
-            for (var k = 0u; k < lw[a].n; k = k + 1u) {
-                gam = gam + lw[a].w[k] * weights[(j * n_l + lw[a].idx[k]) * (g_count + 1u) + g];
-            }
+        for (var a = 0u; a < N_LIGHTS; a = a + 1u) {
+            let gam = tau_sum(lw[a], weight_rows(j, lw[a], g));
             let e = le[a];
             ca = ca + vec4<f32>(gam.x * e, gam.y * e.r);
             cb = cb + vec4<f32>(gam.y * e.gb, gam.z * e.rg);
@@ -324,153 +350,14 @@ fn fs_pixel(in: VertexOut) -> @location(0) vec4<f32> {
     duv_dx = dpdx(uv);
     duv_dy = dpdy(uv);
     reads = 0u;
-    gather_lights(in, f);
+    let lit = gather_lights(in, f);
     var rgb = vec3<f32>(0.0);
-    if (n_active > 0u) {
+    if (lit) {
         let views = view_weights(dir_angles(vec3<f32>(dot(v, f.t), dot(v, f.b), dot(v, f.n))), VIEW_FOUR);
         for (var m = 0u; m < views.n; m = m + 1u) {
             rgb = rgb + views.w[m] * slot_pixel(views.idx[m], uv);
         }
     }
-    count_reads();
-    return vec4<f32>(rgb, 1.0);
-}
-
-// ---- per-vertex evaluation (the paper's blending) ----
-
-var<private> vis: array<f32, 4>;
-// the 12 candidate slots of the triangle's vertices (NONE where the vertex weighs 0)
-var<private> cand: array<u32, 12>;
-// per member (vertex holding the current slot, ≤ 3) and entry, index m·4 + l:
-// coefficient offset and barycentric × visibility
-var<private> m_base: array<u32, 12>;
-var<private> m_scale: array<f32, 12>;
-
-fn coef_base(tri: vec3<u32>, c: u32, l: u32, stride: u32) -> u32 {
-    return ((tri[c / 4u] * frame.info.w + l) * 4u + c % 4u) * stride;
-}
-
-// Collects the vertices whose slot set holds cand[c]; returns how many (≤ 3).
-fn collect_members(in: VertexOut, c: u32, stride: u32, n_entries: u32) -> u32 {
-    let j = cand[c];
-    var n_m = 0u;
-    for (var c3 = c; c3 < 12u; c3 = c3 + 1u) {
-        if (cand[c3] != j || n_m >= 3u) {
-            continue;
-        }
-        for (var l = 0u; l < n_entries; l = l + 1u) {
-            m_base[n_m * 4u + l] = coef_base(in.tri, c3, l, stride);
-            m_scale[n_m * 4u + l] = in.bary[c3 / 4u] * vis[l];
-        }
-        n_m = n_m + 1u;
-    }
-    return n_m;
-}
-
-// Σ over the triangle's vertices and the `n_entries` lights of the per-vertex layout, each
-// entry weighted by vis[l]: the paper's barycentric blending of per-vertex reconstructions,
-// each distinct slot read once.
-fn vertex_sum(in: VertexOut, uv: vec2<f32>, n_entries: u32) -> vec3<f32> {
-    let g_count = samplings.info.x;
-    let stride = 2u + 3u * frame.info.z;
-    var sets: array<vec4<u32>, 3>;
-    sets[0] = vertex_slots[in.tri.x];
-    sets[1] = vertex_slots[in.tri.y];
-    sets[2] = vertex_slots[in.tri.z];
-    for (var c = 0u; c < 12u; c = c + 1u) {
-        cand[c] = select(sets[c / 4u][c % 4u], NONE, in.bary[c / 4u] <= 0.0);
-    }
-    var rgb = vec3<f32>(0.0);
-    for (var c = 0u; c < 12u; c = c + 1u) {
-        let j = cand[c];
-        if (j == NONE) {
-            continue;
-        }
-        var seen = false;
-        for (var c2 = 0u; c2 < c; c2 = c2 + 1u) {
-            seen = seen || cand[c2] == j;
-        }
-        if (seen) {
-            continue;
-        }
-        let n_m = collect_members(in, c, stride, n_entries);
-        var mc = vec3<f32>(0.0);
-        var bias = vec3<f32>(0.0);
-        for (var m = 0u; m < n_m; m = m + 1u) {
-            for (var l = 0u; l < n_entries; l = l + 1u) {
-                let s = m_scale[m * 4u + l];
-                let base = m_base[m * 4u + l];
-                mc = mc + s * vertex_coef[base].rgb;
-                bias = bias + s * vertex_coef[base + 1u].rgb;
-            }
-        }
-        var col = mc * textureSampleGrad(mean_tex, tex_sampler, uv, j, duv_dx, duv_dy).rgb + bias;
-        var acc_a = vec4<f32>(0.0);
-        var acc_b = vec4<f32>(0.0);
-        var acc_c = vec4<f32>(0.0);
-        for (var g = 0u; g < g_count; g = g + 1u) {
-            var ca = vec4<f32>(0.0);
-            var cb = vec4<f32>(0.0);
-            var cc = vec4<f32>(0.0);
-            for (var m = 0u; m < n_m; m = m + 1u) {
-                for (var l = 0u; l < n_entries; l = l + 1u) {
-                    let s = m_scale[m * 4u + l];
-                    let base = m_base[m * 4u + l] + 2u + 3u * g;
-                    ca = ca + s * vertex_coef[base];
-                    cb = cb + s * vertex_coef[base + 1u];
-                    cc = cc + s * vertex_coef[base + 2u];
-                }
-            }
-            let layer = j * 3u * g_count + 3u * g;
-            acc_a = acc_a + ca * textureSampleGrad(eigen_tex, tex_sampler, uv, layer, duv_dx, duv_dy);
-            acc_b = acc_b + cb * textureSampleGrad(eigen_tex, tex_sampler, uv, layer + 1u, duv_dx, duv_dy);
-            acc_c = acc_c + cc * textureSampleGrad(eigen_tex, tex_sampler, uv, layer + 2u, duv_dx, duv_dy);
-        }
-        reads = reads + 1u + 3u * g_count;
-        rgb = rgb + col + combine(acc_a, acc_b, acc_c);
-    }
-    return rgb;
-}
-
-// Per-vertex mode: every light (an environment light included) is in the per-vertex
-// layout, frame.info.w = frame.info.x entries.
-@fragment
-fn fs_vertex(in: VertexOut) -> @location(0) vec4<f32> {
-    let v = to_camera(in.world);
-    let f = tangent_frame(in, v);
-    let uv = tex_uv(in.uv);
-    duv_dx = dpdx(uv);
-    duv_dy = dpdy(uv);
-    for (var l = 0u; l < frame.info.x; l = l + 1u) {
-        vis[l] = visibility(l, in, f.back);
-    }
-    reads = 0u;
-    let rgb = vertex_sum(in, uv, frame.info.w);
-    count_reads();
-    return vec4<f32>(rgb, 1.0);
-}
-
-// Per-pixel mode with an environment light: point/directional lights per pixel (the
-// environment's frame light has zero power), plus the environment's per-vertex
-// coefficients, the only entry of the per-vertex layout (frame.info.w = 1).
-@fragment
-fn fs_pixel_env(in: VertexOut) -> @location(0) vec4<f32> {
-    let v = to_camera(in.world);
-    let f = tangent_frame(in, v);
-    let uv = tex_uv(in.uv);
-    duv_dx = dpdx(uv);
-    duv_dy = dpdy(uv);
-    reads = 0u;
-    gather_lights(in, f);
-    var rgb = vec3<f32>(0.0);
-    if (n_active > 0u) {
-        let views = view_weights(dir_angles(vec3<f32>(dot(v, f.t), dot(v, f.b), dot(v, f.n))), VIEW_FOUR);
-        for (var m = 0u; m < views.n; m = m + 1u) {
-            rgb = rgb + views.w[m] * slot_pixel(views.idx[m], uv);
-        }
-    }
-    vis[0] = 1.0;
-    rgb = rgb + vertex_sum(in, uv, frame.info.w);
     count_reads();
     return vec4<f32>(rgb, 1.0);
 }

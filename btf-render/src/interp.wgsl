@@ -86,15 +86,22 @@ fn ring_neighbours(which: u32, r: u32, phi: f32) -> Pair {
     let u = wrap_phi(phi - ring.z) / (360.0 / ring.y);
     let k = floor(u);
     let frac = clamp(u - k, 0.0, 1.0);
-    let ki = u32(k) % count;
-    return Pair(start + ki, start + (ki + 1u) % count, frac);
+    // u lies in [0, count] (count only by rounding), so `% count` is one conditional
+    // subtraction (integer division is scalarised and slow on lavapipe)
+    let ki = wrap_index(u32(k), count);
+    return Pair(start + ki, start + wrap_index(ki + 1u, count), frac);
+}
+
+// i % count for i ≤ count.
+fn wrap_index(i: u32, count: u32) -> u32 {
+    return select(i, i - count, i >= count);
 }
 
 fn nearest_on_ring(which: u32, r: u32, phi: f32) -> u32 {
     let ring = ring_of(which, r);
     let count = u32(ring.y);
     let u = wrap_phi(phi - ring.z) / (360.0 / ring.y);
-    return u32(ring.w) + u32(floor(u + 0.5)) % count;
+    return u32(ring.w) + wrap_index(u32(floor(u + 0.5)), count);
 }
 
 fn w4_push(p: ptr<function, W4>, i: u32, w: f32) {

@@ -2,13 +2,16 @@
 // reads per pixel as the BTF pass for the same settings — filtered reads with explicit
 // gradients from the same mean and eigentexture arrays at the same uv, one mean read then
 // 3G eigentexture layers per slot — and only sums them, so its time is what the reads alone
-// cost. The count is the BTF pass's measured mean: `floor` reads everywhere and one more
-// on a hashed fraction `frac` of the pixels.
+// cost. The BTF pass reads whole slots; the bound reads `floor` slots everywhere and one
+// more on a hashed fraction `frac` of the pixels, the BTF pass's measured mean. No branch
+// picks the texture (lavapipe runs both sides of every branch, which would execute two
+// samples per read) and no integer division per read.
 
 struct ReadBound {
-    // x: reads (floor), y: reads per slot (1 + 3G), z: eigentexture layers, w: mean layers
+    // x: whole slots (floor), y: reads per slot (1 + 3G), z: eigentexture layers, w: mean
+    // layers
     counts: vec4<u32>,
-    // x: fraction of pixels with one read more
+    // x: fraction of pixels with one slot more
     frac: vec4<f32>,
 }
 
@@ -26,19 +29,16 @@ fn fs_read_bound(in: BaseOut) -> @location(0) vec4<f32> {
     let uv = base_uv(in.uv);
     let ddx = dpdx(uv);
     let ddy = dpdy(uv);
-    var n = rb.counts.x;
-    if (pixel_hash(vec2<u32>(in.clip.xy)) < rb.frac.x) {
-        n = n + 1u;
-    }
-    let per_slot = max(rb.counts.y, 1u);
+    let extra = select(0u, 1u, pixel_hash(vec2<u32>(in.clip.xy)) < rb.frac.x);
+    let slots = rb.counts.x + extra;
+    let eigen_per_slot = max(rb.counts.y, 1u) - 1u;
     var acc = vec4<f32>(0.0);
-    for (var i = 0u; i < n; i = i + 1u) {
-        let slot = i / per_slot;
-        let r = i % per_slot;
-        if (r == 0u) {
-            acc = acc + textureSampleGrad(mean_tex, tex_sampler, uv, slot % rb.counts.w, ddx, ddy);
-        } else {
-            let layer = (slot * (per_slot - 1u) + r - 1u) % rb.counts.z;
+    for (var s = 0u; s < slots; s = s + 1u) {
+        let mean_layer = min(s, rb.counts.w - 1u);
+        acc = acc + textureSampleGrad(mean_tex, tex_sampler, uv, mean_layer, ddx, ddy);
+        let first = s * eigen_per_slot;
+        for (var r = 0u; r < eigen_per_slot; r = r + 1u) {
+            let layer = min(first + r, rb.counts.z - 1u);
             acc = acc + textureSampleGrad(eigen_tex, tex_sampler, uv, layer, ddx, ddy);
         }
     }

@@ -213,6 +213,13 @@ impl Renderer {
             msaa: fx.msaa,
             count_reads: options.count_reads,
             environment: scene.environment().is_some(),
+            shadows: match (scene.wants_shadow_pass(), fx.shadows) {
+                (false, _) | (_, Shadows::None) => 0,
+                (true, Shadows::Volume) => 1,
+                (true, Shadows::Map) => 2,
+            },
+            smooth_boundary: scene.wants_shadow_pass() && fx.smooth_boundary,
+            lights: scene.lights.len() as u32,
         };
         let btf = BtfPass::new(gpu, key)?;
         let sampler = gpu.device.create_sampler(&wgpu::SamplerDescriptor {

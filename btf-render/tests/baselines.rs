@@ -1,7 +1,8 @@
 //! The cost baselines and the sweep built on them: plain texture mapping reads slot 0's
 //! mean; the read bound makes exactly the reads it is asked for (one mean then the packed
-//! eigentexture layers of each slot, summed, a hashed share of pixels one read more); the
-//! sweep's rows carry the read counts the packing predicts and errors that fall with `c`.
+//! eigentexture layers of each slot, summed, in whole slots: a hashed share of pixels one
+//! slot more); the sweep's rows carry the read counts the packing predicts and errors that
+//! fall with `c`.
 
 mod common;
 
@@ -81,20 +82,22 @@ fn baselines_read_what_they_claim() {
     let full = render(&scene, &gpu, Baseline::ReadBound { reads_per_pixel: 13.0 });
     let e13 = assert_close("read-bound-13", SIZE, SIZE, &bound13, &full.rgb, 1e-3);
     assert!(plain.stats.ran("plain texture") && full.stats.ran("read bound"));
-    // 1.5 reads: the mean everywhere, a first eigentexture layer on about half the pixels.
-    let half = render(&scene, &gpu, Baseline::ReadBound { reads_per_pixel: 1.5 });
-    let one = render(&scene, &gpu, Baseline::ReadBound { reads_per_pixel: 1.0 });
-    let e1 = rel_rmse(&mean, &one.rgb);
+    // 19.5 reads = 1.5 slots of 13: slot 0 everywhere, a second slot on about half the pixels.
+    let half = render(&scene, &gpu, Baseline::ReadBound { reads_per_pixel: 19.5 });
     let differ = (0..texels)
-        .filter(|&t| (0..3).any(|k| (half.rgb[t * 3 + k] - one.rgb[t * 3 + k]).abs() > 1e-4))
+        .filter(|&t| (0..3).any(|k| (half.rgb[t * 3 + k] - full.rgb[t * 3 + k]).abs() > 1e-4))
         .count() as f64
         / texels as f64;
+    // below one slot: no reads on most pixels (black), the whole slot on the rest
+    let tenth = render(&scene, &gpu, Baseline::ReadBound { reads_per_pixel: 1.3 });
+    let black = (0..texels).filter(|&t| (0..3).all(|k| tenth.rgb[t * 3 + k] == 0.0)).count() as f64
+        / texels as f64;
     eprintln!(
-        "plain vs slot-0 mean {e:.1e}; 13 reads vs CPU sum {e13:.1e}; 1 read vs mean {e1:.1e}; share of pixels with a second read at 1.5: {differ:.3}"
+        "plain vs slot-0 mean {e:.1e}; 13 reads vs CPU sum {e13:.1e}; share of pixels with a second slot at 19.5 reads: {differ:.3}; without reads at 1.3: {black:.3}"
     );
-    assert!(e1 < 1e-3);
-    // 1024 pixels, binomial(0.5): ±5 standard deviations.
-    assert!((differ - 0.5).abs() < 0.08, "share with an extra read {differ}");
+    // 1024 pixels, binomial(0.9): ±5 standard deviations.
+    assert!((black - 0.9).abs() < 0.05, "share without reads {black}");
+    assert!((differ - 0.5).abs() < 0.08, "share with a second slot {differ}");
 }
 
 #[test]

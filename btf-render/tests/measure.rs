@@ -89,7 +89,9 @@ fn frame_time_ratios() {
 }
 
 /// The cost sweep of `btf render-sweep` on the sphere-over-plane mesh at 256², c = 4…32
-/// (`BTF_SWEEP_SIZE` overrides the size): prints the rows, the linear fits and the checks.
+/// (`BTF_SWEEP_SIZE` overrides the size, `BTF_SWEEP_COMPONENTS=4,32` the component counts,
+/// `BTF_SWEEP_REPEATS` the timed frames per cell): prints the rows, the linear fits and the
+/// checks.
 #[test]
 #[ignore = "a measurement on lavapipe: run for BENCHMARKS.md"]
 fn cost_sweep_against_baselines() {
@@ -125,7 +127,12 @@ fn cost_sweep_against_baselines() {
         "#
     );
     let scene = Scene::load(&write(dir.path(), "scene.toml", &text)).unwrap();
-    let config = SweepConfig { components: vec![4, 8, 16, 32], repeats: 5 };
+    let components = std::env::var("BTF_SWEEP_COMPONENTS")
+        .ok()
+        .map(|s| s.split(',').map(|c| c.trim().parse().unwrap()).collect())
+        .unwrap_or_else(|| vec![4, 8, 16, 32]);
+    let repeats = std::env::var("BTF_SWEEP_REPEATS").ok().and_then(|s| s.parse().ok()).unwrap_or(5);
+    let config = SweepConfig { components, repeats };
     let r = run(&gpu, &scene, &config, &mut |d, n| eprint!("\r{d}/{n}")).unwrap();
     eprintln!();
     eprintln!(

@@ -1,0 +1,184 @@
+// Per-vertex evaluation, appended to interp.wgsl + btf_pass.wgsl: the paper's blending of
+// the three vertices' per-vertex reconstructions (Sattler et al. 2003, §4.2, eq. 2–5 with the
+// coefficients folded per vertex on the CPU, per_vertex.rs), and the environment light's
+// per-vertex coefficients (eq. 11) added to per-pixel lights.
+
+// per-vertex mode: per (vertex, light, slot m): mean coefficient, bias, 3G coefficient vec4
+@group(2) @binding(0) var<storage, read> vertex_coef: array<vec4<f32>>;
+@group(2) @binding(1) var<storage, read> vertex_slots: array<vec4<u32>>;
+
+// vs_main plus the triangle's slot sets for the per-vertex layout: loaded once per corner
+// instead of once per fragment (flat varyings cost lavapipe next to nothing per fragment).
+@vertex
+fn vs_vertex(v: CornerIn) -> VertexOut {
+    var out = corner_out(v);
+    out.slots0 = vertex_slots[v.tri.x];
+    out.slots1 = vertex_slots[v.tri.y];
+    out.slots2 = vertex_slots[v.tri.z];
+    return out;
+}
+
+// ---- per-vertex evaluation (the paper's blending) ----
+
+var<private> vis: vec4<f32>;
+
+// 1, 2, 4, 8 where `b` holds: the four slots of a vertex as four bits.
+fn pack_bits(b: vec4<bool>) -> u32 {
+    return dot(select(vec4<u32>(0u), vec4<u32>(1u, 2u, 4u, 8u), b), vec4<u32>(1u));
+}
+
+// Per component of `j`: whether `held` holds it.
+fn in_set(held: vec4<u32>, j: vec4<u32>) -> vec4<bool> {
+    return (j == held.xxxx) | (j == held.yyyy) | (j == held.zzzz) | (j == held.wwww);
+}
+
+// Component m of v (v[m] with a computed m, as selects).
+fn component(v: vec4<u32>, m: u32) -> u32 {
+    return dot(select(vec4<u32>(0u), v, vec4<u32>(m) == vec4<u32>(0u, 1u, 2u, 3u)), vec4<u32>(1u));
+}
+
+// The triangle's slot sets, with vertices that weigh nothing at this fragment (barycentric
+// ≤ 0) emptied.
+struct SlotSets {
+    s0: vec4<u32>,
+    s1: vec4<u32>,
+    s2: vec4<u32>,
+}
+
+fn slot_sets(in: VertexOut) -> SlotSets {
+    let none = vec4<u32>(NONE);
+    return SlotSets(
+        select(in.slots0, none, in.bary.x <= 0.0),
+        select(in.slots1, none, in.bary.y <= 0.0),
+        select(in.slots2, none, in.bary.z <= 0.0),
+    );
+}
+
+// Bit 4k + m: vertex k's slot m is the first occurrence of its slot (a vertex's own slots
+// are distinct, so only an earlier vertex can repeat it). Vector compares, no branches:
+// lavapipe runs both sides of every branch, so the shader loops over these bits instead of
+// masking twelve candidates.
+fn first_occurrences(s: SlotSets) -> u32 {
+    let none = vec4<u32>(NONE);
+    let f0 = s.s0 != none;
+    let f1 = (s.s1 != none) & !in_set(s.s0, s.s1);
+    let f2 = (s.s2 != none) & !in_set(s.s0, s.s2) & !in_set(s.s1, s.s2);
+    return pack_bits(f0) | (pack_bits(f1) << 4u) | (pack_bits(f2) << 8u);
+}
+
+// Σ over the triangle's vertices and the `n_entries` lights of the per-vertex layout, each
+// entry weighted by vis[l]: the paper's barycentric blending of per-vertex reconstructions,
+// each distinct slot read once. Per slot j, its members are the vertices holding it (bit k
+// of `members`) at coefficient offset base[k] (light 0; light l adds l·4·stride).
+fn vertex_sum(in: VertexOut, uv: vec2<f32>, n_entries: u32) -> vec3<f32> {
+    let g_count = samplings.info.x;
+    let stride = 2u + 3u * frame.info.z;
+    let light_step = 4u * stride;
+    let s = slot_sets(in);
+    var todo = first_occurrences(s);
+    var rgb = vec3<f32>(0.0);
+    loop {
+        if (todo == 0u) {
+            break;
+        }
+        let e = firstTrailingBit(todo);
+        todo = todo & (todo - 1u);
+        let k_first = e / 4u;
+        let j = component(select(select(s.s2, s.s1, k_first == 1u), s.s0, k_first == 0u), e % 4u);
+        let jv = vec4<u32>(j);
+        let hit = vec3<u32>(pack_bits(s.s0 == jv), pack_bits(s.s1 == jv), pack_bits(s.s2 == jv));
+        let members = pack_bits(vec4<bool>(hit != vec3<u32>(0u), false));
+        // slot index m of each member = trailing bit of its hit mask
+        let base = ((in.tri * frame.info.w) * 4u + firstTrailingBit(hit)) * stride;
+        var mc = vec3<f32>(0.0);
+        var bias = vec3<f32>(0.0);
+        var todo_m = members;
+        loop {
+            if (todo_m == 0u) {
+                break;
+            }
+            let k = firstTrailingBit(todo_m);
+            todo_m = todo_m & (todo_m - 1u);
+            for (var l = 0u; l < n_entries; l = l + 1u) {
+                let w = in.bary[k] * vis[l];
+                let b = base[k] + l * light_step;
+                mc = mc + w * vertex_coef[b].rgb;
+                bias = bias + w * vertex_coef[b + 1u].rgb;
+            }
+        }
+        var col = mc * textureSampleGrad(mean_tex, tex_sampler, uv, j, duv_dx, duv_dy).rgb + bias;
+        var acc_a = vec4<f32>(0.0);
+        var acc_b = vec4<f32>(0.0);
+        var acc_c = vec4<f32>(0.0);
+        for (var g = 0u; g < g_count; g = g + 1u) {
+            var ca = vec4<f32>(0.0);
+            var cb = vec4<f32>(0.0);
+            var cc = vec4<f32>(0.0);
+            var todo_g = members;
+            loop {
+                if (todo_g == 0u) {
+                    break;
+                }
+                let k = firstTrailingBit(todo_g);
+                todo_g = todo_g & (todo_g - 1u);
+                for (var l = 0u; l < n_entries; l = l + 1u) {
+                    let w = in.bary[k] * vis[l];
+                    let b = base[k] + l * light_step + 2u + 3u * g;
+                    ca = ca + w * vertex_coef[b];
+                    cb = cb + w * vertex_coef[b + 1u];
+                    cc = cc + w * vertex_coef[b + 2u];
+                }
+            }
+            let layer = j * 3u * g_count + 3u * g;
+            acc_a = acc_a + ca * textureSampleGrad(eigen_tex, tex_sampler, uv, layer, duv_dx, duv_dy);
+            acc_b = acc_b + cb * textureSampleGrad(eigen_tex, tex_sampler, uv, layer + 1u, duv_dx, duv_dy);
+            acc_c = acc_c + cc * textureSampleGrad(eigen_tex, tex_sampler, uv, layer + 2u, duv_dx, duv_dy);
+        }
+        reads = reads + 1u + 3u * g_count;
+        rgb = rgb + col + combine(acc_a, acc_b, acc_c);
+    }
+    return rgb;
+}
+
+// Per-vertex mode: every light (an environment light included) is in the per-vertex
+// layout, frame.info.w = frame.info.x entries.
+@fragment
+fn fs_vertex(in: VertexOut) -> @location(0) vec4<f32> {
+    let v = to_camera(in.world);
+    let f = tangent_frame(in, v);
+    let uv = tex_uv(in.uv);
+    duv_dx = dpdx(uv);
+    duv_dy = dpdy(uv);
+    for (var l = 0u; l < N_LIGHTS; l = l + 1u) {
+        vis[l] = visibility(l, in, f.back);
+    }
+    reads = 0u;
+    let rgb = vertex_sum(in, uv, N_LIGHTS);
+    count_reads();
+    return vec4<f32>(rgb, 1.0);
+}
+
+// Per-pixel mode with an environment light: point/directional lights per pixel (the
+// environment's frame light has zero power), plus the environment's per-vertex
+// coefficients, the only entry of the per-vertex layout (frame.info.w = 1).
+@fragment
+fn fs_pixel_env(in: VertexOut) -> @location(0) vec4<f32> {
+    let v = to_camera(in.world);
+    let f = tangent_frame(in, v);
+    let uv = tex_uv(in.uv);
+    duv_dx = dpdx(uv);
+    duv_dy = dpdy(uv);
+    reads = 0u;
+    let lit = gather_lights(in, f);
+    var rgb = vec3<f32>(0.0);
+    if (lit) {
+        let views = view_weights(dir_angles(vec3<f32>(dot(v, f.t), dot(v, f.b), dot(v, f.n))), VIEW_FOUR);
+        for (var m = 0u; m < views.n; m = m + 1u) {
+            rgb = rgb + views.w[m] * slot_pixel(views.idx[m], uv);
+        }
+    }
+    vis[0] = 1.0;
+    rgb = rgb + vertex_sum(in, uv, 1u);
+    count_reads();
+    return vec4<f32>(rgb, 1.0);
+}
