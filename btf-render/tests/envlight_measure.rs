@@ -123,6 +123,22 @@ fn measure_shirts() {
     }
 }
 
+/// Visibility alone (for profiling): `… --test envlight_measure visibility_only -- --ignored
+/// --nocapture`, the high shirt with `BTF_MEASURE_HIGH=1`.
+#[test]
+#[ignore = "a measurement: visibility of one shirt against the ray cast"]
+fn visibility_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let high = std::env::var("BTF_MEASURE_HIGH").is_ok_and(|v| v == "1");
+    let (name, res) =
+        if high { ("shirt high", Resolution::High) } else { ("shirt low", Resolution::Low) };
+    let mesh = shirt(dir.path(), res);
+    let tangents = compute_tangents(&mesh);
+    let cube = Hemicube::new(32).unwrap();
+    let frames = HemicubeFrame::of_mesh(&mesh.positions, &mesh.normals, &tangents, true);
+    visibility(name, &cube, &frames, &mesh, &dir.path().join("cache"));
+}
+
 /// Rasteriser (all frames, then through the cache) against the reference ray cast (all
 /// frames of the low shirt, every 8th frame of the high one), bits compared.
 fn visibility(

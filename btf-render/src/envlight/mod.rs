@@ -18,6 +18,7 @@ pub mod envmap;
 mod gather;
 pub mod heatmap;
 pub mod hemicube;
+mod octets;
 mod raster;
 mod raster_face;
 pub mod scene_env;

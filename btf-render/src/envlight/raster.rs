@@ -15,8 +15,9 @@
 //! (`2·10⁻³` face units plus a term growing for triangles close to the origin) only has to
 //! cover the rounding of the projection, which is of order `10⁻⁶`.
 
-use super::bvh::{Bvh, Tri, dot, sub, tri_hit};
+use super::bvh::{Bvh, Tri, dot, sub};
 use super::hemicube::Hemicube;
+use super::octets::{FrameRays, Packet, RowWord, TriFromOrigin, packet_hits, tri_rows};
 use super::raster_face::{
     Face, Rect, face_bounds, face_of, faces, ratio_range, span_mask, xy_distance,
 };
@@ -44,6 +45,10 @@ pub(super) struct FrameRaster<'a> {
     /// 0.9 × the smallest `z / √(x² + y²)` of any pixel centre: geometry below this cone
     /// around the origin lies under every pixel's ray.
     cone: f32,
+    /// The pixel rays of the frame.
+    rays: FrameRays,
+    /// Scratch: open row words of a rectangle.
+    rows: Vec<RowWord>,
 }
 
 impl<'a> FrameRaster<'a> {
@@ -69,6 +74,8 @@ impl<'a> FrameRaster<'a> {
             eps: 0.0,
             cone: 0.9
                 * cube.dirs.iter().map(|d| d[2] / d[0].hypot(d[1])).fold(f32::INFINITY, f32::min),
+            rays: FrameRays::new(cube.len()),
+            rows: Vec::new(),
         }
     }
 
@@ -78,6 +85,7 @@ impl<'a> FrameRaster<'a> {
         self.frame = *frame;
         self.origin = [0, 1, 2].map(|a| frame.origin[a] + eps * frame.axes[2][a]);
         self.eps = eps;
+        self.rays.set(&self.cube.dirs, frame);
         self.occ.fill(0);
         self.occluded = 0;
         self.walk(bvh);
@@ -115,9 +123,7 @@ impl<'a> FrameRaster<'a> {
             if open <= RAY_CAST_BELOW {
                 // Few pixels left under a far node: rays through its subtree are cheaper
                 // than projecting its triangles one by one.
-                for r in rects.iter().flatten() {
-                    self.cast_pixels(r, |o, d, eps| bvh.occluded_below(me, o, d, eps));
-                }
+                self.cast_packets(bvh, me, &rects);
                 continue;
             }
             if node.count > 0 {
@@ -230,21 +236,56 @@ impl<'a> FrameRaster<'a> {
             .sum()
     }
 
-    /// Marks the still-visible pixels of `r` whose ray `hit(origin, dir, eps)` reports.
-    fn cast_pixels(&mut self, r: &Rect, hit: impl Fn([f32; 3], [f32; 3], f32) -> bool) {
+    /// The open row words of `r` into `self.rows`.
+    fn open_rows(&mut self, r: &Rect) {
+        self.rows.clear();
         let face = self.faces[r.face];
         for row in r.r0..=r.r1 {
             let base = (self.row_base[r.face] + row) * self.wpr;
-            for c in r.c0..=r.c1 {
-                if self.occ[base + c / 64] >> (c % 64) & 1 == 1 {
-                    continue;
-                }
-                let p = face.start + row * self.res + c;
-                if hit(self.origin, self.frame.to_world(self.cube.dirs[p]), self.eps) {
-                    self.occ[base + c / 64] |= 1 << (c % 64);
-                    self.occluded += 1;
+            for w in r.c0 / 64..=r.c1 / 64 {
+                let m = span_mask(r.c0.max(64 * w) - 64 * w, r.c1.min(64 * w + 63) - 64 * w);
+                let open = !self.occ[base + w] & m;
+                if open != 0 {
+                    let pixel0 = face.start + row * self.res + 64 * w;
+                    self.rows.push(RowWord { pixel0, word: base + w, open });
                 }
             }
+        }
+    }
+
+    /// Casts the rays of the open pixels of `rects` through the subtree of node `root`, in
+    /// packets of octets, and marks the hit ones.
+    fn cast_packets(&mut self, bvh: &Bvh, root: u32, rects: &[Option<Rect>; 5]) {
+        let mut packet = Packet::new();
+        for r in rects.iter().flatten() {
+            self.open_rows(r);
+            for k in 0..self.rows.len() {
+                let rw = self.rows[k];
+                let mut bits = rw.open;
+                while bits != 0 {
+                    let c = bits.trailing_zeros();
+                    let lanes = (bits >> c) as u32 & 0xff;
+                    if !packet.push(rw.pixel0 + c as usize, lanes, rw.word, c) {
+                        self.flush(bvh, root, &packet);
+                        packet = Packet::new();
+                        continue;
+                    }
+                    bits &= !(0xffu64 << c);
+                }
+            }
+        }
+        self.flush(bvh, root, &packet);
+    }
+
+    fn flush(&mut self, bvh: &Bvh, root: u32, packet: &Packet) {
+        if packet.len == 0 {
+            return;
+        }
+        let hits = packet_hits(bvh, root, self.origin, self.eps, &self.rays, packet);
+        for k in 0..packet.len {
+            let h = Packet::lanes(hits, k);
+            self.occ[packet.word[k]] |= h << packet.shift[k];
+            self.occluded += h.count_ones() as usize;
         }
     }
 
@@ -294,6 +335,11 @@ impl<'a> FrameRaster<'a> {
     }
 
     fn test_pixels(&mut self, r: &Rect, t: &Tri) {
-        self.cast_pixels(r, |o, d, eps| tri_hit(t, o, d, eps));
+        self.open_rows(r);
+        if self.rows.is_empty() {
+            return;
+        }
+        let tf = TriFromOrigin::new(t, self.origin);
+        self.occluded += tri_rows(&tf, self.eps, &self.rays, &self.rows, &mut self.occ) as usize;
     }
 }

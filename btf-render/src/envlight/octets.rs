@@ -1,0 +1,314 @@
+//! Eight hemicube pixel rays at a time for the rasteriser of [`super::raster`] (Sattler et
+//! al. 2003, §5.2: the `V(x, p_α)` of eq. 9): the reference's any-hit tests — the slab test
+//! of a BVH box and the Möller–Trumbore test of [`super::bvh`] — evaluated for eight
+//! consecutive pixels ("an octet") in lanes, plus a packet traversal of a BVH subtree with
+//! up to [`MAX_OCTETS`] octets that visits each node once for all rays still open.
+//!
+//! Exactness. Each lane performs the very `f32` operations of the scalar tests in the same
+//! order (no fused multiply-add, IEEE division, the same NaN handling of `min`/`max` and
+//! comparisons), on the very ray (`FrameRays` holds `to_world` of the pixel direction and
+//! its reciprocal exactly as [`super::bvh::Bvh::occluded`] forms them), so a lane reports a
+//! hit exactly when the scalar test does. Per triangle `s = o − p₀`, `q = s × e₁` and
+//! `e₂ · q` do not depend on the ray and are formed once, as the scalar test forms them.
+//! With AVX2 (detected at run time) the lanes become one 8-wide vector; elsewhere the same
+//! code runs as scalar loops.
+
+use super::bvh::{Bvh, Node, Tri, cross, dot, sub};
+use super::visibility::HemicubeFrame;
+
+/// Most octets in one packet (the lane masks are a `u128`).
+pub(super) const MAX_OCTETS: usize = 16;
+
+/// World directions and their reciprocals of every pixel of one frame, one array per axis,
+/// padded by one octet so any eight consecutive pixels can be loaded.
+pub(super) struct FrameRays {
+    pub(super) dir: [Vec<f32>; 3],
+    pub(super) inv: [Vec<f32>; 3],
+}
+
+impl FrameRays {
+    pub(super) fn new(pixels: usize) -> FrameRays {
+        let v = || vec![0f32; pixels + 8];
+        FrameRays { dir: [v(), v(), v()], inv: [v(), v(), v()] }
+    }
+
+    /// The rays of `frame` through the tangent-space pixel directions `dirs`.
+    pub(super) fn set(&mut self, dirs: &[[f32; 3]], frame: &HemicubeFrame) {
+        for (p, d) in dirs.iter().enumerate() {
+            let w = frame.to_world(*d);
+            for a in 0..3 {
+                self.dir[a][p] = w[a];
+                self.inv[a][p] = 1.0 / w[a];
+            }
+        }
+    }
+}
+
+/// Eight lanes of one axis starting at pixel `p`.
+#[inline(always)]
+fn lanes(v: &[f32], p: usize) -> &[f32; 8] {
+    v[p..p + 8].try_into().unwrap_or(&[0.0; 8])
+}
+
+/// The slab test of [`super::bvh`] for the rays of pixels `p..p + 8` (bit `l` = lane `l`).
+#[inline(always)]
+fn slab8(node: &Node, o: [f32; 3], t_min: f32, rays: &FrameRays, p: usize) -> u32 {
+    let lo = sub(node.lo, o);
+    let hi = sub(node.hi, o);
+    let inv = [lanes(&rays.inv[0], p), lanes(&rays.inv[1], p), lanes(&rays.inv[2], p)];
+    let mut bits = 0u32;
+    for l in 0..8 {
+        let (mut t0, mut t1) = (t_min, f32::INFINITY);
+        for a in 0..3 {
+            let ta = lo[a] * inv[a][l];
+            let tb = hi[a] * inv[a][l];
+            t0 = t0.max(ta.min(tb));
+            t1 = t1.min(ta.max(tb));
+        }
+        bits |= ((t0 <= t1) as u32) << l;
+    }
+    bits
+}
+
+/// A triangle with the ray-independent parts of the test for rays from one origin.
+pub(super) struct TriFromOrigin<'a> {
+    tri: &'a Tri,
+    s: [f32; 3],
+    q: [f32; 3],
+    e2_q: f32,
+}
+
+impl<'a> TriFromOrigin<'a> {
+    #[inline(always)]
+    pub(super) fn new(tri: &'a Tri, o: [f32; 3]) -> Self {
+        let s = sub(o, tri.p0);
+        let q = cross(s, tri.e1);
+        TriFromOrigin { tri, s, q, e2_q: dot(tri.e2, q) }
+    }
+}
+
+/// [`super::bvh::tri_hit`] for the rays of pixels `p..p + 8` (bit `l` = lane `l`).
+#[inline(always)]
+fn tri8(t: &TriFromOrigin, t_min: f32, rays: &FrameRays, p: usize) -> u32 {
+    let d = [lanes(&rays.dir[0], p), lanes(&rays.dir[1], p), lanes(&rays.dir[2], p)];
+    let mut bits = 0u32;
+    for l in 0..8 {
+        let dl = [d[0][l], d[1][l], d[2][l]];
+        let pv = cross(dl, t.tri.e2);
+        let det = dot(t.tri.e1, pv);
+        let inv = 1.0 / det;
+        let u = dot(t.s, pv) * inv;
+        let v = dot(dl, t.q) * inv;
+        let hit = !(det.abs() < 1e-20)
+            & (u >= 0.0)
+            & (u <= 1.0)
+            & !(v < 0.0 || u + v > 1.0)
+            & (t.e2_q * inv > t_min);
+        bits |= (hit as u32) << l;
+    }
+    bits
+}
+
+/// A set of octets: the first pixel of each, where its bits go in the occlusion mask (word
+/// and shift), and the lanes in use (8 bits per octet).
+pub(super) struct Packet {
+    pub(super) start: [u32; MAX_OCTETS],
+    pub(super) word: [usize; MAX_OCTETS],
+    pub(super) shift: [u32; MAX_OCTETS],
+    pub(super) mask: u128,
+    pub(super) len: usize,
+}
+
+impl Packet {
+    pub(super) fn new() -> Packet {
+        Packet {
+            start: [0; MAX_OCTETS],
+            word: [0; MAX_OCTETS],
+            shift: [0; MAX_OCTETS],
+            mask: 0,
+            len: 0,
+        }
+    }
+
+    /// Adds the octet of pixels `pixel..pixel + 8` with lanes `lanes`, whose bits are bits
+    /// `shift..` of occlusion word `word`; false when full.
+    pub(super) fn push(&mut self, pixel: usize, lanes: u32, word: usize, shift: u32) -> bool {
+        if self.len == MAX_OCTETS {
+            return false;
+        }
+        let k = self.len;
+        (self.start[k], self.word[k], self.shift[k]) = (pixel as u32, word, shift);
+        self.mask |= ((lanes & 0xff) as u128) << (8 * k);
+        self.len += 1;
+        true
+    }
+
+    /// The lanes of octet `k` in `m`.
+    pub(super) fn lanes(m: u128, k: usize) -> u64 {
+        octet_mask(m, k) as u64
+    }
+}
+
+#[inline(always)]
+fn octet_mask(m: u128, k: usize) -> u32 {
+    (m >> (8 * k)) as u32 & 0xff
+}
+
+/// The lanes of `packet` whose rays from `o` hit a triangle
+/// under node `root`, with the node tests of [`Bvh::occluded_below`].
+#[inline(always)]
+fn packet_hits_kernel(
+    bvh: &Bvh,
+    root: u32,
+    o: [f32; 3],
+    t_min: f32,
+    rays: &FrameRays,
+    packet: &Packet,
+) -> u128 {
+    let mask = packet.mask;
+    let (nodes, tris) = (bvh.nodes(), bvh.tris());
+    let starts = &packet.start[..packet.len.min(MAX_OCTETS)];
+    let mut open = mask;
+    let mut hit = 0u128;
+    let mut stack = [(root, mask); 64];
+    let mut sp = 1usize;
+    while sp > 0 {
+        sp -= 1;
+        let (me, m) = stack[sp];
+        let Some(node) = nodes.get(me as usize) else { continue };
+        let mut live = 0u128;
+        for (k, &p) in starts.iter().enumerate() {
+            let lm = octet_mask(m & open, k);
+            if lm != 0 {
+                live |= ((slab8(node, o, t_min, rays, p as usize) & lm) as u128) << (8 * k);
+            }
+        }
+        if live == 0 {
+            continue;
+        }
+        if node.count > 0 {
+            let s = node.start_or_right as usize;
+            for t in tris.get(s..s + node.count as usize).unwrap_or(&[]) {
+                let tf = TriFromOrigin::new(t, o);
+                for (k, &p) in starts.iter().enumerate() {
+                    let lm = octet_mask(live, k);
+                    if lm != 0 {
+                        let h = ((tri8(&tf, t_min, rays, p as usize) & lm) as u128) << (8 * k);
+                        live &= !h;
+                        hit |= h;
+                    }
+                }
+                if live == 0 {
+                    break;
+                }
+            }
+            open &= !hit;
+            if open == 0 {
+                break;
+            }
+        } else if sp + 2 <= stack.len() {
+            // Depth-first layout: the left child directly follows its parent.
+            stack[sp] = (node.start_or_right, live);
+            stack[sp + 1] = (me + 1, live);
+            sp += 2;
+        }
+    }
+    hit
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn packet_hits_avx2(
+    bvh: &Bvh,
+    root: u32,
+    o: [f32; 3],
+    t_min: f32,
+    rays: &FrameRays,
+    packet: &Packet,
+) -> u128 {
+    packet_hits_kernel(bvh, root, o, t_min, rays, packet)
+}
+
+/// [`packet_hits_kernel`] with 8-lane vectors where the CPU has them.
+#[allow(unsafe_code)]
+pub(super) fn packet_hits(
+    bvh: &Bvh,
+    root: u32,
+    o: [f32; 3],
+    t_min: f32,
+    rays: &FrameRays,
+    packet: &Packet,
+) -> u128 {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2 (checked just above); the kernel is plain safe code.
+        return unsafe { packet_hits_avx2(bvh, root, o, t_min, rays, packet) };
+    }
+    packet_hits_kernel(bvh, root, o, t_min, rays, packet)
+}
+
+/// One row word of open pixels for [`tri_rows`]: the pixel of bit 0, the index of the
+/// occlusion word and its open bits to test.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct RowWord {
+    pub(super) pixel0: usize,
+    pub(super) word: usize,
+    pub(super) open: u64,
+}
+
+#[inline(always)]
+fn tri_rows_kernel(
+    tf: &TriFromOrigin,
+    t_min: f32,
+    rays: &FrameRays,
+    rows: &[RowWord],
+    occ: &mut [u64],
+) -> u32 {
+    let mut newly = 0;
+    for r in rows {
+        let mut bits = r.open;
+        while bits != 0 {
+            let c = bits.trailing_zeros() as usize;
+            let lm = (bits >> c) as u32 & 0xff;
+            bits &= !(0xffu64 << c);
+            let h = (tri8(tf, t_min, rays, r.pixel0 + c) & lm) as u64;
+            if h != 0 {
+                if let Some(w) = occ.get_mut(r.word) {
+                    *w |= h << c;
+                }
+                newly += h.count_ones();
+            }
+        }
+    }
+    newly
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn tri_rows_avx2(
+    tf: &TriFromOrigin,
+    t_min: f32,
+    rays: &FrameRays,
+    rows: &[RowWord],
+    occ: &mut [u64],
+) -> u32 {
+    tri_rows_kernel(tf, t_min, rays, rows, occ)
+}
+
+/// Tests the open pixels of `rows` against one triangle, sets the bits of the hit ones in
+/// `occ` and returns how many were newly occluded.
+#[allow(unsafe_code)]
+pub(super) fn tri_rows(
+    tf: &TriFromOrigin,
+    t_min: f32,
+    rays: &FrameRays,
+    rows: &[RowWord],
+    occ: &mut [u64],
+) -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2 (checked just above); the kernel is plain safe code.
+        return unsafe { tri_rows_avx2(tf, t_min, rays, rows, occ) };
+    }
+    tri_rows_kernel(tf, t_min, rays, rows, occ)
+}
