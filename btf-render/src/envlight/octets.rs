@@ -24,21 +24,54 @@ pub(super) const MAX_OCTETS: usize = 16;
 pub(super) struct FrameRays {
     pub(super) dir: [Vec<f32>; 3],
     pub(super) inv: [Vec<f32>; 3],
+    /// The tangent-space pixel directions, one array per axis.
+    tangent: [Vec<f32>; 3],
 }
 
 impl FrameRays {
-    pub(super) fn new(pixels: usize) -> FrameRays {
-        let v = || vec![0f32; pixels + 8];
-        FrameRays { dir: [v(), v(), v()], inv: [v(), v(), v()] }
+    /// Room for the pixels of the tangent-space directions `dirs`.
+    pub(super) fn new(dirs: &[[f32; 3]]) -> FrameRays {
+        let v = || vec![0f32; dirs.len() + 8];
+        let axis = |a: usize| dirs.iter().map(|d| d[a]).collect();
+        FrameRays {
+            dir: [v(), v(), v()],
+            inv: [v(), v(), v()],
+            tangent: [axis(0), axis(1), axis(2)],
+        }
     }
 
-    /// The rays of `frame` through the tangent-space pixel directions `dirs`.
-    pub(super) fn set(&mut self, dirs: &[[f32; 3]], frame: &HemicubeFrame) {
-        for (p, d) in dirs.iter().enumerate() {
-            let w = frame.to_world(*d);
-            for a in 0..3 {
-                self.dir[a][p] = w[a];
-                self.inv[a][p] = 1.0 / w[a];
+    /// The rays of `frame`: [`HemicubeFrame::to_world`] of every pixel direction and its
+    /// reciprocal, per axis (the same operations in the same order, so the same bits).
+    pub(super) fn set(&mut self, frame: &HemicubeFrame) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2 (checked just above); the kernel is plain safe code.
+            #[allow(unsafe_code)]
+            unsafe {
+                self.set_avx2(frame)
+            };
+            return;
+        }
+        self.set_kernel(frame);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn set_avx2(&mut self, frame: &HemicubeFrame) {
+        self.set_kernel(frame);
+    }
+
+    #[inline(always)]
+    fn set_kernel(&mut self, frame: &HemicubeFrame) {
+        let [t, b, n] = frame.axes;
+        let [x, y, z] = &self.tangent;
+        for a in 0..3 {
+            let (dir, inv) = (&mut self.dir[a], &mut self.inv[a]);
+            for (((d, i), &x), (&y, &z)) in
+                dir.iter_mut().zip(inv.iter_mut()).zip(x).zip(y.iter().zip(z))
+            {
+                *d = x * t[a] + y * b[a] + z * n[a];
+                *i = 1.0 / *d;
             }
         }
     }

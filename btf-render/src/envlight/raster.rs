@@ -49,6 +49,7 @@ pub(super) struct FrameRaster<'a> {
     rays: FrameRays,
     /// Scratch: open row words of a rectangle.
     rows: Vec<RowWord>,
+    ray_cast_below: usize,
 }
 
 impl<'a> FrameRaster<'a> {
@@ -74,8 +75,12 @@ impl<'a> FrameRaster<'a> {
             eps: 0.0,
             cone: 0.9
                 * cube.dirs.iter().map(|d| d[2] / d[0].hypot(d[1])).fold(f32::INFINITY, f32::min),
-            rays: FrameRays::new(cube.len()),
+            rays: FrameRays::new(&cube.dirs),
             rows: Vec::new(),
+            ray_cast_below: std::env::var("BTF_RCB")
+                .ok()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(RAY_CAST_BELOW),
         }
     }
 
@@ -85,7 +90,7 @@ impl<'a> FrameRaster<'a> {
         self.frame = *frame;
         self.origin = [0, 1, 2].map(|a| frame.origin[a] + eps * frame.axes[2][a]);
         self.eps = eps;
-        self.rays.set(&self.cube.dirs, frame);
+        self.rays.set(frame);
         self.occ.fill(0);
         self.occluded = 0;
         self.walk(bvh);
@@ -94,10 +99,9 @@ impl<'a> FrameRaster<'a> {
             for r in 0..face.rows {
                 let row = &self.occ[(self.row_base[f] + r) * self.wpr..][..self.wpr];
                 let p0 = face.start + r * self.res;
-                for c in 0..self.res {
-                    if row[c / 64] >> (c % 64) & 1 == 0 {
-                        out[(p0 + c) / 64] |= 1 << ((p0 + c) % 64);
-                    }
+                for (w, &occ) in row.iter().enumerate() {
+                    let n = (self.res - 64 * w).min(64);
+                    set_bits(out, p0 + 64 * w, !occ & span_mask(0, n - 1));
                 }
             }
         }
@@ -120,7 +124,7 @@ impl<'a> FrameRaster<'a> {
             if open == 0 {
                 continue;
             }
-            if open <= RAY_CAST_BELOW {
+            if open <= self.ray_cast_below {
                 // Few pixels left under a far node: rays through its subtree are cheaper
                 // than projecting its triangles one by one.
                 self.cast_packets(bvh, me, &rects);
@@ -341,5 +345,14 @@ impl<'a> FrameRaster<'a> {
         }
         let tf = TriFromOrigin::new(t, self.origin);
         self.occluded += tri_rows(&tf, self.eps, &self.rays, &self.rows, &mut self.occ) as usize;
+    }
+}
+
+/// ORs the bits of `word` into the bit set `out` starting at bit `at`.
+fn set_bits(out: &mut [u64], at: usize, word: u64) {
+    let (i, s) = (at / 64, at % 64);
+    out[i] |= word << s;
+    if s > 0 && word >> (64 - s) != 0 {
+        out[i + 1] |= word >> (64 - s);
     }
 }
