@@ -136,6 +136,13 @@ fn visibility_only() {
     let tangents = compute_tangents(&mesh);
     let cube = Hemicube::new(32).unwrap();
     let frames = HemicubeFrame::of_mesh(&mesh.positions, &mesh.normals, &tangents, true);
+    if std::env::var("BTF_FAST_ONLY").is_ok_and(|v| v == "1") {
+        // For `perf stat`: the rasteriser alone.
+        let t = Instant::now();
+        VisibilityMaps::compute(&cube, &frames, &mesh.positions, &mesh.triangles);
+        eprintln!("{name}: rasteriser alone {:.0} ms", ms(t));
+        return;
+    }
     visibility(name, &cube, &frames, &mesh, &dir.path().join("cache"));
 }
 

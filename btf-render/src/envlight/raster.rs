@@ -49,7 +49,6 @@ pub(super) struct FrameRaster<'a> {
     rays: FrameRays,
     /// Scratch: open row words of a rectangle.
     rows: Vec<RowWord>,
-    ray_cast_below: usize,
 }
 
 impl<'a> FrameRaster<'a> {
@@ -77,10 +76,6 @@ impl<'a> FrameRaster<'a> {
                 * cube.dirs.iter().map(|d| d[2] / d[0].hypot(d[1])).fold(f32::INFINITY, f32::min),
             rays: FrameRays::new(&cube.dirs),
             rows: Vec::new(),
-            ray_cast_below: std::env::var("BTF_RCB")
-                .ok()
-                .and_then(|v| v.parse().ok())
-                .unwrap_or(RAY_CAST_BELOW),
         }
     }
 
@@ -120,11 +115,11 @@ impl<'a> FrameRaster<'a> {
             }
             let node = &nodes[me as usize];
             let Some(rects) = self.box_rects(node.lo, node.hi) else { continue };
-            let open: usize = rects.iter().flatten().map(|r| self.visible_in(r)).sum();
+            let open = self.visible_in(&rects, RAY_CAST_BELOW);
             if open == 0 {
                 continue;
             }
-            if open <= self.ray_cast_below {
+            if open <= RAY_CAST_BELOW {
                 // Few pixels left under a far node: rays through its subtree are cheaper
                 // than projecting its triangles one by one.
                 self.cast_packets(bvh, me, &rects);
@@ -224,31 +219,44 @@ impl<'a> FrameRaster<'a> {
         (l <= h).then_some((l as usize, h as usize))
     }
 
-    /// Number of still-visible pixels in `r`.
-    fn visible_in(&self, r: &Rect) -> usize {
-        (r.r0..=r.r1)
-            .map(|row| {
-                let words = &self.occ[(self.row_base[r.face] + row) * self.wpr..][..self.wpr];
-                (r.c0 / 64..=r.c1 / 64)
-                    .map(|w| {
-                        let m =
-                            span_mask(r.c0.max(64 * w) - 64 * w, r.c1.min(64 * w + 63) - 64 * w);
-                        (!words[w] & m).count_ones() as usize
-                    })
-                    .sum::<usize>()
-            })
-            .sum()
+    /// The column masks of `r` per occlusion word (words `c0 / 64 ..= c1 / 64`).
+    fn word_masks(r: &Rect) -> ([u64; 8], usize, usize) {
+        // Rows hold at most 512 pixels (`RES_RANGE`), 8 words.
+        let (w0, w1) = (r.c0 / 64, (r.c1 / 64).min(7));
+        let mut m = [0u64; 8];
+        for (w, m) in m.iter_mut().enumerate().take(w1 + 1).skip(w0) {
+            *m = span_mask(r.c0.max(64 * w) - 64 * w, r.c1.min(64 * w + 63) - 64 * w);
+        }
+        (m, w0, w1)
+    }
+
+    /// Number of still-visible pixels in `rects`, counted up to just above `limit`.
+    fn visible_in(&self, rects: &[Option<Rect>; 5], limit: usize) -> usize {
+        let mut open = 0;
+        for r in rects.iter().flatten() {
+            let (m, w0, w1) = Self::word_masks(r);
+            for row in r.r0..=r.r1 {
+                let base = (self.row_base[r.face] + row) * self.wpr;
+                for w in w0..=w1 {
+                    open += (!self.occ[base + w] & m[w]).count_ones() as usize;
+                }
+                if open > limit {
+                    return open;
+                }
+            }
+        }
+        open
     }
 
     /// The open row words of `r` into `self.rows`.
     fn open_rows(&mut self, r: &Rect) {
         self.rows.clear();
         let face = self.faces[r.face];
+        let (m, w0, w1) = Self::word_masks(r);
         for row in r.r0..=r.r1 {
             let base = (self.row_base[r.face] + row) * self.wpr;
-            for w in r.c0 / 64..=r.c1 / 64 {
-                let m = span_mask(r.c0.max(64 * w) - 64 * w, r.c1.min(64 * w + 63) - 64 * w);
-                let open = !self.occ[base + w] & m;
+            for w in w0..=w1 {
+                let open = !self.occ[base + w] & m[w];
                 if open != 0 {
                     let pixel0 = face.start + row * self.res + 64 * w;
                     self.rows.push(RowWord { pixel0, word: base + w, open });
