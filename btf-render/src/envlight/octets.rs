@@ -16,8 +16,8 @@
 use super::bvh::{Bvh, Node, Tri, cross, dot, sub};
 use super::visibility::HemicubeFrame;
 
-/// Most octets in one packet (the lane masks are a `u128`).
-pub(super) const MAX_OCTETS: usize = 16;
+/// Most rays in one packet (the lane masks are a `u64`).
+pub(super) const PACKET: usize = 64;
 
 /// World directions and their reciprocals of every pixel of one frame, one array per axis,
 /// padded by one octet so any eight consecutive pixels can be loaded.
@@ -83,12 +83,12 @@ fn lanes(v: &[f32], p: usize) -> &[f32; 8] {
     v[p..p + 8].try_into().unwrap_or(&[0.0; 8])
 }
 
-/// The slab test of [`super::bvh`] for the rays of pixels `p..p + 8` (bit `l` = lane `l`).
+/// The slab test of [`super::bvh`] for eight rays with reciprocal directions `inv` (bit
+/// `l` = lane `l`).
 #[inline(always)]
-fn slab8(node: &Node, o: [f32; 3], t_min: f32, rays: &FrameRays, p: usize) -> u32 {
+fn slab8(node: &Node, o: [f32; 3], t_min: f32, inv: [&[f32; 8]; 3]) -> u32 {
     let lo = sub(node.lo, o);
     let hi = sub(node.hi, o);
-    let inv = [lanes(&rays.inv[0], p), lanes(&rays.inv[1], p), lanes(&rays.inv[2], p)];
     let mut bits = 0u32;
     for l in 0..8 {
         let (mut t0, mut t1) = (t_min, f32::INFINITY);
@@ -120,10 +120,9 @@ impl<'a> TriFromOrigin<'a> {
     }
 }
 
-/// [`super::bvh::tri_hit`] for the rays of pixels `p..p + 8` (bit `l` = lane `l`).
+/// [`super::bvh::tri_hit`] for eight rays with directions `d` (bit `l` = lane `l`).
 #[inline(always)]
-fn tri8(t: &TriFromOrigin, t_min: f32, rays: &FrameRays, p: usize) -> u32 {
-    let d = [lanes(&rays.dir[0], p), lanes(&rays.dir[1], p), lanes(&rays.dir[2], p)];
+fn tri8(t: &TriFromOrigin, t_min: f32, d: [&[f32; 8]; 3]) -> u32 {
     let mut bits = 0u32;
     for l in 0..8 {
         let dl = [d[0][l], d[1][l], d[2][l]];
@@ -142,78 +141,63 @@ fn tri8(t: &TriFromOrigin, t_min: f32, rays: &FrameRays, p: usize) -> u32 {
     bits
 }
 
-/// A set of octets: the first pixel of each, where its bits go in the occlusion mask (word
-/// and shift), and the lanes in use (8 bits per octet).
+/// Up to [`PACKET`] rays of one frame, packed into lanes, with the occlusion-mask bit
+/// each one answers for.
 pub(super) struct Packet {
-    pub(super) start: [u32; MAX_OCTETS],
-    pub(super) word: [usize; MAX_OCTETS],
-    pub(super) shift: [u32; MAX_OCTETS],
-    pub(super) mask: u128,
+    dir: [[f32; PACKET]; 3],
+    inv: [[f32; PACKET]; 3],
+    pub(super) bit: [u32; PACKET],
     pub(super) len: usize,
 }
 
 impl Packet {
     pub(super) fn new() -> Packet {
-        Packet {
-            start: [0; MAX_OCTETS],
-            word: [0; MAX_OCTETS],
-            shift: [0; MAX_OCTETS],
-            mask: 0,
-            len: 0,
-        }
+        Packet { dir: [[0.0; PACKET]; 3], inv: [[0.0; PACKET]; 3], bit: [0; PACKET], len: 0 }
     }
 
-    /// Adds the octet of pixels `pixel..pixel + 8` with lanes `lanes`, whose bits are bits
-    /// `shift..` of occlusion word `word`; false when full.
-    pub(super) fn push(&mut self, pixel: usize, lanes: u32, word: usize, shift: u32) -> bool {
-        if self.len == MAX_OCTETS {
+    /// Adds the ray of pixel `p` of `rays` for occlusion-mask bit `bit`; false when full.
+    pub(super) fn push(&mut self, rays: &FrameRays, p: usize, bit: u32) -> bool {
+        let k = self.len;
+        if k == PACKET {
             return false;
         }
-        let k = self.len;
-        (self.start[k], self.word[k], self.shift[k]) = (pixel as u32, word, shift);
-        self.mask |= ((lanes & 0xff) as u128) << (8 * k);
+        for a in 0..3 {
+            self.dir[a][k] = rays.dir[a][p];
+            self.inv[a][k] = rays.inv[a][p];
+        }
+        self.bit[k] = bit;
         self.len += 1;
         true
     }
 
-    /// The lanes of octet `k` in `m`.
-    pub(super) fn lanes(m: u128, k: usize) -> u64 {
-        octet_mask(m, k) as u64
+    /// Lanes of octet `k`.
+    #[inline(always)]
+    fn octet(v: &[[f32; PACKET]; 3], k: usize) -> [&[f32; 8]; 3] {
+        [0, 1, 2].map(|a| lanes(&v[a], 8 * k))
     }
 }
 
+/// The lanes of `packet` (bit `k` = ray `k`) whose rays from `o` hit a triangle under
+/// node `root`, with the node tests of [`Bvh::occluded_below`].
 #[inline(always)]
-fn octet_mask(m: u128, k: usize) -> u32 {
-    (m >> (8 * k)) as u32 & 0xff
-}
-
-/// The lanes of `packet` whose rays from `o` hit a triangle
-/// under node `root`, with the node tests of [`Bvh::occluded_below`].
-#[inline(always)]
-fn packet_hits_kernel(
-    bvh: &Bvh,
-    root: u32,
-    o: [f32; 3],
-    t_min: f32,
-    rays: &FrameRays,
-    packet: &Packet,
-) -> u128 {
-    let mask = packet.mask;
+fn packet_hits_kernel(bvh: &Bvh, root: u32, o: [f32; 3], t_min: f32, packet: &Packet) -> u64 {
     let (nodes, tris) = (bvh.nodes(), bvh.tris());
-    let starts = &packet.start[..packet.len.min(MAX_OCTETS)];
-    let mut open = mask;
-    let mut hit = 0u128;
-    let mut stack = [(root, mask); 64];
+    let n = packet.len.min(PACKET);
+    let all = if n == 64 { u64::MAX } else { (1u64 << n) - 1 };
+    let octets = n.div_ceil(8);
+    let mut open = all;
+    let mut stack = [(root, all); 64];
     let mut sp = 1usize;
     while sp > 0 {
         sp -= 1;
         let (me, m) = stack[sp];
         let Some(node) = nodes.get(me as usize) else { continue };
-        let mut live = 0u128;
-        for (k, &p) in starts.iter().enumerate() {
-            let lm = octet_mask(m & open, k);
+        let mut live = 0u64;
+        for k in 0..octets {
+            let lm = (m & open) >> (8 * k) & 0xff;
             if lm != 0 {
-                live |= ((slab8(node, o, t_min, rays, p as usize) & lm) as u128) << (8 * k);
+                let bits = slab8(node, o, t_min, Packet::octet(&packet.inv, k)) as u64;
+                live |= (bits & lm) << (8 * k);
             }
         }
         if live == 0 {
@@ -223,19 +207,18 @@ fn packet_hits_kernel(
             let s = node.start_or_right as usize;
             for t in tris.get(s..s + node.count as usize).unwrap_or(&[]) {
                 let tf = TriFromOrigin::new(t, o);
-                for (k, &p) in starts.iter().enumerate() {
-                    let lm = octet_mask(live, k);
+                for k in 0..octets {
+                    let lm = live >> (8 * k) & 0xff;
                     if lm != 0 {
-                        let h = ((tri8(&tf, t_min, rays, p as usize) & lm) as u128) << (8 * k);
-                        live &= !h;
-                        hit |= h;
+                        let h = tri8(&tf, t_min, Packet::octet(&packet.dir, k)) as u64 & lm;
+                        live &= !(h << (8 * k));
+                        open &= !(h << (8 * k));
                     }
                 }
                 if live == 0 {
                     break;
                 }
             }
-            open &= !hit;
             if open == 0 {
                 break;
             }
@@ -246,38 +229,24 @@ fn packet_hits_kernel(
             sp += 2;
         }
     }
-    hit
+    all & !open
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn packet_hits_avx2(
-    bvh: &Bvh,
-    root: u32,
-    o: [f32; 3],
-    t_min: f32,
-    rays: &FrameRays,
-    packet: &Packet,
-) -> u128 {
-    packet_hits_kernel(bvh, root, o, t_min, rays, packet)
+fn packet_hits_avx2(bvh: &Bvh, root: u32, o: [f32; 3], t_min: f32, packet: &Packet) -> u64 {
+    packet_hits_kernel(bvh, root, o, t_min, packet)
 }
 
 /// [`packet_hits_kernel`] with 8-lane vectors where the CPU has them.
 #[allow(unsafe_code)]
-pub(super) fn packet_hits(
-    bvh: &Bvh,
-    root: u32,
-    o: [f32; 3],
-    t_min: f32,
-    rays: &FrameRays,
-    packet: &Packet,
-) -> u128 {
+pub(super) fn packet_hits(bvh: &Bvh, root: u32, o: [f32; 3], t_min: f32, packet: &Packet) -> u64 {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU supports AVX2 (checked just above); the kernel is plain safe code.
-        return unsafe { packet_hits_avx2(bvh, root, o, t_min, rays, packet) };
+        return unsafe { packet_hits_avx2(bvh, root, o, t_min, packet) };
     }
-    packet_hits_kernel(bvh, root, o, t_min, rays, packet)
+    packet_hits_kernel(bvh, root, o, t_min, packet)
 }
 
 /// One row word of open pixels for [`tri_rows`]: the pixel of bit 0, the index of the
@@ -304,7 +273,9 @@ fn tri_rows_kernel(
             let c = bits.trailing_zeros() as usize;
             let lm = (bits >> c) as u32 & 0xff;
             bits &= !(0xffu64 << c);
-            let h = (tri8(tf, t_min, rays, r.pixel0 + c) & lm) as u64;
+            let p = r.pixel0 + c;
+            let d = [lanes(&rays.dir[0], p), lanes(&rays.dir[1], p), lanes(&rays.dir[2], p)];
+            let h = (tri8(tf, t_min, d) & lm) as u64;
             if h != 0 {
                 if let Some(w) = occ.get_mut(r.word) {
                     *w |= h << c;

@@ -266,7 +266,7 @@ impl<'a> FrameRaster<'a> {
     }
 
     /// Casts the rays of the open pixels of `rects` through the subtree of node `root`, in
-    /// packets of octets, and marks the hit ones.
+    /// packets, and marks the hit ones.
     fn cast_packets(&mut self, bvh: &Bvh, root: u32, rects: &[Option<Rect>; 5]) {
         let mut packet = Packet::new();
         for r in rects.iter().flatten() {
@@ -275,14 +275,14 @@ impl<'a> FrameRaster<'a> {
                 let rw = self.rows[k];
                 let mut bits = rw.open;
                 while bits != 0 {
-                    let c = bits.trailing_zeros();
-                    let lanes = (bits >> c) as u32 & 0xff;
-                    if !packet.push(rw.pixel0 + c as usize, lanes, rw.word, c) {
+                    let c = bits.trailing_zeros() as usize;
+                    let bit = (64 * rw.word + c) as u32;
+                    if !packet.push(&self.rays, rw.pixel0 + c, bit) {
                         self.flush(bvh, root, &packet);
-                        packet = Packet::new();
+                        packet.len = 0;
                         continue;
                     }
-                    bits &= !(0xffu64 << c);
+                    bits &= bits - 1;
                 }
             }
         }
@@ -293,11 +293,12 @@ impl<'a> FrameRaster<'a> {
         if packet.len == 0 {
             return;
         }
-        let hits = packet_hits(bvh, root, self.origin, self.eps, &self.rays, packet);
-        for k in 0..packet.len {
-            let h = Packet::lanes(hits, k);
-            self.occ[packet.word[k]] |= h << packet.shift[k];
-            self.occluded += h.count_ones() as usize;
+        let mut hits = packet_hits(bvh, root, self.origin, self.eps, packet);
+        self.occluded += hits.count_ones() as usize;
+        while hits != 0 {
+            let b = packet.bit[hits.trailing_zeros() as usize] as usize;
+            self.occ[b / 64] |= 1 << (b % 64);
+            hits &= hits - 1;
         }
     }
 
