@@ -1,8 +1,9 @@
 //! Eight hemicube pixel rays at a time for the rasteriser of [`super::raster`] (Sattler et
 //! al. 2003, §5.2: the `V(x, p_α)` of eq. 9): the reference's any-hit tests — the slab test
 //! of a BVH box and the Möller–Trumbore test of [`super::bvh`] — evaluated for eight
-//! consecutive pixels ("an octet") in lanes, plus a packet traversal of a BVH subtree with
-//! up to [`MAX_OCTETS`] octets that visits each node once for all rays still open.
+//! rays in lanes ("an octet"), plus a packet traversal of a BVH subtree with up to
+//! [`PACKET`] rays that visits each node once for all the rays still open, nearer child
+//! first.
 //!
 //! Exactness. Each lane performs the very `f32` operations of the scalar tests in the same
 //! order (no fused multiply-add, IEEE division, the same NaN handling of `min`/`max` and
@@ -223,13 +224,27 @@ fn packet_hits_kernel(bvh: &Bvh, root: u32, o: [f32; 3], t_min: f32, packet: &Pa
                 break;
             }
         } else if sp + 2 <= stack.len() {
-            // Depth-first layout: the left child directly follows its parent.
-            stack[sp] = (node.start_or_right, live);
-            stack[sp + 1] = (me + 1, live);
+            // Depth-first layout: the left child directly follows its parent. The nearer
+            // child is visited first (any hit ends a ray).
+            let (l, r) = (me + 1, node.start_or_right);
+            let near_left = match (nodes.get(l as usize), nodes.get(r as usize)) {
+                (Some(a), Some(b)) => centre_dist2(a, o) <= centre_dist2(b, o),
+                _ => true,
+            };
+            let (first, second) = if near_left { (l, r) } else { (r, l) };
+            stack[sp] = (second, live);
+            stack[sp + 1] = (first, live);
             sp += 2;
         }
     }
     all & !open
+}
+
+/// Squared distance from `o` to the centre of a node's box.
+#[inline(always)]
+fn centre_dist2(n: &Node, o: [f32; 3]) -> f32 {
+    let c = [0, 1, 2].map(|a| 0.5 * (n.lo[a] + n.hi[a]) - o[a]);
+    dot(c, c)
 }
 
 #[cfg(target_arch = "x86_64")]
