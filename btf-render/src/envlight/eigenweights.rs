@@ -117,7 +117,11 @@ impl EigenWeightSets {
 
     /// `G(δ) = Ḡ + Σ_{k<e} o_k(δ) W_k` (then `U(δ) = G(δ) · P`).
     pub fn reconstruct(&self, delta_deg: f64, e: usize) -> WeightSet {
-        let o = self.coefficients_at(delta_deg, e);
+        self.reconstruct_from(&self.coefficients_at(delta_deg, e))
+    }
+
+    /// `G = Ḡ + Σ_k o_k W_k` for coefficients `o` (from [`EigenWeightSets::coefficients_at`]).
+    pub fn reconstruct_from(&self, o: &[f64]) -> WeightSet {
         let mut g = self.mean.g.clone();
         for (ok, w) in o.iter().zip(&self.sets) {
             let ok = *ok as f32;

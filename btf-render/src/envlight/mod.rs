@@ -13,6 +13,7 @@
 //! - [`heatmap`]: green → red error images and small line plots written with `image`.
 
 pub mod bvh;
+mod camera_basis;
 pub mod eigenweights;
 pub mod envmap;
 mod gather;
