@@ -19,6 +19,7 @@ use crate::math::Vec3;
 use crate::per_vertex::VertexCoefficients;
 use crate::tangent;
 use btf_core::{Direction, InterpMode};
+use rayon::prelude::*;
 
 /// Camera and mesh inputs of [`SceneEnvironment::fill`].
 pub struct ViewInput<'a> {
@@ -79,8 +80,12 @@ pub(super) struct Built {
     /// Eigenweightsets the bases hold.
     e: usize,
     picks: Vec<Pick>,
-    /// Per material: the indices into `picks` and their basis.
-    bases: Vec<(usize, Vec<usize>, GammaBasis)>,
+    /// Per pick: its basis and its pair in that basis.
+    loc: Vec<(usize, usize)>,
+    /// First pick of every vertex, and the end (picks come in vertex order).
+    vertex_start: Vec<usize>,
+    /// Per material that occurs: the material and its basis.
+    bases: Vec<(usize, GammaBasis)>,
 }
 
 /// What [`SceneEnvironment::fill`] remembers between calls.
@@ -190,34 +195,53 @@ impl SceneEnvironment {
     fn build_bases(&self, view: &ViewInput, key: ViewKey, e: usize) -> Option<Built> {
         let ews = self.eigenweightsets()?;
         let picks = self.picks(view);
+        let mut loc = vec![(0, 0); picks.len()];
         let mut bases = vec![];
         for (mi, pm) in self.coefficients.iter().enumerate() {
-            let idx: Vec<usize> = (0..picks.len()).filter(|&i| picks[i].material == mi).collect();
-            if idx.is_empty() {
-                continue;
+            let mut pairs = vec![];
+            for (i, p) in picks.iter().enumerate().filter(|(_, p)| p.material == mi) {
+                loc[i] = (bases.len(), pairs.len());
+                pairs.push((p.frame, p.slot));
             }
-            let pairs: Vec<(usize, usize)> =
-                idx.iter().map(|&i| (picks[i].frame, picks[i].slot)).collect();
-            bases.push((mi, idx, ews.gamma_basis(pm, &pairs, e).ok()?));
+            if !pairs.is_empty() {
+                bases.push((mi, ews.gamma_basis(pm, &pairs, e).ok()?));
+            }
         }
-        Some(Built { key, e, picks, bases })
+        let mut vertex_start = vec![0; self.vertices + 1];
+        for p in &picks {
+            vertex_start[p.v + 1] += 1;
+        }
+        for v in 0..self.vertices {
+            vertex_start[v + 1] += vertex_start[v];
+        }
+        Some(Built { key, e, picks, loc, vertex_start, bases })
     }
 
+    /// `γ*` of every pick from the bases, written straight into the vertices' coefficients
+    /// (vertices in parallel).
     fn fill_from_bases(
         &self,
         built: &Built,
         o: &[f64],
         out: &mut VertexCoefficients,
-        at: (usize, usize, usize),
+        (l, n_lights, stride): (usize, usize, usize),
     ) {
-        for (mi, idx, basis) in &built.bases {
-            let pm = &self.coefficients[*mi];
-            let mut gs = vec![0f32; idx.len() * basis.per_pick];
-            basis.at(o, &mut gs);
-            for (&i, g) in idx.iter().zip(gs.chunks_exact(basis.per_pick)) {
-                self.write(out, &built.picks[i], pm, g, at);
-            }
-        }
+        let o: Vec<f32> = o.iter().map(|&x| x as f32).collect();
+        let per_vertex = n_lights * 4 * stride;
+        let k3 = built.bases.iter().map(|(_, b)| b.per_pick).max().unwrap_or(0);
+        out.coef.par_chunks_mut(per_vertex).enumerate().for_each_init(
+            || vec![0f32; k3],
+            |gs, (v, dst)| {
+                let Some(range) = built.vertex_start.get(v..v + 2) else { return };
+                for i in range[0]..range[1] {
+                    let (b, pair) = built.loc[i];
+                    let (mi, basis) = &built.bases[b];
+                    basis.at_one(pair, &o, gs);
+                    let pick = &built.picks[i];
+                    self.write_slot(dst, l, stride, pick, &self.coefficients[*mi], gs);
+                }
+            },
+        );
     }
 
     /// Scatters `γ*` of one pick (layout of [`super::WeightSet::gamma_star`]) times
@@ -230,10 +254,26 @@ impl SceneEnvironment {
         gs: &[f32],
         (l, n_lights, stride): (usize, usize, usize),
     ) {
+        let per_vertex = n_lights * 4 * stride;
+        if let Some(dst) = out.coef.get_mut(pick.v * per_vertex..(pick.v + 1) * per_vertex) {
+            self.write_slot(dst, l, stride, pick, pm, gs);
+        }
+    }
+
+    /// [`SceneEnvironment::write`] into the coefficients `dst` of the pick's vertex.
+    fn write_slot(
+        &self,
+        dst: &mut [[f32; 4]],
+        l: usize,
+        stride: usize,
+        pick: &Pick,
+        pm: &CoefficientMatrix,
+        gs: &[f32],
+    ) {
         let k = pm.per_slot();
         let s = pick.omega * self.params.exposure;
-        let base = ((pick.v * n_lights + l) * 4 + pick.m) * stride;
-        let Some(dst) = out.coef.get_mut(base..base + stride) else { return };
+        let base = (l * 4 + pick.m) * stride;
+        let Some(dst) = dst.get_mut(base..base + stride) else { return };
         for col in 0..2 {
             dst[col] = [s * gs[col], s * gs[k + col], s * gs[2 * k + col], 0.0];
         }

@@ -199,6 +199,19 @@ impl GammaBasis {
     }
 }
 
+impl GammaBasis {
+    /// `γ*` of pair `i` alone for the coefficients `o` (as `f32`, at most `terms − 1` used)
+    /// into `out` (`per_pick`): the sums of [`GammaBasis::at`] in the same order.
+    pub fn at_one(&self, i: usize, o: &[f32], out: &mut [f32]) {
+        let per = self.per_pick;
+        let s = &self.data[i * self.terms * per..(i + 1) * self.terms * per];
+        out[..per].copy_from_slice(&s[..per]);
+        for (ok, w) in o.iter().take(self.terms - 1).zip(s[per..].chunks_exact(per)) {
+            out[..per].iter_mut().zip(w).for_each(|(d, &w)| *d += ok * w);
+        }
+    }
+}
+
 /// Relative error `‖U − U_ref‖ / ‖U_ref‖` under `metric`.
 pub fn relative_error(u: &WeightSet, reference: &WeightSet, metric: &[f64]) -> f64 {
     let d: Vec<f32> = u.g.iter().zip(&reference.g).map(|(a, b)| a - b).collect();
