@@ -78,20 +78,20 @@ impl FrameRays {
     }
 }
 
-/// Eight lanes of one axis starting at pixel `p`.
+/// `N` lanes of one axis starting at pixel `p`.
 #[inline(always)]
-fn lanes(v: &[f32], p: usize) -> &[f32; 8] {
-    v[p..p + 8].try_into().unwrap_or(&[0.0; 8])
+fn lanes<const N: usize>(v: &[f32], p: usize) -> &[f32; N] {
+    v[p..p + N].try_into().unwrap_or(&[0.0; N])
 }
 
-/// The slab test of [`super::bvh`] for eight rays with reciprocal directions `inv` (bit
-/// `l` = lane `l`).
+/// The slab test of [`super::bvh`] for `N ≤ 32` rays with reciprocal directions `inv`
+/// (bit `l` = lane `l`).
 #[inline(always)]
-fn slab8(node: &Node, o: [f32; 3], t_min: f32, inv: [&[f32; 8]; 3]) -> u32 {
+fn slab<const N: usize>(node: &Node, o: [f32; 3], t_min: f32, inv: [&[f32; N]; 3]) -> u32 {
     let lo = sub(node.lo, o);
     let hi = sub(node.hi, o);
     let mut bits = 0u32;
-    for l in 0..8 {
+    for l in 0..N {
         let (mut t0, mut t1) = (t_min, f32::INFINITY);
         for a in 0..3 {
             let ta = lo[a] * inv[a][l];
@@ -121,11 +121,11 @@ impl<'a> TriFromOrigin<'a> {
     }
 }
 
-/// [`super::bvh::tri_hit`] for eight rays with directions `d` (bit `l` = lane `l`).
+/// [`super::bvh::tri_hit`] for `N ≤ 32` rays with directions `d` (bit `l` = lane `l`).
 #[inline(always)]
-fn tri8(t: &TriFromOrigin, t_min: f32, d: [&[f32; 8]; 3]) -> u32 {
+fn tri<const N: usize>(t: &TriFromOrigin, t_min: f32, d: [&[f32; N]; 3]) -> u32 {
     let mut bits = 0u32;
-    for l in 0..8 {
+    for l in 0..N {
         let dl = [d[0][l], d[1][l], d[2][l]];
         let pv = cross(dl, t.tri.e2);
         let det = dot(t.tri.e1, pv);
@@ -171,21 +171,28 @@ impl Packet {
         true
     }
 
-    /// Lanes of octet `k`.
+    /// Lanes of group `k` of `N` rays.
     #[inline(always)]
-    fn octet(v: &[[f32; PACKET]; 3], k: usize) -> [&[f32; 8]; 3] {
-        [0, 1, 2].map(|a| lanes(&v[a], 8 * k))
+    fn group<const N: usize>(v: &[[f32; PACKET]; 3], k: usize) -> [&[f32; N]; 3] {
+        [0, 1, 2].map(|a| lanes(&v[a], N * k))
     }
 }
 
 /// The lanes of `packet` (bit `k` = ray `k`) whose rays from `o` hit a triangle under
 /// node `root`, with the node tests of [`Bvh::occluded_below`].
 #[inline(always)]
-fn packet_hits_kernel(bvh: &Bvh, root: u32, o: [f32; 3], t_min: f32, packet: &Packet) -> u64 {
+fn packet_hits_kernel<const N: usize>(
+    bvh: &Bvh,
+    root: u32,
+    o: [f32; 3],
+    t_min: f32,
+    packet: &Packet,
+) -> u64 {
+    let lane_mask = (1u64 << N) - 1;
     let (nodes, tris) = (bvh.nodes(), bvh.tris());
     let n = packet.len.min(PACKET);
     let all = if n == 64 { u64::MAX } else { (1u64 << n) - 1 };
-    let octets = n.div_ceil(8);
+    let groups = n.div_ceil(N);
     let mut open = all;
     let mut stack = [(root, all); 64];
     let mut sp = 1usize;
@@ -194,11 +201,11 @@ fn packet_hits_kernel(bvh: &Bvh, root: u32, o: [f32; 3], t_min: f32, packet: &Pa
         let (me, m) = stack[sp];
         let Some(node) = nodes.get(me as usize) else { continue };
         let mut live = 0u64;
-        for k in 0..octets {
-            let lm = (m & open) >> (8 * k) & 0xff;
+        for k in 0..groups {
+            let lm = (m & open) >> (N * k) & lane_mask;
             if lm != 0 {
-                let bits = slab8(node, o, t_min, Packet::octet(&packet.inv, k)) as u64;
-                live |= (bits & lm) << (8 * k);
+                let bits = slab::<N>(node, o, t_min, Packet::group(&packet.inv, k)) as u64;
+                live |= (bits & lm) << (N * k);
             }
         }
         if live == 0 {
@@ -208,12 +215,12 @@ fn packet_hits_kernel(bvh: &Bvh, root: u32, o: [f32; 3], t_min: f32, packet: &Pa
             let s = node.start_or_right as usize;
             for t in tris.get(s..s + node.count as usize).unwrap_or(&[]) {
                 let tf = TriFromOrigin::new(t, o);
-                for k in 0..octets {
-                    let lm = live >> (8 * k) & 0xff;
+                for k in 0..groups {
+                    let lm = live >> (N * k) & lane_mask;
                     if lm != 0 {
-                        let h = tri8(&tf, t_min, Packet::octet(&packet.dir, k)) as u64 & lm;
-                        live &= !(h << (8 * k));
-                        open &= !(h << (8 * k));
+                        let h = tri::<N>(&tf, t_min, Packet::group(&packet.dir, k)) as u64 & lm;
+                        live &= !(h << (N * k));
+                        open &= !(h << (N * k));
                     }
                 }
                 if live == 0 {
@@ -250,18 +257,31 @@ fn centre_dist2(n: &Node, o: [f32; 3]) -> f32 {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn packet_hits_avx2(bvh: &Bvh, root: u32, o: [f32; 3], t_min: f32, packet: &Packet) -> u64 {
-    packet_hits_kernel(bvh, root, o, t_min, packet)
+    packet_hits_kernel::<8>(bvh, root, o, t_min, packet)
 }
 
-/// [`packet_hits_kernel`] with 8-lane vectors where the CPU has them.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn packet_hits_avx512(bvh: &Bvh, root: u32, o: [f32; 3], t_min: f32, packet: &Packet) -> u64 {
+    packet_hits_kernel::<16>(bvh, root, o, t_min, packet)
+}
+
+/// [`packet_hits_kernel`] with 16-lane (AVX-512) or 8-lane (AVX2) vectors where the CPU
+/// has them.
 #[allow(unsafe_code)]
 pub(super) fn packet_hits(bvh: &Bvh, root: u32, o: [f32; 3], t_min: f32, packet: &Packet) -> u64 {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU supports AVX2 (checked just above); the kernel is plain safe code.
-        return unsafe { packet_hits_avx2(bvh, root, o, t_min, packet) };
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU supports AVX-512F (checked just above); plain safe code.
+            return unsafe { packet_hits_avx512(bvh, root, o, t_min, packet) };
+        }
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2 (checked just above); plain safe code.
+            return unsafe { packet_hits_avx2(bvh, root, o, t_min, packet) };
+        }
     }
-    packet_hits_kernel(bvh, root, o, t_min, packet)
+    packet_hits_kernel::<8>(bvh, root, o, t_min, packet)
 }
 
 /// One row word of open pixels for [`tri_rows`]: the pixel of bit 0, the index of the
@@ -290,7 +310,7 @@ fn tri_rows_kernel(
             bits &= !(0xffu64 << c);
             let p = r.pixel0 + c;
             let d = [lanes(&rays.dir[0], p), lanes(&rays.dir[1], p), lanes(&rays.dir[2], p)];
-            let h = (tri8(tf, t_min, d) & lm) as u64;
+            let h = (tri::<8>(tf, t_min, d) & lm) as u64;
             if h != 0 {
                 if let Some(w) = occ.get_mut(r.word) {
                     *w |= h << c;
