@@ -132,9 +132,9 @@ fn tri<const N: usize>(t: &TriFromOrigin, t_min: f32, d: [&[f32; N]; 3]) -> u32 
         let inv = 1.0 / det;
         let u = dot(t.s, pv) * inv;
         let v = dot(dl, t.q) * inv;
-        let hit = !(det.abs() < 1e-20)
-            & (u >= 0.0)
-            & (u <= 1.0)
+        // `det.abs() < 1e-20` is a miss in the scalar test; NaN is not (it fails on `u`).
+        let hit = (det.abs() >= 1e-20 || det.is_nan())
+            & (0.0..=1.0).contains(&u)
             & !(v < 0.0 || u + v > 1.0)
             & (t.e2_q * inv > t_min);
         bits |= (hit as u32) << l;
