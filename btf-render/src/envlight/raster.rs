@@ -14,6 +14,10 @@
 //! occluded here exactly when some triangle's test hits, as in the reference; the margin
 //! (`2·10⁻³` face units plus a term growing for triangles close to the origin) only has to
 //! cover the rounding of the projection, which is of order `10⁻⁶`.
+//!
+//! A far node over few still-visible pixels is finished instead by casting those pixels'
+//! rays through its subtree as one packet, and near-triangle pixels are tested eight at a
+//! time; both run the same tests lane by lane (see `octets`).
 
 use super::bvh::{Bvh, Tri, dot, sub};
 use super::hemicube::Hemicube;
@@ -24,7 +28,7 @@ use super::raster_face::{
 use super::visibility::HemicubeFrame;
 
 /// Nodes with at most this many still-visible pixels under their projection are finished
-/// by casting those pixels' rays through the node's subtree.
+/// by casting those pixels' rays through the node's subtree, as one packet.
 const RAY_CAST_BELOW: usize = 48;
 
 /// The rasteriser of one hemicube frame.
