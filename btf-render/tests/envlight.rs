@@ -459,3 +459,75 @@ fn gamma_basis_equals_gamma_star_of_the_reconstruction() {
     }
     assert!(ews.gamma_basis(&s.p, &[(s.frames.len(), 0)], 5).is_err());
 }
+
+#[test]
+fn renderer_rotation_through_the_camera_basis_equals_the_direct_path() {
+    use btf_render::envlight::scene_env::{EnvMesh, ViewInput};
+    use btf_render::envlight::{EnvironmentParams, SceneEnvironment};
+    use btf_render::material::MaterialData;
+    use btf_render::math::Vec3;
+    use btf_render::per_vertex::{self, VertexCoefficients};
+    let mesh = crumpled_sheet();
+    let dir = tempfile::tempdir().unwrap();
+    let store =
+        common::write_store(dir.path(), "m.eigen", Pattern::Checker, 2, 2, 4, Quantization::F16);
+    let mat = MaterialData::load(&store, None).unwrap();
+    let (env, _) = sun_env(128, [0.5, 0.3, 0.812]);
+    let tangents = compute_tangents(&mesh);
+    let em = EnvMesh {
+        positions: &mesh.positions,
+        normals: &mesh.normals,
+        tangents: &tangents,
+        triangles: &mesh.triangles,
+    };
+    let params = EnvironmentParams {
+        rotation_deg: 10.0,
+        exposure: 0.7,
+        visibility_res: 8,
+        two_sided: true,
+        eigen: Some((12, 5)),
+        cache_dir: None,
+    };
+    let mut s = SceneEnvironment::new(params, &env, &em, &[&mat]).unwrap();
+    let n = mesh.positions.len();
+    let stride = per_vertex::stride(mat.groups);
+    let (material_of, mats) = (vec![0usize; n], [&mat]);
+    let view_from = |eye: Vec3| ViewInput {
+        eye,
+        ortho_to_camera: None,
+        view_mode: InterpMode::Four,
+        positions: &mesh.positions,
+        normals: &mesh.normals,
+        tangents: &tangents,
+        material_of: &material_of,
+        materials: &mats,
+    };
+    let blank =
+        || VertexCoefficients { slots: vec![[0; 4]; n], coef: vec![[0.0; 4]; n * 4 * stride] };
+    // The sheet is seen from both sides (the camera below it sees back sides).
+    let view = view_from(Vec3::new(0.3, -2.0, -0.4));
+    s.fill(&mut blank(), &view, 0, 1, stride);
+    assert!(!s.fill_used_basis(), "first fill at a camera: the direct path");
+    for delta in [47.0, 200.0, 370.0] {
+        s.set_rotation(delta);
+        let (mut fast, mut slow) = (blank(), blank());
+        s.fill(&mut fast, &view, 0, 1, stride);
+        assert!(
+            s.fill_used_basis(),
+            "δ {delta}: a rotation under the same camera streams the basis"
+        );
+        s.fill_direct(&mut slow, &view, 0, 1, stride);
+        let scale = slow.coef.iter().flatten().fold(0f32, |m, x| m.max(x.abs()));
+        assert!(scale > 0.0);
+        for (a, b) in fast.coef.iter().flatten().zip(slow.coef.iter().flatten()) {
+            // Same sums in another order: f32 rounding of ~100 terms.
+            assert!((a - b).abs() <= 1e-4 * scale, "δ {delta}: {a} vs {b} (scale {scale})");
+        }
+    }
+    // A camera move and an exact rotation take the direct path again.
+    s.fill(&mut blank(), &view_from(Vec3::new(2.0, 0.5, 1.0)), 0, 1, stride);
+    assert!(!s.fill_used_basis());
+    s.set_rotation_exact(30.0);
+    s.fill(&mut blank(), &view, 0, 1, stride);
+    assert!(!s.fill_used_basis());
+}

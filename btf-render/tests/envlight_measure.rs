@@ -11,13 +11,15 @@ mod common;
 use btf_core::InterpMode;
 use btf_core::eigen::Quantization;
 use btf_render::envlight::eigenweights::relative_error;
-use btf_render::envlight::scene_env::EnvMesh;
+use btf_render::envlight::scene_env::{EnvMesh, ViewInput};
 use btf_render::envlight::{
     CoefficientMatrix, EnvCube, EnvMap, EnvironmentParams, GatherInput, Hemicube, HemicubeFrame,
     LightTable, SceneEnvironment, VisibilityMaps, WeightSet, heatmap,
 };
 use btf_render::material::MaterialData;
+use btf_render::math::Vec3;
 use btf_render::mesh::Mesh;
+use btf_render::per_vertex::{self, VertexCoefficients};
 use btf_render::tangent::compute_tangents;
 use datasets::mesh::{MeshKind, Resolution};
 use std::time::Instant;
@@ -123,6 +125,29 @@ fn measure_shirts() {
     }
 }
 
+/// Visibility alone (for profiling): `… --test envlight_measure visibility_only -- --ignored
+/// --nocapture`, the high shirt with `BTF_MEASURE_HIGH=1`.
+#[test]
+#[ignore = "a measurement: visibility of one shirt against the ray cast"]
+fn visibility_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let high = std::env::var("BTF_MEASURE_HIGH").is_ok_and(|v| v == "1");
+    let (name, res) =
+        if high { ("shirt high", Resolution::High) } else { ("shirt low", Resolution::Low) };
+    let mesh = shirt(dir.path(), res);
+    let tangents = compute_tangents(&mesh);
+    let cube = Hemicube::new(32).unwrap();
+    let frames = HemicubeFrame::of_mesh(&mesh.positions, &mesh.normals, &tangents, true);
+    if std::env::var("BTF_FAST_ONLY").is_ok_and(|v| v == "1") {
+        // For `perf stat`: the rasteriser alone.
+        let t = Instant::now();
+        VisibilityMaps::compute(&cube, &frames, &mesh.positions, &mesh.triangles);
+        eprintln!("{name}: rasteriser alone {:.0} ms", ms(t));
+        return;
+    }
+    visibility(name, &cube, &frames, &mesh, &dir.path().join("cache"));
+}
+
 /// Rasteriser (all frames, then through the cache) against the reference ray cast (all
 /// frames of the low shirt, every 8th frame of the high one), bits compared.
 fn visibility(
@@ -218,8 +243,10 @@ fn rotation(
     let mut out = vec![0f32; picks.len() * k3];
     for k in 0..5 {
         let delta = 7.0 + 13.0 * k as f64;
+        let t = Instant::now();
         s.set_rotation(delta);
-        all_g.push(s.timings.rotation_ms);
+        s.weights(); // G of the new rotation (formed on demand)
+        all_g.push(ms(t));
         let t = Instant::now();
         for (n, &(f, j)) in picks.iter().enumerate() {
             s.weights().gamma_star(p, f, j, &mut out[n * k3..(n + 1) * k3]);
@@ -242,6 +269,58 @@ fn rotation(
         picks.len(),
         median(gammas),
         median(fast)
+    );
+    renderer_rotation(name, s, mat, mesh, eye);
+}
+
+/// The renderer's path (`Renderer::set_environment_rotation`, then the per-vertex fill of
+/// the next frame): through the camera's basis against the direct fill, interleaved.
+fn renderer_rotation(
+    name: &str,
+    s: &mut SceneEnvironment,
+    mat: &MaterialData,
+    mesh: &Mesh,
+    eye: [f32; 3],
+) {
+    let n = mesh.positions.len();
+    let tangents = compute_tangents(mesh);
+    let stride = per_vertex::stride(mat.groups);
+    let (material_of, mats) = (vec![0usize; n], [mat]);
+    let view = ViewInput {
+        eye: Vec3::new(eye[0], eye[1], eye[2]),
+        ortho_to_camera: None,
+        view_mode: InterpMode::Four,
+        positions: &mesh.positions,
+        normals: &mesh.normals,
+        tangents: &tangents,
+        material_of: &material_of,
+        materials: &mats,
+    };
+    let mut vc =
+        VertexCoefficients { slots: vec![[0; 4]; n], coef: vec![[0.0; 4]; n * 4 * stride] };
+    s.fill(&mut vc, &view, 0, 1, stride);
+    let t = Instant::now();
+    s.set_rotation(3.0);
+    s.fill(&mut vc, &view, 0, 1, stride);
+    let first_ms = ms(t);
+    assert!(s.fill_used_basis());
+    let (mut basis, mut direct) = (vec![], vec![]);
+    for k in 0..7 {
+        let t = Instant::now();
+        s.set_rotation(11.0 + 17.0 * k as f64);
+        s.fill(&mut vc, &view, 0, 1, stride);
+        basis.push(ms(t));
+        assert!(s.fill_used_basis());
+        let t = Instant::now();
+        s.set_rotation(5.0 + 17.0 * k as f64);
+        s.fill_direct(&mut vc, &view, 0, 1, stride);
+        direct.push(ms(t));
+    }
+    eprintln!(
+        "{name}: renderer rotation (set_environment_rotation + per-vertex fill, e = 5): {:.2} ms through the camera basis (first rotation at this camera, building it: {first_ms:.0} ms); direct fill {:.1} ms ({:.0}×)",
+        median(basis.clone()),
+        median(direct.clone()),
+        median(direct) / median(basis)
     );
 }
 

@@ -117,7 +117,11 @@ impl EigenWeightSets {
 
     /// `G(δ) = Ḡ + Σ_{k<e} o_k(δ) W_k` (then `U(δ) = G(δ) · P`).
     pub fn reconstruct(&self, delta_deg: f64, e: usize) -> WeightSet {
-        let o = self.coefficients_at(delta_deg, e);
+        self.reconstruct_from(&self.coefficients_at(delta_deg, e))
+    }
+
+    /// `G = Ḡ + Σ_k o_k W_k` for coefficients `o` (from [`EigenWeightSets::coefficients_at`]).
+    pub fn reconstruct_from(&self, o: &[f64]) -> WeightSet {
         let mut g = self.mean.g.clone();
         for (ok, w) in o.iter().zip(&self.sets) {
             let ok = *ok as f32;
@@ -192,6 +196,19 @@ impl GammaBasis {
                     }
                 }
             });
+    }
+}
+
+impl GammaBasis {
+    /// `γ*` of pair `i` alone for the coefficients `o` (as `f32`, at most `terms − 1` used)
+    /// into `out` (`per_pick`): the sums of [`GammaBasis::at`] in the same order.
+    pub fn at_one(&self, i: usize, o: &[f32], out: &mut [f32]) {
+        let per = self.per_pick;
+        let s = &self.data[i * self.terms * per..(i + 1) * self.terms * per];
+        out[..per].copy_from_slice(&s[..per]);
+        for (ok, w) in o.iter().take(self.terms - 1).zip(s[per..].chunks_exact(per)) {
+            out[..per].iter_mut().zip(w).for_each(|(d, &w)| *d += ok * w);
+        }
     }
 }
 

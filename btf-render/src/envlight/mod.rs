@@ -13,11 +13,13 @@
 //! - [`heatmap`]: green → red error images and small line plots written with `image`.
 
 pub mod bvh;
+mod camera_basis;
 pub mod eigenweights;
 pub mod envmap;
 mod gather;
 pub mod heatmap;
 pub mod hemicube;
+mod octets;
 mod raster;
 mod raster_face;
 pub mod scene_env;

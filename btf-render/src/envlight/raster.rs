@@ -14,16 +14,21 @@
 //! occluded here exactly when some triangle's test hits, as in the reference; the margin
 //! (`2·10⁻³` face units plus a term growing for triangles close to the origin) only has to
 //! cover the rounding of the projection, which is of order `10⁻⁶`.
+//!
+//! A far node over few still-visible pixels is finished instead by casting those pixels'
+//! rays through its subtree as one packet, and near-triangle pixels are tested eight at a
+//! time; both run the same tests lane by lane (see `octets`).
 
-use super::bvh::{Bvh, Tri, dot, sub, tri_hit};
+use super::bvh::{Bvh, Tri, dot, sub};
 use super::hemicube::Hemicube;
+use super::octets::{FrameRays, Packet, RowWord, TriFromOrigin, packet_hits, tri_rows};
 use super::raster_face::{
     Face, Rect, face_bounds, face_of, faces, ratio_range, span_mask, xy_distance,
 };
 use super::visibility::HemicubeFrame;
 
 /// Nodes with at most this many still-visible pixels under their projection are finished
-/// by casting those pixels' rays through the node's subtree.
+/// by casting those pixels' rays through the node's subtree, as one packet.
 const RAY_CAST_BELOW: usize = 48;
 
 /// The rasteriser of one hemicube frame.
@@ -44,6 +49,10 @@ pub(super) struct FrameRaster<'a> {
     /// 0.9 × the smallest `z / √(x² + y²)` of any pixel centre: geometry below this cone
     /// around the origin lies under every pixel's ray.
     cone: f32,
+    /// The pixel rays of the frame.
+    rays: FrameRays,
+    /// Scratch: open row words of a rectangle.
+    rows: Vec<RowWord>,
 }
 
 impl<'a> FrameRaster<'a> {
@@ -69,6 +78,8 @@ impl<'a> FrameRaster<'a> {
             eps: 0.0,
             cone: 0.9
                 * cube.dirs.iter().map(|d| d[2] / d[0].hypot(d[1])).fold(f32::INFINITY, f32::min),
+            rays: FrameRays::new(&cube.dirs),
+            rows: Vec::new(),
         }
     }
 
@@ -78,6 +89,7 @@ impl<'a> FrameRaster<'a> {
         self.frame = *frame;
         self.origin = [0, 1, 2].map(|a| frame.origin[a] + eps * frame.axes[2][a]);
         self.eps = eps;
+        self.rays.set(frame);
         self.occ.fill(0);
         self.occluded = 0;
         self.walk(bvh);
@@ -86,10 +98,9 @@ impl<'a> FrameRaster<'a> {
             for r in 0..face.rows {
                 let row = &self.occ[(self.row_base[f] + r) * self.wpr..][..self.wpr];
                 let p0 = face.start + r * self.res;
-                for c in 0..self.res {
-                    if row[c / 64] >> (c % 64) & 1 == 0 {
-                        out[(p0 + c) / 64] |= 1 << ((p0 + c) % 64);
-                    }
+                for (w, &occ) in row.iter().enumerate() {
+                    let n = (self.res - 64 * w).min(64);
+                    set_bits(out, p0 + 64 * w, !occ & span_mask(0, n - 1));
                 }
             }
         }
@@ -108,16 +119,14 @@ impl<'a> FrameRaster<'a> {
             }
             let node = &nodes[me as usize];
             let Some(rects) = self.box_rects(node.lo, node.hi) else { continue };
-            let open: usize = rects.iter().flatten().map(|r| self.visible_in(r)).sum();
+            let open = self.visible_in(&rects, RAY_CAST_BELOW);
             if open == 0 {
                 continue;
             }
             if open <= RAY_CAST_BELOW {
                 // Few pixels left under a far node: rays through its subtree are cheaper
                 // than projecting its triangles one by one.
-                for r in rects.iter().flatten() {
-                    self.cast_pixels(r, |o, d, eps| bvh.occluded_below(me, o, d, eps));
-                }
+                self.cast_packets(bvh, me, &rects);
                 continue;
             }
             if node.count > 0 {
@@ -214,37 +223,86 @@ impl<'a> FrameRaster<'a> {
         (l <= h).then_some((l as usize, h as usize))
     }
 
-    /// Number of still-visible pixels in `r`.
-    fn visible_in(&self, r: &Rect) -> usize {
-        (r.r0..=r.r1)
-            .map(|row| {
-                let words = &self.occ[(self.row_base[r.face] + row) * self.wpr..][..self.wpr];
-                (r.c0 / 64..=r.c1 / 64)
-                    .map(|w| {
-                        let m =
-                            span_mask(r.c0.max(64 * w) - 64 * w, r.c1.min(64 * w + 63) - 64 * w);
-                        (!words[w] & m).count_ones() as usize
-                    })
-                    .sum::<usize>()
-            })
-            .sum()
+    /// The column masks of `r` per occlusion word (words `c0 / 64 ..= c1 / 64`).
+    fn word_masks(r: &Rect) -> ([u64; 8], usize, usize) {
+        // Rows hold at most 512 pixels (`RES_RANGE`), 8 words.
+        let (w0, w1) = (r.c0 / 64, (r.c1 / 64).min(7));
+        let mut m = [0u64; 8];
+        for (w, m) in m.iter_mut().enumerate().take(w1 + 1).skip(w0) {
+            *m = span_mask(r.c0.max(64 * w) - 64 * w, r.c1.min(64 * w + 63) - 64 * w);
+        }
+        (m, w0, w1)
     }
 
-    /// Marks the still-visible pixels of `r` whose ray `hit(origin, dir, eps)` reports.
-    fn cast_pixels(&mut self, r: &Rect, hit: impl Fn([f32; 3], [f32; 3], f32) -> bool) {
-        let face = self.faces[r.face];
-        for row in r.r0..=r.r1 {
-            let base = (self.row_base[r.face] + row) * self.wpr;
-            for c in r.c0..=r.c1 {
-                if self.occ[base + c / 64] >> (c % 64) & 1 == 1 {
-                    continue;
+    /// Number of still-visible pixels in `rects`, counted up to just above `limit`.
+    fn visible_in(&self, rects: &[Option<Rect>; 5], limit: usize) -> usize {
+        let mut open = 0;
+        for r in rects.iter().flatten() {
+            let (m, w0, w1) = Self::word_masks(r);
+            for row in r.r0..=r.r1 {
+                let base = (self.row_base[r.face] + row) * self.wpr;
+                for w in w0..=w1 {
+                    open += (!self.occ[base + w] & m[w]).count_ones() as usize;
                 }
-                let p = face.start + row * self.res + c;
-                if hit(self.origin, self.frame.to_world(self.cube.dirs[p]), self.eps) {
-                    self.occ[base + c / 64] |= 1 << (c % 64);
-                    self.occluded += 1;
+                if open > limit {
+                    return open;
                 }
             }
+        }
+        open
+    }
+
+    /// The open row words of `r` into `self.rows`.
+    fn open_rows(&mut self, r: &Rect) {
+        self.rows.clear();
+        let face = self.faces[r.face];
+        let (m, w0, w1) = Self::word_masks(r);
+        for row in r.r0..=r.r1 {
+            let base = (self.row_base[r.face] + row) * self.wpr;
+            for w in w0..=w1 {
+                let open = !self.occ[base + w] & m[w];
+                if open != 0 {
+                    let pixel0 = face.start + row * self.res + 64 * w;
+                    self.rows.push(RowWord { pixel0, word: base + w, open });
+                }
+            }
+        }
+    }
+
+    /// Casts the rays of the open pixels of `rects` through the subtree of node `root`, in
+    /// packets, and marks the hit ones.
+    fn cast_packets(&mut self, bvh: &Bvh, root: u32, rects: &[Option<Rect>; 5]) {
+        let mut packet = Packet::new();
+        for r in rects.iter().flatten() {
+            self.open_rows(r);
+            for k in 0..self.rows.len() {
+                let rw = self.rows[k];
+                let mut bits = rw.open;
+                while bits != 0 {
+                    let c = bits.trailing_zeros() as usize;
+                    let bit = (64 * rw.word + c) as u32;
+                    if !packet.push(&self.rays, rw.pixel0 + c, bit) {
+                        self.flush(bvh, root, &packet);
+                        packet.len = 0;
+                        continue;
+                    }
+                    bits &= bits - 1;
+                }
+            }
+        }
+        self.flush(bvh, root, &packet);
+    }
+
+    fn flush(&mut self, bvh: &Bvh, root: u32, packet: &Packet) {
+        if packet.len == 0 {
+            return;
+        }
+        let mut hits = packet_hits(bvh, root, self.origin, self.eps, packet);
+        self.occluded += hits.count_ones() as usize;
+        while hits != 0 {
+            let b = packet.bit[hits.trailing_zeros() as usize] as usize;
+            self.occ[b / 64] |= 1 << (b % 64);
+            hits &= hits - 1;
         }
     }
 
@@ -294,6 +352,20 @@ impl<'a> FrameRaster<'a> {
     }
 
     fn test_pixels(&mut self, r: &Rect, t: &Tri) {
-        self.cast_pixels(r, |o, d, eps| tri_hit(t, o, d, eps));
+        self.open_rows(r);
+        if self.rows.is_empty() {
+            return;
+        }
+        let tf = TriFromOrigin::new(t, self.origin);
+        self.occluded += tri_rows(&tf, self.eps, &self.rays, &self.rows, &mut self.occ) as usize;
+    }
+}
+
+/// ORs the bits of `word` into the bit set `out` starting at bit `at`.
+fn set_bits(out: &mut [u64], at: usize, word: u64) {
+    let (i, s) = (at / 64, at % 64);
+    out[i] |= word << s;
+    if s > 0 && word >> (64 - s) != 0 {
+        out[i + 1] |= word >> (64 - s);
     }
 }

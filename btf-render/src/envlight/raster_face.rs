@@ -162,7 +162,9 @@ pub(super) fn face_bounds(
 /// Distance from the tangent-space `z` axis to the box `lo..hi` (0 when it crosses it).
 pub(super) fn xy_distance(lo: &[f32; 3], hi: &[f32; 3]) -> f32 {
     let gap = |a: usize| lo[a].max(-hi[a]).max(0.0);
-    gap(0).hypot(gap(1))
+    // In f64: no libm call, no overflow (callers keep a 10 % safety factor).
+    let (x, y) = (gap(0) as f64, gap(1) as f64);
+    (x * x + y * y).sqrt() as f32
 }
 
 /// Bits `a..=b` of a word (`a ≤ b < 64`).

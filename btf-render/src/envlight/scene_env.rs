@@ -9,17 +9,18 @@
 //! eigenweightsets, one PCA over `A` rotations, after which a rotation costs `e` vector
 //! additions (eq. 13). Back sides of two-sided cloth have hemicubes of their own.
 
+use super::camera_basis::CameraCache;
+pub use super::camera_basis::ViewInput;
 use super::eigenweights::EigenWeightSets;
 use super::envmap::{EnvCube, EnvMap};
 use super::hemicube::{Hemicube, LightTable};
 use super::visibility::{HemicubeFrame, VisibilityMaps};
 use super::weights::{CoefficientMatrix, GatherInput, WeightSet, hemicube_pixel, rotate_z};
 use crate::material::MaterialData;
-use crate::math::Vec3;
-use crate::per_vertex::VertexCoefficients;
-use crate::{Error, Result, tangent};
-use btf_core::{Direction, InterpMode};
+use crate::{Error, Result};
+use btf_core::InterpMode;
 use std::path::PathBuf;
+use std::sync::{Mutex, OnceLock};
 use std::time::Instant;
 
 /// Eigenweightsets kept at least (when on and the rank allows), so that error reports for
@@ -72,18 +73,24 @@ pub struct EnvTimings {
 
 /// Runtime state of one environment light.
 pub struct SceneEnvironment {
-    params: EnvironmentParams,
+    pub(super) params: EnvironmentParams,
     cube: Hemicube,
     table: LightTable,
     frames: Vec<HemicubeFrame>,
-    vertices: usize,
+    pub(super) vertices: usize,
+    lights: usize,
     vis: VisibilityMaps,
-    coefficients: Vec<CoefficientMatrix>,
+    pub(super) coefficients: Vec<CoefficientMatrix>,
     env: EnvCube,
-    weights: WeightSet,
+    /// `G` of the current rotation (formed on first use after an eigenweightset rotation).
+    weights: OnceLock<WeightSet>,
+    /// `o_k(δ)` of the current rotation when it came from the eigenweightsets.
+    eigen_o: Option<Vec<f64>>,
     eigen: Option<EigenWeightSets>,
     /// Counts [`SceneEnvironment::set_environment`] calls (caches keyed on the map).
     revision: u64,
+    /// The camera bases of [`SceneEnvironment::fill`].
+    pub(super) camera: Mutex<CameraCache>,
     /// Timings of the preparation.
     pub timings: EnvTimings,
 }
@@ -120,8 +127,6 @@ impl SceneEnvironment {
         let timings =
             EnvTimings { visibility_ms: ms(t), visibility_cached: cached, ..Default::default() };
         let coefficients = materials.iter().map(|m| CoefficientMatrix::from_material(m)).collect();
-        let weights =
-            WeightSet { frames: frames.len(), lights: first.light_sampling.len(), g: vec![] };
         let env_cube = EnvCube { res: 1, dirs: vec![], power: vec![] };
         let mut s = SceneEnvironment {
             params,
@@ -129,12 +134,15 @@ impl SceneEnvironment {
             table,
             frames,
             vertices: mesh.positions.len(),
+            lights: first.light_sampling.len(),
             vis,
             coefficients,
             env: env_cube,
-            weights,
+            weights: OnceLock::new(),
+            eigen_o: None,
             eigen: None,
             revision: 0,
+            camera: Mutex::new(CameraCache::default()),
             timings,
         };
         s.set_environment(env)?;
@@ -156,7 +164,7 @@ impl SceneEnvironment {
             visibility: &self.vis,
             frames: &self.frames,
             dirs: &self.cube.dirs,
-            lights: self.weights.lights,
+            lights: self.lights,
         };
         WeightSet::gather(&input, &self.env, delta_deg)
     }
@@ -166,9 +174,10 @@ impl SceneEnvironment {
         let t = Instant::now();
         self.env = EnvCube::new(env, Self::cube_res(self.params.visibility_res));
         self.revision += 1;
-        self.weights = self.gather(self.params.rotation_deg);
+        self.set_weights(self.gather(self.params.rotation_deg));
         self.timings.weights_ms = ms(t);
         self.eigen = None;
+        self.camera.get_mut().unwrap_or_else(|e| e.into_inner()).clear();
         if let Some((a_n, e)) = self.params.eigen {
             let t = Instant::now();
             let sets: Vec<WeightSet> =
@@ -198,32 +207,54 @@ impl SceneEnvironment {
     pub fn set_rotation_exact(&mut self, delta_deg: f64) {
         let t = Instant::now();
         self.params.rotation_deg = delta_deg;
-        self.weights = self.gather(delta_deg);
+        self.set_weights(self.gather(delta_deg));
         self.timings.rotation_ms = ms(t);
+    }
+
+    /// Exact weights `g` for the current rotation.
+    fn set_weights(&mut self, g: WeightSet) {
+        self.weights = OnceLock::from(g);
+        self.eigen_o = None;
+    }
+
+    /// The current rotation through the eigenweightsets: `o_k(δ)`, `G` formed on demand.
+    fn set_eigen_rotation(&mut self, delta_deg: f64, e: usize) {
+        self.params.rotation_deg = delta_deg;
+        self.eigen_o = self.eigen.as_ref().map(|ews| ews.coefficients_at(delta_deg, e));
+        self.weights = OnceLock::new();
+    }
+
+    /// `o_k(δ)` of the current rotation, when it came from the eigenweightsets.
+    pub(super) fn eigen_coefficients(&self) -> Option<&[f64]> {
+        self.eigen_o.as_deref()
     }
 
     /// Turns the environment to `delta_deg` with `e` eigenweightsets (at most those kept);
     /// an error when eigenweightsets are off.
     pub fn set_rotation_eigen(&mut self, delta_deg: f64, e: usize) -> Result<()> {
-        let ews = self.eigen.as_ref().ok_or_else(|| {
-            Error::Invalid("eigenweightsets are off for this environment light".into())
-        })?;
+        if self.eigen.is_none() {
+            return Err(Error::Invalid(
+                "eigenweightsets are off for this environment light".into(),
+            ));
+        }
         let t = Instant::now();
-        self.params.rotation_deg = delta_deg;
-        self.weights = ews.reconstruct(delta_deg, e);
+        self.set_eigen_rotation(delta_deg, e);
         self.timings.rotation_ms = ms(t);
         Ok(())
     }
 
-    /// Turns the environment to `delta_deg` about world `+z`: `e` vector additions with
-    /// eigenweightsets, else a new gather.
+    /// Turns the environment to `delta_deg` about world `+z`: with eigenweightsets the
+    /// coefficients `o_k(δ)` (`G` and `γ*` follow on demand, see
+    /// [`SceneEnvironment::fill`]), else a new gather.
     pub fn set_rotation(&mut self, delta_deg: f64) {
         let t = Instant::now();
-        self.params.rotation_deg = delta_deg;
-        self.weights = match (&self.eigen, self.params.eigen) {
-            (Some(ews), Some((_, e))) => ews.reconstruct(delta_deg, e),
-            _ => self.gather(delta_deg),
-        };
+        match (&self.eigen, self.params.eigen) {
+            (Some(_), Some((_, e))) => self.set_eigen_rotation(delta_deg, e),
+            _ => {
+                self.params.rotation_deg = delta_deg;
+                self.set_weights(self.gather(delta_deg));
+            }
+        }
         self.timings.rotation_ms = ms(t);
     }
 
@@ -275,9 +306,13 @@ impl SceneEnvironment {
         }
     }
 
-    /// The current weights `g`.
+    /// The current weights `g` (after an eigenweightset rotation `Ḡ + Σ o_k W_k`, formed
+    /// on the first call).
     pub fn weights(&self) -> &WeightSet {
-        &self.weights
+        self.weights.get_or_init(|| match (&self.eigen, &self.eigen_o) {
+            (Some(ews), Some(o)) => ews.reconstruct_from(o),
+            _ => WeightSet { frames: self.frames.len(), lights: self.lights, g: vec![] },
+        })
     }
 
     /// The visibility maps.
@@ -298,83 +333,6 @@ impl SceneEnvironment {
     /// The `U` metric of material 0 (for error measures).
     pub fn metric(&self) -> Vec<f64> {
         self.coefficients[0].metric()
-    }
-
-    /// Writes this light's coefficients (light `l` of `n_lights`) into `out`, for the
-    /// camera at `eye` (or the orthographic direction `ortho_to_camera`).
-    pub fn fill(
-        &self,
-        out: &mut VertexCoefficients,
-        view: &ViewInput,
-        l: usize,
-        n_lights: usize,
-        stride: usize,
-    ) {
-        let mut gs =
-            vec![0f32; 3 * (self.coefficients.iter().map(|c| c.per_slot()).max().unwrap_or(2))];
-        for v in 0..self.vertices {
-            let Some(&mi) = view.material_of.get(v) else { continue };
-            if mi == usize::MAX || mi >= self.coefficients.len() {
-                continue;
-            }
-            let p = Vec3::from(view.positions[v]);
-            let (t, b, mut n) = tangent::frame(view.normals[v], view.tangents[v]);
-            let to_cam =
-                view.ortho_to_camera.unwrap_or(view.eye - p).try_normalize(0.0).unwrap_or(n);
-            let back = to_cam.dot(&n) < 0.0;
-            if back {
-                n = -n;
-            }
-            let Some(dir) = Direction::from_vector(tangent::to_tangent(to_cam, (t, b, n))) else {
-                continue;
-            };
-            let f = if back && self.params.two_sided { self.vertices + v } else { v };
-            let pm = &self.coefficients[mi];
-            let k = pm.per_slot();
-            let vw = view.view_sampling(mi).view_weights(dir, view.view_mode);
-            for (m, &(j, omega)) in vw.as_slice().iter().enumerate() {
-                self.weights.gamma_star(pm, f, j, &mut gs);
-                let s = omega as f32 * self.params.exposure;
-                let base = ((v * n_lights + l) * 4 + m) * stride;
-                let dst = &mut out.coef[base..base + stride];
-                for col in 0..2 {
-                    dst[col] = [s * gs[col], s * gs[k + col], s * gs[2 * k + col], 0.0];
-                }
-                for kk in 0..pm.components {
-                    for ch in 0..3 {
-                        let flat = 3 * kk + ch;
-                        let (g, lane) = (flat / 12, flat % 12);
-                        dst[2 + 3 * g + lane / 4][lane % 4] = s * gs[ch * k + 2 + kk];
-                    }
-                }
-            }
-        }
-    }
-}
-
-/// Camera and mesh inputs of [`SceneEnvironment::fill`].
-pub struct ViewInput<'a> {
-    /// Eye position.
-    pub eye: Vec3,
-    /// Direction towards an orthographic camera.
-    pub ortho_to_camera: Option<Vec3>,
-    /// View blending.
-    pub view_mode: InterpMode,
-    /// Positions, normals, tangents of the mesh.
-    pub positions: &'a [[f32; 3]],
-    /// Unit normals.
-    pub normals: &'a [[f32; 3]],
-    /// Tangents.
-    pub tangents: &'a [[f32; 4]],
-    /// Material of each vertex (`usize::MAX` = none).
-    pub material_of: &'a [usize],
-    /// Materials (for their view samplings).
-    pub materials: &'a [&'a MaterialData],
-}
-
-impl ViewInput<'_> {
-    fn view_sampling(&self, m: usize) -> &btf_core::Sampling {
-        &self.materials[m].view_sampling
     }
 }
 
