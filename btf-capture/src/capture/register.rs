@@ -169,10 +169,14 @@ pub fn register(
                 span,
             );
         }
+        let before = h;
         h = homography::refine(&h, &pts, &lines, 1.0);
         if !lines.is_empty() {
             lines = drop_line_outliers(&h, lines);
             h = homography::refine(&h, &pts, &lines, 1.0);
+        }
+        if !h.iter().all(|v| v.is_finite()) {
+            h = before;
         }
     }
     let pts = markers::corrected_matches(&h, marks, radius, &found);
