@@ -55,6 +55,10 @@ pub struct ProcessArgs {
     /// Store element type (f16|f32).
     #[arg(long, default_value = "f32")]
     dtype: String,
+    /// Light-incidence correction: `cosine` (scale by cos θ_l / cos θ_l' for the
+    /// registered plate tilt) or `none`.
+    #[arg(long, default_value = "cosine")]
+    light_correction: String,
     /// Print a JSON summary on standard output.
     #[arg(long)]
     json: bool,
@@ -74,6 +78,10 @@ pub struct ScoreArgs {
     /// Write score.json and filters.md into this folder.
     #[arg(long)]
     report: Option<PathBuf>,
+    /// Also score against the nominal-direction (orthographic) truth, which charges the
+    /// set-up's perspective (doubles the truth's cost).
+    #[arg(long)]
+    nominal: bool,
 }
 
 /// Runs `btf capture`.
@@ -119,6 +127,11 @@ fn process(a: ProcessArgs) -> Result<()> {
         "markers" => false,
         o => bail!("--registration '{o}' is not markers+lines or markers"),
     };
+    let correct_light_incidence = match a.light_correction.as_str() {
+        "cosine" => true,
+        "none" => false,
+        o => bail!("--light-correction '{o}' is not cosine or none"),
+    };
     let mut opt = ProcessOptions {
         size: a.size,
         rectified_size: a.rectified_size,
@@ -128,6 +141,7 @@ fn process(a: ProcessArgs) -> Result<()> {
         fallback_nominal,
         resume: a.resume,
         dtype,
+        correct_light_incidence,
         ..ProcessOptions::default()
     };
     opt.register.use_lines = use_lines;
@@ -170,11 +184,14 @@ fn process(a: ProcessArgs) -> Result<()> {
     Ok(())
 }
 
-/// The truth normtextures of a synthetic capture: its material evaluated orthographically
-/// at the texel centres of a grid, for the nominal view and light directions.
+/// The truth normtextures of a synthetic capture: its material's BTF averaged over each
+/// texel's square (`k × k` stratified points, `k` giving ≥ 3 points per material texel,
+/// as the material has sub-texel detail), seen from the true camera position
+/// ([`score::Truth::Measurable`]) or orthographically at the nominal view
+/// ([`score::Truth::Nominal`]); always under the nominal light.
 fn truth_fn(
     layout: &CaptureLayout,
-) -> Result<impl Fn(usize, usize, &Grid) -> Vec<[f32; 3]> + Sync + '_> {
+) -> Result<impl Fn(usize, usize, &Grid, score::Truth) -> Vec<[f32; 3]> + Sync + '_> {
     let m = &layout.material;
     let kind = m["kind"]
         .as_str()
@@ -191,15 +208,28 @@ fn truth_fn(
     }
     let material = datasets::Material::build(&spec)?;
     let (s_mm, n_mat) = (layout.plate.sample_mm, spec.size as f64);
-    Ok(move |view: usize, light: usize, g: &Grid| {
-        let v = layout.sampling.direction(view).to_vector();
-        let l = layout.sampling.direction(light).to_vector();
+    let poses = score::true_poses(layout)?;
+    Ok(move |view: usize, light: usize, g: &Grid, which: score::Truth| {
+        let k = ((3.0 * g.texel_mm / (s_mm / n_mat)).ceil() as usize).clamp(2, 16);
+        let view_nominal = layout.sampling.direction(view).to_vector();
+        let light_dir = layout.sampling.direction(light).to_vector();
+        let weight = 1.0 / (k * k) as f64;
         (0..g.n * g.n)
-            .map(|k| {
-                let p = g.centre_mm(k % g.n, k / g.n);
-                let (px, py) =
-                    ((p[0] + s_mm / 2.0) / s_mm * n_mat, (p[1] + s_mm / 2.0) / s_mm * n_mat);
-                material.eval_at(px, py, v, l).map(|x| x as f32)
+            .map(|t| {
+                let centre = g.centre_mm(t % g.n, t / g.n);
+                let mut sum = [0f64; 3];
+                for s in 0..k * k {
+                    let offset = |i: usize| ((i as f64 + 0.5) / k as f64 - 0.5) * g.texel_mm;
+                    let p = [centre[0] + offset(s % k), centre[1] + offset(s / k)];
+                    let v = match which {
+                        score::Truth::Measurable => poses[view].view_dir_sample(layout, view, p),
+                        score::Truth::Nominal => view_nominal,
+                    };
+                    let texel = |x: f64| (x + s_mm / 2.0) / s_mm * n_mat;
+                    let e = material.eval_at(texel(p[0]), texel(p[1]), v, light_dir);
+                    (0..3).for_each(|c| sum[c] += e[c] * weight);
+                }
+                sum.map(|x| x as f32)
             })
             .collect()
     })
@@ -212,7 +242,7 @@ fn score_cmd(a: ScoreArgs) -> Result<()> {
     let truth = truth_fn(&layout)?;
     let filters: &[Filter] =
         if a.compare_filters { &[Filter::Bilinear, Filter::Footprint] } else { &[] };
-    let s = score::score(&store, &layout, &truth, filters).with_context(|| {
+    let s = score::score(&store, &layout, &truth, filters, a.nominal).with_context(|| {
         format!("cannot score {} against {}", a.store.display(), a.truth.display())
     })?;
     let json = serde_json::to_string_pretty(&s)?;

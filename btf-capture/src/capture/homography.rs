@@ -35,9 +35,11 @@ fn normaliser(pts: &[[f64; 2]]) -> Matrix3<f64> {
     Matrix3::new(s, 0.0, -s * mx, 0.0, s, -s * my, 0.0, 0.0, 1.0)
 }
 
-/// Normalised DLT from ≥ 4 correspondences; `None` when they are degenerate.
+/// Normalised DLT from ≥ 4 correspondences; `None` when they are degenerate or not finite
+/// (a NaN makes the SVD iterate forever).
 pub fn dlt(matches: &[PointMatch]) -> Option<Matrix3<f64>> {
-    if matches.len() < 4 {
+    let finite = |m: &PointMatch| m.plate_mm.iter().chain(&m.image_px).all(|v| v.is_finite());
+    if matches.len() < 4 || !matches.iter().all(finite) {
         return None;
     }
     let plate: Vec<[f64; 2]> = matches.iter().map(|m| m.plate_mm).collect();
@@ -250,6 +252,17 @@ mod tests {
             let (a, b) = (apply(&h, p), apply(&truth(), p));
             assert!((a[0] - b[0]).abs() < 1e-8 && (a[1] - b[1]).abs() < 1e-8);
         }
+    }
+
+    #[test]
+    fn non_finite_points_are_refused() {
+        let mut pts: Vec<PointMatch> = layout()
+            .into_iter()
+            .map(|p| PointMatch { plate_mm: p, image_px: [p[0] * 2.0 + 5.0, p[1] * 3.0] })
+            .collect();
+        assert!(dlt(&pts).is_some());
+        pts[2].image_px[1] = f64::NAN;
+        assert!(dlt(&pts).is_none());
     }
 
     #[test]

@@ -186,6 +186,34 @@ impl CaptureLayout {
         self.homography(view, &Matrix3::identity(), &Vector3::zeros())
     }
 
+    /// The plate pose `(R, t)` (`p_lab = R · p_sample + t`, mm) of view `j` behind a
+    /// homography `h` (sample mm → pixels): inverting [`CaptureLayout::homography`],
+    /// `Aᵀ K⁻¹ h = λ [r₁ r₂ t − c]` (H&Z §8.8, Zhang's plane-based decomposition), with
+    /// `λ` the mean length of the first two columns, its sign putting the plate in front
+    /// of the camera, and `r₁, r₂` made orthonormal (`r₃ = r₁ × r₂`). `None` for a
+    /// degenerate `h`.
+    pub fn pose_from_homography(
+        &self,
+        view: usize,
+        h: &Matrix3<f64>,
+    ) -> Option<(Matrix3<f64>, Vector3<f64>)> {
+        let (centre, axes) = self.camera_frame(self.sampling.direction(view));
+        let m = axes.transpose() * self.intrinsics().try_inverse()? * h;
+        let (c1, c2) = (m.column(0).into_owned(), m.column(1).into_owned());
+        let mut lambda = 0.5 * (c1.norm() + c2.norm());
+        // The plate centre lies ahead of the camera: (t − c) points along −view.
+        if m.column(2).dot(&centre) > 0.0 {
+            lambda = -lambda;
+        }
+        if lambda.is_nan() || lambda.abs() <= 1e-12 {
+            return None;
+        }
+        let r1 = (c1 / lambda).try_normalize(1e-12)?;
+        let r2 = (c2 / lambda - r1 * r1.dot(&(c2 / lambda))).try_normalize(1e-12)?;
+        let rotation = Matrix3::from_columns(&[r1, r2, r1.cross(&r2)]);
+        Some((rotation, m.column(2) / lambda + centre))
+    }
+
     /// Camera centre (lab mm) and the matrix whose rows are its right, up and forward axes.
     fn camera_frame(&self, view: Direction) -> (Vector3<f64>, Matrix3<f64>) {
         let v = view.to_vector();
@@ -236,4 +264,53 @@ fn check_directions(path: &Path, s: &Sampling, dirs: &[[f64; 2]]) -> Result<()> 
 pub fn apply(h: &Matrix3<f64>, p: [f64; 2]) -> [f64; 2] {
     let q = h * Vector3::new(p[0], p[1], 1.0);
     [q.x / q.z, q.y / q.z]
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    /// A 1280×960 camera at 600 mm; views at the pole and 75° (four azimuths).
+    pub(crate) fn layout() -> CaptureLayout {
+        let ring = |theta_deg: f64, count: usize| Ring { theta_deg, count, phi_offset_deg: 0.0 };
+        CaptureLayout {
+            dir: PathBuf::from("."),
+            sampling: Sampling::new("rings", vec![ring(0.0, 1), ring(75.0, 4)]).unwrap(),
+            camera: CameraToml {
+                width: 1280,
+                height: 960,
+                focal_px: 2304.0,
+                principal_point_px: [640.0, 480.0],
+                distance_mm: 600.0,
+                bits: 12,
+            },
+            plate: PlateToml {
+                size_mm: 140.0,
+                sample_mm: 80.0,
+                point_markers_mm: vec![[0.0, 0.0]; 4],
+                marker_radius_mm: 2.0,
+                border_offset_mm: 42.0,
+                border_width_mm: 1.0,
+            },
+            radiometry: None,
+            material: serde_json::Value::Null,
+        }
+    }
+
+    #[test]
+    fn pose_is_recovered_from_its_homography() {
+        let l = layout();
+        // A 1.5° tilt about a skew axis and a few millimetres of shift.
+        let axis = nalgebra::Unit::new_normalize(Vector3::new(0.3, -0.8, 0.5));
+        let r = *nalgebra::Rotation3::from_axis_angle(&axis, 1.5f64.to_radians()).matrix();
+        let t = Vector3::new(1.0, -2.0, 0.5);
+        for view in 0..l.sampling.len() {
+            // Any scale of the homography (even negative) describes the same pose.
+            let h = l.homography(view, &r, &t) * -3.7;
+            let (r_est, t_est) = l.pose_from_homography(view, &h).unwrap();
+            assert!((r_est - r).amax() < 1e-9, "view {view}: {r_est} vs {r}");
+            assert!((t_est - t).amax() < 1e-6, "view {view}: {t_est} vs {t}");
+        }
+        assert!(l.pose_from_homography(0, &Matrix3::zeros()).is_none());
+    }
 }

@@ -153,7 +153,8 @@ pub fn detect_point(
             sv += w * ((r0 + y) as f64 + 0.5);
         }
     }
-    Ok([su / sw, sv / sw])
+    let centroid = [su / sw, sv / sw];
+    if centroid.iter().all(|v| v.is_finite()) { Ok(centroid) } else { Err(Miss::NoContrast) }
 }
 
 fn flood(bw: usize, bh: usize, seed: usize, inside: impl Fn(usize) -> bool) -> Vec<usize> {
@@ -223,7 +224,8 @@ pub fn corrected_matches(
         .filter_map(|(m, d)| {
             let p = d.ok()?;
             let b = disc_centroid_bias(h, *m, radius_mm);
-            Some(PointMatch { plate_mm: *m, image_px: [p[0] - b[0], p[1] - b[1]] })
+            let image_px = [p[0] - b[0], p[1] - b[1]];
+            image_px.iter().all(|v| v.is_finite()).then_some(PointMatch { plate_mm: *m, image_px })
         })
         .collect()
 }

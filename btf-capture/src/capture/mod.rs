@@ -8,12 +8,14 @@
 //! - [`homography`] — normalised DLT, consensus outlier rejection, LM refinement;
 //! - [`register`] — one view slot's homography from its images;
 //! - [`rectify`] — resampling onto the output texel grid (bilinear or footprint filter);
+//! - [`incidence`] — the lamp's cosine on the tilted plate (radiometric correction);
 //! - [`blend`] — linear edge blending for tileability;
 //! - [`process`] — the streaming, parallel, resumable driver;
 //! - [`score`] — accuracy against a synthetic capture's ground truth.
 
 pub mod blend;
 pub mod homography;
+pub mod incidence;
 pub mod layout;
 pub mod markers;
 pub mod process;

@@ -59,6 +59,9 @@ pub struct ProcessOptions {
     pub registration_lights: usize,
     /// Registration knobs.
     pub register: RegisterOptions,
+    /// Scale each light's images by `cos θ_l / cos θ_l'` for the registered plate tilt
+    /// ([`super::incidence`]).
+    pub correct_light_incidence: bool,
 }
 
 impl Default for ProcessOptions {
@@ -74,6 +77,7 @@ impl Default for ProcessOptions {
             dtype: DType::F32,
             registration_lights: 8,
             register: RegisterOptions::default(),
+            correct_light_incidence: true,
         }
     }
 }
@@ -242,10 +246,21 @@ pub fn register_slot(
     }
 }
 
-/// Rectifies, crops and blends one raw image with a slot's plan: `size² · 3` values.
-pub fn normtexture(plan: &Plan, img: &RawImage, size: usize) -> Vec<f32> {
+/// Rectifies, crops and blends one raw image with a slot's plan and scales it by `gain`
+/// (the light-incidence correction): `size² · 3` values.
+pub fn normtexture(plan: &Plan, img: &RawImage, size: usize, gain: f32) -> Vec<f32> {
     let crop = plan.apply(img);
-    blend::fold(&crop, plan.n, size).into_iter().flatten().collect()
+    blend::fold(&crop, plan.n, size).into_iter().flatten().map(|v| v * gain).collect()
+}
+
+/// The per-light gains of a registered slot: the incidence correction, or all 1.
+pub fn light_gains(layout: &CaptureLayout, reg: &Registration, correct: bool) -> Vec<f32> {
+    if correct {
+        let g = super::incidence::light_cosine_gains(layout, reg.view, &reg.matrix());
+        g.into_iter().map(|x| x as f32).collect()
+    } else {
+        vec![1.0; layout.sampling.len()]
+    }
 }
 
 /// The plan of a registered slot.
@@ -320,11 +335,16 @@ fn run_slots(
             }
             let reg = register_slot(layout, view, opt)?;
             let plan = slot_plan(layout, &reg, grid, opt.filter)?;
+            let gains = light_gains(layout, &reg, opt.correct_light_incidence);
             let mut written = 0;
             for light in 0..n {
                 if !writer.has_image(view, light) {
                     let img = read_image(layout, view, light)?;
-                    writer.write_image(view, light, &normtexture(&plan, &img, opt.size))?;
+                    writer.write_image(
+                        view,
+                        light,
+                        &normtexture(&plan, &img, opt.size, gains[light]),
+                    )?;
                     written += 1;
                 }
                 tick();
@@ -360,6 +380,8 @@ fn provenance(
         "size": opt.size,
         "blend_width": opt.blend_width,
         "rectified_size": opt.rectified_size,
+        "light_incidence_correction": opt.correct_light_incidence,
+        "plate_tilt_deg": regs.iter().map(|r| super::incidence::tilt_deg(layout, r.view, &r.matrix())).collect::<Vec<_>>(),
         "grid": {"origin_mm": grid.origin_mm, "texel_mm": grid.texel_mm, "n": grid.n},
         "radiometry": match layout.radiometry {
             Some(r) => json!({"reference_white_dn": r.reference_white_dn, "vignetting_cos_power": r.vignetting_cos_power}),

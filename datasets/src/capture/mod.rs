@@ -12,9 +12,11 @@
 //!
 //! `capture.toml` describes what a lab knows (nominal geometry, intrinsics, marker layout,
 //! sampling, naming, the material recipe); the true poses go to `truth.toml`, which capture
-//! processing must never read. The orthographic noise-free normtextures of the same
-//! material (`btf synth material` with the recorded kind, size and seed) are the ground
-//! truth of the rectified result.
+//! processing must never read. The ground truth of the rectified result is the same
+//! material (recorded kind, size and seed) averaged over each output texel's square and
+//! seen from the true camera position (`btf capture score`; `--nominal`: orthographic at
+//! the nominal directions) — a texel stands for its square, and the material has detail
+//! finer than a texel.
 //!
 //! **Image orientation.** A right-handed camera above the sample sees it unmirrored: in
 //! the frontal image (θ_v = 0) image right is sample `+x` and image up is sample `+y`, so
