@@ -140,9 +140,30 @@ fn phi1_small(d: f64) -> f64 {
 /// rounding `≈ ε/d`), else `e^{−min(τ/μ, τ/μ₀)} · τ/μ · φ₁(d)` — no exponential either way.
 #[inline]
 pub fn ft_mu0(tau: f64, mu: f64, mu0: f64, e: f64, e0: f64) -> f64 {
-    let c = (mu - mu0).abs() / (mu * mu0);
-    let d = tau * c;
-    if d > 0.1 { (e - e0) * mu0 / (mu - mu0) } else { e.max(e0) * tau / mu * phi1_small(d) }
+    Pair::new(mu, mu0).ft_mu0(tau, e, e0)
+}
+
+/// The parts of [`ft_mu0`] that depend on `(μ, μ₀)` only, shared by the τ nodes.
+struct Pair {
+    /// `|μ − μ₀|/(μ μ₀)`: `d = τ · c`.
+    c: f64,
+    /// `μ₀/(μ − μ₀)`.
+    r: f64,
+    /// `1/μ`.
+    inv_mu: f64,
+}
+
+impl Pair {
+    #[inline]
+    fn new(mu: f64, mu0: f64) -> Pair {
+        Pair { c: (mu - mu0).abs() / (mu * mu0), r: mu0 / (mu - mu0), inv_mu: 1.0 / mu }
+    }
+
+    #[inline]
+    fn ft_mu0(&self, tau: f64, e: f64, e0: f64) -> f64 {
+        let d = tau * self.c;
+        if d > 0.1 { (e - e0) * self.r } else { e.max(e0) * tau * self.inv_mu * phi1_small(d) }
+    }
 }
 
 /// One vertex side's terms: per τ node `j`, `A_s(τ_j)` then `T_s(τ_j, μ_k)`, RGB, exposure
@@ -179,9 +200,9 @@ pub fn side_terms(
             }
         }
         for (k, e_k) in e_node.iter().enumerate() {
-            let mu = mu_node(k);
+            let pair = Pair::new(mu_node(k), mu0);
             for &j in &live {
-                let ft = ft_mu0(taus[j], mu, mu0, e_k[j], e0[j]);
+                let ft = pair.ft_mu0(taus[j], e_k[j], e0[j]);
                 for c in 0..3 {
                     t[j][k][c] += ft * p[c];
                 }
