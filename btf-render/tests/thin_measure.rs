@@ -189,7 +189,7 @@ fn environment_table_cost_scalar_vs_tau_texture() {
         .iter()
         .enumerate()
         {
-            let mut r = Renderer::new(&gpu, &scene(t), RenderOptions::default()).unwrap();
+            let r = Renderer::new(&gpu, &scene(t), RenderOptions::default()).unwrap();
             ms[i] = ms[i].min(r.render(&gpu).unwrap().stats.ms_of("thin-cloth env tables"));
             eprintln!("{t}: {:.1} ms", ms[i]);
         }
