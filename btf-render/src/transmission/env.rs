@@ -370,6 +370,24 @@ mod tests {
     }
 
     #[test]
+    fn node_scale_covers_the_texture() {
+        let desc = |tex: Option<super::super::desc::TauTexture>| TransmissionDesc {
+            tau: 0.5,
+            tau_texture: tex,
+            albedo: super::super::desc::Albedo::Grey(0.8),
+            phase: PhaseDesc::Isotropic,
+        };
+        // A BTF-mean texture (mean 1) reaches above 1: the nodes go up to tau · max.
+        let s = SlabParams::of(&desc(Some(super::super::desc::TauTexture::BtfMean)), 2.5);
+        assert_eq!((s.tau, s.textured), (1.25, true));
+        // An image in [0, 1]: the nodes span [0, tau].
+        let s = SlabParams::of(&desc(Some(super::super::desc::TauTexture::BtfMean)), 0.7);
+        assert_eq!(s.tau, 0.5);
+        let s = SlabParams::of(&desc(None), 3.0);
+        assert_eq!((s.tau, s.textured), (0.5, false));
+    }
+
+    #[test]
     fn tau_interpolation_hits_the_nodes_and_the_scalar_row() {
         let slab = SlabParams { tau: 2.0, textured: true, albedo: [1.0; 3] };
         assert_eq!(tau_weights(&slab, 0.0), (0, 1, 0.0));
