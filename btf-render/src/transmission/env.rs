@@ -117,16 +117,10 @@ pub fn check_supported(desc: &TransmissionDesc, material: &str, two_sided: bool)
 }
 
 /// `1/(n+1)!` for `n = 0…8`: the series of `φ₁`.
+#[rustfmt::skip]
 const PHI1_SERIES: [f64; 9] = [
-    1.0,
-    1.0 / 2.0,
-    1.0 / 6.0,
-    1.0 / 24.0,
-    1.0 / 120.0,
-    1.0 / 720.0,
-    1.0 / 5040.0,
-    1.0 / 40320.0,
-    1.0 / 362880.0,
+    1.0, 1.0 / 2.0, 1.0 / 6.0, 1.0 / 24.0, 1.0 / 120.0, 1.0 / 720.0, 1.0 / 5040.0,
+    1.0 / 40320.0, 1.0 / 362880.0,
 ];
 
 /// `φ₁(d) = (1 − e^{−d})/d` for `0 ≤ d ≤ 0.1` by its series (truncation `d⁹/10! < 3·10⁻¹⁶`).
@@ -371,17 +365,18 @@ mod tests {
 
     #[test]
     fn node_scale_covers_the_texture() {
-        let desc = |tex: Option<super::super::desc::TauTexture>| TransmissionDesc {
+        use super::super::desc::{Albedo, TauTexture};
+        let desc = |tau_texture| TransmissionDesc {
             tau: 0.5,
-            tau_texture: tex,
-            albedo: super::super::desc::Albedo::Grey(0.8),
+            tau_texture,
+            albedo: Albedo::Grey(0.8),
             phase: PhaseDesc::Isotropic,
         };
         // A BTF-mean texture (mean 1) reaches above 1: the nodes go up to tau · max.
-        let s = SlabParams::of(&desc(Some(super::super::desc::TauTexture::BtfMean)), 2.5);
+        let s = SlabParams::of(&desc(Some(TauTexture::BtfMean)), 2.5);
         assert_eq!((s.tau, s.textured), (1.25, true));
         // An image in [0, 1]: the nodes span [0, tau].
-        let s = SlabParams::of(&desc(Some(super::super::desc::TauTexture::BtfMean)), 0.7);
+        let s = SlabParams::of(&desc(Some(TauTexture::BtfMean)), 0.7);
         assert_eq!(s.tau, 0.5);
         let s = SlabParams::of(&desc(None), 3.0);
         assert_eq!((s.tau, s.textured), (0.5, false));
