@@ -1,119 +1,52 @@
 //! Thin cloth under an environment light (`transmission/env.rs`): the per-vertex tables
 //! against a direct quadrature over the visible sources, half-space furnaces on a flat
 //! sheet against the slab's hemispherical transmission and reflection share (1-D
-//! quadratures of `btf_core::thin_slab`), and the limits τ₁ → 0 / ∞ on the curtain.
+//! quadratures of `btf_core::thin_slab`), and the limits τ₁ → 0 / ∞ on the curtain, also
+//! through τ textures (all 0, all 1, constant). The τ-node tables: `tests/thin_env_tau.rs`.
 
 mod common;
+#[path = "common/curtain_env.rs"]
+mod curtain_env;
 
 use btf_core::eigen::Quantization;
 use btf_core::thin_slab::{Phase, Slab, direct_transmittance, reflection_share};
-use btf_render::envlight::scene_env::EnvMesh;
-use btf_render::envlight::weights::hemicube_pixel;
-use btf_render::envlight::{EnvCube, EnvMap, EnvironmentParams, HemicubeFrame, SceneEnvironment};
-use btf_render::material::MaterialData;
-use btf_render::mesh::Mesh;
-use btf_render::tangent::compute_tangents;
-use btf_render::transmission::env::{MU_NODES, SlabParams, VEC4_PER_VERTEX, mu_node, tables};
+use btf_render::envlight::EnvMap;
+use btf_render::transmission::env::{
+    MU_NODES, ROWS_PER_SIDE, SlabParams, TAU_NODES, VEC4_PER_VERTEX, mu_node, tables,
+};
 use btf_render::{Frame, RenderOptions, Scene, render_scene};
 use common::*;
+use curtain_env::*;
 use std::f64::consts::PI;
 use std::path::Path;
-
-fn curtain_mesh(dir: &Path) -> Mesh {
-    let mesh =
-        datasets::synth_mesh(datasets::MeshKind::Curtain, datasets::Resolution::Low).unwrap();
-    let path = dir.join("curtain.obj");
-    datasets::write_obj(&mesh, &path, "curtain").unwrap();
-    Mesh::load_obj(&path, None).unwrap()
-}
-
-/// A sky with a small bright sun, not symmetric under the rotation.
-fn sky(d: [f64; 3]) -> [f32; 3] {
-    let sun = [0.6f64, 0.2, 0.775];
-    let c = d[0] * sun[0] + d[1] * sun[1] + d[2] * sun[2];
-    let s = if c > 0.995 { 40.0 } else { 0.0 };
-    let base = 0.3 + 0.6 * d[2].max(0.0) + 0.1 * (d[0] + 1.0);
-    [(base + s) as f32, (0.9 * base + s) as f32, (0.7 * base + 0.8 * s) as f32]
-}
 
 #[test]
 fn tables_equal_a_direct_quadrature_over_the_visible_sources() {
     let dir = tempfile::tempdir().unwrap();
-    let mesh = curtain_mesh(dir.path());
-    let tangents = compute_tangents(&mesh);
-    let store = write_store(dir.path(), "m.eigen", Pattern::Lambert, 2, 2, 2, Quantization::F16);
-    let mat = MaterialData::load(&store, None).unwrap();
-    let map = EnvMap::from_fn(64, sky).unwrap();
-    let (rot_deg, exposure, res) = (30.0f64, 0.7f32, 8u32);
-    let params = EnvironmentParams {
-        rotation_deg: rot_deg,
-        exposure,
-        visibility_res: res,
-        two_sided: true,
-        eigen: None,
-        cache_dir: None,
-    };
-    let env_mesh = EnvMesh {
-        positions: &mesh.positions,
-        normals: &mesh.normals,
-        tangents: &tangents,
-        triangles: &mesh.triangles,
-    };
-    let env = SceneEnvironment::new(params, &map, &env_mesh, &[&mat]).unwrap();
-    let n = mesh.positions.len();
-    let slab = SlabParams { tau: 0.4, albedo: [0.9, 0.8, 0.7] };
-    let got = tables(&env, &vec![Some(slab); n]).unwrap();
+    let c = curtain_env(dir.path());
+    let n = c.mesh.positions.len();
+    let slab = SlabParams { tau: 0.4, textured: false, albedo: [0.9, 0.8, 0.7] };
+    let got = tables(&c.env, &vec![Some(slab); n]).unwrap();
     assert_eq!(got.len(), n * VEC4_PER_VERTEX);
-    // The reference: every source of the binned environment, rotated, dropped into its
-    // hemicube pixel, kept if visible, weighted by f_t · μ₀ of the slab (f64).
-    let frames = HemicubeFrame::of_mesh(&mesh.positions, &mesh.normals, &tangents, true);
-    let cube = EnvCube::new(&map, SceneEnvironment::cube_res(res));
-    let (sin, cos) = rot_deg.to_radians().sin_cos();
-    let rot = |a: [f32; 3]| {
-        [cos as f32 * a[0] + sin as f32 * a[1], -sin as f32 * a[0] + cos as f32 * a[1], a[2]]
-    };
+    let mus: Vec<f64> = (0..MU_NODES).map(mu_node).collect();
     let mut occluded_somewhere = false;
     let mut worst = 0f64;
     for v in (0..n).step_by(n / 13) {
         for side in 0..2 {
-            let f = side * n + v;
-            let [t, b, nn] = frames[f].axes.map(rot);
-            let dot = |d: &[f32; 3], a: [f32; 3]| d[0] * a[0] + d[1] * a[1] + d[2] * a[2];
-            let (mut irr, mut num, mut all) = ([0f64; 3], [0f64; 3], 0f64);
-            let mut tk = [[0f64; 3]; MU_NODES];
-            for (d, pw) in cube.dirs.iter().zip(&cube.power) {
-                let z = dot(d, nn);
-                if z <= 0.0 {
-                    continue;
-                }
-                all += pw[0] as f64 * z as f64;
-                let p = hemicube_pixel(res as usize, dot(d, t), dot(d, b), z);
-                if !env.visibility().visible(f, p) {
-                    continue;
-                }
-                let mu0 = z as f64;
-                for c in 0..3 {
-                    let s = Slab { tau: 0.4, albedo: slab.albedo[c], phase: Phase::Isotropic };
-                    irr[c] += pw[c] as f64 * mu0;
-                    num[c] += pw[c] as f64 * mu0 * (-0.4 / mu0).exp();
-                    for (k, row) in tk.iter_mut().enumerate() {
-                        row[c] +=
-                            exposure as f64 * s.f_t(mu_node(k), mu0, 0.0) * mu0 * pw[c] as f64;
-                    }
-                }
-            }
-            occluded_somewhere |= irr[0] < 0.97 * all;
-            let base = v * VEC4_PER_VERTEX + side * (1 + MU_NODES);
-            for c in 0..3 {
-                let a = if irr[c] > 0.0 { num[c] / irr[c] } else { 0.0 };
+            let (a, tk, seen) = reference(&c, side * n + v, 0.4, slab.albedo, &mus);
+            occluded_somewhere |= seen < 0.97;
+            // A scalar τ fills the last τ node.
+            let base =
+                v * VEC4_PER_VERTEX + side * ROWS_PER_SIDE + (TAU_NODES - 1) * (1 + MU_NODES);
+            for ch in 0..3 {
                 let mut check = |got: f32, want: f64| {
                     let e = (got as f64 - want).abs() / want.abs().max(1e-9);
                     assert!(e <= 1e-4, "vertex {v} side {side}: {got} vs {want}");
                     worst = worst.max(e);
                 };
-                check(got[base][c], a);
+                check(got[base][ch], a[ch]);
                 for k in 0..MU_NODES {
-                    check(got[base + 1 + k][c], tk[k][c]);
+                    check(got[base + 1 + k][ch], tk[k][ch]);
                 }
             }
         }
@@ -271,14 +204,35 @@ fn curtain_limits_under_an_environment() {
     assert_close("env-clear", 40, 40, &background, &clear.rgb, 1e-5);
     assert!(rel_rmse(&background, &opaque.rgb) > 0.05, "the opaque curtain must be visible");
     // What the tables cannot represent is refused, naming the material and the key.
-    for (t, key) in [
-        ("{ tau = 0.5, phase = { hg = 0.3 } }", "hg"),
-        ("{ tau = 0.5, tau_texture = \"btf-mean\" }", "tau_texture"),
-    ] {
-        let err =
-            render_scene(&gpu, &scene(t), RenderOptions::default()).err().unwrap().to_string();
-        assert!(err.contains(key) && err.contains("voile.eigen"), "{err}");
-    }
+    let err =
+        render_scene(&gpu, &scene("{ tau = 0.5, phase = { hg = 0.3 } }"), RenderOptions::default())
+            .err()
+            .unwrap()
+            .to_string();
+    assert!(err.contains("hg") && err.contains("voile.eigen"), "{err}");
+    // τ textures: all 0 is the bare background exactly (node τ_0 = 0), all 1 with
+    // tau = 10⁴ the opaque curtain (the last node), and a constant c the scalar τ = tau·c
+    // (between nodes: within the τ interpolation).
+    let grey = |name: &str, v: u8| {
+        image::GrayImage::from_pixel(8, 8, image::Luma([v])).save(dir.path().join(name)).unwrap();
+    };
+    grey("zero.png", 0);
+    grey("one.png", 255);
+    grey("c.png", 102);
+    let zero = render(&gpu, &scene("{ tau = 1.0, tau_texture = \"zero.png\", albedo = 1.0 }"));
+    // (1 − Σ bary · A₀ with A₀ = 1: f32 barycentrics sum to 1 within a few ulp)
+    let e = assert_close("env-tex-zero", 40, 40, &background, &zero.rgb, 1e-5);
+    eprintln!("τ texture 0 vs background: relative RMSE {e:.2e}");
+    let one = render(&gpu, &scene("{ tau = 1e4, tau_texture = \"one.png\", albedo = 1.0 }"));
+    let e = assert_close("env-tex-one", 40, 40, &opaque.rgb, &one.rgb, 1e-5);
+    eprintln!("τ texture 1, tau 1e4 vs opaque: relative RMSE {e:.2e}");
+    // 102/255 = 0.4, stored as f16 0.39990234375; τ = 0.4 lies between τ_4 = 0.327 and
+    // τ_5 = 0.510.
+    let tex = render(&gpu, &scene("{ tau = 1.0, tau_texture = \"c.png\", albedo = 0.9 }"));
+    let flat = render(&gpu, &scene("{ tau = 0.39990234375, albedo = 0.9 }"));
+    let e = assert_close("env-tex-const", 40, 40, &flat.rgb, &tex.rgb, 5e-3);
+    eprintln!("constant τ texture vs scalar τ: relative RMSE {e:.2e}");
+    assert!(rel_rmse(&background, &flat.rgb) > 0.05, "the τ = 0.4 curtain must be visible");
 }
 
 #[test]

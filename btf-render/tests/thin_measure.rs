@@ -157,3 +157,48 @@ fn transmission_cost_under_an_environment() {
         mesh.positions.len()
     );
 }
+
+/// The one-off cost of the thin-cloth environment tables: scalar τ₁ (one τ node) against
+/// `tau_texture = "btf-mean"` (8 τ nodes), same curtain and sky as above, back to back.
+#[test]
+#[ignore = "a measurement: run for BENCHMARKS.md"]
+fn environment_table_cost_scalar_vs_tau_texture() {
+    let Some(gpu) = gpu("environment_table_cost_scalar_vs_tau_texture") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    write_store(dir.path(), "voile.eigen", Pattern::Checker, 64, 64, 16, Quantization::F16);
+    let mesh =
+        datasets::synth_mesh(datasets::MeshKind::Curtain, datasets::Resolution::Low).unwrap();
+    datasets::write_obj(&mesh, &dir.path().join("curtain.obj"), "curtain").unwrap();
+    let sky = datasets::synth_env(datasets::EnvKind::Sky, &Default::default(), 256).unwrap();
+    datasets::write_exr(&sky, &dir.path().join("sky.exr")).unwrap();
+    let scene = |t: &str| {
+        let text = format!(
+            "[output]\nwidth = 32\nheight = 32\n[[meshes]]\npath = \"curtain.obj\"\n\
+             [[materials]]\nstore = \"voile.eigen\"\nuv_scale = 6.0\ntransmission = {t}\n\
+             [camera]\neye = [0.0, -2.6, 0.75]\ntarget = [0.0, 0.0, 0.75]\nup = [0.0, 0.0, 1.0]\n\
+             [[lights]]\nkind = \"environment\"\npath = \"sky.exr\"\nexposure = 0.05\nvisibility_res = 16\ncache_dir = \"cache\"\n"
+        );
+        Scene::load(&write(dir.path(), "scene.toml", &text)).unwrap()
+    };
+    let mut ms = [f64::MAX; 2];
+    for _ in 0..3 {
+        for (i, t) in [
+            "{ tau = 0.6, albedo = 0.9 }",
+            "{ tau = 0.6, tau_texture = \"btf-mean\", albedo = 0.9 }",
+        ]
+        .iter()
+        .enumerate()
+        {
+            let r = Renderer::new(&gpu, &scene(t), RenderOptions::default()).unwrap();
+            ms[i] = ms[i].min(r.render(&gpu).unwrap().stats.ms_of("thin-cloth env tables"));
+            eprintln!("{t}: {:.1} ms", ms[i]);
+        }
+    }
+    eprintln!(
+        "thin-cloth env tables, {} vertices: scalar τ {:.1} ms, τ texture (8 nodes) {:.1} ms, ratio {:.2} (best of 3)",
+        mesh.positions.len(),
+        ms[0],
+        ms[1],
+        ms[1] / ms[0]
+    );
+}

@@ -23,24 +23,39 @@
 //!   limits (`τ₁ → 0`: share 0; `τ₁ → ∞`: share 1); for other BTFs it weights `μ₀` by
 //!   the irradiance rather than by the BTF's own light dependence.
 //!
+//! **Per-texel thickness** (`tau_texture`): `T_s` and `A_s` depend on the texel's `τ`, so
+//! a textured material gets the tables at `TAU_NODES = 8` thicknesses `τ_j = τ_max (j/7)²`
+//! (`τ_max = tau · max(1, largest texel)`; `τ_0 = 0` gives `A = 1`, `T = 0`, i.e. the
+//! exact transparent limit), and the shader interpolates linearly in `τ` between the two
+//! nodes around the texel's `τ` (bilinear with `√μ`). The nodes share the pass over the
+//! sources: per source one exponential gives all `e^{−τ_j/μ₀}` as powers, and the kernel
+//! [`ft_mu0`] needs no exponential (node exponentials `e^{−τ_j/μ_k}` precomputed). A
+//! scalar-`τ` material fills only the last node (`τ_7 = τ₁`), which the shader reads
+//! without interpolation.
+//!
 //! `f_t` of an isotropic slab depends on `μ, μ₀` only, which is what makes one table per
-//! vertex side enough; Henyey–Greenstein also depends on the azimuth between view and
-//! light and is refused (as are per-texel thicknesses, whose `τ₁` would need a table per
-//! texel) by [`check_supported`]. The tables cost one pass over the sources per vertex
-//! side and are recomputed when the environment, its rotation or its exposure changes.
+//! vertex side and τ node enough; Henyey–Greenstein also depends on the azimuth between
+//! view and light and is refused by [`check_supported`]. The tables cost one pass over
+//! the sources per vertex side and are recomputed when the environment, its rotation or
+//! its exposure changes.
 
 use super::desc::{PhaseDesc, TransmissionDesc};
 use crate::envlight::SceneEnvironment;
 use crate::{Error, Result};
-use btf_core::thin_slab::transmission_factor;
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
 /// View cosines tabulated per vertex side.
 pub const MU_NODES: usize = 16;
 
-/// vec4 per vertex: two sides × (`A_s`, `T_s(μ_0…μ_15)`).
-pub const VEC4_PER_VERTEX: usize = 2 * (1 + MU_NODES);
+/// Optical thicknesses tabulated per vertex side for a material with a τ texture.
+pub const TAU_NODES: usize = 8;
+
+/// Rows of one vertex side: per τ node `j`, `A_s(τ_j)` then `T_s(τ_j, μ_0…μ_15)`.
+pub const ROWS_PER_SIDE: usize = TAU_NODES * (1 + MU_NODES);
+
+/// vec4 per vertex: two sides × [`ROWS_PER_SIDE`].
+pub const VEC4_PER_VERTEX: usize = 2 * ROWS_PER_SIDE;
 
 /// View cosine of node `k`: `(k / (MU_NODES − 1))²`.
 pub fn mu_node(k: usize) -> f64 {
@@ -48,19 +63,40 @@ pub fn mu_node(k: usize) -> f64 {
     u * u
 }
 
+/// Optical thickness of node `j` for the node scale `tau_max`: `tau_max · (j / 7)²`.
+pub fn tau_node(tau_max: f64, j: usize) -> f64 {
+    let u = j as f64 / (TAU_NODES - 1) as f64;
+    tau_max * u * u
+}
+
 /// Slab parameters of one material for the tables.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SlabParams {
-    /// Optical thickness `τ₁`.
+    /// Optical thickness `τ₁` (scalar), or with `textured` the node scale: the largest
+    /// `τ` of the texture, `tau · max(1, largest texel)`.
     pub tau: f64,
+    /// Per-texel `τ`: tables at all [`TAU_NODES`] nodes; else only at the last (`τ = tau`).
+    pub textured: bool,
     /// Single-scattering albedo `ϖ₀` (RGB).
     pub albedo: [f64; 3],
 }
 
 impl SlabParams {
-    /// From a material's `transmission` table.
-    pub fn of(desc: &TransmissionDesc) -> SlabParams {
-        SlabParams { tau: desc.tau as f64, albedo: desc.albedo.rgb().map(|a| a as f64) }
+    /// From a material's `transmission` table and the largest value of its τ texture
+    /// (ignored without one).
+    pub fn of(desc: &TransmissionDesc, max_texel: f32) -> SlabParams {
+        let textured = desc.tau_texture.is_some();
+        let scale = if textured { max_texel.max(1.0) as f64 } else { 1.0 };
+        SlabParams {
+            tau: desc.tau as f64 * scale,
+            textured,
+            albedo: desc.albedo.rgb().map(|a| a as f64),
+        }
+    }
+
+    /// The τ nodes the tables hold (`j` with `τ_j > 0`; the rows of `τ_0 = 0` are fixed).
+    fn nodes(&self) -> std::ops::Range<usize> {
+        if self.textured { 1..TAU_NODES } else { TAU_NODES - 1..TAU_NODES }
     }
 }
 
@@ -72,11 +108,6 @@ pub fn check_supported(desc: &TransmissionDesc, material: &str, two_sided: bool)
             "transmission.phase = {{ hg = {hg} }} under an environment light: the environment terms are tabulated in μ for isotropic scattering; use phase = \"isotropic\""
         ));
     }
-    if desc.tau_texture.is_some() {
-        return refuse(
-            "transmission.tau_texture under an environment light: the environment terms are tabulated per vertex for the material's scalar tau; remove tau_texture".into(),
-        );
-    }
     if !two_sided {
         return refuse(
             "thin cloth under an environment light needs two_sided = true (the back-lit term integrates the far side's visibility)".into(),
@@ -85,57 +116,163 @@ pub fn check_supported(desc: &TransmissionDesc, material: &str, two_sided: bool)
     Ok(())
 }
 
-/// One vertex side's terms: `A_s` then `T_s(μ_k)`, RGB, exposure included in `T`.
+/// `1/(n+1)!` for `n = 0…8`: the series of `φ₁`.
+#[rustfmt::skip]
+const PHI1_SERIES: [f64; 9] = [
+    1.0, 1.0 / 2.0, 1.0 / 6.0, 1.0 / 24.0, 1.0 / 120.0, 1.0 / 720.0, 1.0 / 5040.0,
+    1.0 / 40320.0, 1.0 / 362880.0,
+];
+
+/// `φ₁(d) = (1 − e^{−d})/d` for `0 ≤ d ≤ 0.1` by its series (truncation `d⁹/10! < 3·10⁻¹⁶`).
+#[inline]
+fn phi1_small(d: f64) -> f64 {
+    PHI1_SERIES.iter().rev().fold(0.0, |sum, &c| c - d * sum)
+}
+
+/// `F_t(τ, μ, μ₀) · μ₀` from precomputed `e = e^{−τ/μ}`, `e0 = e^{−τ/μ₀}` (`τ > 0`):
+/// the quotient `(e − e0) μ₀/(μ − μ₀)` where `d = τ|μ − μ₀|/(μ μ₀) > 0.1` (relative
+/// rounding `≈ ε/d`), else `e^{−min(τ/μ, τ/μ₀)} · τ/μ · φ₁(d)` — no exponential either way.
+#[inline]
+pub fn ft_mu0(tau: f64, mu: f64, mu0: f64, e: f64, e0: f64) -> f64 {
+    Pair::new(mu, mu0).ft_mu0(tau, e, e0)
+}
+
+/// The parts of [`ft_mu0`] that depend on `(μ, μ₀)` only, shared by the τ nodes.
+struct Pair {
+    /// `|μ − μ₀|/(μ μ₀)`: `d = τ · c`.
+    c: f64,
+    /// `μ₀/(μ − μ₀)`.
+    r: f64,
+    /// `1/μ`.
+    inv_mu: f64,
+}
+
+impl Pair {
+    #[inline]
+    fn new(mu: f64, mu0: f64) -> Pair {
+        Pair { c: (mu - mu0).abs() / (mu * mu0), r: mu0 / (mu - mu0), inv_mu: 1.0 / mu }
+    }
+
+    #[inline]
+    fn ft_mu0(&self, tau: f64, e: f64, e0: f64) -> f64 {
+        let d = tau * self.c;
+        if d > 0.1 { (e - e0) * self.r } else { e.max(e0) * tau * self.inv_mu * phi1_small(d) }
+    }
+}
+
+/// One vertex side's terms: per τ node `j`, `A_s(τ_j)` then `T_s(τ_j, μ_k)`, RGB, exposure
+/// included in `T`. Rows of nodes the slab does not use stay 0; `τ_j = 0` gives `A = 1`,
+/// `T = 0`.
 pub fn side_terms(
     env: &SceneEnvironment,
     frame: usize,
     slab: &SlabParams,
-) -> [[f64; 3]; 1 + MU_NODES] {
-    let tau = slab.tau;
-    let nodes: [(f64, f64); MU_NODES] = std::array::from_fn(|k| {
+) -> [[[f64; 3]; 1 + MU_NODES]; TAU_NODES] {
+    let nodes = slab.nodes();
+    let taus: [f64; TAU_NODES] =
+        std::array::from_fn(|j| if nodes.contains(&j) { tau_node(slab.tau, j) } else { 0.0 });
+    // e^{−τ_j/μ_k}, 0 at μ = 0 (τ_j > 0).
+    let e_node: [[f64; TAU_NODES]; MU_NODES] = std::array::from_fn(|k| {
         let mu = mu_node(k);
-        let e = if tau <= 0.0 {
-            1.0
-        } else if mu > 0.0 {
-            (-tau / mu).exp()
-        } else {
-            0.0
-        };
-        (mu, e)
+        taus.map(|t| if mu > 0.0 { (-t / mu).exp() } else { 0.0 })
     });
+    let live: Vec<usize> = nodes.clone().filter(|&j| taus[j] > 0.0).collect();
     let mut irr = [0f64; 3];
-    let mut a = [0f64; 3];
-    let mut t = [[0f64; 3]; MU_NODES];
+    let mut a = [[0f64; 3]; TAU_NODES];
+    let mut t = [[[0f64; 3]; MU_NODES]; TAU_NODES];
+    let mut e0 = [1f64; TAU_NODES];
     env.visible_sources(frame, |d, power| {
         let mu0 = d[2] as f64;
-        let e0 = (-tau / mu0).exp();
         let p = power.map(|c| c as f64);
+        exponentials(&taus, slab.textured, mu0, &mut e0);
         for c in 0..3 {
             irr[c] += p[c] * mu0;
-            a[c] += p[c] * mu0 * e0;
         }
-        for (tk, &(mu, e)) in t.iter_mut().zip(&nodes) {
-            // F_t by the raw quotient where it is well conditioned (the same branch as
-            // `transmission_factor`, with the node's exponential precomputed), else the series.
-            let ft = if mu == 0.0 || tau * (mu0 - mu).abs() > mu * mu0 {
-                (e - e0) / (mu - mu0)
-            } else {
-                transmission_factor(tau, mu, mu0)
-            } * mu0;
+        for j in nodes.clone() {
             for c in 0..3 {
-                tk[c] += ft * p[c];
+                a[j][c] += p[c] * mu0 * e0[j];
+            }
+        }
+        for (k, e_k) in e_node.iter().enumerate() {
+            let pair = Pair::new(mu_node(k), mu0);
+            for &j in &live {
+                let ft = pair.ft_mu0(taus[j], e_k[j], e0[j]);
+                for c in 0..3 {
+                    t[j][k][c] += ft * p[c];
+                }
             }
         }
     });
     let f = env.exposure() as f64;
-    let mut out = [[0f64; 3]; 1 + MU_NODES];
-    for c in 0..3 {
-        out[0][c] = if irr[c] > 0.0 { a[c] / irr[c] } else { 0.0 };
-        for k in 0..MU_NODES {
-            out[1 + k][c] = f * slab.albedo[c] / (4.0 * PI) * t[k][c];
+    let mut out = [[[0f64; 3]; 1 + MU_NODES]; TAU_NODES];
+    for j in nodes {
+        for c in 0..3 {
+            out[j][0][c] = if irr[c] > 0.0 { a[j][c] / irr[c] } else { 0.0 };
+            for k in 0..MU_NODES {
+                out[j][1 + k][c] = f * slab.albedo[c] / (4.0 * PI) * t[j][k][c];
+            }
         }
     }
+    if slab.textured {
+        out[0][0] = [1.0; 3];
+    }
     out
+}
+
+/// `e0[j] = e^{−τ_j/μ₀}`: with τ nodes `τ_j = τ_max (j/7)²` from one exponential
+/// `x = e^{−τ_max/(49 μ₀)}` as `x^{j²}` (`x^{(j+1)²} = x^{j²} · x^{2j+1}`, 49 products at
+/// most: relative rounding ≤ 10⁻¹⁴); for a scalar τ the one exponential of the last node.
+fn exponentials(taus: &[f64; TAU_NODES], textured: bool, mu0: f64, e0: &mut [f64; TAU_NODES]) {
+    let last = TAU_NODES - 1;
+    if !textured {
+        e0[last] = (-taus[last] / mu0).exp();
+        return;
+    }
+    let x = (-taus[last] / ((last * last) as f64 * mu0)).exp();
+    let x2 = x * x;
+    let (mut pow_sq, mut pow_odd) = (1.0, x);
+    for e in e0.iter_mut() {
+        *e = pow_sq;
+        pow_sq *= pow_odd;
+        pow_odd *= x2;
+    }
+}
+
+/// Interpolates one vertex side's table (the `ROWS_PER_SIDE` rows of [`tables`]) as the
+/// fragment shader does: linear in `√μ` between view nodes and linear in `τ` between
+/// the τ nodes (a scalar-τ slab reads its last node). Returns `(A, T)`.
+pub fn interpolate(
+    side: &[[f32; 4]],
+    slab: &SlabParams,
+    mu: f64,
+    tau: f64,
+) -> ([f64; 3], [f64; 3]) {
+    let (j0, j1, w) = tau_weights(slab, tau);
+    let u = mu.clamp(0.0, 1.0).sqrt() * (MU_NODES - 1) as f64;
+    let k = (u.floor() as usize).min(MU_NODES - 2);
+    let s = u - k as f64;
+    let row = |j: usize, i: usize| side[j * (1 + MU_NODES) + i].map(|v| v as f64);
+    let lerp = |x: f64, y: f64, t: f64| x + t * (y - x);
+    let mut a = [0.0; 3];
+    let mut tr = [0.0; 3];
+    for c in 0..3 {
+        a[c] = lerp(row(j0, 0)[c], row(j1, 0)[c], w);
+        let at = |j: usize| lerp(row(j, 1 + k)[c], row(j, 2 + k)[c], s);
+        tr[c] = lerp(at(j0), at(j1), w);
+    }
+    (a, tr)
+}
+
+/// The two τ nodes around `tau` and the weight of the upper one (linear in τ).
+fn tau_weights(slab: &SlabParams, tau: f64) -> (usize, usize, f64) {
+    let last = TAU_NODES - 1;
+    if !slab.textured || slab.tau <= 0.0 {
+        return (last, last, 0.0);
+    }
+    let u = (tau / slab.tau).clamp(0.0, 1.0).sqrt() * last as f64;
+    let j = (u.floor() as usize).min(last - 1);
+    let (t0, t1) = (tau_node(slab.tau, j), tau_node(slab.tau, j + 1));
+    (j, j + 1, ((tau - t0) / (t1 - t0)).clamp(0.0, 1.0))
 }
 
 /// The tables of every vertex (`VEC4_PER_VERTEX` vec4 each, zeros where `slab_of[v]` is
@@ -156,8 +293,8 @@ pub fn tables(env: &SceneEnvironment, slab_of: &[Option<SlabParams>]) -> Result<
         let Some(slab) = &slab_of[v] else { return };
         for side in 0..2 {
             let terms = side_terms(env, side * n + v, slab);
-            for (i, rgb) in terms.iter().enumerate() {
-                dst[side * (1 + MU_NODES) + i] = [rgb[0] as f32, rgb[1] as f32, rgb[2] as f32, 0.0];
+            for (i, rgb) in terms.iter().flatten().enumerate() {
+                dst[side * ROWS_PER_SIDE + i] = [rgb[0] as f32, rgb[1] as f32, rgb[2] as f32, 0.0];
             }
         }
     });
@@ -167,6 +304,7 @@ pub fn tables(env: &SceneEnvironment, slab_of: &[Option<SlabParams>]) -> Result<
 #[cfg(test)]
 mod tests {
     use super::*;
+    use btf_core::thin_slab::transmission_factor;
 
     #[test]
     fn nodes_span_grazing_to_normal() {
@@ -181,31 +319,80 @@ mod tests {
 
     #[test]
     fn fast_kernel_equals_the_slab_function_on_both_branches() {
-        // side_terms' quotient with precomputed node exponentials against
-        // transmission_factor, near and far from μ = μ₀ and at the grazing node.
-        for tau in [0.0, 1e-6, 0.05, 0.6, 5.0, 1e4] {
+        // ft_mu0 with precomputed exponentials against transmission_factor · μ₀, near and
+        // far from μ = μ₀ (both branches, d on both sides of 0.1) and at the grazing node.
+        let mut worst = 0f64;
+        for tau in [1e-6, 1e-3, 0.05, 0.6, 5.0, 1e4] {
             for k in 0..MU_NODES {
                 let mu = mu_node(k);
-                let e = if tau <= 0.0 {
-                    1.0
-                } else if mu > 0.0 {
-                    (-tau / mu).exp()
-                } else {
-                    0.0
-                };
-                for mu0 in [1e-4, 0.1, mu + 1e-7, 0.5, 0.999, 1.0] {
+                let e = if mu > 0.0 { (-tau / mu).exp() } else { 0.0 };
+                for mu0 in [1e-4, 0.1, mu + 1e-7, mu * 1.05 + 1e-3, 0.5, 0.999, 1.0] {
                     let e0 = (-tau / mu0).exp();
-                    let reference = transmission_factor(tau, mu, mu0);
-                    if mu == 0.0 || tau * (mu0 - mu).abs() > mu * mu0 {
-                        let fast = (e - e0) / (mu - mu0);
-                        let err = (fast - reference).abs() / reference.abs().max(1e-300);
-                        assert!(
-                            err < 1e-12 || fast == reference,
-                            "τ {tau} μ {mu} μ₀ {mu0}: {fast} vs {reference}"
-                        );
-                    }
+                    let reference = transmission_factor(tau, mu, mu0) * mu0;
+                    let fast = ft_mu0(tau, mu, mu0, e, e0);
+                    let err = (fast - reference).abs() / reference.abs().max(1e-300);
+                    assert!(
+                        err < 1e-12 || fast == reference,
+                        "τ {tau} μ {mu} μ₀ {mu0}: {fast} vs {reference}"
+                    );
+                    worst = worst.max(err);
                 }
             }
         }
+        eprintln!("worst relative difference {worst:.1e}");
+    }
+
+    #[test]
+    fn powers_give_the_node_exponentials() {
+        let tau_max = 3.0;
+        let taus: [f64; TAU_NODES] = std::array::from_fn(|j| tau_node(tau_max, j));
+        assert_eq!(taus[0], 0.0);
+        assert_eq!(taus[TAU_NODES - 1], tau_max);
+        for mu0 in [1e-3, 0.07, 0.5, 1.0] {
+            let mut e0 = [0.0; TAU_NODES];
+            exponentials(&taus, true, mu0, &mut e0);
+            for (j, (&e, &t)) in e0.iter().zip(&taus).enumerate() {
+                // exp's own conditioning: an argument rounded by ε·τ/μ₀ moves e^{−τ/μ₀} by
+                // that much relatively; the 49 products add ≤ 49 ε.
+                let want = (-t / mu0).exp();
+                assert!(
+                    (e - want).abs() <= (50.0 + 4.0 * t / mu0) * f64::EPSILON * want,
+                    "μ₀ {mu0} node {j}: {e} vs {want}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn node_scale_covers_the_texture() {
+        use super::super::desc::{Albedo, TauTexture};
+        let desc = |tau_texture| TransmissionDesc {
+            tau: 0.5,
+            tau_texture,
+            albedo: Albedo::Grey(0.8),
+            phase: PhaseDesc::Isotropic,
+        };
+        // A BTF-mean texture (mean 1) reaches above 1: the nodes go up to tau · max.
+        let s = SlabParams::of(&desc(Some(TauTexture::BtfMean)), 2.5);
+        assert_eq!((s.tau, s.textured), (1.25, true));
+        // An image in [0, 1]: the nodes span [0, tau].
+        let s = SlabParams::of(&desc(Some(TauTexture::BtfMean)), 0.7);
+        assert_eq!(s.tau, 0.5);
+        let s = SlabParams::of(&desc(None), 3.0);
+        assert_eq!((s.tau, s.textured), (0.5, false));
+    }
+
+    #[test]
+    fn tau_interpolation_hits_the_nodes_and_the_scalar_row() {
+        let slab = SlabParams { tau: 2.0, textured: true, albedo: [1.0; 3] };
+        assert_eq!(tau_weights(&slab, 0.0), (0, 1, 0.0));
+        assert_eq!(tau_weights(&slab, 2.0), (TAU_NODES - 2, TAU_NODES - 1, 1.0));
+        let (j0, j1, w) = tau_weights(&slab, tau_node(2.0, 3));
+        assert!((j0 == 3 && w.abs() < 1e-12) || (j1 == 3 && (w - 1.0).abs() < 1e-12));
+        let (j0, j1, w) = tau_weights(&slab, 0.5 * (tau_node(2.0, 4) + tau_node(2.0, 5)));
+        assert_eq!((j0, j1), (4, 5));
+        assert!((w - 0.5).abs() < 1e-12);
+        let scalar = SlabParams { textured: false, ..slab };
+        assert_eq!(tau_weights(&scalar, 0.7), (TAU_NODES - 1, TAU_NODES - 1, 0.0));
     }
 }

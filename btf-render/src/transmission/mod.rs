@@ -37,8 +37,8 @@
 //! **Environment lights** ([`env`]): per vertex side, the transmission through the slab
 //! (`∫ f_t L V μ₀ dω₀` over the far hemisphere, tabulated at 16 view cosines) and the
 //! irradiance-weighted `e^{−τ₁/μ₀}` that scales the BTF's environment term on the near
-//! side, from the environment's visibility maps; isotropic scattering and scalar `τ₁`
-//! only.
+//! side, from the environment's visibility maps; a `tau_texture` gets the tables at 8
+//! thicknesses, interpolated in `τ` per texel; isotropic scattering only.
 //!
 //! Limitations: thin cloth casts opaque shadows (shadow passes treat every triangle
 //! alike); the transmitted term is shadowed by shadow maps only; transmissive materials

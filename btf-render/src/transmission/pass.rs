@@ -32,7 +32,7 @@ pub struct ThinRaw {
     /// `τ₁`, Henyey–Greenstein `g`, τ texture bound (1/0), the environment's entry in the
     /// per-vertex layout.
     pub params: [f32; 4],
-    /// Albedo `ϖ₀` (RGB), unused.
+    /// Albedo `ϖ₀` (RGB), the τ-node scale of the environment tables (`SlabParams::tau`).
     pub albedo: [f32; 4],
 }
 
@@ -106,15 +106,20 @@ impl ThinPass {
         });
         let entry = env.map_or(0, |e| e.entry);
         let mut materials = Vec::new();
+        let mut slabs = Vec::new();
         for (desc, data, name) in descs {
-            materials.push(match desc {
-                Some(d) => {
-                    Some(ThinMaterial::new(gpu, &layout, d, data, name, &env_tables, entry)?)
-                }
-                None => None,
-            });
+            let Some(d) = desc else {
+                materials.push(None);
+                slabs.push(None);
+                continue;
+            };
+            let texels = tau_texels(d, data)?;
+            let max_texel = texels.2.iter().map(|t| t.to_f32()).fold(0.0, f32::max);
+            let slab = SlabParams::of(d, max_texel);
+            let bind = ThinBind { layout: &layout, env_tables: &env_tables, env_entry: entry };
+            materials.push(Some(ThinMaterial::new(gpu, &bind, d, &slab, texels, name)?));
+            slabs.push(Some(slab));
         }
-        let slabs = descs.iter().map(|(d, _, _)| d.map(SlabParams::of)).collect();
         let triangles: Vec<(usize, [CornerVertex; 3])> = corners
             .chunks_exact(3)
             .zip(material_of_triangle)
@@ -232,21 +237,32 @@ pub fn back_to_front(triangles: &[(usize, [CornerVertex; 3])], camera: &CameraSe
     order
 }
 
+/// The τ texture of a material (1×1 of ones without `tau_texture`): width, height, texels.
+fn tau_texels(desc: &TransmissionDesc, data: &MaterialData) -> Result<(u32, u32, Vec<f16>)> {
+    Ok(match &desc.tau_texture {
+        None => (1, 1, vec![f16::ONE]),
+        Some(TauTexture::BtfMean) => btf_mean_thickness(data),
+        Some(TauTexture::Image(p)) => image_thickness(p)?,
+    })
+}
+
+/// What every material's bind group shares.
+struct ThinBind<'a> {
+    layout: &'a wgpu::BindGroupLayout,
+    env_tables: &'a wgpu::Buffer,
+    env_entry: u32,
+}
+
 impl ThinMaterial {
     fn new(
         gpu: &Gpu,
-        layout: &wgpu::BindGroupLayout,
+        bind: &ThinBind,
         desc: &TransmissionDesc,
-        data: &MaterialData,
+        slab: &SlabParams,
+        (w, h, texels): (u32, u32, Vec<f16>),
         name: &str,
-        env_tables: &wgpu::Buffer,
-        env_entry: u32,
     ) -> Result<ThinMaterial> {
-        let (w, h, texels) = match &desc.tau_texture {
-            None => (1, 1, vec![f16::ONE]),
-            Some(TauTexture::BtfMean) => btf_mean_thickness(data),
-            Some(TauTexture::Image(p)) => image_thickness(p)?,
-        };
+        let (layout, env_tables, env_entry) = (bind.layout, bind.env_tables, bind.env_entry);
         let a = desc.albedo.rgb();
         let raw = ThinRaw {
             params: [
@@ -255,7 +271,7 @@ impl ThinMaterial {
                 desc.tau_texture.is_some() as u32 as f32,
                 env_entry as f32,
             ],
-            albedo: [a[0], a[1], a[2], 0.0],
+            albedo: [a[0], a[1], a[2], slab.tau as f32],
         };
         gpu.scoped(&format!("uploading the transmission of {name}"), || {
             let uniform = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {

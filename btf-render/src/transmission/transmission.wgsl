@@ -8,13 +8,14 @@ struct ThinRaw {
     // x: τ₁ (scale of the texture), y: Henyey–Greenstein g, z: 1 = τ texture bound,
     // w: the environment's entry in the per-vertex layout
     params: vec4<f32>,
-    // rgb: single-scattering albedo ϖ₀
+    // rgb: single-scattering albedo ϖ₀, w: τ_max, the scale of the environment's τ nodes
     albedo: vec4<f32>,
 }
 
 @group(3) @binding(0) var<uniform> thin: ThinRaw;
 @group(3) @binding(1) var tau_tex: texture_2d<f32>;
-// Per vertex and side (0 = +N, 1 = −N): A_s, then T_s(μ_k) at μ_k = (k/15)² (env.rs).
+// Per vertex, side (0 = +N, 1 = −N) and τ node τ_j = τ_max (j/7)²: A_s, then T_s(μ_k) at
+// μ_k = (k/15)² (env.rs).
 @group(3) @binding(2) var<storage, read> thin_env: array<vec4<f32>>;
 
 const THIN_MIN_COS: f32 = 1e-4;
@@ -137,24 +138,50 @@ fn fs_thin(in: VertexOut) -> @location(0) vec4<f32> {
 // ---- environment light on thin cloth (transmission/env.rs) ----
 
 const THIN_MU_NODES: u32 = 16u;
+const THIN_TAU_NODES: u32 = 8u;
 
-fn thin_env_row(vtx: u32, side: u32, i: u32) -> vec3<f32> {
-    return thin_env[(vtx * 2u + side) * (1u + THIN_MU_NODES) + i].rgb;
+fn thin_env_row(vtx: u32, side: u32, j: u32, i: u32) -> vec3<f32> {
+    return thin_env[((vtx * 2u + side) * THIN_TAU_NODES + j) * (1u + THIN_MU_NODES) + i].rgb;
 }
 
-// Barycentric blend of the three vertices' A (eye side) and T(μ) (far side, linear in √μ).
-fn thin_env_terms(in: VertexOut, f: Frame3, mu: f32) -> array<vec3<f32>, 2> {
+// The τ nodes around tau and the weight of the upper one (linear in τ); a scalar τ reads
+// the last node alone (env.rs tau_weights).
+fn thin_tau_nodes(tau: f32) -> vec3<f32> {
+    let last = THIN_TAU_NODES - 1u;
+    let scale = thin.albedo.w;
+    if (thin.params.z < 0.5 || scale <= 0.0) {
+        return vec3<f32>(f32(last), f32(last), 0.0);
+    }
+    let u = sqrt(clamp(tau / scale, 0.0, 1.0)) * f32(last);
+    let j = min(u32(floor(u)), last - 1u);
+    let s0 = f32(j) / f32(last);
+    let s1 = f32(j + 1u) / f32(last);
+    let t0 = scale * s0 * s0;
+    let t1 = scale * s1 * s1;
+    return vec3<f32>(f32(j), f32(j + 1u), clamp((tau - t0) / (t1 - t0), 0.0, 1.0));
+}
+
+// Barycentric blend of the three vertices' A (eye side) and T(μ) (far side), bilinear in
+// (√μ, τ).
+fn thin_env_terms(in: VertexOut, f: Frame3, mu: f32, tau: f32) -> array<vec3<f32>, 2> {
     let eye = select(0u, 1u, f.back);
     let far = 1u - eye;
     let u = sqrt(clamp(mu, 0.0, 1.0)) * f32(THIN_MU_NODES - 1u);
     let k = min(u32(floor(u)), THIN_MU_NODES - 2u);
     let t = u - f32(k);
+    let nodes = thin_tau_nodes(tau);
+    let j0 = u32(nodes.x);
+    let j1 = u32(nodes.y);
+    let w = nodes.z;
     var a = vec3<f32>(0.0);
     var tr = vec3<f32>(0.0);
     for (var c = 0u; c < 3u; c = c + 1u) {
         let vtx = in.tri[c];
-        a = a + in.bary[c] * thin_env_row(vtx, eye, 0u);
-        tr = tr + in.bary[c] * mix(thin_env_row(vtx, far, 1u + k), thin_env_row(vtx, far, 2u + k), t);
+        let a_c = mix(thin_env_row(vtx, eye, j0, 0u), thin_env_row(vtx, eye, j1, 0u), w);
+        let t0 = mix(thin_env_row(vtx, far, j0, 1u + k), thin_env_row(vtx, far, j0, 2u + k), t);
+        let t1 = mix(thin_env_row(vtx, far, j1, 1u + k), thin_env_row(vtx, far, j1, 2u + k), t);
+        a = a + in.bary[c] * a_c;
+        tr = tr + in.bary[c] * mix(t0, t1, w);
     }
     return array<vec3<f32>, 2>(a, tr);
 }
@@ -184,7 +211,7 @@ fn fs_thin_env(in: VertexOut) -> @location(0) vec4<f32> {
     for (var l = 0u; l < 4u; l = l + 1u) {
         vis[l] = select(0.0, 1.0, l == entry);
     }
-    let terms = thin_env_terms(in, f, mu);
+    let terms = thin_env_terms(in, f, mu, tau);
     let share = vec3<f32>(1.0) - exp(-tau / mu) * terms[0];
     rgb = rgb + share * vertex_sum(in, uv, frame.info.w) + terms[1];
     count_reads();
