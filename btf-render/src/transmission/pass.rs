@@ -18,10 +18,12 @@ use crate::{Error, Gpu, Result};
 use half::f16;
 use wgpu::util::DeviceExt;
 
-/// WGSL of the pass: the BTF pass's source with the thin-cloth fragment shader appended.
+/// WGSL of the pass: the BTF pass's source (per-vertex part included: the environment term
+/// is per vertex) with the thin-cloth fragment shaders appended.
 pub const SOURCE: &str = concat!(
     include_str!("../interp.wgsl"),
     include_str!("../btf_pass.wgsl"),
+    include_str!("../btf_vertex.wgsl"),
     include_str!("transmission.wgsl")
 );
 

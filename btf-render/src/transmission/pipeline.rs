@@ -106,7 +106,9 @@ pub(super) fn pipeline(
             layout: Some(&layout),
             vertex: wgpu::VertexState {
                 module: &module,
-                entry_point: Some("vs_main"),
+                // The environment's BTF term blends per-vertex slot sets: `vs_vertex` hands
+                // them to the fragments as flat varyings.
+                entry_point: Some(if environment { "vs_vertex" } else { "vs_main" }),
                 compilation_options: options.clone(),
                 buffers: &[Some(corner_buffer_layout())],
             },
