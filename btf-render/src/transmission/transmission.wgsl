@@ -112,12 +112,22 @@ fn thin_transmitted(in: VertexOut, f: Frame3, v: vec3<f32>, tau: f32, mu: f32) -
     return thin.albedo.rgb * rgb;
 }
 
-@fragment
-fn fs_thin(in: VertexOut) -> @location(0) vec4<f32> {
+// What both thin fragment shaders compute: the fragment's frame, view cosine and τ, and
+// the point and directional lights' reflected share of the BTF plus their transmitted term.
+struct ThinShade {
+    f: Frame3,
+    uv: vec2<f32>,
+    mu: f32,
+    tau: f32,
+    rgb: vec3<f32>,
+}
+
+// Called first thing in an entry point: the uv derivatives for the BTF's mip selection
+// (slot_pixel) must be taken in uniform control flow.
+fn thin_shade(in: VertexOut) -> ThinShade {
     let v = to_camera(in.world);
     let f = tangent_frame(in, v);
     let uv = tex_uv(in.uv);
-    // uv derivatives for the BTF's mip selection (slot_pixel), taken in uniform control flow
     duv_dx = dpdx(uv);
     duv_dy = dpdy(uv);
     let mu = max(dot(v, f.n), THIN_MIN_COS);
@@ -132,8 +142,14 @@ fn fs_thin(in: VertexOut) -> @location(0) vec4<f32> {
         }
     }
     rgb = rgb + thin_transmitted(in, f, v, tau, mu);
+    return ThinShade(f, uv, mu, tau, rgb);
+}
+
+@fragment
+fn fs_thin(in: VertexOut) -> @location(0) vec4<f32> {
+    let s = thin_shade(in);
     count_reads();
-    return vec4<f32>(rgb, exp(-tau / mu));
+    return vec4<f32>(s.rgb, exp(-s.tau / s.mu));
 }
 
 // ---- environment light on thin cloth (transmission/env.rs) ----
@@ -191,30 +207,14 @@ fn thin_env_terms(in: VertexOut, f: Frame3, mu: f32, tau: f32) -> array<vec3<f32
 // thin.params.w alone) scaled by 1 − e^{−τ/μ}·A, and the transmitted T(μ).
 @fragment
 fn fs_thin_env(in: VertexOut) -> @location(0) vec4<f32> {
-    let v = to_camera(in.world);
-    let f = tangent_frame(in, v);
-    let uv = tex_uv(in.uv);
-    duv_dx = dpdx(uv);
-    duv_dy = dpdy(uv);
-    let mu = max(dot(v, f.n), THIN_MIN_COS);
-    let tau = thin_tau(uv);
-    reads = 0u;
-    gather_lights_thin(in, f, tau, mu);
-    var rgb = vec3<f32>(0.0);
-    if (n_active > 0u) {
-        let views = view_weights(dir_angles(vec3<f32>(dot(v, f.t), dot(v, f.b), dot(v, f.n))), VIEW_FOUR);
-        for (var m = 0u; m < views.n; m = m + 1u) {
-            rgb = rgb + views.w[m] * slot_pixel(views.idx[m], uv);
-        }
-    }
-    rgb = rgb + thin_transmitted(in, f, v, tau, mu);
+    let s = thin_shade(in);
     let entry = u32(thin.params.w);
     for (var l = 0u; l < 4u; l = l + 1u) {
         vis[l] = select(0.0, 1.0, l == entry);
     }
-    let terms = thin_env_terms(in, f, mu, tau);
-    let share = vec3<f32>(1.0) - exp(-tau / mu) * terms[0];
-    rgb = rgb + share * vertex_sum(in, uv, frame.info.w) + terms[1];
+    let terms = thin_env_terms(in, s.f, s.mu, s.tau);
+    let share = vec3<f32>(1.0) - exp(-s.tau / s.mu) * terms[0];
+    let rgb = s.rgb + share * vertex_sum(in, s.uv, frame.info.w) + terms[1];
     count_reads();
-    return vec4<f32>(rgb, exp(-tau / mu));
+    return vec4<f32>(rgb, exp(-s.tau / s.mu));
 }
