@@ -93,13 +93,7 @@ fn transmission_cost_and_orbit() {
 #[ignore = "a measurement on lavapipe: run for BENCHMARKS.md"]
 fn transmission_cost_under_an_environment() {
     let Some(gpu) = gpu("transmission_cost_under_an_environment") else { return };
-    let dir = tempfile::tempdir().unwrap();
-    write_store(dir.path(), "voile.eigen", Pattern::Checker, 64, 64, 16, Quantization::F16);
-    let mesh =
-        datasets::synth_mesh(datasets::MeshKind::Curtain, datasets::Resolution::Low).unwrap();
-    datasets::write_obj(&mesh, &dir.path().join("curtain.obj"), "curtain").unwrap();
-    let sky = datasets::synth_env(datasets::EnvKind::Sky, &Default::default(), 256).unwrap();
-    datasets::write_exr(&sky, &dir.path().join("sky.exr")).unwrap();
+    let (dir, mesh) = curtain_and_sky();
     let scene = |t: &str| {
         let text = format!(
             "[output]\nwidth = 256\nheight = 256\nshow_environment = true\n\
@@ -164,13 +158,7 @@ fn transmission_cost_under_an_environment() {
 #[ignore = "a measurement: run for BENCHMARKS.md"]
 fn environment_table_cost_scalar_vs_tau_texture() {
     let Some(gpu) = gpu("environment_table_cost_scalar_vs_tau_texture") else { return };
-    let dir = tempfile::tempdir().unwrap();
-    write_store(dir.path(), "voile.eigen", Pattern::Checker, 64, 64, 16, Quantization::F16);
-    let mesh =
-        datasets::synth_mesh(datasets::MeshKind::Curtain, datasets::Resolution::Low).unwrap();
-    datasets::write_obj(&mesh, &dir.path().join("curtain.obj"), "curtain").unwrap();
-    let sky = datasets::synth_env(datasets::EnvKind::Sky, &Default::default(), 256).unwrap();
-    datasets::write_exr(&sky, &dir.path().join("sky.exr")).unwrap();
+    let (dir, mesh) = curtain_and_sky();
     let scene = |t: &str| {
         let text = format!(
             "[output]\nwidth = 32\nheight = 32\n[[meshes]]\npath = \"curtain.obj\"\n\
@@ -201,4 +189,17 @@ fn environment_table_cost_scalar_vs_tau_texture() {
         ms[1],
         ms[1] / ms[0]
     );
+}
+
+/// A folder with the voile store, the low curtain (`curtain.obj`) and the synthetic sky
+/// (`sky.exr`) that the environment measurements share.
+fn curtain_and_sky() -> (tempfile::TempDir, datasets::Mesh) {
+    let dir = tempfile::tempdir().unwrap();
+    write_store(dir.path(), "voile.eigen", Pattern::Checker, 64, 64, 16, Quantization::F16);
+    let mesh =
+        datasets::synth_mesh(datasets::MeshKind::Curtain, datasets::Resolution::Low).unwrap();
+    datasets::write_obj(&mesh, &dir.path().join("curtain.obj"), "curtain").unwrap();
+    let sky = datasets::synth_env(datasets::EnvKind::Sky, &Default::default(), 256).unwrap();
+    datasets::write_exr(&sky, &dir.path().join("sky.exr")).unwrap();
+    (dir, mesh)
 }
