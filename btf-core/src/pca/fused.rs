@@ -48,7 +48,7 @@ pub(super) fn lift_store_f16(
     let mut halves = vec![f16::ZERO; c * m];
     let (mut yb, mut sb, mut eb) = (Block::default(), Block::default(), Block::default());
     let mut lifted = vec![0f64; cp * BLOCK];
-    let (mut narrow, mut wide) = (vec![0f32; BLOCK], vec![0f64; BLOCK]);
+    let mut narrow = vec![0f32; BLOCK];
     let (mut cross_acc, mut bgram_acc) = (DotAcc::new(c, n, false), DotAcc::new(c, c, true));
     let (mut hi, mut lo) = (vec![0f64; c], vec![0f64; c]);
     for c0 in (0..m).step_by(BLOCK) {
@@ -68,9 +68,9 @@ pub(super) fn lift_store_f16(
             narrow[..w].iter_mut().zip(b).for_each(|(o, &v)| *o = v as f32);
             let h = &mut halves[k * m + c0..k * m + c0 + w];
             h.convert_from_f32_slice(&narrow[..w]);
-            h.convert_to_f64_slice(&mut wide[..w]);
-            sb.row_mut(k)[..w].copy_from_slice(&wide[..w]);
-            for ((e, &s), &b) in eb.row_mut(k)[..w].iter_mut().zip(&wide[..w]).zip(b) {
+            let stored = &mut sb.row_mut(k)[..w];
+            h.convert_to_f64_slice(stored);
+            for ((e, &s), &b) in eb.row_mut(k)[..w].iter_mut().zip(&*stored).zip(b) {
                 *e = s - b;
             }
         }
