@@ -342,8 +342,10 @@ fn count_reads() {
     }
 }
 
-@fragment
-fn fs_pixel(in: VertexOut) -> @location(0) vec4<f32> {
+// The per-pixel lights' reconstruction at a fragment (eq. 2–5, four-slot view blending).
+// Call it first in an entry point: it takes the uv derivatives for mip selection, which
+// needs uniform control flow.
+fn pixel_lights(in: VertexOut) -> vec3<f32> {
     let v = to_camera(in.world);
     let f = tangent_frame(in, v);
     let uv = tex_uv(in.uv);
@@ -358,6 +360,12 @@ fn fs_pixel(in: VertexOut) -> @location(0) vec4<f32> {
             rgb = rgb + views.w[m] * slot_pixel(views.idx[m], uv);
         }
     }
+    return rgb;
+}
+
+@fragment
+fn fs_pixel(in: VertexOut) -> @location(0) vec4<f32> {
+    let rgb = pixel_lights(in);
     count_reads();
     return vec4<f32>(rgb, 1.0);
 }

@@ -163,22 +163,9 @@ fn fs_vertex(in: VertexOut) -> @location(0) vec4<f32> {
 // coefficients, the only entry of the per-vertex layout (frame.info.w = 1).
 @fragment
 fn fs_pixel_env(in: VertexOut) -> @location(0) vec4<f32> {
-    let v = to_camera(in.world);
-    let f = tangent_frame(in, v);
-    let uv = tex_uv(in.uv);
-    duv_dx = dpdx(uv);
-    duv_dy = dpdy(uv);
-    reads = 0u;
-    let lit = gather_lights(in, f);
-    var rgb = vec3<f32>(0.0);
-    if (lit) {
-        let views = view_weights(dir_angles(vec3<f32>(dot(v, f.t), dot(v, f.b), dot(v, f.n))), VIEW_FOUR);
-        for (var m = 0u; m < views.n; m = m + 1u) {
-            rgb = rgb + views.w[m] * slot_pixel(views.idx[m], uv);
-        }
-    }
+    var rgb = pixel_lights(in);
     vis[0] = 1.0;
-    rgb = rgb + vertex_sum(in, uv, 1u);
+    rgb = rgb + vertex_sum(in, tex_uv(in.uv), 1u);
     count_reads();
     return vec4<f32>(rgb, 1.0);
 }
