@@ -1,8 +1,9 @@
 //! A bounding-volume hierarchy over the mesh triangles for the occlusion rays of the
 //! visibility maps (Sattler et al. 2003, §5.2: `V(x, p_α)` of eq. 9).
 //!
-//! Built top-down by splitting at the median centroid along the longest axis (leaves of at
-//! most [`LEAF_SIZE`] triangles), stored flat in depth-first order so the left child of a
+//! Built top-down by the binned surface-area heuristic over triangle centroids (the median
+//! of the longest axis where no bin boundary splits a set; leaves of at most [`LEAF_SIZE`]
+//! triangles), stored flat in depth-first order so the left child of a
 //! node is the next node. Queries are any-hit: a ray is occluded as soon as one triangle
 //! is hit in `(t_min, ∞)`. Triangles are double-sided (cloth occludes from both sides), the
 //! test is Möller–Trumbore in `f32`; zero-area triangles never report a hit.
@@ -94,15 +95,27 @@ impl Bvh {
         }
         let me = self.nodes.len();
         self.nodes.push(Node { lo, hi, start_or_right: start as u32, count: order.len() as u32 });
-        let axis =
-            (0..3).max_by(|&a, &b| (chi[a] - clo[a]).total_cmp(&(chi[b] - clo[b]))).unwrap_or(0);
-        if order.len() <= LEAF_SIZE || chi[axis] <= clo[axis] {
+        if order.len() <= LEAF_SIZE {
             return me;
         }
-        let mid = order.len() / 2;
-        order.select_nth_unstable_by(mid, |&a, &b| {
-            cents[a as usize][axis].total_cmp(&cents[b as usize][axis])
-        });
+        let mid = match sah_split(corners, cents, order, clo, chi) {
+            Some(mid) => mid,
+            None => {
+                // No useful binned split (centroids bunched in one bin): the median of the
+                // longest axis, unless every centroid coincides.
+                let axis = (0..3)
+                    .max_by(|&a, &b| (chi[a] - clo[a]).total_cmp(&(chi[b] - clo[b])))
+                    .unwrap_or(0);
+                if chi[axis] <= clo[axis] {
+                    return me;
+                }
+                let mid = order.len() / 2;
+                order.select_nth_unstable_by(mid, |&a, &b| {
+                    cents[a as usize][axis].total_cmp(&cents[b as usize][axis])
+                });
+                mid
+            }
+        };
         let (left, right) = order.split_at_mut(mid);
         self.build(corners, cents, left, start);
         let r = self.build(corners, cents, right, start + mid);
@@ -167,6 +180,99 @@ impl Bvh {
         }
         false
     }
+}
+
+/// Bins per axis of the surface-area split.
+const SAH_BINS: usize = 16;
+
+/// Box of `lo..hi` grown by the corners of a triangle.
+fn grow(b: &mut ([f32; 3], [f32; 3]), c: &[[f32; 3]; 3]) {
+    for p in c {
+        for a in 0..3 {
+            b.0[a] = b.0[a].min(p[a]);
+            b.1[a] = b.1[a].max(p[a]);
+        }
+    }
+}
+
+/// Half the surface area of a box (0 for an empty one).
+fn half_area(b: &([f32; 3], [f32; 3])) -> f32 {
+    let e = [0, 1, 2].map(|a| (b.1[a] - b.0[a]).max(0.0));
+    e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
+}
+
+/// Partitions `order` by the binned surface-area heuristic (the split minimising
+/// `A_left · n_left + A_right · n_right` over [`SAH_BINS`] centroid bins per axis) and
+/// returns the size of the left part, or `None` when no bin boundary splits the set.
+fn sah_split(
+    corners: &[[[f32; 3]; 3]],
+    cents: &[[f32; 3]],
+    order: &mut [u32],
+    clo: [f32; 3],
+    chi: [f32; 3],
+) -> Option<usize> {
+    let empty = ([f32::MAX; 3], [f32::MIN; 3]);
+    let mut best: Option<(f32, usize, usize)> = None;
+    for axis in 0..3 {
+        let extent = chi[axis] - clo[axis];
+        if extent <= 0.0 {
+            continue;
+        }
+        let scale = SAH_BINS as f32 / extent;
+        let bin_of = |c: &[f32; 3]| (((c[axis] - clo[axis]) * scale) as usize).min(SAH_BINS - 1);
+        let mut boxes = [empty; SAH_BINS];
+        let mut counts = [0usize; SAH_BINS];
+        for &t in order.iter() {
+            let b = bin_of(&cents[t as usize]);
+            counts[b] += 1;
+            grow(&mut boxes[b], &corners[t as usize]);
+        }
+        // Right-to-left sweep: cost of the right part for each boundary.
+        let mut right = [0f32; SAH_BINS];
+        let (mut acc, mut n) = (empty, 0usize);
+        for b in (1..SAH_BINS).rev() {
+            n += counts[b];
+            if counts[b] > 0 {
+                acc = (
+                    [0, 1, 2].map(|a| acc.0[a].min(boxes[b].0[a])),
+                    [0, 1, 2].map(|a| acc.1[a].max(boxes[b].1[a])),
+                );
+            }
+            right[b] = half_area(&acc) * n as f32;
+        }
+        let (mut acc, mut n) = (empty, 0usize);
+        for b in 0..SAH_BINS - 1 {
+            n += counts[b];
+            if counts[b] > 0 {
+                acc = (
+                    [0, 1, 2].map(|a| acc.0[a].min(boxes[b].0[a])),
+                    [0, 1, 2].map(|a| acc.1[a].max(boxes[b].1[a])),
+                );
+            }
+            if n == 0 || n == order.len() {
+                continue;
+            }
+            let cost = half_area(&acc) * n as f32 + right[b + 1];
+            if best.is_none_or(|(c, _, _)| cost < c) {
+                best = Some((cost, axis, b + 1));
+            }
+        }
+    }
+    let (_, axis, split) = best?;
+    let scale = SAH_BINS as f32 / (chi[axis] - clo[axis]);
+    let left_of = |t: &u32| {
+        let c = cents[*t as usize];
+        (((c[axis] - clo[axis]) * scale) as usize).min(SAH_BINS - 1) < split
+    };
+    // Stable order inside each part keeps the build deterministic.
+    let mut i = 0;
+    for j in 0..order.len() {
+        if left_of(&order[j]) {
+            order.swap(i, j);
+            i += 1;
+        }
+    }
+    Some(i)
 }
 
 fn slab_hit(n: &Node, o: [f32; 3], inv: [f32; 3], t_min: f32) -> bool {
