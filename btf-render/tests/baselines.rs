@@ -16,27 +16,8 @@ use half::f16;
 const SIZE: u32 = 32;
 
 fn ortho_plane(dir: &std::path::Path) -> Scene {
-    let text = format!(
-        r#"
-        [output]
-        width = {SIZE}
-        height = {SIZE}
-        [[meshes]]
-        path = "plane.obj"
-        [[materials]]
-        store = "m.eigen"
-        [camera]
-        projection = "orthographic"
-        eye = [0.5, 0.5, 3.0]
-        target = [0.5, 0.5, 0.0]
-        ortho_height = 1.0
-        [[lights]]
-        kind = "directional"
-        direction = [0.3, 0.2, 1.0]
-        irradiance = [1.0, 1.0, 1.0]
-        "#
-    );
-    Scene::load(&write(dir, "scene.toml", &text)).unwrap()
+    let cam = Ortho { eye: [0.5, 0.5, 3.0], ..OVER_PLANE };
+    ortho_scene(dir, SIZE, cam, "plane.obj", "store = \"m.eigen\"", &directional([0.3, 0.2, 1.0]))
 }
 
 fn render(scene: &Scene, gpu: &btf_render::Gpu, baseline: Baseline) -> btf_render::Frame {

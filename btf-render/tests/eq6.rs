@@ -15,34 +15,18 @@ const SIZE: u32 = 128;
 const HALF_HEIGHT: f32 = 1.2;
 
 fn sphere_scene(dir: &std::path::Path, shadows: &str, smooth: bool) -> Scene {
-    let text = format!(
-        r#"
-        [output]
-        width = {SIZE}
-        height = {SIZE}
-        [[meshes]]
-        path = "sphere.obj"
-        [[materials]]
-        store = "u.eigen"
-        [camera]
-        projection = "orthographic"
-        eye = [0.0, 0.0, 5.0]
-        target = [0.0, 0.0, 0.0]
-        ortho_height = {}
-        [[lights]]
-        kind = "directional"
-        direction = [{}, {}, {}]
-        irradiance = [1.0, 1.0, 1.0]
-        [effects]
-        shadows = "{shadows}"
-        smooth_boundary = {smooth}
-        "#,
-        2.0 * HALF_HEIGHT,
-        LS[0],
-        LS[1],
-        LS[2]
+    let rest = format!(
+        "{}[effects]\nshadows = \"{shadows}\"\nsmooth_boundary = {smooth}\n",
+        directional(LS)
     );
-    Scene::load(&write(dir, "scene.toml", &text)).unwrap()
+    ortho_scene(
+        dir,
+        SIZE,
+        OVER_SPHERE.with_height(2.0 * HALF_HEIGHT),
+        "sphere.obj",
+        "store = \"u.eigen\"",
+        &rest,
+    )
 }
 
 fn lum(f: &Frame, x: u32, y: u32) -> f32 {

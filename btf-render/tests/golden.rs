@@ -17,30 +17,8 @@ fn plane_scene(
     light_dir: [f32; 3],
     size: u32,
 ) -> Scene {
-    let text = format!(
-        r#"
-        [output]
-        width = {size}
-        height = {size}
-        [[meshes]]
-        path = "{obj}"
-        [[materials]]
-        store = "{store}"
-        [camera]
-        projection = "orthographic"
-        eye = [0.5, 0.5, 4.0]
-        target = [0.5, 0.5, 0.0]
-        up = [0.0, 1.0, 0.0]
-        ortho_height = 1.0
-        [[lights]]
-        kind = "directional"
-        direction = [{}, {}, {}]
-        irradiance = [1.0, 1.0, 1.0]
-        {extra}
-        "#,
-        light_dir[0], light_dir[1], light_dir[2]
-    );
-    Scene::load(&write(dir, "scene.toml", &text)).unwrap()
+    let rest = format!("{}{extra}\n", directional(light_dir));
+    ortho_scene(dir, size, OVER_PLANE, obj, &format!("store = \"{store}\""), &rest)
 }
 
 /// World light direction on the plane → tangent direction: T = +x, B = −y, N = +z.

@@ -49,30 +49,9 @@ fn write_noise_store(dir: &Path, w: usize, q: Quantization) {
 }
 
 fn plane_scene(dir: &Path, size: u32, mipmaps: bool) -> Scene {
-    let text = format!(
-        r#"
-        [output]
-        width = {size}
-        height = {size}
-        [[meshes]]
-        path = "plane.obj"
-        [[materials]]
-        store = "n.eigen"
-        uv_scale = 4.0
-        [camera]
-        projection = "orthographic"
-        eye = [0.5, 0.5, 3.0]
-        target = [0.5, 0.5, 0.0]
-        ortho_height = 1.0
-        [[lights]]
-        kind = "directional"
-        direction = [0.0, 0.0, 1.0]
-        irradiance = [1.0, 1.0, 1.0]
-        [effects]
-        mipmaps = {mipmaps}
-        "#
-    );
-    Scene::load(&write(dir, "scene.toml", &text)).unwrap()
+    let cam = Ortho { eye: [0.5, 0.5, 3.0], ..OVER_PLANE };
+    let rest = format!("{}[effects]\nmipmaps = {mipmaps}\n", directional([0.0, 0.0, 1.0]));
+    ortho_scene(dir, size, cam, "plane.obj", "store = \"n.eigen\"\nuv_scale = 4.0", &rest)
 }
 
 /// `k × k` box average of a frame.

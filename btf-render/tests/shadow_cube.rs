@@ -35,32 +35,11 @@ fn mesh() -> String {
 }
 
 fn scene(dir: &std::path::Path, shadows: &str, size: u32) -> Scene {
-    let text = format!(
-        r#"
-        [output]
-        width = {size}
-        height = {size}
-        [[meshes]]
-        path = "scene.obj"
-        [[materials]]
-        store = "u.eigen"
-        [camera]
-        projection = "orthographic"
-        eye = [0.5, 0.5, 4.0]
-        target = [0.5, 0.5, 0.0]
-        ortho_height = 1.0
-        [[lights]]
-        kind = "point"
-        position = [{}, {}, {}]
-        intensity = [0.05, 0.05, 0.05]
-        [effects]
-        shadows = "{shadows}"
-        shadow_map_size = 1024
-        terminator_deg = 5.0
-        "#,
-        LIGHT[0], LIGHT[1], LIGHT[2]
+    let rest = format!(
+        "{}[effects]\nshadows = \"{shadows}\"\nshadow_map_size = 1024\nterminator_deg = 5.0\n",
+        point(LIGHT, 0.05)
     );
-    Scene::load(&write(dir, "scene.toml", &text)).unwrap()
+    ortho_scene(dir, size, OVER_PLANE, "scene.obj", "store = \"u.eigen\"", &rest)
 }
 
 /// Where the ray from ground point (x, y) to the light crosses the occluders' height.

@@ -33,31 +33,9 @@ fn predicted_x(y: f32, alpha_deg: f32) -> f32 {
 }
 
 fn occluder_scene(dir: &std::path::Path, shadows: &str, size: u32) -> Scene {
-    let text = format!(
-        r#"
-        [output]
-        width = {size}
-        height = {size}
-        [[meshes]]
-        path = "scene.obj"
-        [[materials]]
-        store = "u.eigen"
-        [camera]
-        projection = "orthographic"
-        eye = [0.5, 0.5, 4.0]
-        target = [0.5, 0.5, 0.0]
-        ortho_height = 1.0
-        [[lights]]
-        kind = "directional"
-        direction = [{}, {}, {}]
-        irradiance = [1.0, 1.0, 1.0]
-        [effects]
-        shadows = "{shadows}"
-        shadow_map_size = 2048
-        "#,
-        L[0], L[1], L[2]
-    );
-    Scene::load(&write(dir, "scene.toml", &text)).unwrap()
+    let rest =
+        format!("{}[effects]\nshadows = \"{shadows}\"\nshadow_map_size = 2048\n", directional(L));
+    ortho_scene(dir, size, OVER_PLANE, "scene.obj", "store = \"u.eigen\"", &rest)
 }
 
 fn lum(f: &Frame, x: u32, y: u32) -> f32 {
@@ -142,31 +120,12 @@ fn smooth_boundary_sits_where_eq6_puts_it_without_zigzag() {
     write(dir.path(), "sphere.obj", &sphere_obj(1.0, [0.0, 0.0, 0.0], 16));
     let size = 128u32;
     for (shadows, alpha) in [("volume", 15.0f32), ("volume", 30.0), ("map", 15.0)] {
-        let text = format!(
-            r#"
-            [output]
-            width = {size}
-            height = {size}
-            [[meshes]]
-            path = "sphere.obj"
-            [[materials]]
-            store = "u.eigen"
-            [camera]
-            projection = "orthographic"
-            eye = [0.0, 0.0, 5.0]
-            target = [0.0, 0.0, 0.0]
-            ortho_height = 2.4
-            [[lights]]
-            kind = "directional"
-            direction = [{}, {}, {}]
-            irradiance = [1.0, 1.0, 1.0]
-            [effects]
-            shadows = "{shadows}"
-            terminator_deg = {alpha}
-            "#,
-            LS[0], LS[1], LS[2]
+        let rest = format!(
+            "{}[effects]\nshadows = \"{shadows}\"\nterminator_deg = {alpha}\n",
+            directional(LS)
         );
-        let scene = Scene::load(&write(dir.path(), "scene.toml", &text)).unwrap();
+        let cam = OVER_SPHERE.with_height(2.4);
+        let scene = ortho_scene(dir.path(), size, cam, "sphere.obj", "store = \"u.eigen\"", &rest);
         let f = render_scene(&gpu, &scene, RenderOptions::default()).unwrap();
         assert!(f.all_finite());
         let px_per_unit = size as f32 / 2.4;

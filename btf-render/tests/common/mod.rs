@@ -6,7 +6,7 @@
 use btf_core::Sampling;
 use btf_core::eigen::{EigenMeta, EigenWriter, Quantization, QuantizedSlot, quantize};
 use btf_core::store::BtfMeta;
-use btf_render::{Frame, Gpu};
+use btf_render::{Frame, Gpu, Scene};
 use std::f32::consts::TAU;
 use std::path::{Path, PathBuf};
 
@@ -240,4 +240,61 @@ fn write_lambert(
     }
     writer.finish().unwrap();
     path
+}
+
+/// An orthographic camera looking down `−z` (up `+y`) for the small test scenes.
+#[derive(Debug, Clone, Copy)]
+pub struct Ortho {
+    pub eye: [f32; 3],
+    pub target: [f32; 3],
+    /// World height of the view.
+    pub height: f32,
+}
+
+/// Looking at the unit plane `[0, 1]²` from above.
+pub const OVER_PLANE: Ortho = Ortho { eye: [0.5, 0.5, 4.0], target: [0.5, 0.5, 0.0], height: 1.0 };
+
+/// `[[lights]]` entry of a white directional light shining from `direction`.
+pub fn directional(direction: [f32; 3]) -> String {
+    format!(
+        "[[lights]]\nkind = \"directional\"\ndirection = {direction:?}\nirradiance = [1.0, 1.0, 1.0]\n"
+    )
+}
+
+/// `[[lights]]` entry of a grey point light of `intensity` at `position`.
+pub fn point(position: [f32; 3], intensity: f32) -> String {
+    format!(
+        "[[lights]]\nkind = \"point\"\nposition = {position:?}\nintensity = {:?}\n",
+        [intensity; 3]
+    )
+}
+
+/// Loads (after writing `scene.toml` into `dir`) a `size²` scene of mesh `obj` with one
+/// material (`material`: the body of its `[[materials]]` table, e.g. `store = "u.eigen"`)
+/// under camera `cam`, followed by `rest` (lights, `[effects]`).
+pub fn ortho_scene(
+    dir: &Path,
+    size: u32,
+    cam: Ortho,
+    obj: &str,
+    material: &str,
+    rest: &str,
+) -> Scene {
+    let Ortho { eye, target, height } = cam;
+    let text = format!(
+        "[output]\nwidth = {size}\nheight = {size}\n[[meshes]]\npath = \"{obj}\"\n\
+         [[materials]]\n{material}\n[camera]\nprojection = \"orthographic\"\neye = {eye:?}\n\
+         target = {target:?}\northo_height = {height:?}\n{rest}"
+    );
+    Scene::load(&write(dir, "scene.toml", &text)).unwrap()
+}
+
+/// Looking at a sphere around the origin from `+z`, view height 2.
+pub const OVER_SPHERE: Ortho = Ortho { eye: [0.0, 0.0, 5.0], target: [0.0, 0.0, 0.0], height: 2.0 };
+
+impl Ortho {
+    /// The same camera with view height `height`.
+    pub fn with_height(self, height: f32) -> Ortho {
+        Ortho { height, ..self }
+    }
 }
