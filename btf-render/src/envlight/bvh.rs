@@ -354,4 +354,37 @@ mod tests {
         assert!(hits > 200 && hits < 1800, "{hits}");
         assert!(!Bvh::new(&pos, &[]).occluded([0.0; 3], [0.0, 0.0, 1.0], 0.0));
     }
+
+    #[test]
+    fn degenerate_sets_build_and_answer_like_brute_force() {
+        // 300 copies of one triangle, 50 zero-area slivers on a line and one far triangle:
+        // the binned split must neither loop nor lose triangles.
+        let pos = vec![
+            [0.0, 0.0, 1.0],
+            [1.0, 0.0, 1.0],
+            [0.0, 1.0, 1.0],
+            [0.0, 0.0, 2.0],
+            [1.0, 1.0, 2.0],
+            [2.0, 2.0, 2.0],
+            [5.0, 5.0, 3.0],
+            [6.0, 5.0, 3.0],
+            [5.0, 6.0, 3.0],
+        ];
+        let mut tris = vec![[0u32, 1, 2]; 300];
+        tris.extend(std::iter::repeat_n([3u32, 4, 5], 50));
+        tris.push([6, 7, 8]);
+        let bvh = Bvh::new(&pos, &tris);
+        assert_eq!(bvh.triangles(), tris.len());
+        let leaves: usize = bvh.nodes().iter().map(|n| n.count as usize).sum();
+        assert_eq!(leaves, tris.len());
+        for (o, d, hit) in [
+            ([0.2, 0.2, 0.0], [0.0, 0.0, 1.0], true),
+            ([0.9, 0.9, 0.0], [0.0, 0.0, 1.0], false),
+            ([5.2, 5.2, 0.0], [0.0, 0.0, 1.0], true),
+            ([3.0, 3.0, 0.0], [0.0, 0.0, 1.0], false),
+        ] {
+            assert_eq!(bvh.occluded(o, d, 1e-4), hit, "{o:?}");
+            assert_eq!(brute(&pos, &tris, o, d), hit, "{o:?}");
+        }
+    }
 }
