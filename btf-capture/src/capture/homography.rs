@@ -35,14 +35,48 @@ fn normaliser(pts: &[[f64; 2]]) -> Matrix3<f64> {
     Matrix3::new(s, 0.0, -s * mx, 0.0, s, -s * my, 0.0, 0.0, 1.0)
 }
 
-/// Normalised DLT from ≥ 4 correspondences; `None` when they are degenerate or not finite
-/// (a NaN makes the SVD iterate forever).
+/// Whether three plate points are collinear to within a relative `1e-3` (the sine of the
+/// angle they make).
+fn collinear(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> bool {
+    let (u, v) = ([b[0] - a[0], b[1] - a[1]], [c[0] - a[0], c[1] - a[1]]);
+    let cross = (u[0] * v[1] - u[1] * v[0]).abs();
+    cross <= 1e-3 * u[0].hypot(u[1]) * v[0].hypot(v[1])
+}
+
+/// Whether some four of `pts` have no three on a line — what a plane homography needs to
+/// be determined.
+pub fn general_position(pts: &[[f64; 2]]) -> bool {
+    let n = pts.len();
+    if n < 4 {
+        return false;
+    }
+    let mut idx = [0usize, 1, 2, 3];
+    loop {
+        let q = idx.map(|i| pts[i]);
+        let bad = [(0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3)]
+            .iter()
+            .any(|&(i, j, k)| collinear(q[i], q[j], q[k]));
+        if !bad {
+            return true;
+        }
+        if !next_combination(&mut idx, n) {
+            return false;
+        }
+    }
+}
+
+/// Normalised DLT from ≥ 4 correspondences; `None` when they are degenerate (no four of the
+/// plate points in general position) or not finite (a NaN makes the SVD iterate forever).
 pub fn dlt(matches: &[PointMatch]) -> Option<Matrix3<f64>> {
     let finite = |m: &PointMatch| m.plate_mm.iter().chain(&m.image_px).all(|v| v.is_finite());
     if matches.len() < 4 || !matches.iter().all(finite) {
         return None;
     }
     let plate: Vec<[f64; 2]> = matches.iter().map(|m| m.plate_mm).collect();
+    if !general_position(&plate) {
+        // Three of four on a line (or all on one): a whole family of homographies fits.
+        return None;
+    }
     let image: Vec<[f64; 2]> = matches.iter().map(|m| m.image_px).collect();
     let (tp, ti) = (normaliser(&plate), normaliser(&image));
     let mut a = DMatrix::<f64>::zeros(2 * matches.len().max(5), 9);
@@ -243,6 +277,22 @@ mod tests {
 
     fn matches(h: &Matrix3<f64>) -> Vec<PointMatch> {
         layout().into_iter().map(|p| PointMatch { plate_mm: p, image_px: apply(h, p) }).collect()
+    }
+
+    #[test]
+    fn three_markers_on_a_line_do_not_fix_a_homography() {
+        // The case seen on a 60° view: one bottom row of markers plus one more. Three of
+        // the four are collinear, so every homography of a one-parameter family fits them.
+        let m = matches(&truth());
+        let l_shape = [m[0], m[1], m[2], m[3]];
+        assert!(dlt(&l_shape).is_none());
+        assert!(consensus(&l_shape, 2.0).is_none());
+        // Any fourth marker off that line settles it.
+        let h = dlt(&[m[0], m[2], m[3], m[6]]).unwrap();
+        assert!(m.iter().all(|p| point_error(&h, p) < 1e-6));
+        assert!(!general_position(&layout()[..3]));
+        assert!(!general_position(&[[0.0, 0.0], [1.0, 1.0], [2.0, 2.0], [3.0, 3.0]]));
+        assert!(general_position(&layout()));
     }
 
     #[test]

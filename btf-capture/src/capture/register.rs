@@ -95,13 +95,21 @@ pub fn register(
             .map(|&m| markers::detect_point(img, h, m, radius, opt.search_margin_mm))
             .collect()
     };
-    let usable = |f: &[Detection]| f.iter().filter(|d| d.is_ok()).count();
+    // Found markers, ranked first by whether four of them fix a homography (no three on a
+    // line of the plate), then by their number.
+    let usable = |f: &[Detection]| {
+        let pts: Vec<[f64; 2]> =
+            f.iter().zip(marks).filter(|(d, _)| d.is_ok()).map(|(_, m)| *m).collect();
+        (homography::general_position(&pts), pts.len())
+    };
     let mut found = detect_all(&layout.nominal_homography(view));
     // A plate higher or lower than nominal by Δz moves every marker by Δz · tan θ_v on the
-    // plate (6.8 mm for 1.8 mm at 75°, past the search margin): when too few markers are
-    // found, search again around the positions for Δz = ±2, ±4 mm and keep the best.
+    // plate (6.8 mm for 1.8 mm at 75°, past the search margin; at 60° a 1–2 mm error
+    // already pushes the foreshortened blobs onto their search borders): unless every
+    // marker was found, search again around the positions for Δz = ±2, ±4 mm and keep the
+    // best.
     for dz in [-2.0, 2.0, -4.0, 4.0] {
-        if usable(&found) >= 4 {
+        if usable(&found).1 == marks.len() {
             break;
         }
         let shifted = layout.homography(view, &Matrix3::identity(), &Vector3::new(0.0, 0.0, dz));
