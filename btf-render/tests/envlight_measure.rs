@@ -125,7 +125,7 @@ fn measure_shirts() {
     }
 }
 
-/// Visibility alone (for profiling): `… --test envlight_measure visibility_only -- --ignored
+/// Visibility alone (for profiling; `BTF_ONE_SIDED=1` for the front sides only): `… --test envlight_measure visibility_only -- --ignored
 /// --nocapture`, the high shirt with `BTF_MEASURE_HIGH=1`.
 #[test]
 #[ignore = "a measurement: visibility of one shirt against the ray cast"]
@@ -137,7 +137,9 @@ fn visibility_only() {
     let mesh = shirt(dir.path(), res);
     let tangents = compute_tangents(&mesh);
     let cube = Hemicube::new(32).unwrap();
-    let frames = HemicubeFrame::of_mesh(&mesh.positions, &mesh.normals, &tangents, true);
+    // `BTF_ONE_SIDED=1`: the front sides only, what a `two_sided = false` scene computes.
+    let two_sided = !std::env::var("BTF_ONE_SIDED").is_ok_and(|v| v == "1");
+    let frames = HemicubeFrame::of_mesh(&mesh.positions, &mesh.normals, &tangents, two_sided);
     if std::env::var("BTF_FAST_ONLY").is_ok_and(|v| v == "1") {
         // For `perf stat`: the rasteriser alone.
         let t = Instant::now();
