@@ -6,7 +6,9 @@ use crate::eigen::{EigenMeta, EigenWriter, Quantization};
 use crate::metrics::{psnr_db, rel_rmse_from};
 use crate::pca::{PcaScratch, SlotRows, max_components, pca_rows_in, pca_slot_in};
 use crate::store::{BtfStore, SlotData};
+use crate::zarr::DType;
 use crate::{Error, Result};
+use half::f16;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
@@ -127,12 +129,19 @@ pub fn compress(
             _ => e,
         };
         let q = params.quantization;
-        // f32 chunks are mapped and read in place, their checksums folded into the first
-        // pass; other dtypes are decoded into the worker's buffer.
+        // f32 and f16 chunks are mapped and read in place (widened to f64 as they are
+        // loaded), their checksums folded into the first pass; other dtypes are decoded
+        // into the worker's buffer.
         let r = if let Some(mapped) = input.map_slot(v)? {
-            let rows =
-                SlotRows { view: v, rows: mapped.rows()?, texel_values: meta.texel_values() };
-            pca_rows_in(&rows, c, q, scratch, Some(&|crcs: &[u32]| mapped.verify(crcs)))
+            let check = |crcs: &[u32]| mapped.verify(crcs);
+            let m = meta.texel_values();
+            if input.dtype() == DType::F16 {
+                let rows = SlotRows::<f16> { view: v, rows: mapped.rows()?, texel_values: m };
+                pca_rows_in(&rows, c, q, scratch, Some(&check))
+            } else {
+                let rows = SlotRows::<f32> { view: v, rows: mapped.rows()?, texel_values: m };
+                pca_rows_in(&rows, c, q, scratch, Some(&check))
+            }
         } else {
             input.read_slot_into_unchecked(v, slot, raw)?;
             pca_slot_in(slot, c, q, scratch)
@@ -218,7 +227,6 @@ pub fn compress(
 mod tests {
     use super::*;
     use crate::store::{BtfMeta, BtfWriter};
-    use crate::zarr::DType;
 
     fn tiny_store(path: &Path) {
         tiny_store_as(path, DType::F32);
@@ -281,7 +289,7 @@ mod tests {
     }
 
     #[test]
-    fn mapped_f32_and_decoded_f16_stores_compress_alike_and_truncation_is_named() {
+    fn mapped_f32_and_f16_stores_compress_alike_and_truncation_is_named() {
         // The tiny store's values are multiples of 0.1 in [1, 2]: not all f16-exact, so
         // round them through f16 first by writing an f16 store and an f32 copy of it.
         let dir = tempfile::tempdir().unwrap();
@@ -296,7 +304,8 @@ mod tests {
         }
         w.finish().unwrap();
         let f = BtfStore::open(&p32).unwrap();
-        assert!(f.map_slot(0).unwrap().is_some() && h.map_slot(0).unwrap().is_none());
+        // Both are read in place: f16 widened to f64 by the same loads as f32.
+        assert!(f.map_slot(0).unwrap().is_some() && h.map_slot(0).unwrap().is_some());
         let params = CompressParams { components: 3, ..Default::default() };
         let a = compress(&h, &dir.path().join("h.eig"), params, &|| {}).unwrap();
         let b = compress(&f, &dir.path().join("f.eig"), params, &|| {}).unwrap();

@@ -19,6 +19,31 @@ const SUB_BLOCK: usize = 256;
 /// Components per lift tile.
 pub const LIFT_COMPONENTS: usize = 8;
 
+/// An element type of stored normtextures that the block loads widen to `f64` exactly:
+/// `f32`, or IEEE half precision (`half::f16`, converted with `vcvtph2ps` under AVX-512).
+pub trait Texel: bytemuck::Pod + Send + Sync + 'static {
+    /// True for `f16`.
+    const HALF: bool;
+    /// The value as `f32` (exact for both types).
+    fn widen(self) -> f32;
+}
+
+impl Texel for f32 {
+    const HALF: bool = false;
+    #[inline(always)]
+    fn widen(self) -> f32 {
+        self
+    }
+}
+
+impl Texel for half::f16 {
+    const HALF: bool = true;
+    #[inline(always)]
+    fn widen(self) -> f32 {
+        self.to_f32()
+    }
+}
+
 /// Rows of `f64` values over one block of columns: row `i` is `data[i·stride..][..stride]`,
 /// the columns past the block's width and the rows past `rows` (at least [`Block::PAD_ROWS`]
 /// of them) are zero so that whole tiles can be read.
@@ -66,10 +91,24 @@ fn has_avx512() -> bool {
     }
 }
 
+/// What one tile of [`DotAcc`] computes of its `ta × 5` outputs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Tile {
+    /// All of them.
+    Full,
+    /// Those with `s ≥ r` (a diagonal tile of a symmetric product): 15 of 25.
+    Upper,
+    /// The first `s < 5` columns (the rows of `B` past the last multiple of 5).
+    Narrow(usize),
+}
+
 /// Accumulates `A·Bᵀ` block by block of columns: each output keeps one register's worth
 /// ([`LANES`]) of partial sums across blocks, reduced only by [`DotAcc::finish`], so a tile
 /// of `R × 5` outputs is loaded, updated over the block's columns and stored back, and the
-/// rows of `A` stay in the L1 cache while those of `B` stream past.
+/// rows of `A` stay in the L1 cache while those of `B` stream past. The rows of `B` past
+/// the last multiple of 5 get narrower tiles, and a symmetric product's diagonal tiles
+/// compute only their upper triangle, so that 81 rows cost 3325 products per column rather
+/// than the 3825 of whole 5 × 5 tiles (3321 are needed).
 #[derive(Debug, Clone)]
 pub struct DotAcc {
     a_rows: usize,
@@ -77,8 +116,8 @@ pub struct DotAcc {
     upper: bool,
     /// Rows of `A` per tile (4 or 5).
     ta: usize,
-    /// Top-left output of every tile.
-    tiles: Vec<(usize, usize)>,
+    /// Top-left output and kind of every tile.
+    tiles: Vec<(usize, usize, Tile)>,
     /// `LANES` partial sums per output, tile after tile.
     partial: Vec<f64>,
 }
@@ -89,9 +128,20 @@ impl DotAcc {
     pub fn new(a_rows: usize, b_rows: usize, upper: bool) -> Self {
         let ta = if a_rows <= 16 && a_rows.is_multiple_of(4) { 4 } else { TB };
         let mut tiles = Vec::new();
+        let b_whole = b_rows / TB * TB;
         for i0 in (0..a_rows).step_by(ta) {
+            if upper && ta != TB {
+                // 4-row tiles do not line up with the 5-column ones: whole tiles from i0.
+                tiles.extend((i0..b_rows).step_by(TB).map(|j0| (i0, j0, Tile::Full)));
+                continue;
+            }
             let j_start = if upper { i0 } else { 0 };
-            tiles.extend((j_start..b_rows).step_by(TB).map(|j0| (i0, j0)));
+            for j0 in (j_start..b_whole).step_by(TB) {
+                tiles.push((i0, j0, if upper && j0 == i0 { Tile::Upper } else { Tile::Full }));
+            }
+            if b_whole < b_rows {
+                tiles.push((i0, b_whole, Tile::Narrow(b_rows - b_whole)));
+            }
         }
         let partial = vec![0f64; tiles.len() * ta * TB * LANES];
         DotAcc { a_rows, b_rows, upper, ta, tiles, partial }
@@ -115,14 +165,13 @@ impl DotAcc {
         for k0 in (0..w).step_by(SUB_BLOCK) {
             let cols = (k0, (k0 + SUB_BLOCK).min(w));
             let tiles = self.tiles.iter().zip(self.partial.chunks_exact_mut(per_tile));
-            for (&(i0, j0), acc) in tiles {
+            for (&(i0, j0, kind), acc) in tiles {
                 let ra = &a.data[i0 * w..(i0 + ta) * w];
                 let rb = &b.data[j0 * w..(j0 + TB) * w];
-                match (simd, ta) {
-                    (true, 4) => tile_simd::<4>(ra, rb, w, cols, acc),
-                    (true, _) => tile_simd::<TB>(ra, rb, w, cols, acc),
-                    (false, 4) => tile_portable::<4>(ra, rb, w, cols, acc),
-                    (false, _) => tile_portable::<TB>(ra, rb, w, cols, acc),
+                if simd {
+                    tile_simd(ta, kind, ra, rb, w, cols, acc);
+                } else {
+                    tile_portable(ta, kind, ra, rb, w, cols, acc);
                 }
             }
         }
@@ -134,7 +183,7 @@ impl DotAcc {
         assert!(ldo >= self.b_rows, "output row stride smaller than b's rows");
         assert!(self.a_rows == 0 || out.len() >= (self.a_rows - 1) * ldo + self.b_rows);
         let per_tile = self.ta * TB * LANES;
-        for (&(i0, j0), acc) in self.tiles.iter().zip(self.partial.chunks_exact(per_tile)) {
+        for (&(i0, j0, _), acc) in self.tiles.iter().zip(self.partial.chunks_exact(per_tile)) {
             for r in 0..self.ta {
                 for s in 0..TB {
                     let (i, j) = (i0 + r, j0 + s);
@@ -148,59 +197,74 @@ impl DotAcc {
     }
 }
 
-/// `acc[(r·5 + s)·8 + l] += Σ_k a_r[8k + l]·b_s[8k + l]` over columns `k0..k1` of the `R`
-/// rows of `a` and the 5 of `b` (rows `w` apart).
-fn tile_portable<const R: usize>(
+/// `acc[(r·5 + s)·8 + l] += Σ_k a_r[8k + l]·b_s[8k + l]` over columns `k0..k1` of the `ta`
+/// rows of `a` and the 5 of `b` (rows `w` apart), for the outputs `kind` names.
+fn tile_portable(
+    ta: usize,
+    kind: Tile,
     a: &[f64],
     b: &[f64],
     w: usize,
     (k0, k1): (usize, usize),
     acc: &mut [f64],
 ) {
-    let mut v = [[[0f64; LANES]; TB]; R];
-    for r in 0..R {
-        for s in 0..TB {
-            v[r][s].copy_from_slice(&acc[(r * TB + s) * LANES..(r * TB + s + 1) * LANES]);
-        }
-    }
-    for k in (k0..k1).step_by(LANES) {
-        for r in 0..R {
-            let ar = &a[r * w + k..r * w + k + LANES];
-            for s in 0..TB {
-                let bs = &b[s * w + k..s * w + k + LANES];
+    for r in 0..ta {
+        let (s_lo, s_hi) = match kind {
+            Tile::Full => (0, TB),
+            Tile::Upper => (r, TB),
+            Tile::Narrow(s) => (0, s),
+        };
+        for s in s_lo..s_hi {
+            let v = &mut acc[(r * TB + s) * LANES..(r * TB + s + 1) * LANES];
+            for k in (k0..k1).step_by(LANES) {
+                let (ar, bs) = (&a[r * w + k..r * w + k + LANES], &b[s * w + k..s * w + k + LANES]);
                 for l in 0..LANES {
-                    v[r][s][l] += ar[l] * bs[l];
+                    v[l] += ar[l] * bs[l];
                 }
             }
         }
     }
-    for r in 0..R {
-        for s in 0..TB {
-            acc[(r * TB + s) * LANES..(r * TB + s + 1) * LANES].copy_from_slice(&v[r][s]);
-        }
-    }
 }
 
-fn tile_simd<const R: usize>(
+/// [`tile_portable`] with AVX-512 (checked by the caller's caller), one instance per shape.
+fn tile_simd(
+    ta: usize,
+    kind: Tile,
     a: &[f64],
     b: &[f64],
     w: usize,
     cols: (usize, usize),
     acc: &mut [f64],
 ) {
-    assert!(a.len() >= R * w && b.len() >= TB * w && w.is_multiple_of(LANES));
+    assert!(a.len() >= ta * w && b.len() >= TB * w && w.is_multiple_of(LANES));
     assert!(cols.0 <= cols.1 && cols.1 <= w && cols.0.is_multiple_of(LANES));
-    assert!(acc.len() >= R * TB * LANES);
+    assert!(acc.len() >= ta * TB * LANES && (ta == 4 || ta == TB));
     #[cfg(target_arch = "x86_64")]
     {
-        // SAFETY: the caller checked AVX-512F at run time; the slices hold R and 5 rows of
-        // w values (w and the first column multiples of 8, the last ≤ w) and R·5·8 partial
-        // sums, so every access lies inside.
-        unsafe { avx512::tile::<R>(a.as_ptr(), b.as_ptr(), w, cols, acc.as_mut_ptr()) }
+        let (a, b, acc) = (a.as_ptr(), b.as_ptr(), acc.as_mut_ptr());
+        // SAFETY: the caller checked AVX-512F at run time; the slices hold ta (4 or 5) and 5
+        // rows of w values (w and the first column multiples of 8, the last ≤ w) and
+        // ta·5·8 partial sums, so every access lies inside.
+        unsafe {
+            match (ta, kind) {
+                (4, Tile::Full) => avx512::tile::<4, TB>(a, b, w, cols, acc),
+                (4, Tile::Upper) => avx512::tile::<4, TB>(a, b, w, cols, acc),
+                (4, Tile::Narrow(1)) => avx512::tile::<4, 1>(a, b, w, cols, acc),
+                (4, Tile::Narrow(2)) => avx512::tile::<4, 2>(a, b, w, cols, acc),
+                (4, Tile::Narrow(3)) => avx512::tile::<4, 3>(a, b, w, cols, acc),
+                (4, Tile::Narrow(_)) => avx512::tile::<4, 4>(a, b, w, cols, acc),
+                (_, Tile::Full) => avx512::tile::<TB, TB>(a, b, w, cols, acc),
+                (_, Tile::Upper) => avx512::tile_upper(a, w, cols, acc),
+                (_, Tile::Narrow(1)) => avx512::tile::<TB, 1>(a, b, w, cols, acc),
+                (_, Tile::Narrow(2)) => avx512::tile::<TB, 2>(a, b, w, cols, acc),
+                (_, Tile::Narrow(3)) => avx512::tile::<TB, 3>(a, b, w, cols, acc),
+                (_, Tile::Narrow(_)) => avx512::tile::<TB, 4>(a, b, w, cols, acc),
+            }
+        }
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
-        tile_portable::<R>(a, b, w, cols, acc)
+        tile_portable(ta, kind, a, b, w, cols, acc)
     }
 }
 
@@ -258,11 +322,11 @@ pub(crate) fn lift_rows_with(
 /// Asks the cache to fetch columns `c0..c0 + w` of every row ahead of their use. Each row's
 /// piece of a block is its own page (1024 `f32`), where the hardware prefetcher stops, so
 /// without this every block of a pass starts with one cache miss per row and line.
-pub fn prefetch_rows(x: &[&[f32]], c0: usize, w: usize) {
+pub fn prefetch_rows<T: Texel>(x: &[&[T]], c0: usize, w: usize) {
     #[cfg(target_arch = "x86_64")]
     for row in x {
         let Some(piece) = row.get(c0..(c0 + w).min(row.len())) else { continue };
-        for line in piece.chunks(16) {
+        for line in piece.chunks(64 / size_of::<T>()) {
             // SAFETY: a prefetch never faults and reads nothing into registers; the pointer
             // lies inside the row in any case.
             unsafe {
@@ -291,11 +355,11 @@ pub struct LoadStats {
 /// (`s = shift[c0..c0 + w]`, or zero), exactly: the difference of two `f32` values is an
 /// `f64`. With `colsum` (`w` values), adds `Σ_i y_i` per column into it and returns the
 /// input's statistics.
-pub fn load_shifted(
-    x: &[&[f32]],
+pub fn load_shifted<T: Texel>(
+    x: &[&[T]],
     c0: usize,
     w: usize,
-    shift: Option<&[f32]>,
+    shift: Option<&[T]>,
     blk: &mut Block,
     colsum: Option<&mut [f64]>,
 ) -> Option<LoadStats> {
@@ -303,11 +367,11 @@ pub fn load_shifted(
 }
 
 /// [`load_shifted`] with the kernel chosen by the caller.
-pub(crate) fn load_shifted_with(
-    x: &[&[f32]],
+pub(crate) fn load_shifted_with<T: Texel>(
+    x: &[&[T]],
     c0: usize,
     w: usize,
-    shift: Option<&[f32]>,
+    shift: Option<&[T]>,
     blk: &mut Block,
     colsum: Option<&mut [f64]>,
     simd: bool,
@@ -325,15 +389,15 @@ pub(crate) fn load_shifted_with(
 }
 
 #[inline(always)]
-fn load_shifted_body(
-    x: &[&[f32]],
+fn load_shifted_body<T: Texel>(
+    x: &[&[T]],
     c0: usize,
     w: usize,
-    shift: Option<&[f32]>,
+    shift: Option<&[T]>,
     blk: &mut Block,
     mut colsum: Option<&mut [f64]>,
 ) -> Option<LoadStats> {
-    let zeros = [0f32; 0];
+    let zeros: [T; 0] = [];
     let mut e = [0f64; LANES];
     let mut p = [f32::MIN; LANES];
     let mut bad = [0f32; LANES];
@@ -351,8 +415,8 @@ fn load_shifted_body(
                     .zip(cs.chunks_exact_mut(LANES))
                 {
                     for l in 0..LANES {
-                        let v = s8[l];
-                        let y = v as f64 - h8[l] as f64;
+                        let v = s8[l].widen();
+                        let y = v as f64 - h8[l].widen() as f64;
                         d8[l] = y;
                         c8[l] += y;
                         e[l] += (v as f64) * (v as f64);
@@ -362,8 +426,8 @@ fn load_shifted_body(
                 }
                 let tail = w - w % LANES;
                 for t in tail..w {
-                    let v = src[t];
-                    let y = v as f64 - sh[t] as f64;
+                    let v = src[t].widen();
+                    let y = v as f64 - sh[t].widen() as f64;
                     dst[t] = y;
                     cs[t] += y;
                     e[0] += (v as f64) * (v as f64);
@@ -373,12 +437,12 @@ fn load_shifted_body(
             }
             (_, Some(_)) => {
                 for ((d, &v), &h) in dst.iter_mut().zip(src).zip(sh) {
-                    *d = v as f64 - h as f64;
+                    *d = v.widen() as f64 - h.widen() as f64;
                 }
             }
             (_, None) => {
                 for (d, &v) in dst.iter_mut().zip(src) {
-                    *d = v as f64;
+                    *d = v.widen() as f64;
                 }
             }
         }

@@ -17,7 +17,7 @@
 use crate::eigen::{Quantization, QuantizedSlot, dequantize, quantize};
 use crate::gemm::{Mat, dgemm};
 use crate::kernels::{
-    Block, DotAcc, LANES, LIFT_COMPONENTS, lift_rows, load_shifted, prefetch_rows,
+    Block, DotAcc, LANES, LIFT_COMPONENTS, Texel, lift_rows, load_shifted, prefetch_rows,
 };
 use crate::store::SlotData;
 use crate::{Error, Result};
@@ -68,14 +68,14 @@ pub struct PcaScratch {
     basis: Vec<f64>,
 }
 
-/// The light images of one view slot as row slices: of a [`SlotData`] in memory, or of a
-/// store's mapped chunks ([`crate::mapped::MappedSlot`]).
+/// The light images of one view slot as row slices of `f32` or `f16` values: of a
+/// [`SlotData`] in memory, or of a store's mapped chunks ([`crate::mapped::MappedSlot`]).
 #[derive(Debug, Clone)]
-pub struct SlotRows<'a> {
+pub struct SlotRows<'a, T = f32> {
     /// View slot index.
     pub view: usize,
     /// One row of `texel_values` values per light.
-    pub rows: Vec<&'a [f32]>,
+    pub rows: Vec<&'a [T]>,
     /// Floats per row.
     pub texel_values: usize,
 }
@@ -109,11 +109,12 @@ pub fn pca_slot_in(
     pca_rows_in(&SlotRows::of(slot), components, quantization, scratch, None)
 }
 
-/// [`pca_slot_in`] on row slices. With `checksums`, the first pass also computes the
-/// CRC32C of every row's bytes on the way (the bytes it reads anyway) and hands them to
-/// `checksums` before anything is derived from the data.
-pub fn pca_rows_in(
-    slot: &SlotRows<'_>,
+/// [`pca_slot_in`] on row slices (of `f32` or `f16` values, widened to `f64` exactly as
+/// they are loaded). With `checksums`, the first pass also computes the CRC32C of every
+/// row's bytes on the way (the bytes it reads anyway) and hands them to `checksums` before
+/// anything is derived from the data.
+pub fn pca_rows_in<T: Texel>(
+    slot: &SlotRows<'_, T>,
     components: usize,
     quantization: Quantization,
     scratch: &mut PcaScratch,
@@ -232,7 +233,7 @@ struct FirstPass {
 /// `X̃ = C·(X − 1sᵀ)` with `C = I − 11ᵀ/n`, so `X̃X̃ᵀ = C·YYᵀ·C` for `Y = X − 1sᵀ`. With
 /// `s = x_0` (the first light image) `Y` is exact in `f64` and of the data's spread, not its
 /// mean, so no precision is lost to a large mean.
-fn first_pass(slot: &SlotRows<'_>, with_crc: bool) -> Result<FirstPass> {
+fn first_pass<T: Texel>(slot: &SlotRows<'_, T>, with_crc: bool) -> Result<FirstPass> {
     let (n, m, x) = (slot.rows.len(), slot.texel_values, &slot.rows[..]);
     let shift = x[0];
     let mut crcs = vec![0u32; if with_crc { n } else { 0 }];
@@ -251,8 +252,9 @@ fn first_pass(slot: &SlotRows<'_>, with_crc: bool) -> Result<FirstPass> {
         let st = load_shifted(x, c0, w, Some(shift), &mut blk, Some(&mut colsum))
             .expect("statistics were asked for");
         if !st.finite {
-            for i in 0..n {
-                crate::store::check_finite(x[i], slot.view, i, 0)?;
+            for (i, row) in x.iter().enumerate() {
+                let row: Vec<f32> = row.iter().map(|v| v.widen()).collect();
+                crate::store::check_finite(&row, slot.view, i, 0)?;
             }
         }
         energy += st.energy;
@@ -260,7 +262,7 @@ fn first_pass(slot: &SlotRows<'_>, with_crc: bool) -> Result<FirstPass> {
         prefetch_rows(x, c0 + w, BLOCK);
         gram.add(&blk, &blk);
         for t in 0..w {
-            mean[c0 + t] = (shift[c0 + t] as f64 + colsum[t] / n as f64) as f32;
+            mean[c0 + t] = (shift[c0 + t].widen() as f64 + colsum[t] / n as f64) as f32;
         }
     }
     let mut g = vec![0f64; n * n];
@@ -323,8 +325,8 @@ fn max_min(row: &[f64], hi: &mut f64, lo: &mut f64) {
 /// `B = liftᵀX̃ = (C·lift)ᵀY` (`C·lift` has zero column sums, so the shift cancels), then
 /// the sign of each eigentexture (and its lift column) fixed so that its largest-magnitude
 /// entry is positive.
-fn lift_pass(
-    slot: &SlotRows<'_>,
+fn lift_pass<T: Texel>(
+    slot: &SlotRows<'_, T>,
     lift: &mut [f64],
     c: usize,
     effective: usize,
@@ -366,8 +368,8 @@ fn lift_pass(
 
 /// For the stored basis `S` (`c × m`) and the exact one `B`: `E·Yᵀ` (`c × n`, with
 /// `E = S − B`; centring it gives `X̃Eᵀ`, transposed) and `SSᵀ` (`c × c`), in `f64`.
-fn stored_pass(
-    slot: &SlotRows<'_>,
+fn stored_pass<T: Texel>(
+    slot: &SlotRows<'_, T>,
     basis: &Basis,
     stored: &[f32],
     c: usize,

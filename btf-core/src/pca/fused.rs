@@ -16,7 +16,9 @@
 //! `2^{28}` values (that largest magnitude is at least `1/√m`).
 
 use super::{BLOCK, centred_coef, finish_correction, max_min};
-use crate::kernels::{Block, DotAcc, LIFT_COMPONENTS, lift_rows, load_shifted, prefetch_rows};
+use crate::kernels::{
+    Block, DotAcc, LIFT_COMPONENTS, Texel, lift_rows, load_shifted, prefetch_rows,
+};
 use half::f16;
 use half::slice::HalfFloatSliceExt;
 
@@ -35,8 +37,8 @@ pub(super) struct Fused {
 /// The fused lift and stored-basis pass over the rows `x` (`m` values each), with the
 /// lifting matrix `lift` (`n × c`, column `k` = `v_k/√λ_k`; its columns' signs are fixed
 /// here as the eigentextures' are).
-pub(super) fn lift_store_f16(
-    x: &[&[f32]],
+pub(super) fn lift_store_f16<T: Texel>(
+    x: &[&[T]],
     m: usize,
     lift: &mut [f64],
     c: usize,
