@@ -2,7 +2,7 @@
 //! all view slots in parallel, one slot in memory per worker, with per-slot statistics kept
 //! beside the arrays so an interrupted run resumes where it stopped.
 
-use crate::eigen::{EigenMeta, EigenWriter, Quantization};
+use crate::eigen::{EigenMeta, EigenWriter, Quantization, QuantizedSlot};
 use crate::metrics::{psnr_db, rel_rmse_from};
 use crate::pca::{PcaScratch, SlotRows, max_components, pca_rows_in, pca_slot_in};
 use crate::store::{BtfStore, SlotData};
@@ -14,6 +14,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::json;
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::mpsc;
 use std::time::Instant;
 
 /// Parameters of [`compress`].
@@ -50,7 +51,8 @@ pub struct SlotReport {
     pub peak: f32,
     /// Components with non-zero eigenvalue.
     pub effective_components: usize,
-    /// Wall-clock seconds spent on the slot (reading included).
+    /// Wall-clock seconds spent on the slot (reading included; the writing is the writer
+    /// thread's).
     pub seconds: f64,
 }
 
@@ -109,15 +111,17 @@ pub fn compress(
     let writer = EigenWriter::create(output, emeta, params.resume)?;
     // One worker per thread, each with its own slot buffers for the whole run (a slot is
     // 64 MB at 256²: allocating and faulting it in per slot would cost more than reading it).
+    // A finished slot goes to the writer thread (its chunks written by direct I/O, which
+    // waits for the disk), so the workers go on computing meanwhile.
     let one = |v: usize,
                slot: &mut SlotData,
                raw: &mut Vec<u8>,
                scratch: &mut PcaScratch|
-     -> Result<(SlotReport, bool)> {
+     -> Result<(SlotReport, Option<QuantizedSlot>)> {
         let done = writer.has_slot(v).then(|| writer.read_stats(v)).flatten();
         if let Some(r) = done.and_then(|s| serde_json::from_value(s).ok()) {
             progress();
-            return Ok((r, true));
+            return Ok((r, None));
         }
         let t0 = Instant::now();
         // The PCA checks every value in its first pass; on a non-finite one, the store's
@@ -147,7 +151,6 @@ pub fn compress(
             pca_slot_in(slot, c, q, scratch)
         }
         .map_err(name_texel)?;
-        writer.write_slot(v, &r.stored)?;
         let report = SlotReport {
             view: v,
             sse: r.sse,
@@ -158,35 +161,57 @@ pub fn compress(
             effective_components: r.effective_components,
             seconds: t0.elapsed().as_secs_f64(),
         };
-        writer.write_stats(v, &json!(report))?;
-        progress();
-        Ok((report, false))
+        Ok((report, Some(r.stored)))
     };
     let n_views = meta.n_views();
     let next = AtomicUsize::new(0);
     let failed = AtomicBool::new(false);
     let workers = rayon::current_num_threads().clamp(1, n_views.max(1));
-    let per_worker: Vec<Result<Vec<(SlotReport, bool)>>> = (0..workers)
-        .into_par_iter()
-        .map(|_| {
-            let mut slot = SlotData { view: 0, n_lights: 0, texel_values: 0, data: Vec::new() };
-            let (mut raw, mut scratch) = (Vec::new(), PcaScratch::default());
-            let mut done = Vec::new();
-            loop {
-                let v = next.fetch_add(1, Ordering::Relaxed);
-                if v >= n_views || failed.load(Ordering::Relaxed) {
-                    return Ok(done);
+    // At most two finished slots wait for the writer (a slot's arrays are 7 MB at 256²).
+    let (to_writer, queue) = mpsc::sync_channel::<(SlotReport, QuantizedSlot)>(2);
+    let work = |to_writer: &mpsc::SyncSender<_>| -> Result<Vec<(SlotReport, bool)>> {
+        let mut slot = SlotData { view: 0, n_lights: 0, texel_values: 0, data: Vec::new() };
+        let (mut raw, mut scratch) = (Vec::new(), PcaScratch::default());
+        let mut done = Vec::new();
+        loop {
+            let v = next.fetch_add(1, Ordering::Relaxed);
+            if v >= n_views || failed.load(Ordering::Relaxed) {
+                return Ok(done);
+            }
+            let sent = one(v, &mut slot, &mut raw, &mut scratch).and_then(|(r, stored)| {
+                let resumed = stored.is_none();
+                if let Some(stored) = stored {
+                    // A refusal means the writer stopped on an error, which it reports.
+                    to_writer
+                        .send((r.clone(), stored))
+                        .map_err(|_| Error::Invalid("the writer stopped".into()))?;
                 }
-                match one(v, &mut slot, &mut raw, &mut scratch) {
-                    Ok(r) => done.push(r),
-                    Err(e) => {
-                        failed.store(true, Ordering::Relaxed);
-                        return Err(e);
-                    }
+                Ok((r, resumed))
+            });
+            match sent {
+                Ok(r) => done.push(r),
+                Err(e) => {
+                    failed.store(true, Ordering::Relaxed);
+                    return Err(e);
                 }
             }
-        })
-        .collect();
+        }
+    };
+    let (per_worker, written) = std::thread::scope(|scope| {
+        let writer = &writer;
+        let write = scope.spawn(move || -> Result<()> {
+            for (report, stored) in queue {
+                writer.write_slot(report.view, &stored)?;
+                writer.write_stats(report.view, &json!(report))?;
+                progress();
+            }
+            Ok(())
+        });
+        let per_worker: Vec<_> = (0..workers).into_par_iter().map(|_| work(&to_writer)).collect();
+        drop(to_writer);
+        (per_worker, write.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
+    });
+    written?;
     let mut slots = Vec::with_capacity(n_views);
     for w in per_worker {
         slots.extend(w?);
