@@ -456,6 +456,8 @@ fn load_shifted_body<T: Texel>(
 
 #[cfg(target_arch = "x86_64")]
 mod avx512;
+mod single;
+pub use single::{Block32, CrossAcc32};
 
 #[cfg(test)]
 mod tests;

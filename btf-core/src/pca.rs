@@ -401,14 +401,19 @@ fn stored_pass<T: Texel>(
 fn finish_correction(cross: &DotAcc, bgram: &DotAcc, c: usize, n: usize) -> (Vec<f64>, Vec<f64>) {
     let mut cross_out = vec![0f64; c * n];
     cross.finish(&mut cross_out, n);
-    let mut bgram_out = vec![0f64; c * c];
-    bgram.finish(&mut bgram_out, c);
+    (cross_out, finish_symmetric(bgram, c))
+}
+
+/// The full `c × c` matrix of a symmetric product accumulated as its upper triangle.
+fn finish_symmetric(upper: &DotAcc, c: usize) -> Vec<f64> {
+    let mut out = vec![0f64; c * c];
+    upper.finish(&mut out, c);
     for i in 0..c {
         for j in 0..i {
-            bgram_out[i * c + j] = bgram_out[j * c + i];
+            out[i * c + j] = out[j * c + i];
         }
     }
-    (cross_out, bgram_out)
+    out
 }
 
 /// The lift's columns centred (`C·lift`, zero column sums, so the images' shift cancels),

@@ -272,3 +272,58 @@ unsafe fn lift_tile<const NV: usize>(
         }
     }
 }
+
+/// See `single::tile_portable` (`S` rows of `y`). Safety: AVX-512F present; `e` valid for
+/// `4·w` reads, `y` for `S·w`, `out` for reads and writes at `r·ldo + s` (`r < 4`,
+/// `s < S`); `w` a multiple of 16.
+#[target_feature(enable = "avx512f")]
+pub(super) unsafe fn tile32<const S: usize>(
+    e: *const f32,
+    y: *const f32,
+    w: usize,
+    out: *mut f64,
+    ldo: usize,
+) {
+    let mut v = [[_mm512_setzero_ps(); S]; 4];
+    let mut k = 0;
+    while k < w {
+        // SAFETY: k + 16 ≤ w; rows r < 4 and s < S lie inside the caller's extents.
+        unsafe {
+            let mut ev = [_mm512_setzero_ps(); 4];
+            for (r, x) in ev.iter_mut().enumerate() {
+                *x = _mm512_loadu_ps(e.add(r * w + k));
+            }
+            for s in 0..S {
+                let ys = _mm512_loadu_ps(y.add(s * w + k));
+                for r in 0..4 {
+                    v[r][s] = _mm512_fmadd_ps(ev[r], ys, v[r][s]);
+                }
+            }
+        }
+        k += 16;
+    }
+    for r in 0..4 {
+        for s in 0..S {
+            let (lo, hi) = widen16(v[r][s]);
+            // SAFETY: r < 4, s < S (the caller's extents).
+            unsafe { *out.add(r * ldo + s) += _mm512_reduce_add_pd(_mm512_add_pd(lo, hi)) };
+        }
+    }
+}
+
+/// `to[t] = from[t] as f32` (round to nearest), eight at a time.
+#[target_feature(enable = "avx512f")]
+pub(super) fn round_to_f32(from: &[f64], to: &mut [f32]) {
+    let n = from.len().min(to.len());
+    let body = n - n % 8;
+    for t in (0..body).step_by(8) {
+        // SAFETY: t + 8 ≤ body ≤ the length of both slices.
+        unsafe {
+            let v = _mm512_cvtpd_ps(_mm512_loadu_pd(from.as_ptr().add(t)));
+            _mm256_storeu_ps(to.as_mut_ptr().add(t), v);
+        }
+    }
+    for t in body..n {
+        to[t] = from[t] as f32;
+    }
+}

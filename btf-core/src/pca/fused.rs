@@ -3,6 +3,8 @@
 //! `B = (C·lift)ᵀY`, rounded to `f16` and turned into the stored basis `S` and its error
 //! `E = S − B` while the block of `Y` is still in the cache, so the correction `E·Yᵀ` and
 //! the Gram matrix `SSᵀ` that the least-squares weights need come from the same read.
+//! `E·Yᵀ` is a correction of relative size `2⁻¹¹`, so it is summed in `f32`
+//! ([`crate::kernels::CrossAcc32`]) from `E` and `Y` rounded to `f32`.
 //!
 //! That needs the rounding to be fixed before the whole of `B` is known. It is: the
 //! eigentextures have unit norm, so every entry is at most 1 in magnitude and rounds to
@@ -15,9 +17,10 @@
 //! which stays below `2^{−11}` of the row's largest magnitude for rows of fewer than
 //! `2^{28}` values (that largest magnitude is at least `1/√m`).
 
-use super::{BLOCK, centred_coef, finish_correction, max_min};
+use super::{BLOCK, centred_coef, finish_symmetric, max_min};
 use crate::kernels::{
-    Block, DotAcc, LIFT_COMPONENTS, Texel, lift_rows, load_shifted, prefetch_rows,
+    Block, Block32, CrossAcc32, DotAcc, LIFT_COMPONENTS, Texel, lift_rows, load_shifted,
+    prefetch_rows,
 };
 use half::f16;
 use half::slice::HalfFloatSliceExt;
@@ -48,10 +51,11 @@ pub(super) fn lift_store_f16<T: Texel>(
     let cp = c.div_ceil(LIFT_COMPONENTS) * LIFT_COMPONENTS;
     let coef = centred_coef(lift, n, c, cp);
     let mut halves = vec![f16::ZERO; c * m];
-    let (mut yb, mut sb, mut eb) = (Block::default(), Block::default(), Block::default());
+    let (mut yb, mut sb) = (Block::default(), Block::default());
+    let (mut y32, mut e32) = (Block32::default(), Block32::default());
     let mut lifted = vec![0f64; cp * BLOCK];
     let mut narrow = vec![0f32; BLOCK];
-    let (mut cross_acc, mut bgram_acc) = (DotAcc::new(c, n, false), DotAcc::new(c, c, true));
+    let (mut cross_acc, mut bgram_acc) = (CrossAcc32::new(c, n), DotAcc::new(c, c, true));
     let (mut hi, mut lo) = (vec![0f64; c], vec![0f64; c]);
     for c0 in (0..m).step_by(BLOCK) {
         let w = BLOCK.min(m - c0);
@@ -60,7 +64,7 @@ pub(super) fn lift_store_f16<T: Texel>(
         prefetch_rows(x, c0 + w, BLOCK);
         lift_rows(&yb, &coef, cp, &mut lifted, ws, 0);
         sb.shape(c, w);
-        eb.shape(c, w);
+        e32.shape(c, w);
         for k in 0..c {
             let b = &lifted[k * ws..k * ws + w];
             if k < effective {
@@ -72,14 +76,17 @@ pub(super) fn lift_store_f16<T: Texel>(
             h.convert_from_f32_slice(&narrow[..w]);
             let stored = &mut sb.row_mut(k)[..w];
             h.convert_to_f64_slice(stored);
-            for ((e, &s), &b) in eb.row_mut(k)[..w].iter_mut().zip(&*stored).zip(b) {
-                *e = s - b;
+            for ((e, &s), &b) in e32.row_mut(k)[..w].iter_mut().zip(&*stored).zip(b) {
+                *e = (s - b) as f32;
             }
         }
-        cross_acc.add(&eb, &yb);
+        y32.round_from(&yb, w);
+        cross_acc.add(&e32, &y32);
         bgram_acc.add(&sb, &sb);
     }
-    let (mut cross, mut bgram) = finish_correction(&cross_acc, &bgram_acc, c, n);
+    let mut cross = vec![0f64; c * n];
+    cross_acc.finish(&mut cross, n);
+    let mut bgram = finish_symmetric(&bgram_acc, c);
     let mut sign = vec![1f64; c];
     let mut scale_offset = vec![[1f32, 0.0]; c];
     for k in 0..effective {
