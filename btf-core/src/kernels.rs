@@ -456,7 +456,9 @@ fn load_shifted_body<T: Texel>(
 
 #[cfg(target_arch = "x86_64")]
 mod avx512;
+mod f16_round;
 mod single;
+pub use f16_round::round_to_f16;
 pub use single::{Block32, CrossAcc32};
 
 #[cfg(test)]

@@ -327,3 +327,42 @@ pub(super) fn round_to_f32(from: &[f64], to: &mut [f32]) {
         to[t] = from[t] as f32;
     }
 }
+
+/// See `f16_round::round_to_f16_with`, eight values at a time (all slices of `b.len()`).
+#[target_feature(enable = "avx512f,f16c")]
+pub(super) fn round_to_f16(
+    b: &[f64],
+    halves: &mut [half::f16],
+    stored: &mut [f64],
+    err: &mut [f32],
+    (hi, lo): (&mut f64, &mut f64),
+) {
+    let w = b.len();
+    assert!(halves.len() == w && stored.len() == w && err.len() == w);
+    let body = w - w % 8;
+    let (mut vhi, mut vlo) = (_mm512_set1_pd(*hi), _mm512_set1_pd(*lo));
+    for t in (0..body).step_by(8) {
+        // SAFETY: t + 8 ≤ body ≤ w, the length of every slice.
+        unsafe {
+            let v = _mm512_loadu_pd(b.as_ptr().add(t));
+            // The second operand wins ties of ±0 and NaN, as in `if v > hi { v } else { hi }`.
+            vhi = _mm512_max_pd(v, vhi);
+            vlo = _mm512_min_pd(v, vlo);
+            let h = _mm256_cvtps_ph::<_MM_FROUND_TO_NEAREST_INT>(_mm512_cvtpd_ps(v));
+            _mm_storeu_si128(halves.as_mut_ptr().add(t).cast(), h);
+            let s = _mm512_cvtps_pd(_mm256_cvtph_ps(h));
+            _mm512_storeu_pd(stored.as_mut_ptr().add(t), s);
+            _mm256_storeu_ps(err.as_mut_ptr().add(t), _mm512_cvtpd_ps(_mm512_sub_pd(s, v)));
+        }
+    }
+    *hi = _mm512_reduce_max_pd(vhi);
+    *lo = _mm512_reduce_min_pd(vlo);
+    for t in body..w {
+        let v = b[t];
+        halves[t] = half::f16::from_f32(v as f32);
+        stored[t] = halves[t].to_f64();
+        err[t] = (stored[t] - v) as f32;
+        *hi = if v > *hi { v } else { *hi };
+        *lo = if v < *lo { v } else { *lo };
+    }
+}

@@ -17,10 +17,10 @@
 //! which stays below `2^{−11}` of the row's largest magnitude for rows of fewer than
 //! `2^{28}` values (that largest magnitude is at least `1/√m`).
 
-use super::{BLOCK, centred_coef, finish_symmetric, max_min};
+use super::{BLOCK, centred_coef, finish_symmetric};
 use crate::kernels::{
     Block, Block32, CrossAcc32, DotAcc, LIFT_COMPONENTS, Texel, lift_rows, load_shifted,
-    prefetch_rows,
+    prefetch_rows, round_to_f16,
 };
 use half::f16;
 use half::slice::HalfFloatSliceExt;
@@ -66,19 +66,16 @@ pub(super) fn lift_store_f16<T: Texel>(
         sb.shape(c, w);
         e32.shape(c, w);
         for k in 0..c {
-            let b = &lifted[k * ws..k * ws + w];
-            if k < effective {
-                max_min(b, &mut hi[k], &mut lo[k]);
-            }
-            // f64 → f32 → f16 at unit scale, back to f64 exactly: the stored value.
-            narrow[..w].iter_mut().zip(b).for_each(|(o, &v)| *o = v as f32);
-            let h = &mut halves[k * m + c0..k * m + c0 + w];
-            h.convert_from_f32_slice(&narrow[..w]);
-            let stored = &mut sb.row_mut(k)[..w];
-            h.convert_to_f64_slice(stored);
-            for ((e, &s), &b) in e32.row_mut(k)[..w].iter_mut().zip(&*stored).zip(b) {
-                *e = (s - b) as f32;
-            }
+            // f64 → f32 → f16 at unit scale, back to f64 exactly: the stored value, its
+            // error and the row's extremes (used for k < effective only).
+            round_to_f16(
+                &lifted[k * ws..k * ws + w],
+                &mut halves[k * m + c0..k * m + c0 + w],
+                sb.row_mut(k),
+                e32.row_mut(k),
+                (&mut hi[k], &mut lo[k]),
+                &mut narrow,
+            );
         }
         y32.round_from(&yb, w);
         cross_acc.add(&e32, &y32);
