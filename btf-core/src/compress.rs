@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::json;
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::mpsc;
+use std::sync::{Mutex, mpsc};
 use std::time::Instant;
 
 /// Parameters of [`compress`].
@@ -167,8 +167,10 @@ pub fn compress(
     let next = AtomicUsize::new(0);
     let failed = AtomicBool::new(false);
     let workers = rayon::current_num_threads().clamp(1, n_views.max(1));
-    // At most two finished slots wait for the writer (a slot's arrays are 7 MB at 256²).
+    // At most two finished slots wait for the writer (a slot's arrays are 7 MB at 256²);
+    // the eigentexture bytes it has written come back for the next slots to reuse.
     let (to_writer, queue) = mpsc::sync_channel::<(SlotReport, QuantizedSlot)>(2);
+    let spent = Mutex::new(Vec::<Vec<u8>>::new());
     let work = |to_writer: &mpsc::SyncSender<_>| -> Result<Vec<(SlotReport, bool)>> {
         let mut slot = SlotData { view: 0, n_lights: 0, texel_values: 0, data: Vec::new() };
         let (mut raw, mut scratch) = (Vec::new(), PcaScratch::default());
@@ -177,6 +179,9 @@ pub fn compress(
             let v = next.fetch_add(1, Ordering::Relaxed);
             if v >= n_views || failed.load(Ordering::Relaxed) {
                 return Ok(done);
+            }
+            if let Some(bytes) = spent.lock().ok().and_then(|mut p| p.pop()) {
+                scratch.recycle(bytes);
             }
             let sent = one(v, &mut slot, &mut raw, &mut scratch).and_then(|(r, stored)| {
                 let resumed = stored.is_none();
@@ -198,12 +203,15 @@ pub fn compress(
         }
     };
     let (per_worker, written) = std::thread::scope(|scope| {
-        let writer = &writer;
+        let (writer, spent) = (&writer, &spent);
         let write = scope.spawn(move || -> Result<()> {
             for (report, stored) in queue {
                 writer.write_slot(report.view, &stored)?;
                 writer.write_stats(report.view, &json!(report))?;
                 progress();
+                if let Ok(mut pool) = spent.lock() {
+                    pool.push(stored.eigentextures);
+                }
             }
             Ok(())
         });

@@ -66,6 +66,17 @@ pub fn pca_slot(slot: &SlotData, components: usize, quantization: Quantization) 
 #[derive(Debug, Default)]
 pub struct PcaScratch {
     basis: Vec<f64>,
+    /// Bytes for the next slot's stored eigentextures (see [`PcaScratch::recycle`]).
+    raw: Vec<u8>,
+}
+
+impl PcaScratch {
+    /// Hands back the eigentexture bytes of a slot already written, so that the next slot
+    /// forms its own in them (6 MB at 256², c = 16: a fresh allocation would be faulted in
+    /// page by page and its release would flush the other core's TLB).
+    pub fn recycle(&mut self, eigentexture_bytes: Vec<u8>) {
+        self.raw = eigentexture_bytes;
+    }
 }
 
 /// The light images of one view slot as row slices of `f32` or `f16` values: of a
@@ -162,7 +173,8 @@ pub fn pca_rows_in<T: Texel>(
     // SSᵀ. For f16 both come from one sweep ([`fused`]); 8-bit scales need all of B first.
     let (raw, scale_offset, cross, bgram) = match quantization {
         Quantization::F16 => {
-            let f = fused::lift_store_f16(&slot.rows, m, &mut lift, c, effective);
+            let raw = std::mem::take(&mut scratch.raw);
+            let f = fused::lift_store_f16(&slot.rows, m, &mut lift, c, effective, raw);
             (f.raw, f.scale_offset, f.cross, f.bgram)
         }
         Quantization::U8 => {

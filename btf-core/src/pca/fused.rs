@@ -39,18 +39,27 @@ pub(super) struct Fused {
 
 /// The fused lift and stored-basis pass over the rows `x` (`m` values each), with the
 /// lifting matrix `lift` (`n × c`, column `k` = `v_k/√λ_k`; its columns' signs are fixed
-/// here as the eigentextures' are).
+/// here as the eigentextures' are). `raw` is reused for the stored bytes (its contents
+/// are overwritten; a buffer whose pages are already mapped costs no page faults).
 pub(super) fn lift_store_f16<T: Texel>(
     x: &[&[T]],
     m: usize,
     lift: &mut [f64],
     c: usize,
     effective: usize,
+    mut raw: Vec<u8>,
 ) -> Fused {
     let n = x.len();
     let cp = c.div_ceil(LIFT_COMPONENTS) * LIFT_COMPONENTS;
     let coef = centred_coef(lift, n, c, cp);
-    let mut halves = vec![f16::ZERO; c * m];
+    // The halves are formed in `raw` itself where it is aligned for them on a
+    // little-endian host (every entry is written below), else in a buffer of their own.
+    raw.resize(c * m * 2, 0);
+    let in_place = cfg!(target_endian = "little")
+        && bytemuck::try_cast_slice_mut::<u8, f16>(&mut raw[..]).is_ok();
+    let mut own = if in_place { Vec::new() } else { vec![f16::ZERO; c * m] };
+    let halves: &mut [f16] =
+        if in_place { bytemuck::cast_slice_mut(&mut raw[..]) } else { &mut own };
     let (mut yb, mut sb) = (Block::default(), Block::default());
     let (mut y32, mut e32) = (Block32::default(), Block32::default());
     let mut lifted = vec![0f64; cp * BLOCK];
@@ -114,11 +123,10 @@ pub(super) fn lift_store_f16<T: Texel>(
             bgram[k * c + j] *= sign[k] * sign[j];
         }
     }
-    let raw = if cfg!(target_endian = "little") {
-        bytemuck::cast_slice(&halves).to_vec()
-    } else {
-        halves.iter().flat_map(|h| h.to_le_bytes()).collect()
-    };
+    if !in_place {
+        raw.clear();
+        raw.extend(own.iter().flat_map(|h| h.to_le_bytes()));
+    }
     Fused { raw, scale_offset, cross, bgram }
 }
 
