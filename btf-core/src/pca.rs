@@ -68,6 +68,8 @@ pub struct PcaScratch {
     basis: Vec<f64>,
     /// Bytes for the next slot's stored eigentextures (see [`PcaScratch::recycle`]).
     raw: Vec<u8>,
+    /// The passes' blocks, kept so that their pages stay mapped from slot to slot.
+    blocks: fused::Blocks,
 }
 
 impl PcaScratch {
@@ -147,7 +149,7 @@ pub fn pca_rows_in<T: Texel>(
         )));
     }
     // Pass 1: the centred Gram matrix, mean, energy and peak (and the checksums).
-    let first = first_pass(slot, checksums.is_some())?;
+    let first = first_pass(slot, checksums.is_some(), &mut scratch.blocks.y)?;
     if let Some(check) = checksums {
         check(&first.crcs)?;
     }
@@ -174,7 +176,8 @@ pub fn pca_rows_in<T: Texel>(
     let (raw, scale_offset, cross, bgram) = match quantization {
         Quantization::F16 => {
             let raw = std::mem::take(&mut scratch.raw);
-            let f = fused::lift_store_f16(&slot.rows, m, &mut lift, c, effective, raw);
+            let blocks = &mut scratch.blocks;
+            let f = fused::lift_store_f16(&slot.rows, m, &mut lift, c, effective, raw, blocks);
             (f.raw, f.scale_offset, f.cross, f.bgram)
         }
         Quantization::U8 => {
@@ -245,14 +248,17 @@ struct FirstPass {
 /// `X̃ = C·(X − 1sᵀ)` with `C = I − 11ᵀ/n`, so `X̃X̃ᵀ = C·YYᵀ·C` for `Y = X − 1sᵀ`. With
 /// `s = x_0` (the first light image) `Y` is exact in `f64` and of the data's spread, not its
 /// mean, so no precision is lost to a large mean.
-fn first_pass<T: Texel>(slot: &SlotRows<'_, T>, with_crc: bool) -> Result<FirstPass> {
+fn first_pass<T: Texel>(
+    slot: &SlotRows<'_, T>,
+    with_crc: bool,
+    blk: &mut Block,
+) -> Result<FirstPass> {
     let (n, m, x) = (slot.rows.len(), slot.texel_values, &slot.rows[..]);
     let shift = x[0];
     let mut crcs = vec![0u32; if with_crc { n } else { 0 }];
     let mut gram = DotAcc::new(n, n, true);
     let mut mean = vec![0f32; m];
     let (mut energy, mut peak) = (0f64, f32::MIN);
-    let mut blk = Block::default();
     let mut colsum = vec![0f64; BLOCK];
     for c0 in (0..m).step_by(BLOCK) {
         let w = BLOCK.min(m - c0);
@@ -261,7 +267,7 @@ fn first_pass<T: Texel>(slot: &SlotRows<'_, T>, with_crc: bool) -> Result<FirstP
         for (crc, row) in crcs.iter_mut().zip(x) {
             *crc = crc32c::crc32c_append(*crc, bytemuck::cast_slice(&row[c0..c0 + w]));
         }
-        let st = load_shifted(x, c0, w, Some(shift), &mut blk, Some(&mut colsum))
+        let st = load_shifted(x, c0, w, Some(shift), blk, Some(&mut colsum))
             .expect("statistics were asked for");
         if !st.finite {
             for (i, row) in x.iter().enumerate() {
@@ -272,7 +278,7 @@ fn first_pass<T: Texel>(slot: &SlotRows<'_, T>, with_crc: bool) -> Result<FirstP
         energy += st.energy;
         peak = peak.max(st.peak);
         prefetch_rows(x, c0 + w, BLOCK);
-        gram.add(&blk, &blk);
+        gram.add(blk, blk);
         for t in 0..w {
             mean[c0 + t] = (shift[c0 + t].widen() as f64 + colsum[t] / n as f64) as f32;
         }

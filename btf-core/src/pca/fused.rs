@@ -25,6 +25,20 @@ use crate::kernels::{
 use half::f16;
 use half::slice::HalfFloatSliceExt;
 
+/// The fused pass's working blocks, kept by the caller from slot to slot.
+#[derive(Debug, Default)]
+pub(super) struct Blocks {
+    /// `Y` in `f64` (also the first pass's block).
+    pub y: Block,
+    /// `S` in `f64`.
+    s: Block,
+    /// `Y` and `E` rounded to `f32`.
+    y32: Block32,
+    e32: Block32,
+    /// The block of `B` (`cp × BLOCK`).
+    lifted: Vec<f64>,
+}
+
 /// What the fused pass yields.
 pub(super) struct Fused {
     /// `c` rows of `m` little-endian `f16` values, signs fixed.
@@ -48,6 +62,7 @@ pub(super) fn lift_store_f16<T: Texel>(
     c: usize,
     effective: usize,
     mut raw: Vec<u8>,
+    blocks: &mut Blocks,
 ) -> Fused {
     let n = x.len();
     let cp = c.div_ceil(LIFT_COMPONENTS) * LIFT_COMPONENTS;
@@ -60,18 +75,18 @@ pub(super) fn lift_store_f16<T: Texel>(
     let mut own = if in_place { Vec::new() } else { vec![f16::ZERO; c * m] };
     let halves: &mut [f16] =
         if in_place { bytemuck::cast_slice_mut(&mut raw[..]) } else { &mut own };
-    let (mut yb, mut sb) = (Block::default(), Block::default());
-    let (mut y32, mut e32) = (Block32::default(), Block32::default());
-    let mut lifted = vec![0f64; cp * BLOCK];
+    let Blocks { y: yb, s: sb, y32, e32, lifted } = blocks;
+    // Every value of the block of B is written by the lift before it is read.
+    lifted.resize(cp * BLOCK, 0.0);
     let mut narrow = vec![0f32; BLOCK];
     let (mut cross_acc, mut bgram_acc) = (CrossAcc32::new(c, n), DotAcc::new(c, c, true));
     let (mut hi, mut lo) = (vec![0f64; c], vec![0f64; c]);
     for c0 in (0..m).step_by(BLOCK) {
         let w = BLOCK.min(m - c0);
-        load_shifted(x, c0, w, Some(x[0]), &mut yb, None);
+        load_shifted(x, c0, w, Some(x[0]), yb, None);
         let ws = yb.stride;
         prefetch_rows(x, c0 + w, BLOCK);
-        lift_rows(&yb, &coef, cp, &mut lifted, ws, 0);
+        lift_rows(yb, &coef, cp, lifted, ws, 0);
         sb.shape(c, w);
         e32.shape(c, w);
         for k in 0..c {
@@ -86,9 +101,9 @@ pub(super) fn lift_store_f16<T: Texel>(
                 &mut narrow,
             );
         }
-        y32.round_from(&yb, w);
-        cross_acc.add(&e32, &y32);
-        bgram_acc.add(&sb, &sb);
+        y32.round_from(yb, w);
+        cross_acc.add(e32, y32);
+        bgram_acc.add(sb, sb);
     }
     let mut cross = vec![0f64; c * n];
     cross_acc.finish(&mut cross, n);
