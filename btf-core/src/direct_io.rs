@@ -128,4 +128,23 @@ mod tests {
             assert!(names.is_empty(), "{names:?}");
         }
     }
+
+    #[test]
+    fn a_zarr_chunk_written_directly_reads_back_with_its_checksum() {
+        use crate::zarr::{ArrayMeta, DType, Limits, ZarrArray, encode_f32};
+        // 70 001 values: 280 004 bytes, above the 256 KiB threshold, with an unaligned tail.
+        let dir = tempfile::tempdir().unwrap();
+        let meta = ArrayMeta {
+            shape: vec![2, 70_001],
+            chunk_shape: vec![1, 70_001],
+            dtype: DType::F32,
+            dimension_names: vec!["a".into(), "b".into()],
+        };
+        let a = ZarrArray::create(dir.path(), meta).unwrap().with_direct_writes();
+        let values: Vec<f32> = (0..70_001).map(|i| (i as f32 * 0.37).sin()).collect();
+        let raw = encode_f32(&values, DType::F32);
+        a.write_chunk(&[1, 0], &raw).unwrap();
+        let b = ZarrArray::open(dir.path(), &Limits::default()).unwrap();
+        assert_eq!(b.read_chunk(&[1, 0]).unwrap(), raw);
+    }
 }
