@@ -2,16 +2,19 @@
 //! all view slots in parallel, one slot in memory per worker, with per-slot statistics kept
 //! beside the arrays so an interrupted run resumes where it stopped.
 
-use crate::eigen::{EigenMeta, EigenWriter, Quantization};
+use crate::eigen::{EigenMeta, EigenWriter, Quantization, QuantizedSlot};
 use crate::metrics::{psnr_db, rel_rmse_from};
 use crate::pca::{PcaScratch, SlotRows, max_components, pca_rows_in, pca_slot_in};
 use crate::store::{BtfStore, SlotData};
+use crate::zarr::DType;
 use crate::{Error, Result};
+use half::f16;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Mutex, mpsc};
 use std::time::Instant;
 
 /// Parameters of [`compress`].
@@ -48,7 +51,8 @@ pub struct SlotReport {
     pub peak: f32,
     /// Components with non-zero eigenvalue.
     pub effective_components: usize,
-    /// Wall-clock seconds spent on the slot (reading included).
+    /// Wall-clock seconds spent on the slot (reading included; the writing is the writer
+    /// thread's).
     pub seconds: f64,
 }
 
@@ -107,15 +111,17 @@ pub fn compress(
     let writer = EigenWriter::create(output, emeta, params.resume)?;
     // One worker per thread, each with its own slot buffers for the whole run (a slot is
     // 64 MB at 256²: allocating and faulting it in per slot would cost more than reading it).
+    // A finished slot goes to the writer thread (its chunks written by direct I/O, which
+    // waits for the disk), so the workers go on computing meanwhile.
     let one = |v: usize,
                slot: &mut SlotData,
                raw: &mut Vec<u8>,
                scratch: &mut PcaScratch|
-     -> Result<(SlotReport, bool)> {
+     -> Result<(SlotReport, Option<QuantizedSlot>)> {
         let done = writer.has_slot(v).then(|| writer.read_stats(v)).flatten();
         if let Some(r) = done.and_then(|s| serde_json::from_value(s).ok()) {
             progress();
-            return Ok((r, true));
+            return Ok((r, None));
         }
         let t0 = Instant::now();
         // The PCA checks every value in its first pass; on a non-finite one, the store's
@@ -127,18 +133,24 @@ pub fn compress(
             _ => e,
         };
         let q = params.quantization;
-        // f32 chunks are mapped and read in place, their checksums folded into the first
-        // pass; other dtypes are decoded into the worker's buffer.
+        // f32 and f16 chunks are mapped and read in place (widened to f64 as they are
+        // loaded), their checksums folded into the first pass; other dtypes are decoded
+        // into the worker's buffer.
         let r = if let Some(mapped) = input.map_slot(v)? {
-            let rows =
-                SlotRows { view: v, rows: mapped.rows()?, texel_values: meta.texel_values() };
-            pca_rows_in(&rows, c, q, scratch, Some(&|crcs: &[u32]| mapped.verify(crcs)))
+            let check = |crcs: &[u32]| mapped.verify(crcs);
+            let m = meta.texel_values();
+            if input.dtype() == DType::F16 {
+                let rows = SlotRows::<f16> { view: v, rows: mapped.rows()?, texel_values: m };
+                pca_rows_in(&rows, c, q, scratch, Some(&check))
+            } else {
+                let rows = SlotRows::<f32> { view: v, rows: mapped.rows()?, texel_values: m };
+                pca_rows_in(&rows, c, q, scratch, Some(&check))
+            }
         } else {
             input.read_slot_into_unchecked(v, slot, raw)?;
             pca_slot_in(slot, c, q, scratch)
         }
         .map_err(name_texel)?;
-        writer.write_slot(v, &r.stored)?;
         let report = SlotReport {
             view: v,
             sse: r.sse,
@@ -149,35 +161,65 @@ pub fn compress(
             effective_components: r.effective_components,
             seconds: t0.elapsed().as_secs_f64(),
         };
-        writer.write_stats(v, &json!(report))?;
-        progress();
-        Ok((report, false))
+        Ok((report, Some(r.stored)))
     };
     let n_views = meta.n_views();
     let next = AtomicUsize::new(0);
     let failed = AtomicBool::new(false);
     let workers = rayon::current_num_threads().clamp(1, n_views.max(1));
-    let per_worker: Vec<Result<Vec<(SlotReport, bool)>>> = (0..workers)
-        .into_par_iter()
-        .map(|_| {
-            let mut slot = SlotData { view: 0, n_lights: 0, texel_values: 0, data: Vec::new() };
-            let (mut raw, mut scratch) = (Vec::new(), PcaScratch::default());
-            let mut done = Vec::new();
-            loop {
-                let v = next.fetch_add(1, Ordering::Relaxed);
-                if v >= n_views || failed.load(Ordering::Relaxed) {
-                    return Ok(done);
+    // At most two finished slots wait for the writer (a slot's arrays are 7 MB at 256²);
+    // the eigentexture bytes it has written come back for the next slots to reuse.
+    let (to_writer, queue) = mpsc::sync_channel::<(SlotReport, QuantizedSlot)>(2);
+    let spent = Mutex::new(Vec::<Vec<u8>>::new());
+    let work = |to_writer: &mpsc::SyncSender<_>| -> Result<Vec<(SlotReport, bool)>> {
+        let mut slot = SlotData { view: 0, n_lights: 0, texel_values: 0, data: Vec::new() };
+        let (mut raw, mut scratch) = (Vec::new(), PcaScratch::default());
+        let mut done = Vec::new();
+        loop {
+            let v = next.fetch_add(1, Ordering::Relaxed);
+            if v >= n_views || failed.load(Ordering::Relaxed) {
+                return Ok(done);
+            }
+            if let Some(bytes) = spent.lock().ok().and_then(|mut p| p.pop()) {
+                scratch.recycle(bytes);
+            }
+            let sent = one(v, &mut slot, &mut raw, &mut scratch).and_then(|(r, stored)| {
+                let resumed = stored.is_none();
+                if let Some(stored) = stored {
+                    // A refusal means the writer stopped on an error, which it reports.
+                    to_writer
+                        .send((r.clone(), stored))
+                        .map_err(|_| Error::Invalid("the writer stopped".into()))?;
                 }
-                match one(v, &mut slot, &mut raw, &mut scratch) {
-                    Ok(r) => done.push(r),
-                    Err(e) => {
-                        failed.store(true, Ordering::Relaxed);
-                        return Err(e);
-                    }
+                Ok((r, resumed))
+            });
+            match sent {
+                Ok(r) => done.push(r),
+                Err(e) => {
+                    failed.store(true, Ordering::Relaxed);
+                    return Err(e);
                 }
             }
-        })
-        .collect();
+        }
+    };
+    let (per_worker, written) = std::thread::scope(|scope| {
+        let (writer, spent) = (&writer, &spent);
+        let write = scope.spawn(move || -> Result<()> {
+            for (report, stored) in queue {
+                writer.write_slot(report.view, &stored)?;
+                writer.write_stats(report.view, &json!(report))?;
+                progress();
+                if let Ok(mut pool) = spent.lock() {
+                    pool.push(stored.eigentextures);
+                }
+            }
+            Ok(())
+        });
+        let per_worker: Vec<_> = (0..workers).into_par_iter().map(|_| work(&to_writer)).collect();
+        drop(to_writer);
+        (per_worker, write.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
+    });
+    written?;
     let mut slots = Vec::with_capacity(n_views);
     for w in per_worker {
         slots.extend(w?);
@@ -218,7 +260,6 @@ pub fn compress(
 mod tests {
     use super::*;
     use crate::store::{BtfMeta, BtfWriter};
-    use crate::zarr::DType;
 
     fn tiny_store(path: &Path) {
         tiny_store_as(path, DType::F32);
@@ -281,7 +322,7 @@ mod tests {
     }
 
     #[test]
-    fn mapped_f32_and_decoded_f16_stores_compress_alike_and_truncation_is_named() {
+    fn mapped_f32_and_f16_stores_compress_alike_and_truncation_is_named() {
         // The tiny store's values are multiples of 0.1 in [1, 2]: not all f16-exact, so
         // round them through f16 first by writing an f16 store and an f32 copy of it.
         let dir = tempfile::tempdir().unwrap();
@@ -296,7 +337,8 @@ mod tests {
         }
         w.finish().unwrap();
         let f = BtfStore::open(&p32).unwrap();
-        assert!(f.map_slot(0).unwrap().is_some() && h.map_slot(0).unwrap().is_none());
+        // Both are read in place: f16 widened to f64 by the same loads as f32.
+        assert!(f.map_slot(0).unwrap().is_some() && h.map_slot(0).unwrap().is_some());
         let params = CompressParams { components: 3, ..Default::default() };
         let a = compress(&h, &dir.path().join("h.eig"), params, &|| {}).unwrap();
         let b = compress(&f, &dir.path().join("f.eig"), params, &|| {}).unwrap();

@@ -195,7 +195,12 @@ fn open_arrays(dir: &Path, m: &EigenMeta, create: bool) -> Result<Arrays> {
         }
     });
     let mut next = || it.next().unwrap();
-    Ok(Arrays { mean: next()?, eig: next()?, scale: next()?, weights: next()?, values: next()? })
+    let (mean, eig) = (next()?, next()?);
+    // The means and eigentextures are almost all of a store's bytes, and a compression run
+    // never reads them back: written by direct I/O, they cost the disk's time, not a core's.
+    let (mean, eig) =
+        if create { (mean.with_direct_writes(), eig.with_direct_writes()) } else { (mean, eig) };
+    Ok(Arrays { mean, eig, scale: next()?, weights: next()?, values: next()? })
 }
 
 /// Quantises `basis` (`components × n` floats) per component; returns raw bytes and

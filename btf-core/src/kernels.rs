@@ -19,6 +19,31 @@ const SUB_BLOCK: usize = 256;
 /// Components per lift tile.
 pub const LIFT_COMPONENTS: usize = 8;
 
+/// An element type of stored normtextures that the block loads widen to `f64` exactly:
+/// `f32`, or IEEE half precision (`half::f16`, converted with `vcvtph2ps` under AVX-512).
+pub trait Texel: bytemuck::Pod + Send + Sync + 'static {
+    /// True for `f16`.
+    const HALF: bool;
+    /// The value as `f32` (exact for both types).
+    fn widen(self) -> f32;
+}
+
+impl Texel for f32 {
+    const HALF: bool = false;
+    #[inline(always)]
+    fn widen(self) -> f32 {
+        self
+    }
+}
+
+impl Texel for half::f16 {
+    const HALF: bool = true;
+    #[inline(always)]
+    fn widen(self) -> f32 {
+        self.to_f32()
+    }
+}
+
 /// Rows of `f64` values over one block of columns: row `i` is `data[i·stride..][..stride]`,
 /// the columns past the block's width and the rows past `rows` (at least [`Block::PAD_ROWS`]
 /// of them) are zero so that whole tiles can be read.
@@ -63,144 +88,6 @@ fn has_avx512() -> bool {
     #[cfg(not(target_arch = "x86_64"))]
     {
         false
-    }
-}
-
-/// Accumulates `A·Bᵀ` block by block of columns: each output keeps one register's worth
-/// ([`LANES`]) of partial sums across blocks, reduced only by [`DotAcc::finish`], so a tile
-/// of `R × 5` outputs is loaded, updated over the block's columns and stored back, and the
-/// rows of `A` stay in the L1 cache while those of `B` stream past.
-#[derive(Debug, Clone)]
-pub struct DotAcc {
-    a_rows: usize,
-    b_rows: usize,
-    upper: bool,
-    /// Rows of `A` per tile (4 or 5).
-    ta: usize,
-    /// Top-left output of every tile.
-    tiles: Vec<(usize, usize)>,
-    /// `LANES` partial sums per output, tile after tile.
-    partial: Vec<f64>,
-}
-
-impl DotAcc {
-    /// For `a_rows × b_rows` outputs; with `upper`, only `j ≥ i` (a symmetric product's
-    /// upper triangle, `A` and `B` the same rows).
-    pub fn new(a_rows: usize, b_rows: usize, upper: bool) -> Self {
-        let ta = if a_rows <= 16 && a_rows.is_multiple_of(4) { 4 } else { TB };
-        let mut tiles = Vec::new();
-        for i0 in (0..a_rows).step_by(ta) {
-            let j_start = if upper { i0 } else { 0 };
-            tiles.extend((j_start..b_rows).step_by(TB).map(|j0| (i0, j0)));
-        }
-        let partial = vec![0f64; tiles.len() * ta * TB * LANES];
-        DotAcc { a_rows, b_rows, upper, ta, tiles, partial }
-    }
-
-    /// Adds the products of one block of columns.
-    pub fn add(&mut self, a: &Block, b: &Block) {
-        self.add_with(a, b, has_avx512());
-    }
-
-    /// [`DotAcc::add`] with the kernel chosen by the caller.
-    pub(crate) fn add_with(&mut self, a: &Block, b: &Block, simd: bool) {
-        assert_eq!((a.rows, b.rows), (self.a_rows, self.b_rows), "blocks of other shapes");
-        assert_eq!(a.stride, b.stride, "blocks of different widths");
-        let (w, ta) = (a.stride, self.ta);
-        assert!(a.data.len() >= a.rows.div_ceil(ta) * ta * w, "block a lacks padding rows");
-        assert!(b.data.len() >= b.rows.div_ceil(TB) * TB * w, "block b lacks padding rows");
-        let simd = simd && has_avx512();
-        let per_tile = ta * TB * LANES;
-        // Sub-blocks of columns small enough for a tile's `A` rows to stay in L1.
-        for k0 in (0..w).step_by(SUB_BLOCK) {
-            let cols = (k0, (k0 + SUB_BLOCK).min(w));
-            let tiles = self.tiles.iter().zip(self.partial.chunks_exact_mut(per_tile));
-            for (&(i0, j0), acc) in tiles {
-                let ra = &a.data[i0 * w..(i0 + ta) * w];
-                let rb = &b.data[j0 * w..(j0 + TB) * w];
-                match (simd, ta) {
-                    (true, 4) => tile_simd::<4>(ra, rb, w, cols, acc),
-                    (true, _) => tile_simd::<TB>(ra, rb, w, cols, acc),
-                    (false, 4) => tile_portable::<4>(ra, rb, w, cols, acc),
-                    (false, _) => tile_portable::<TB>(ra, rb, w, cols, acc),
-                }
-            }
-        }
-    }
-
-    /// `out[i·ldo + j] += Σ_t a_i[t]·b_j[t]` over every block added (only `j ≥ i` with
-    /// `upper`; other entries are left alone).
-    pub fn finish(&self, out: &mut [f64], ldo: usize) {
-        assert!(ldo >= self.b_rows, "output row stride smaller than b's rows");
-        assert!(self.a_rows == 0 || out.len() >= (self.a_rows - 1) * ldo + self.b_rows);
-        let per_tile = self.ta * TB * LANES;
-        for (&(i0, j0), acc) in self.tiles.iter().zip(self.partial.chunks_exact(per_tile)) {
-            for r in 0..self.ta {
-                for s in 0..TB {
-                    let (i, j) = (i0 + r, j0 + s);
-                    if i < self.a_rows && j < self.b_rows && (!self.upper || j >= i) {
-                        let lanes = &acc[(r * TB + s) * LANES..(r * TB + s + 1) * LANES];
-                        out[i * ldo + j] += lanes.iter().sum::<f64>();
-                    }
-                }
-            }
-        }
-    }
-}
-
-/// `acc[(r·5 + s)·8 + l] += Σ_k a_r[8k + l]·b_s[8k + l]` over columns `k0..k1` of the `R`
-/// rows of `a` and the 5 of `b` (rows `w` apart).
-fn tile_portable<const R: usize>(
-    a: &[f64],
-    b: &[f64],
-    w: usize,
-    (k0, k1): (usize, usize),
-    acc: &mut [f64],
-) {
-    let mut v = [[[0f64; LANES]; TB]; R];
-    for r in 0..R {
-        for s in 0..TB {
-            v[r][s].copy_from_slice(&acc[(r * TB + s) * LANES..(r * TB + s + 1) * LANES]);
-        }
-    }
-    for k in (k0..k1).step_by(LANES) {
-        for r in 0..R {
-            let ar = &a[r * w + k..r * w + k + LANES];
-            for s in 0..TB {
-                let bs = &b[s * w + k..s * w + k + LANES];
-                for l in 0..LANES {
-                    v[r][s][l] += ar[l] * bs[l];
-                }
-            }
-        }
-    }
-    for r in 0..R {
-        for s in 0..TB {
-            acc[(r * TB + s) * LANES..(r * TB + s + 1) * LANES].copy_from_slice(&v[r][s]);
-        }
-    }
-}
-
-fn tile_simd<const R: usize>(
-    a: &[f64],
-    b: &[f64],
-    w: usize,
-    cols: (usize, usize),
-    acc: &mut [f64],
-) {
-    assert!(a.len() >= R * w && b.len() >= TB * w && w.is_multiple_of(LANES));
-    assert!(cols.0 <= cols.1 && cols.1 <= w && cols.0.is_multiple_of(LANES));
-    assert!(acc.len() >= R * TB * LANES);
-    #[cfg(target_arch = "x86_64")]
-    {
-        // SAFETY: the caller checked AVX-512F at run time; the slices hold R and 5 rows of
-        // w values (w and the first column multiples of 8, the last ≤ w) and R·5·8 partial
-        // sums, so every access lies inside.
-        unsafe { avx512::tile::<R>(a.as_ptr(), b.as_ptr(), w, cols, acc.as_mut_ptr()) }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        tile_portable::<R>(a, b, w, cols, acc)
     }
 }
 
@@ -258,11 +145,11 @@ pub(crate) fn lift_rows_with(
 /// Asks the cache to fetch columns `c0..c0 + w` of every row ahead of their use. Each row's
 /// piece of a block is its own page (1024 `f32`), where the hardware prefetcher stops, so
 /// without this every block of a pass starts with one cache miss per row and line.
-pub fn prefetch_rows(x: &[&[f32]], c0: usize, w: usize) {
+pub fn prefetch_rows<T: Texel>(x: &[&[T]], c0: usize, w: usize) {
     #[cfg(target_arch = "x86_64")]
     for row in x {
         let Some(piece) = row.get(c0..(c0 + w).min(row.len())) else { continue };
-        for line in piece.chunks(16) {
+        for line in piece.chunks(64 / size_of::<T>()) {
             // SAFETY: a prefetch never faults and reads nothing into registers; the pointer
             // lies inside the row in any case.
             unsafe {
@@ -291,11 +178,11 @@ pub struct LoadStats {
 /// (`s = shift[c0..c0 + w]`, or zero), exactly: the difference of two `f32` values is an
 /// `f64`. With `colsum` (`w` values), adds `Σ_i y_i` per column into it and returns the
 /// input's statistics.
-pub fn load_shifted(
-    x: &[&[f32]],
+pub fn load_shifted<T: Texel>(
+    x: &[&[T]],
     c0: usize,
     w: usize,
-    shift: Option<&[f32]>,
+    shift: Option<&[T]>,
     blk: &mut Block,
     colsum: Option<&mut [f64]>,
 ) -> Option<LoadStats> {
@@ -303,11 +190,11 @@ pub fn load_shifted(
 }
 
 /// [`load_shifted`] with the kernel chosen by the caller.
-pub(crate) fn load_shifted_with(
-    x: &[&[f32]],
+pub(crate) fn load_shifted_with<T: Texel>(
+    x: &[&[T]],
     c0: usize,
     w: usize,
-    shift: Option<&[f32]>,
+    shift: Option<&[T]>,
     blk: &mut Block,
     colsum: Option<&mut [f64]>,
     simd: bool,
@@ -325,15 +212,15 @@ pub(crate) fn load_shifted_with(
 }
 
 #[inline(always)]
-fn load_shifted_body(
-    x: &[&[f32]],
+fn load_shifted_body<T: Texel>(
+    x: &[&[T]],
     c0: usize,
     w: usize,
-    shift: Option<&[f32]>,
+    shift: Option<&[T]>,
     blk: &mut Block,
     mut colsum: Option<&mut [f64]>,
 ) -> Option<LoadStats> {
-    let zeros = [0f32; 0];
+    let zeros: [T; 0] = [];
     let mut e = [0f64; LANES];
     let mut p = [f32::MIN; LANES];
     let mut bad = [0f32; LANES];
@@ -351,8 +238,8 @@ fn load_shifted_body(
                     .zip(cs.chunks_exact_mut(LANES))
                 {
                     for l in 0..LANES {
-                        let v = s8[l];
-                        let y = v as f64 - h8[l] as f64;
+                        let v = s8[l].widen();
+                        let y = v as f64 - h8[l].widen() as f64;
                         d8[l] = y;
                         c8[l] += y;
                         e[l] += (v as f64) * (v as f64);
@@ -362,8 +249,8 @@ fn load_shifted_body(
                 }
                 let tail = w - w % LANES;
                 for t in tail..w {
-                    let v = src[t];
-                    let y = v as f64 - sh[t] as f64;
+                    let v = src[t].widen();
+                    let y = v as f64 - sh[t].widen() as f64;
                     dst[t] = y;
                     cs[t] += y;
                     e[0] += (v as f64) * (v as f64);
@@ -373,12 +260,12 @@ fn load_shifted_body(
             }
             (_, Some(_)) => {
                 for ((d, &v), &h) in dst.iter_mut().zip(src).zip(sh) {
-                    *d = v as f64 - h as f64;
+                    *d = v.widen() as f64 - h.widen() as f64;
                 }
             }
             (_, None) => {
                 for (d, &v) in dst.iter_mut().zip(src) {
-                    *d = v as f64;
+                    *d = v.widen() as f64;
                 }
             }
         }
@@ -392,6 +279,12 @@ fn load_shifted_body(
 
 #[cfg(target_arch = "x86_64")]
 mod avx512;
+mod dot;
+mod f16_round;
+mod single;
+pub use dot::DotAcc;
+pub use f16_round::round_to_f16;
+pub use single::{Block32, CrossAcc32};
 
 #[cfg(test)]
 mod tests;

@@ -18,6 +18,7 @@
 //! No GPU code and no image-format crates live here.
 
 pub mod compress;
+pub mod direct_io;
 pub mod direction;
 pub mod eigen;
 pub mod error;

@@ -77,14 +77,18 @@ impl MappedSlot {
         MappedSlot { view, chunks }
     }
 
-    /// Each light's payload as `f32` values (little-endian hosts; a map is page-aligned).
-    pub fn rows(&self) -> Result<Vec<&[f32]>> {
+    /// Each light's payload as values of `T` (`f32` or `f16`; little-endian hosts, and a
+    /// map is page-aligned).
+    pub fn rows<T: bytemuck::Pod>(&self) -> Result<Vec<&[T]>> {
         self.chunks
             .iter()
             .map(|c| {
                 bytemuck::try_cast_slice(c.payload()).map_err(|e| Error::Corrupt {
                     path: c.path().to_owned(),
-                    what: format!("chunk payload is not a run of f32 values ({e})"),
+                    what: format!(
+                        "chunk payload is not a run of {} values ({e})",
+                        std::any::type_name::<T>()
+                    ),
                 })
             })
             .collect()

@@ -17,7 +17,7 @@
 use crate::eigen::{Quantization, QuantizedSlot, dequantize, quantize};
 use crate::gemm::{Mat, dgemm};
 use crate::kernels::{
-    Block, DotAcc, LANES, LIFT_COMPONENTS, lift_rows, load_shifted, prefetch_rows,
+    Block, DotAcc, LANES, LIFT_COMPONENTS, Texel, lift_rows, load_shifted, prefetch_rows,
 };
 use crate::store::SlotData;
 use crate::{Error, Result};
@@ -28,6 +28,9 @@ mod fused;
 /// Columns per block in the streaming passes: 81 rows of them fit the L2 cache in `f64`,
 /// and each row's 4 KB of `f32` input are one long run for the hardware prefetcher.
 const BLOCK: usize = 1024;
+/// Bytes of each row checksummed at a time in the first pass (a multiple of a block's
+/// piece of a row for `f32` and `f16`).
+const CRC_SPAN_BYTES: usize = 8192;
 
 /// Result of the PCA of one slot.
 #[derive(Debug, Clone)]
@@ -66,16 +69,29 @@ pub fn pca_slot(slot: &SlotData, components: usize, quantization: Quantization) 
 #[derive(Debug, Default)]
 pub struct PcaScratch {
     basis: Vec<f64>,
+    /// Bytes for the next slot's stored eigentextures (see [`PcaScratch::recycle`]).
+    raw: Vec<u8>,
+    /// The passes' blocks, kept so that their pages stay mapped from slot to slot.
+    blocks: fused::Blocks,
 }
 
-/// The light images of one view slot as row slices: of a [`SlotData`] in memory, or of a
-/// store's mapped chunks ([`crate::mapped::MappedSlot`]).
+impl PcaScratch {
+    /// Hands back the eigentexture bytes of a slot already written, so that the next slot
+    /// forms its own in them (6 MB at 256², c = 16: a fresh allocation would be faulted in
+    /// page by page and its release would flush the other core's TLB).
+    pub fn recycle(&mut self, eigentexture_bytes: Vec<u8>) {
+        self.raw = eigentexture_bytes;
+    }
+}
+
+/// The light images of one view slot as row slices of `f32` or `f16` values: of a
+/// [`SlotData`] in memory, or of a store's mapped chunks ([`crate::mapped::MappedSlot`]).
 #[derive(Debug, Clone)]
-pub struct SlotRows<'a> {
+pub struct SlotRows<'a, T = f32> {
     /// View slot index.
     pub view: usize,
     /// One row of `texel_values` values per light.
-    pub rows: Vec<&'a [f32]>,
+    pub rows: Vec<&'a [T]>,
     /// Floats per row.
     pub texel_values: usize,
 }
@@ -109,11 +125,12 @@ pub fn pca_slot_in(
     pca_rows_in(&SlotRows::of(slot), components, quantization, scratch, None)
 }
 
-/// [`pca_slot_in`] on row slices. With `checksums`, the first pass also computes the
-/// CRC32C of every row's bytes on the way (the bytes it reads anyway) and hands them to
-/// `checksums` before anything is derived from the data.
-pub fn pca_rows_in(
-    slot: &SlotRows<'_>,
+/// [`pca_slot_in`] on row slices (of `f32` or `f16` values, widened to `f64` exactly as
+/// they are loaded). With `checksums`, the first pass also computes the CRC32C of every
+/// row's bytes on the way (the bytes it reads anyway) and hands them to `checksums` before
+/// anything is derived from the data.
+pub fn pca_rows_in<T: Texel>(
+    slot: &SlotRows<'_, T>,
     components: usize,
     quantization: Quantization,
     scratch: &mut PcaScratch,
@@ -135,7 +152,7 @@ pub fn pca_rows_in(
         )));
     }
     // Pass 1: the centred Gram matrix, mean, energy and peak (and the checksums).
-    let first = first_pass(slot, checksums.is_some())?;
+    let first = first_pass(slot, checksums.is_some(), &mut scratch.blocks.y)?;
     if let Some(check) = checksums {
         check(&first.crcs)?;
     }
@@ -161,7 +178,9 @@ pub fn pca_rows_in(
     // SSᵀ. For f16 both come from one sweep ([`fused`]); 8-bit scales need all of B first.
     let (raw, scale_offset, cross, bgram) = match quantization {
         Quantization::F16 => {
-            let f = fused::lift_store_f16(&slot.rows, m, &mut lift, c, effective);
+            let raw = std::mem::take(&mut scratch.raw);
+            let blocks = &mut scratch.blocks;
+            let f = fused::lift_store_f16(&slot.rows, m, &mut lift, c, effective, raw, blocks);
             (f.raw, f.scale_offset, f.cross, f.bgram)
         }
         Quantization::U8 => {
@@ -232,35 +251,45 @@ struct FirstPass {
 /// `X̃ = C·(X − 1sᵀ)` with `C = I − 11ᵀ/n`, so `X̃X̃ᵀ = C·YYᵀ·C` for `Y = X − 1sᵀ`. With
 /// `s = x_0` (the first light image) `Y` is exact in `f64` and of the data's spread, not its
 /// mean, so no precision is lost to a large mean.
-fn first_pass(slot: &SlotRows<'_>, with_crc: bool) -> Result<FirstPass> {
+fn first_pass<T: Texel>(
+    slot: &SlotRows<'_, T>,
+    with_crc: bool,
+    blk: &mut Block,
+) -> Result<FirstPass> {
     let (n, m, x) = (slot.rows.len(), slot.texel_values, &slot.rows[..]);
     let shift = x[0];
     let mut crcs = vec![0u32; if with_crc { n } else { 0 }];
     let mut gram = DotAcc::new(n, n, true);
     let mut mean = vec![0f32; m];
     let (mut energy, mut peak) = (0f64, f32::MIN);
-    let mut blk = Block::default();
     let mut colsum = vec![0f64; BLOCK];
     for c0 in (0..m).step_by(BLOCK) {
         let w = BLOCK.min(m - c0);
         colsum[..w].fill(0.0);
-        // The checksum reads the block's bytes into the cache just before the load does.
-        for (crc, row) in crcs.iter_mut().zip(x) {
-            *crc = crc32c::crc32c_append(*crc, bytemuck::cast_slice(&row[c0..c0 + w]));
+        // The checksum reads the next 8 KB of every row (one to four blocks' worth) into
+        // the cache just before the loads do: longer runs than a block's piece of a row
+        // amortise the three-stream CRC32C's cost per call.
+        let span = CRC_SPAN_BYTES / size_of::<T>();
+        if c0 % span == 0 {
+            for (crc, row) in crcs.iter_mut().zip(x) {
+                let piece = &row[c0..(c0 + span).min(m)];
+                *crc = crc32c::crc32c_append(*crc, bytemuck::cast_slice(piece));
+            }
         }
-        let st = load_shifted(x, c0, w, Some(shift), &mut blk, Some(&mut colsum))
+        let st = load_shifted(x, c0, w, Some(shift), blk, Some(&mut colsum))
             .expect("statistics were asked for");
         if !st.finite {
-            for i in 0..n {
-                crate::store::check_finite(x[i], slot.view, i, 0)?;
+            for (i, row) in x.iter().enumerate() {
+                let row: Vec<f32> = row.iter().map(|v| v.widen()).collect();
+                crate::store::check_finite(&row, slot.view, i, 0)?;
             }
         }
         energy += st.energy;
         peak = peak.max(st.peak);
         prefetch_rows(x, c0 + w, BLOCK);
-        gram.add(&blk, &blk);
+        gram.add(blk, blk);
         for t in 0..w {
-            mean[c0 + t] = (shift[c0 + t] as f64 + colsum[t] / n as f64) as f32;
+            mean[c0 + t] = (shift[c0 + t].widen() as f64 + colsum[t] / n as f64) as f32;
         }
     }
     let mut g = vec![0f64; n * n];
@@ -323,8 +352,8 @@ fn max_min(row: &[f64], hi: &mut f64, lo: &mut f64) {
 /// `B = liftᵀX̃ = (C·lift)ᵀY` (`C·lift` has zero column sums, so the shift cancels), then
 /// the sign of each eigentexture (and its lift column) fixed so that its largest-magnitude
 /// entry is positive.
-fn lift_pass(
-    slot: &SlotRows<'_>,
+fn lift_pass<T: Texel>(
+    slot: &SlotRows<'_, T>,
     lift: &mut [f64],
     c: usize,
     effective: usize,
@@ -366,8 +395,8 @@ fn lift_pass(
 
 /// For the stored basis `S` (`c × m`) and the exact one `B`: `E·Yᵀ` (`c × n`, with
 /// `E = S − B`; centring it gives `X̃Eᵀ`, transposed) and `SSᵀ` (`c × c`), in `f64`.
-fn stored_pass(
-    slot: &SlotRows<'_>,
+fn stored_pass<T: Texel>(
+    slot: &SlotRows<'_, T>,
     basis: &Basis,
     stored: &[f32],
     c: usize,
@@ -399,14 +428,19 @@ fn stored_pass(
 fn finish_correction(cross: &DotAcc, bgram: &DotAcc, c: usize, n: usize) -> (Vec<f64>, Vec<f64>) {
     let mut cross_out = vec![0f64; c * n];
     cross.finish(&mut cross_out, n);
-    let mut bgram_out = vec![0f64; c * c];
-    bgram.finish(&mut bgram_out, c);
+    (cross_out, finish_symmetric(bgram, c))
+}
+
+/// The full `c × c` matrix of a symmetric product accumulated as its upper triangle.
+fn finish_symmetric(upper: &DotAcc, c: usize) -> Vec<f64> {
+    let mut out = vec![0f64; c * c];
+    upper.finish(&mut out, c);
     for i in 0..c {
         for j in 0..i {
-            bgram_out[i * c + j] = bgram_out[j * c + i];
+            out[i * c + j] = out[j * c + i];
         }
     }
-    (cross_out, bgram_out)
+    out
 }
 
 /// The lift's columns centred (`C·lift`, zero column sums, so the images' shift cancels),

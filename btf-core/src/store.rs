@@ -189,6 +189,21 @@ pub fn check_finite(values: &[f32], view: usize, light: usize, width: usize) -> 
     Ok(())
 }
 
+/// Checks that every value stays finite when rounded to `f16` (magnitude below 65520, where
+/// rounding to nearest reaches infinity); names the slot, light and texel otherwise.
+fn check_f16_range(values: &[f32], view: usize, light: usize, width: usize) -> Result<()> {
+    const F16_OVERFLOW: f32 = 65520.0;
+    let Some(pos) = values.iter().position(|v| v.abs() >= F16_OVERFLOW) else { return Ok(()) };
+    let texel = pos / 3;
+    let (y, x) = texel.checked_div(width).map_or((0, texel), |y| (y, texel % width));
+    Err(Error::Invalid(format!(
+        "image (view slot {view}, light {light}): value {} at texel y={y}, x={x}, channel {} \
+         is beyond the f16 range (store it as f32)",
+        values[pos],
+        pos % 3
+    )))
+}
+
 /// Writer of a BTF store, one image at a time, in any order, resumable.
 #[derive(Debug)]
 pub struct BtfWriter {
@@ -262,6 +277,9 @@ impl BtfWriter {
             )));
         }
         check_finite(values, view, light, self.meta.width)?;
+        if self.arr.meta().dtype == DType::F16 {
+            check_f16_range(values, view, light, self.meta.width)?;
+        }
         self.arr.write_chunk(
             &[view as u64, light as u64, 0, 0, 0],
             &zarr::encode_f32(values, self.arr.meta().dtype),
@@ -409,11 +427,12 @@ impl BtfStore {
         self.read_slot_checked(view, slot, raw, true)
     }
 
-    /// Maps the chunks of view slot `view` read-only when they hold little-endian `f32`
-    /// (the in-memory layout), for a caller that reads the slot several times and checks
-    /// the checksums itself ([`crate::mapped`]); `None` for a dtype that must be decoded.
+    /// Maps the chunks of view slot `view` read-only when they hold little-endian `f32` or
+    /// `f16` (in-memory layouts the PCA's loads widen in place), for a caller that reads
+    /// the slot several times and checks the checksums itself ([`crate::mapped`]); `None`
+    /// for a dtype that must be decoded.
     pub fn map_slot(&self, view: usize) -> Result<Option<crate::mapped::MappedSlot>> {
-        if self.dtype() != DType::F32 || !cfg!(target_endian = "little") {
+        if !matches!(self.dtype(), DType::F32 | DType::F16) || !cfg!(target_endian = "little") {
             return Ok(None);
         }
         if view >= self.meta.n_views() {
@@ -564,5 +583,22 @@ mod tests {
         img[7] = f32::NAN;
         let err = w.write_image(3, 2, &img).unwrap_err().to_string();
         assert!(err.contains("view slot 3, light 2") && err.contains("x=2"), "{err}");
+    }
+
+    #[test]
+    fn f16_store_refuses_values_that_would_round_to_infinity() {
+        let dir = tempfile::tempdir().unwrap();
+        let w =
+            BtfWriter::create(&dir.path().join("h.btf"), tiny_meta(), DType::F16, false).unwrap();
+        // 65519 rounds to the largest f16 (65504); 65520 is the first value that rounds to ∞.
+        let mut img = vec![0.5; 18];
+        img[4] = -65519.0;
+        w.write_image(0, 0, &img).unwrap();
+        img[10] = 65520.0;
+        let err = w.write_image(1, 3, &img).unwrap_err().to_string();
+        assert!(
+            err.contains("view slot 1, light 3") && err.contains("y=1, x=0, channel 1"),
+            "{err}"
+        );
     }
 }

@@ -242,7 +242,12 @@ pub fn read_group(dir: &Path) -> Result<Value> {
 pub struct ZarrArray {
     dir: PathBuf,
     meta: ArrayMeta,
+    /// Write large chunks past the page cache ([`crate::direct_io`]).
+    direct: bool,
 }
+
+/// Chunks of at least this many payload bytes go past the page cache when asked for.
+const DIRECT_MIN_BYTES: usize = 256 << 10;
 
 impl ZarrArray {
     /// Creates (or re-opens with identical metadata, for resuming) an array folder.
@@ -260,7 +265,14 @@ impl ZarrArray {
         } else {
             write_atomic(&path, serde_json::to_string_pretty(&meta.to_json()).unwrap().as_bytes())?;
         }
-        Ok(ZarrArray { dir: dir.to_owned(), meta })
+        Ok(ZarrArray { dir: dir.to_owned(), meta, direct: false })
+    }
+
+    /// Writes chunks of 256 KiB and more by direct I/O from now on, where the file system
+    /// allows it ([`crate::direct_io`]): for large outputs nothing reads back soon.
+    pub fn with_direct_writes(mut self) -> Self {
+        self.direct = true;
+        self
     }
 
     /// Opens an existing array, validating its metadata against `limits`.
@@ -268,7 +280,7 @@ impl ZarrArray {
         let path = dir.join("zarr.json");
         let meta = ArrayMeta::from_json(&path, &read_json(&path)?)?;
         meta.check_limits(dir, limits)?;
-        Ok(ZarrArray { dir: dir.to_owned(), meta })
+        Ok(ZarrArray { dir: dir.to_owned(), meta, direct: false })
     }
 
     /// The array's metadata.
@@ -295,10 +307,18 @@ impl ZarrArray {
                 raw.len()
             )));
         }
+        let crc = crc32c::crc32c(raw).to_le_bytes();
+        let path = self.chunk_path(idx);
+        if self.direct
+            && raw.len() >= DIRECT_MIN_BYTES
+            && crate::direct_io::write_atomic_direct(&path, raw, &crc)?
+        {
+            return Ok(());
+        }
         let mut buf = Vec::with_capacity(raw.len() + 4);
         buf.extend_from_slice(raw);
-        buf.extend_from_slice(&crc32c::crc32c(raw).to_le_bytes());
-        write_atomic(&self.chunk_path(idx), &buf)
+        buf.extend_from_slice(&crc);
+        write_atomic(&path, &buf)
     }
 
     /// Reads one chunk's raw element bytes after checking its size and checksum.

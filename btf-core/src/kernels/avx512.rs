@@ -1,51 +1,106 @@
 //! AVX-512 versions of the kernels in `kernels.rs` (the same sums, eight `f64` lanes per
 //! register, fused multiply-adds); callers check the CPU feature at run time.
 
-use super::{LANES, LIFT_COMPONENTS, TB};
+use super::{LANES, LIFT_COMPONENTS, TB, Texel};
 use std::arch::x86_64::*;
 
-/// `load_shifted_body` compiled with AVX-512 (safe code; callers check the feature),
-/// the statistics of whole 16-value groups by hand (the vectoriser leaves the
-/// NaN-aware maximum and the energy sum scalar).
+/// 16 stored values from `p` as `f32` (`vcvtph2ps` for `f16`, exact). Safety: AVX-512F
+/// present, `p` valid for 16 reads.
 #[target_feature(enable = "avx512f")]
-pub(super) fn load_shifted(
-    x: &[&[f32]],
+#[inline]
+unsafe fn load16<T: Texel>(p: *const T) -> __m512 {
+    // SAFETY: forwarded from the caller; 16 values of T are 32 or 64 bytes.
+    unsafe {
+        if T::HALF {
+            _mm512_cvtph_ps(_mm256_loadu_si256(p.cast()))
+        } else {
+            _mm512_loadu_ps(p.cast())
+        }
+    }
+}
+
+/// The 16 `f32` lanes of `v` as two registers of `f64` (exact).
+#[target_feature(enable = "avx512f")]
+#[inline]
+fn widen16(v: __m512) -> (__m512d, __m512d) {
+    let lo = _mm512_cvtps_pd(_mm512_castps512_ps256(v));
+    let hi = _mm512_cvtps_pd(_mm256_castpd_ps(_mm512_extractf64x4_pd(_mm512_castps_pd(v), 1)));
+    (lo, hi)
+}
+
+/// `load_shifted_with` under AVX-512 (callers check the feature): whole 16-value groups
+/// by hand (the vectoriser leaves the NaN-aware maximum, the energy sum and the `f16`
+/// conversion scalar), the last `w mod 16` columns one by one.
+#[target_feature(enable = "avx512f")]
+pub(super) fn load_shifted<T: Texel>(
+    x: &[&[T]],
     c0: usize,
     w: usize,
-    shift: Option<&[f32]>,
+    shift: Option<&[T]>,
     blk: &mut super::Block,
     colsum: Option<&mut [f64]>,
 ) -> Option<super::LoadStats> {
-    let (Some(cs), Some(sh)) = (colsum, shift) else {
-        return super::load_shifted_body(x, c0, w, shift, blk, None);
-    };
+    let sh = shift.map(|s| &s[c0..c0 + w]);
+    match (colsum, sh) {
+        (Some(cs), Some(sh)) => Some(load_with_stats(x, c0, w, sh, blk, &mut cs[..w])),
+        (_, sh) => {
+            load_plain(x, c0, w, sh, blk);
+            None
+        }
+    }
+}
+
+/// `y_i = x_i − s` (or `x_i`) for the columns `c0..c0 + w` of every row.
+#[target_feature(enable = "avx512f")]
+fn load_plain<T: Texel>(x: &[&[T]], c0: usize, w: usize, sh: Option<&[T]>, blk: &mut super::Block) {
+    let body = w - w % 16;
+    for i in 0..blk.rows {
+        let src = &x[i][c0..c0 + w];
+        let dst = &mut blk.row_mut(i)[..w];
+        for t in (0..body).step_by(16) {
+            // SAFETY: t + 16 ≤ body ≤ w, the length of src, sh and dst.
+            unsafe {
+                let (mut lo, mut hi) = widen16(load16(src.as_ptr().add(t)));
+                if let Some(sh) = sh {
+                    let (hlo, hhi) = widen16(load16(sh.as_ptr().add(t)));
+                    (lo, hi) = (_mm512_sub_pd(lo, hlo), _mm512_sub_pd(hi, hhi));
+                }
+                _mm512_storeu_pd(dst.as_mut_ptr().add(t), lo);
+                _mm512_storeu_pd(dst.as_mut_ptr().add(t + 8), hi);
+            }
+        }
+        for t in body..w {
+            dst[t] = src[t].widen() as f64 - sh.map_or(0.0, |s| s[t].widen() as f64);
+        }
+    }
+}
+
+/// `y_i = x_i − s` with the column sums of `y`, and the energy, peak and finiteness of `x`.
+#[target_feature(enable = "avx512f")]
+fn load_with_stats<T: Texel>(
+    x: &[&[T]],
+    c0: usize,
+    w: usize,
+    sh: &[T],
+    blk: &mut super::Block,
+    cs: &mut [f64],
+) -> super::LoadStats {
     let body = w - w % 16;
     let mut e = _mm512_setzero_pd();
     let mut p = _mm512_set1_ps(f32::MIN);
     let mut bad = _mm512_setzero_ps();
     let zero = _mm512_setzero_ps();
-    let sh = &sh[c0..c0 + w];
-    let cs = &mut cs[..w];
     for i in 0..blk.rows {
         let src = &x[i][c0..c0 + w];
         let dst = &mut blk.row_mut(i)[..w];
         for t in (0..body).step_by(16) {
             // SAFETY: t + 16 ≤ body ≤ w, the length of src, sh, dst and cs.
             unsafe {
-                let v = _mm512_loadu_ps(src.as_ptr().add(t));
-                let h = _mm512_loadu_ps(sh.as_ptr().add(t));
+                let v = load16(src.as_ptr().add(t));
                 p = _mm512_max_ps(p, v);
                 bad = _mm512_fmadd_ps(v, zero, bad); // NaN for NaN or ±∞
-                let vlo = _mm512_cvtps_pd(_mm512_castps512_ps256(v));
-                let vhi = _mm512_cvtps_pd(_mm256_castpd_ps(_mm512_extractf64x4_pd(
-                    _mm512_castps_pd(v),
-                    1,
-                )));
-                let hlo = _mm512_cvtps_pd(_mm512_castps512_ps256(h));
-                let hhi = _mm512_cvtps_pd(_mm256_castpd_ps(_mm512_extractf64x4_pd(
-                    _mm512_castps_pd(h),
-                    1,
-                )));
+                let (vlo, vhi) = widen16(v);
+                let (hlo, hhi) = widen16(load16(sh.as_ptr().add(t)));
                 e = _mm512_fmadd_pd(vlo, vlo, e);
                 e = _mm512_fmadd_pd(vhi, vhi, e);
                 let (ylo, yhi) = (_mm512_sub_pd(vlo, hlo), _mm512_sub_pd(vhi, hhi));
@@ -62,13 +117,12 @@ pub(super) fn load_shifted(
         peak: _mm512_reduce_max_ps(p),
         finite: _mm512_reduce_add_ps(bad) == 0.0,
     };
-    // The last w mod 16 columns, one by one.
     for i in 0..blk.rows {
         let src = &x[i][c0..c0 + w];
         let dst = blk.row_mut(i);
         for t in body..w {
-            let v = src[t];
-            let y = v as f64 - sh[t] as f64;
+            let v = src[t].widen();
+            let y = v as f64 - sh[t].widen() as f64;
             dst[t] = y;
             cs[t] += y;
             rest.energy += (v as f64) * (v as f64);
@@ -76,22 +130,23 @@ pub(super) fn load_shifted(
             rest.finite &= v.is_finite();
         }
     }
-    Some(rest)
+    rest
 }
 
-/// See `tile_portable`. Safety: AVX-512F present, `a` and `b` valid for `R·w` and `5·w`
-/// reads, `acc` for `R·5·8` reads and writes, `w` and `k0` multiples of 8, `k1 ≤ w`.
+/// See `tile_portable` (`R` rows of `a`, the first `S` of `b`). Safety: AVX-512F present,
+/// `a` and `b` valid for `R·w` and `S·w` reads, `acc` for `R·5·8` reads and writes, `w`
+/// and `k0` multiples of 8, `k1 ≤ w`.
 #[target_feature(enable = "avx512f")]
-pub(super) unsafe fn tile<const R: usize>(
+pub(super) unsafe fn tile<const R: usize, const S: usize>(
     a: *const f64,
     b: *const f64,
     w: usize,
     (k0, k1): (usize, usize),
     acc: *mut f64,
 ) {
-    let mut v = [[_mm512_setzero_pd(); TB]; R];
+    let mut v = [[_mm512_setzero_pd(); S]; R];
     for r in 0..R {
-        for s in 0..TB {
+        for s in 0..S {
             // SAFETY: (r·5 + s)·8 + 8 ≤ R·5·8.
             v[r][s] = unsafe { _mm512_loadu_pd(acc.add((r * TB + s) * LANES)) };
         }
@@ -99,12 +154,12 @@ pub(super) unsafe fn tile<const R: usize>(
     let mut k = k0;
     while k < k1 {
         let mut av = [_mm512_setzero_pd(); R];
-        // SAFETY: k + 8 ≤ w, rows r < R and s < 5 lie inside the caller's extents.
+        // SAFETY: k + 8 ≤ w, rows r < R and s < S lie inside the caller's extents.
         unsafe {
             for (r, x) in av.iter_mut().enumerate() {
                 *x = _mm512_loadu_pd(a.add(r * w + k));
             }
-            for s in 0..TB {
+            for s in 0..S {
                 let bs = _mm512_loadu_pd(b.add(s * w + k));
                 for r in 0..R {
                     v[r][s] = _mm512_fmadd_pd(av[r], bs, v[r][s]);
@@ -114,7 +169,42 @@ pub(super) unsafe fn tile<const R: usize>(
         k += LANES;
     }
     for r in 0..R {
-        for s in 0..TB {
+        for s in 0..S {
+            // SAFETY: as for the loads.
+            unsafe { _mm512_storeu_pd(acc.add((r * TB + s) * LANES), v[r][s]) };
+        }
+    }
+}
+
+/// The upper triangle (`s ≥ r`) of a diagonal 5 × 5 tile of `a·aᵀ`: 15 products per
+/// column instead of 25. Safety: as for [`tile`] with `R = S = 5` and `b = a`.
+#[target_feature(enable = "avx512f")]
+pub(super) unsafe fn tile_upper(a: *const f64, w: usize, (k0, k1): (usize, usize), acc: *mut f64) {
+    let mut v = [[_mm512_setzero_pd(); TB]; TB];
+    for r in 0..TB {
+        for s in r..TB {
+            // SAFETY: (r·5 + s)·8 + 8 ≤ 5·5·8.
+            v[r][s] = unsafe { _mm512_loadu_pd(acc.add((r * TB + s) * LANES)) };
+        }
+    }
+    let mut k = k0;
+    while k < k1 {
+        let mut av = [_mm512_setzero_pd(); TB];
+        // SAFETY: k + 8 ≤ w, rows r < 5 lie inside the caller's extents.
+        unsafe {
+            for (r, x) in av.iter_mut().enumerate() {
+                *x = _mm512_loadu_pd(a.add(r * w + k));
+            }
+        }
+        for r in 0..TB {
+            for s in r..TB {
+                v[r][s] = _mm512_fmadd_pd(av[r], av[s], v[r][s]);
+            }
+        }
+        k += LANES;
+    }
+    for r in 0..TB {
+        for s in r..TB {
             // SAFETY: as for the loads.
             unsafe { _mm512_storeu_pd(acc.add((r * TB + s) * LANES), v[r][s]) };
         }
@@ -180,5 +270,99 @@ unsafe fn lift_tile<const NV: usize>(
             // SAFETY: k < 8, t + 8·(q + 1) ≤ w.
             unsafe { _mm512_storeu_pd(out.add(k * ldo + t + q * LANES), *v) };
         }
+    }
+}
+
+/// See `single::tile_portable` (`S` rows of `y`). Safety: AVX-512F present; `e` valid for
+/// `4·w` reads, `y` for `S·w`, `out` for reads and writes at `r·ldo + s` (`r < 4`,
+/// `s < S`); `w` a multiple of 16.
+#[target_feature(enable = "avx512f")]
+pub(super) unsafe fn tile32<const S: usize>(
+    e: *const f32,
+    y: *const f32,
+    w: usize,
+    out: *mut f64,
+    ldo: usize,
+) {
+    let mut v = [[_mm512_setzero_ps(); S]; 4];
+    let mut k = 0;
+    while k < w {
+        // SAFETY: k + 16 ≤ w; rows r < 4 and s < S lie inside the caller's extents.
+        unsafe {
+            let mut ev = [_mm512_setzero_ps(); 4];
+            for (r, x) in ev.iter_mut().enumerate() {
+                *x = _mm512_loadu_ps(e.add(r * w + k));
+            }
+            for s in 0..S {
+                let ys = _mm512_loadu_ps(y.add(s * w + k));
+                for r in 0..4 {
+                    v[r][s] = _mm512_fmadd_ps(ev[r], ys, v[r][s]);
+                }
+            }
+        }
+        k += 16;
+    }
+    for r in 0..4 {
+        for s in 0..S {
+            let (lo, hi) = widen16(v[r][s]);
+            // SAFETY: r < 4, s < S (the caller's extents).
+            unsafe { *out.add(r * ldo + s) += _mm512_reduce_add_pd(_mm512_add_pd(lo, hi)) };
+        }
+    }
+}
+
+/// `to[t] = from[t] as f32` (round to nearest), eight at a time.
+#[target_feature(enable = "avx512f")]
+pub(super) fn round_to_f32(from: &[f64], to: &mut [f32]) {
+    let n = from.len().min(to.len());
+    let body = n - n % 8;
+    for t in (0..body).step_by(8) {
+        // SAFETY: t + 8 ≤ body ≤ the length of both slices.
+        unsafe {
+            let v = _mm512_cvtpd_ps(_mm512_loadu_pd(from.as_ptr().add(t)));
+            _mm256_storeu_ps(to.as_mut_ptr().add(t), v);
+        }
+    }
+    for t in body..n {
+        to[t] = from[t] as f32;
+    }
+}
+
+/// See `f16_round::round_to_f16_with`, eight values at a time (all slices of `b.len()`).
+#[target_feature(enable = "avx512f,f16c")]
+pub(super) fn round_to_f16(
+    b: &[f64],
+    halves: &mut [half::f16],
+    stored: &mut [f64],
+    err: &mut [f32],
+    (hi, lo): (&mut f64, &mut f64),
+) {
+    let w = b.len();
+    assert!(halves.len() == w && stored.len() == w && err.len() == w);
+    let body = w - w % 8;
+    let (mut vhi, mut vlo) = (_mm512_set1_pd(*hi), _mm512_set1_pd(*lo));
+    for t in (0..body).step_by(8) {
+        // SAFETY: t + 8 ≤ body ≤ w, the length of every slice.
+        unsafe {
+            let v = _mm512_loadu_pd(b.as_ptr().add(t));
+            // The second operand wins ties of ±0 and NaN, as in `if v > hi { v } else { hi }`.
+            vhi = _mm512_max_pd(v, vhi);
+            vlo = _mm512_min_pd(v, vlo);
+            let h = _mm256_cvtps_ph::<_MM_FROUND_TO_NEAREST_INT>(_mm512_cvtpd_ps(v));
+            _mm_storeu_si128(halves.as_mut_ptr().add(t).cast(), h);
+            let s = _mm512_cvtps_pd(_mm256_cvtph_ps(h));
+            _mm512_storeu_pd(stored.as_mut_ptr().add(t), s);
+            _mm256_storeu_ps(err.as_mut_ptr().add(t), _mm512_cvtpd_ps(_mm512_sub_pd(s, v)));
+        }
+    }
+    *hi = _mm512_reduce_max_pd(vhi);
+    *lo = _mm512_reduce_min_pd(vlo);
+    for t in body..w {
+        let v = b[t];
+        halves[t] = half::f16::from_f32(v as f32);
+        stored[t] = halves[t].to_f64();
+        err[t] = (stored[t] - v) as f32;
+        *hi = if v > *hi { v } else { *hi };
+        *lo = if v < *lo { v } else { *lo };
     }
 }

@@ -27,9 +27,10 @@ fn block(x: &[f32], rows: usize, m: usize, c0: usize, w: usize) -> Block {
 #[test]
 fn dot_acc_matches_naive_sums_for_both_kernels() {
     // Odd shapes (rows not multiples of the tiles, widths not of 8), accumulated over two
-    // blocks of columns; a 12-row A takes the 4-row tiles.
+    // blocks of columns; a 12- or 16-row A takes the 4-row tiles; B rows past a multiple
+    // of 5 (1 to 4 of them) take the narrow tiles, symmetric diagonals the triangular one.
     let m = 600; // the second block spans more than one 256-column sub-block
-    for (na, nb) in [(11, 7), (12, 9)] {
+    for (na, nb) in [(11, 7), (12, 9), (16, 21), (21, 8), (14, 5)] {
         let xa = values(na * m, 1);
         let xb = values(nb * m, 2);
         let naive = |i: usize, j: usize, xb: &[f32]| -> f64 {
@@ -43,13 +44,14 @@ fn dot_acc_matches_naive_sums_for_both_kernels() {
                 acc.add_with(&a, &b, simd);
                 gram.add_with(&a, &a, simd);
             }
-            let mut out = vec![1.0; na * 10];
-            acc.finish(&mut out, 10);
+            let ld = nb + 3;
+            let mut out = vec![1.0; na * ld];
+            acc.finish(&mut out, ld);
             for i in 0..na {
-                for j in 0..10 {
+                for j in 0..ld {
                     let want = if j < nb { 1.0 + naive(i, j, &xb) } else { 1.0 };
                     assert!(
-                        (out[i * 10 + j] - want).abs() < 1e-12 * (1.0 + want.abs()),
+                        (out[i * ld + j] - want).abs() < 1e-12 * (1.0 + want.abs()),
                         "simd {simd} ({i}, {j})"
                     );
                 }
@@ -132,6 +134,35 @@ fn load_shifted_is_exact_and_reports_statistics_for_both_kernels() {
             y[pos] = bad;
             let st = load(&y, &mut b, &mut colsum);
             assert!(!st.finite, "simd {simd}: {bad} at {pos}");
+        }
+    }
+}
+
+#[test]
+fn f16_rows_load_as_their_f32_values_for_both_kernels() {
+    // 37 columns from 4: two groups of 16 and a tail of 5; values of every f16 magnitude
+    // (subnormals, ±65504) load exactly as the same values stored as f32.
+    let (n, m, c0, w) = (3, 50, 4, 37);
+    let mut halves: Vec<half::f16> =
+        values(n * m, 7).iter().map(|&v| half::f16::from_f32(v)).collect();
+    for (pos, v) in [(9, 65504.0), (60, -65504.0), (70, 3e-7), (110, -6e-5)] {
+        halves[pos] = half::f16::from_f32(v);
+    }
+    let wide: Vec<f32> = halves.iter().map(|h| h.to_f32()).collect();
+    let rows_h: Vec<&[half::f16]> = halves.chunks_exact(m).collect();
+    for simd in [false, true] {
+        for stats in [false, true] {
+            let (mut bh, mut bf) = (Block::default(), Block::default());
+            let (mut ch, mut cf) = (vec![0.0; w], vec![0.0; w]);
+            let sh = Some(rows_h[1]);
+            let sf = Some(&wide[m..2 * m]);
+            let (ch, cf) =
+                if stats { (Some(&mut ch[..]), Some(&mut cf[..])) } else { (None, None) };
+            let a = load_shifted_with(&rows_h, c0, w, sh, &mut bh, ch, simd);
+            let b = load_shifted_with(&rows_of(&wide, n, m), c0, w, sf, &mut bf, cf, simd);
+            assert_eq!(bh.data, bf.data, "simd {simd}, stats {stats}");
+            let key = |s: Option<LoadStats>| s.map(|s| (s.energy, s.peak, s.finite));
+            assert_eq!(key(a), key(b), "simd {simd}, stats {stats}");
         }
     }
 }

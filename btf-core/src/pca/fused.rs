@@ -3,6 +3,8 @@
 //! `B = (C·lift)ᵀY`, rounded to `f16` and turned into the stored basis `S` and its error
 //! `E = S − B` while the block of `Y` is still in the cache, so the correction `E·Yᵀ` and
 //! the Gram matrix `SSᵀ` that the least-squares weights need come from the same read.
+//! `E·Yᵀ` is a correction of relative size `2⁻¹¹`, so it is summed in `f32`
+//! ([`crate::kernels::CrossAcc32`]) from `E` and `Y` rounded to `f32`.
 //!
 //! That needs the rounding to be fixed before the whole of `B` is known. It is: the
 //! eigentextures have unit norm, so every entry is at most 1 in magnitude and rounds to
@@ -15,10 +17,27 @@
 //! which stays below `2^{−11}` of the row's largest magnitude for rows of fewer than
 //! `2^{28}` values (that largest magnitude is at least `1/√m`).
 
-use super::{BLOCK, centred_coef, finish_correction, max_min};
-use crate::kernels::{Block, DotAcc, LIFT_COMPONENTS, lift_rows, load_shifted, prefetch_rows};
+use super::{BLOCK, centred_coef, finish_symmetric};
+use crate::kernels::{
+    Block, Block32, CrossAcc32, DotAcc, LIFT_COMPONENTS, Texel, lift_rows, load_shifted,
+    prefetch_rows, round_to_f16,
+};
 use half::f16;
 use half::slice::HalfFloatSliceExt;
+
+/// The fused pass's working blocks, kept by the caller from slot to slot.
+#[derive(Debug, Default)]
+pub(super) struct Blocks {
+    /// `Y` in `f64` (also the first pass's block).
+    pub y: Block,
+    /// `S` in `f64`.
+    s: Block,
+    /// `Y` and `E` rounded to `f32`.
+    y32: Block32,
+    e32: Block32,
+    /// The block of `B` (`cp × BLOCK`).
+    lifted: Vec<f64>,
+}
 
 /// What the fused pass yields.
 pub(super) struct Fused {
@@ -34,50 +53,61 @@ pub(super) struct Fused {
 
 /// The fused lift and stored-basis pass over the rows `x` (`m` values each), with the
 /// lifting matrix `lift` (`n × c`, column `k` = `v_k/√λ_k`; its columns' signs are fixed
-/// here as the eigentextures' are).
-pub(super) fn lift_store_f16(
-    x: &[&[f32]],
+/// here as the eigentextures' are). `raw` is reused for the stored bytes (its contents
+/// are overwritten; a buffer whose pages are already mapped costs no page faults).
+pub(super) fn lift_store_f16<T: Texel>(
+    x: &[&[T]],
     m: usize,
     lift: &mut [f64],
     c: usize,
     effective: usize,
+    mut raw: Vec<u8>,
+    blocks: &mut Blocks,
 ) -> Fused {
     let n = x.len();
     let cp = c.div_ceil(LIFT_COMPONENTS) * LIFT_COMPONENTS;
     let coef = centred_coef(lift, n, c, cp);
-    let mut halves = vec![f16::ZERO; c * m];
-    let (mut yb, mut sb, mut eb) = (Block::default(), Block::default(), Block::default());
-    let mut lifted = vec![0f64; cp * BLOCK];
+    // The halves are formed in `raw` itself where it is aligned for them on a
+    // little-endian host (every entry is written below), else in a buffer of their own.
+    raw.resize(c * m * 2, 0);
+    let in_place = cfg!(target_endian = "little")
+        && bytemuck::try_cast_slice_mut::<u8, f16>(&mut raw[..]).is_ok();
+    let mut own = if in_place { Vec::new() } else { vec![f16::ZERO; c * m] };
+    let halves: &mut [f16] =
+        if in_place { bytemuck::cast_slice_mut(&mut raw[..]) } else { &mut own };
+    let Blocks { y: yb, s: sb, y32, e32, lifted } = blocks;
+    // Every value of the block of B is written by the lift before it is read.
+    lifted.resize(cp * BLOCK, 0.0);
     let mut narrow = vec![0f32; BLOCK];
-    let (mut cross_acc, mut bgram_acc) = (DotAcc::new(c, n, false), DotAcc::new(c, c, true));
+    let (mut cross_acc, mut bgram_acc) = (CrossAcc32::new(c, n), DotAcc::new(c, c, true));
     let (mut hi, mut lo) = (vec![0f64; c], vec![0f64; c]);
     for c0 in (0..m).step_by(BLOCK) {
         let w = BLOCK.min(m - c0);
-        load_shifted(x, c0, w, Some(x[0]), &mut yb, None);
+        load_shifted(x, c0, w, Some(x[0]), yb, None);
         let ws = yb.stride;
         prefetch_rows(x, c0 + w, BLOCK);
-        lift_rows(&yb, &coef, cp, &mut lifted, ws, 0);
+        lift_rows(yb, &coef, cp, lifted, ws, 0);
         sb.shape(c, w);
-        eb.shape(c, w);
+        e32.shape(c, w);
         for k in 0..c {
-            let b = &lifted[k * ws..k * ws + w];
-            if k < effective {
-                max_min(b, &mut hi[k], &mut lo[k]);
-            }
-            // f64 → f32 → f16 at unit scale, back to f64 exactly: the stored value.
-            narrow[..w].iter_mut().zip(b).for_each(|(o, &v)| *o = v as f32);
-            let h = &mut halves[k * m + c0..k * m + c0 + w];
-            h.convert_from_f32_slice(&narrow[..w]);
-            let stored = &mut sb.row_mut(k)[..w];
-            h.convert_to_f64_slice(stored);
-            for ((e, &s), &b) in eb.row_mut(k)[..w].iter_mut().zip(&*stored).zip(b) {
-                *e = s - b;
-            }
+            // f64 → f32 → f16 at unit scale, back to f64 exactly: the stored value, its
+            // error and the row's extremes (used for k < effective only).
+            round_to_f16(
+                &lifted[k * ws..k * ws + w],
+                &mut halves[k * m + c0..k * m + c0 + w],
+                sb.row_mut(k),
+                e32.row_mut(k),
+                (&mut hi[k], &mut lo[k]),
+                &mut narrow,
+            );
         }
-        cross_acc.add(&eb, &yb);
-        bgram_acc.add(&sb, &sb);
+        y32.round_from(yb, w);
+        cross_acc.add(e32, y32);
+        bgram_acc.add(sb, sb);
     }
-    let (mut cross, mut bgram) = finish_correction(&cross_acc, &bgram_acc, c, n);
+    let mut cross = vec![0f64; c * n];
+    cross_acc.finish(&mut cross, n);
+    let mut bgram = finish_symmetric(&bgram_acc, c);
     let mut sign = vec![1f64; c];
     let mut scale_offset = vec![[1f32, 0.0]; c];
     for k in 0..effective {
@@ -108,11 +138,10 @@ pub(super) fn lift_store_f16(
             bgram[k * c + j] *= sign[k] * sign[j];
         }
     }
-    let raw = if cfg!(target_endian = "little") {
-        bytemuck::cast_slice(&halves).to_vec()
-    } else {
-        halves.iter().flat_map(|h| h.to_le_bytes()).collect()
-    };
+    if !in_place {
+        raw.clear();
+        raw.extend(own.iter().flat_map(|h| h.to_le_bytes()));
+    }
     Fused { raw, scale_offset, cross, bgram }
 }
 

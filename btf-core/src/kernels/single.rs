@@ -1,0 +1,211 @@
+//! Single-precision products for a correction term of the per-slot PCA (Sattler et al.
+//! 2003, eq. 1): `E·Yᵀ`, the projections of the images on the rounding error `E = S − B`
+//! of the stored (`f16`) eigentextures. `E` is at most `2⁻¹¹` of an entry of `B`, so its
+//! products need a relative precision of about `2⁻¹¹` less than the rest: in `f32`, with
+//! 16 lanes per register, they cost half the instructions of `f64`. Within one block of
+//! columns (at most 1024) every output sums in `f32` lanes; across blocks, in `f64`.
+//! The images enter as `Y` rounded to `f32` (a relative change of `2⁻²⁴`).
+
+use super::{Block, has_avx512};
+
+/// `f32` lanes of one AVX-512 register.
+pub const LANES32: usize = 16;
+/// Rows of `E` and of `Y` per tile.
+const TE: usize = 4;
+const TY: usize = 5;
+
+/// Rows of `f32` values over one block of columns; like [`Block`], the columns past the
+/// width and [`Block32::PAD_ROWS`] rows past the last are zero.
+#[derive(Debug, Default, Clone)]
+pub struct Block32 {
+    /// The values, row-major.
+    pub data: Vec<f32>,
+    /// Rows in use.
+    pub rows: usize,
+    /// Columns per row (a multiple of [`LANES32`]).
+    pub stride: usize,
+}
+
+impl Block32 {
+    /// Zero rows kept after the last one.
+    pub const PAD_ROWS: usize = TY;
+
+    /// Reshapes to `rows × width` (zeroed when the shape changes or the width is ragged).
+    pub fn shape(&mut self, rows: usize, width: usize) {
+        let stride = width.div_ceil(LANES32) * LANES32;
+        if rows != self.rows || stride != self.stride || !width.is_multiple_of(LANES32) {
+            self.rows = rows;
+            self.stride = stride;
+            self.data.clear();
+            self.data.resize((rows + Self::PAD_ROWS) * stride, 0.0);
+        }
+    }
+
+    /// Row `i` (all `stride` columns).
+    pub fn row_mut(&mut self, i: usize) -> &mut [f32] {
+        &mut self.data[i * self.stride..(i + 1) * self.stride]
+    }
+
+    /// The first `width` columns of every row of `src`, rounded to `f32`.
+    pub fn round_from(&mut self, src: &Block, width: usize) {
+        self.shape(src.rows, width);
+        let simd = has_avx512();
+        for i in 0..src.rows {
+            let from = &src.data[i * src.stride..i * src.stride + width];
+            let to = &mut self.data[i * self.stride..i * self.stride + width];
+            if simd {
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: AVX-512F detected at run time; the function is safe code.
+                unsafe {
+                    super::avx512::round_to_f32(from, to)
+                };
+            } else {
+                to.iter_mut().zip(from).for_each(|(t, &f)| *t = f as f32);
+            }
+        }
+    }
+}
+
+/// Accumulates `E·Yᵀ` (`e_rows × y_rows`) block by block: `f32` sums within a block,
+/// `f64` across blocks.
+#[derive(Debug, Clone)]
+pub struct CrossAcc32 {
+    e_rows: usize,
+    y_rows: usize,
+    sums: Vec<f64>,
+}
+
+impl CrossAcc32 {
+    /// For `e_rows × y_rows` outputs.
+    pub fn new(e_rows: usize, y_rows: usize) -> Self {
+        let padded = e_rows.div_ceil(TE) * TE;
+        CrossAcc32 { e_rows, y_rows, sums: vec![0.0; padded * y_rows] }
+    }
+
+    /// Adds the products of one block of columns (`e` with at least `e_rows` rounded up
+    /// to 4 rows, zero past `e_rows`).
+    pub fn add(&mut self, e: &Block32, y: &Block32) {
+        self.add_with(e, y, has_avx512());
+    }
+
+    /// [`CrossAcc32::add`] with the kernel chosen by the caller.
+    pub(crate) fn add_with(&mut self, e: &Block32, y: &Block32, simd: bool) {
+        assert_eq!((e.rows, y.rows), (self.e_rows, self.y_rows), "blocks of other shapes");
+        assert_eq!(e.stride, y.stride, "blocks of different widths");
+        let (w, n) = (e.stride, self.y_rows);
+        assert!(e.data.len() >= e.rows.div_ceil(TE) * TE * w, "block e lacks padding rows");
+        assert!(y.data.len() >= n * w);
+        let simd = simd && has_avx512();
+        for i0 in (0..self.e_rows).step_by(TE) {
+            let re = &e.data[i0 * w..(i0 + TE) * w];
+            let out = &mut self.sums[i0 * n..(i0 + TE) * n];
+            let mut j0 = 0;
+            while j0 < n {
+                let s = TY.min(n - j0);
+                let ry = &y.data[j0 * w..(j0 + s) * w];
+                if simd {
+                    tile_simd(s, re, ry, w, &mut out[j0..], n);
+                } else {
+                    tile_portable(s, re, ry, w, &mut out[j0..], n);
+                }
+                j0 += s;
+            }
+        }
+    }
+
+    /// `out[i·ldo + j] = Σ e_i·y_j` over every block added.
+    pub fn finish(&self, out: &mut [f64], ldo: usize) {
+        for i in 0..self.e_rows {
+            out[i * ldo..i * ldo + self.y_rows]
+                .copy_from_slice(&self.sums[i * self.y_rows..(i + 1) * self.y_rows]);
+        }
+    }
+}
+
+/// `out[r·ldo + s] += Σ_t e_r[t]·y_s[t]` (`f32` sums in 16 lanes, added in `f64`) for
+/// the 4 rows of `e` and `s_count` of `y`.
+fn tile_portable(s_count: usize, e: &[f32], y: &[f32], w: usize, out: &mut [f64], ldo: usize) {
+    for r in 0..TE {
+        for s in 0..s_count {
+            let mut lanes = [0f32; LANES32];
+            let (er, ys) = (&e[r * w..(r + 1) * w], &y[s * w..(s + 1) * w]);
+            for (a, b) in er.chunks_exact(LANES32).zip(ys.chunks_exact(LANES32)) {
+                for l in 0..LANES32 {
+                    lanes[l] += a[l] * b[l];
+                }
+            }
+            out[r * ldo + s] += lanes.iter().map(|&v| v as f64).sum::<f64>();
+        }
+    }
+}
+
+fn tile_simd(s_count: usize, e: &[f32], y: &[f32], w: usize, out: &mut [f64], ldo: usize) {
+    assert!(e.len() >= TE * w && y.len() >= s_count * w && w.is_multiple_of(LANES32));
+    assert!((1..=TY).contains(&s_count) && out.len() > (TE - 1) * ldo + s_count - 1);
+    #[cfg(target_arch = "x86_64")]
+    {
+        let (e, y, o) = (e.as_ptr(), y.as_ptr(), out.as_mut_ptr());
+        // SAFETY: AVX-512F checked by the caller's caller; e holds 4 rows and y s_count
+        // rows of w values (a multiple of 16), out the 4 × s_count outputs (asserted).
+        unsafe {
+            match s_count {
+                1 => super::avx512::tile32::<1>(e, y, w, o, ldo),
+                2 => super::avx512::tile32::<2>(e, y, w, o, ldo),
+                3 => super::avx512::tile32::<3>(e, y, w, o, ldo),
+                4 => super::avx512::tile32::<4>(e, y, w, o, ldo),
+                _ => super::avx512::tile32::<TY>(e, y, w, o, ldo),
+            }
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    tile_portable(s_count, e, y, w, out, ldo)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cross_products_match_f64_sums_within_f32_rounding_for_both_kernels() {
+        // 6 E rows (padded to 8), 12 Y rows (5 + 5 + 2), two blocks of 48 and 40 columns.
+        let (ne, ny, m) = (6, 12, 88);
+        let val = |i: usize, t: usize, k: f64| ((i * 131 + t * 17) % 97) as f64 / 97.0 - k;
+        let mut want = vec![0f64; ne * ny];
+        for simd in [false, true] {
+            let mut acc = CrossAcc32::new(ne, ny);
+            for (c0, w) in [(0, 48), (48, 40)] {
+                let (mut e, mut y) = (Block32::default(), Block32::default());
+                e.shape(ne, w);
+                y.shape(ny, w);
+                for t in 0..w {
+                    for i in 0..ne {
+                        e.row_mut(i)[t] = (val(i, c0 + t, 0.5) * 1e-3) as f32;
+                    }
+                    for j in 0..ny {
+                        y.row_mut(j)[t] = val(j + 50, c0 + t, 0.3) as f32;
+                    }
+                }
+                if !simd {
+                    for i in 0..ne {
+                        for j in 0..ny {
+                            want[i * ny + j] += (0..w)
+                                .map(|t| {
+                                    e.data[i * e.stride + t] as f64
+                                        * y.data[j * y.stride + t] as f64
+                                })
+                                .sum::<f64>();
+                        }
+                    }
+                }
+                acc.add_with(&e, &y, simd);
+            }
+            let mut out = vec![0f64; ne * ny];
+            acc.finish(&mut out, ny);
+            let scale = 1e-3 * m as f64;
+            for (k, (o, w)) in out.iter().zip(&want).enumerate() {
+                // f32 sums of at most 88/16 terms per lane: a few ulps of the magnitude.
+                assert!((o - w).abs() <= 1e-6 * scale, "simd {simd} output {k}: {o} vs {w}");
+            }
+        }
+    }
+}
