@@ -68,7 +68,12 @@ mod linux {
             .open(&tmp);
         let mut file = match opened {
             Ok(f) => f,
-            Err(e) if refused(&e) => return Ok(false),
+            Err(e) if refused(&e) => {
+                // Some kernels create the file before they refuse `O_DIRECT` (tmpfs before
+                // 6.6): leave nothing behind.
+                let _ = fs::remove_file(&tmp);
+                return Ok(false);
+            }
             Err(e) => return Err(Error::io(&tmp, e)),
         };
         let written = STAGING.with(|buf| {
