@@ -195,10 +195,21 @@ fn grow(b: &mut ([f32; 3], [f32; 3]), c: &[[f32; 3]; 3]) {
     }
 }
 
+/// The smallest box holding both (an empty box, `MAX..MIN`, leaves the other as it is).
+fn union(a: &([f32; 3], [f32; 3]), b: &([f32; 3], [f32; 3])) -> ([f32; 3], [f32; 3]) {
+    ([0, 1, 2].map(|k| a.0[k].min(b.0[k])), [0, 1, 2].map(|k| a.1[k].max(b.1[k])))
+}
+
 /// Half the surface area of a box (0 for an empty one).
 fn half_area(b: &([f32; 3], [f32; 3])) -> f32 {
     let e = [0, 1, 2].map(|a| (b.1[a] - b.0[a]).max(0.0));
     e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
+}
+
+/// The bin of centroid `c` along `axis` of the centroid bounds `clo..chi` (extent > 0).
+fn bin(c: &[f32; 3], axis: usize, clo: [f32; 3], chi: [f32; 3]) -> usize {
+    let scale = SAH_BINS as f32 / (chi[axis] - clo[axis]);
+    (((c[axis] - clo[axis]) * scale) as usize).min(SAH_BINS - 1)
 }
 
 /// Partitions `order` by the binned surface-area heuristic (the split minimising
@@ -218,12 +229,10 @@ fn sah_split(
         if extent <= 0.0 {
             continue;
         }
-        let scale = SAH_BINS as f32 / extent;
-        let bin_of = |c: &[f32; 3]| (((c[axis] - clo[axis]) * scale) as usize).min(SAH_BINS - 1);
         let mut boxes = [empty; SAH_BINS];
         let mut counts = [0usize; SAH_BINS];
         for &t in order.iter() {
-            let b = bin_of(&cents[t as usize]);
+            let b = bin(&cents[t as usize], axis, clo, chi);
             counts[b] += 1;
             grow(&mut boxes[b], &corners[t as usize]);
         }
@@ -232,23 +241,13 @@ fn sah_split(
         let (mut acc, mut n) = (empty, 0usize);
         for b in (1..SAH_BINS).rev() {
             n += counts[b];
-            if counts[b] > 0 {
-                acc = (
-                    [0, 1, 2].map(|a| acc.0[a].min(boxes[b].0[a])),
-                    [0, 1, 2].map(|a| acc.1[a].max(boxes[b].1[a])),
-                );
-            }
+            acc = union(&acc, &boxes[b]);
             right[b] = half_area(&acc) * n as f32;
         }
         let (mut acc, mut n) = (empty, 0usize);
         for b in 0..SAH_BINS - 1 {
             n += counts[b];
-            if counts[b] > 0 {
-                acc = (
-                    [0, 1, 2].map(|a| acc.0[a].min(boxes[b].0[a])),
-                    [0, 1, 2].map(|a| acc.1[a].max(boxes[b].1[a])),
-                );
-            }
+            acc = union(&acc, &boxes[b]);
             if n == 0 || n == order.len() {
                 continue;
             }
@@ -259,12 +258,8 @@ fn sah_split(
         }
     }
     let (_, axis, split) = best?;
-    let scale = SAH_BINS as f32 / (chi[axis] - clo[axis]);
-    let left_of = |t: &u32| {
-        let c = cents[*t as usize];
-        (((c[axis] - clo[axis]) * scale) as usize).min(SAH_BINS - 1) < split
-    };
-    // Stable order inside each part keeps the build deterministic.
+    let left_of = |t: &u32| bin(&cents[*t as usize], axis, clo, chi) < split;
+    // An in-place partition (deterministic, so the same mesh always gives the same tree).
     let mut i = 0;
     for j in 0..order.len() {
         if left_of(&order[j]) {
