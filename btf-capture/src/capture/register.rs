@@ -95,29 +95,10 @@ pub fn register(
             .map(|&m| markers::detect_point(img, h, m, radius, opt.search_margin_mm))
             .collect()
     };
-    // Found markers, ranked first by whether four of them fix a homography (no three on a
-    // line of the plate), then by their number.
-    let usable = |f: &[Detection]| {
-        let pts: Vec<[f64; 2]> =
-            f.iter().zip(marks).filter(|(d, _)| d.is_ok()).map(|(_, m)| *m).collect();
-        (homography::general_position(&pts), pts.len())
-    };
-    let mut found = detect_all(&layout.nominal_homography(view));
-    // A plate higher or lower than nominal by Δz moves every marker by Δz · tan θ_v on the
-    // plate (6.8 mm for 1.8 mm at 75°, past the search margin; at 60° a 1–2 mm error
-    // already pushes the foreshortened blobs onto their search borders): unless every
-    // marker was found, search again around the positions for Δz = ±2, ±4 mm and keep the
-    // best.
-    for dz in [-2.0, 2.0, -4.0, 4.0] {
-        if usable(&found).1 == marks.len() {
-            break;
-        }
-        let shifted = layout.homography(view, &Matrix3::identity(), &Vector3::new(0.0, 0.0, dz));
-        let again = detect_all(&shifted);
-        if usable(&again) > usable(&found) {
-            found = again;
-        }
-    }
+    let nominal = detect_all(&layout.nominal_homography(view));
+    let mut found = best_detections(marks, nominal, |dz| {
+        detect_all(&layout.homography(view, &Matrix3::identity(), &Vector3::new(0.0, 0.0, dz)))
+    });
     let raw = |found: &[Detection]| -> Vec<(usize, PointMatch)> {
         found
             .iter()
@@ -202,6 +183,38 @@ pub fn register(
     })
 }
 
+/// Ranks a set of detections: first whether four found markers fix a homography (no three
+/// on a line of the plate), then how many were found.
+fn rank(marks: &[[f64; 2]], found: &[Detection]) -> (bool, usize) {
+    let pts: Vec<[f64; 2]> =
+        found.iter().zip(marks).filter(|(d, _)| d.is_ok()).map(|(_, m)| *m).collect();
+    (homography::general_position(&pts), pts.len())
+}
+
+/// The detections to register from: `nominal` (around the nominal pose) unless every marker
+/// was found there, else the best ([`rank`]) of it and `search(Δz)` for Δz = ±2, ±4 mm. A
+/// plate higher or lower than nominal by Δz moves every marker by Δz · tan θ_v on the plate
+/// (6.8 mm for 1.8 mm at 75°, past the search margin; at 60° an error of 1–2 mm already
+/// pushes the foreshortened blobs onto their search borders). The search stops once a set
+/// holds every marker.
+fn best_detections(
+    marks: &[[f64; 2]],
+    nominal: Vec<Detection>,
+    mut search: impl FnMut(f64) -> Vec<Detection>,
+) -> Vec<Detection> {
+    let mut found = nominal;
+    for dz in [-2.0, 2.0, -4.0, 4.0] {
+        if rank(marks, &found).1 == marks.len() {
+            break;
+        }
+        let again = search(dz);
+        if rank(marks, &again) > rank(marks, &found) {
+            found = again;
+        }
+    }
+    found
+}
+
 fn drop_line_outliers(h: &Matrix3<f64>, lines: Vec<LineMatch>) -> Vec<LineMatch> {
     let mut abs: Vec<f64> = lines.iter().map(|l| homography::line_error(h, l).abs()).collect();
     abs.sort_by(f64::total_cmp);
@@ -222,5 +235,57 @@ pub fn nominal(layout: &CaptureLayout, view: usize, why: String) -> Registration
         line_rms_px: 0.0,
         fallback_nominal: true,
         missed: vec![why],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The plate's nine point markers (as in the default capture layout).
+    const MARKS: [[f64; 2]; 9] = [
+        [-60.0, -60.0],
+        [0.0, -60.0],
+        [60.0, -60.0],
+        [60.0, 0.0],
+        [60.0, 60.0],
+        [0.0, 60.0],
+        [-60.0, 60.0],
+        [-60.0, 0.0],
+        [30.0, 60.0],
+    ];
+
+    /// Detections of the markers `which` (the others missed).
+    fn found(which: &[usize]) -> Vec<Detection> {
+        (0..MARKS.len())
+            .map(|k| if which.contains(&k) { Ok(MARKS[k]) } else { Err(Miss::BadShape) })
+            .collect()
+    }
+
+    #[test]
+    fn a_collinear_four_does_not_stop_the_plate_height_search() {
+        // The noise-free 60° view: the nominal pose finds the bottom row and one more (three
+        // on a line), Δz = −2 mm three markers, Δz = +2 mm all nine.
+        let mut asked = vec![];
+        let best = best_detections(&MARKS, found(&[0, 1, 2, 3]), |dz| {
+            asked.push(dz);
+            if dz == 2.0 { found(&(0..9).collect::<Vec<_>>()) } else { found(&[0, 1, 2]) }
+        });
+        assert_eq!(rank(&MARKS, &best), (true, 9));
+        assert_eq!(asked, [-2.0, 2.0], "the search stops once every marker is found");
+    }
+
+    #[test]
+    fn a_set_that_fixes_the_homography_beats_a_degenerate_one_of_the_same_size() {
+        // Four each: the bottom row plus one (three on a line) against four corners.
+        let degenerate = found(&[0, 1, 2, 3]);
+        let general = found(&[0, 2, 4, 6]);
+        assert_eq!(rank(&MARKS, &degenerate), (false, 4));
+        let best = best_detections(&MARKS, degenerate, |_| general.clone());
+        assert_eq!(rank(&MARKS, &best), (true, 4));
+        // A complete nominal set is kept without any search.
+        let all = found(&(0..9).collect::<Vec<_>>());
+        let kept = best_detections(&MARKS, all, |_| unreachable!("no search needed"));
+        assert_eq!(rank(&MARKS, &kept), (true, 9));
     }
 }
