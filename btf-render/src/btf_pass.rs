@@ -159,6 +159,20 @@ pub struct BtfPass {
     pub key: BtfPassKey,
 }
 
+/// Environment variable naming a WGSL file to build the pass from instead of [`SOURCE`]:
+/// a knob for timing experiments on the shader (BENCHMARKS.md, issue #5,
+/// `benches/shader_variants.py`), never set in normal use.
+pub const SHADER_OVERRIDE_VAR: &str = "BTF_PASS_WGSL";
+
+/// The pass's WGSL: [`SOURCE`], or the file named by [`SHADER_OVERRIDE_VAR`].
+fn shader_source() -> Result<std::borrow::Cow<'static, str>> {
+    let Some(path) = std::env::var_os(SHADER_OVERRIDE_VAR) else {
+        return Ok(SOURCE.into());
+    };
+    let path = std::path::PathBuf::from(path);
+    std::fs::read_to_string(&path).map(Into::into).map_err(|source| crate::Error::Io { path, source })
+}
+
 fn entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
     let visibility = wgpu::ShaderStages::VERTEX_FRAGMENT;
     wgpu::BindGroupLayoutEntry { binding, visibility, ty, count: None }
@@ -181,6 +195,7 @@ impl BtfPass {
     /// Builds the pipeline variant for `key`.
     pub fn new(gpu: &Gpu, key: BtfPassKey) -> Result<BtfPass> {
         use wgpu::{BindingType as B, TextureSampleType as S, TextureViewDimension as D};
+        let source = shader_source()?;
         let dev = &gpu.device;
         let float = S::Float { filterable: true };
         gpu.scoped("building the BTF pass", || {
@@ -226,7 +241,7 @@ impl BtfPass {
             });
             let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("btf_pass.wgsl"),
-                source: wgpu::ShaderSource::Wgsl(SOURCE.into()),
+                source: wgpu::ShaderSource::Wgsl(source),
             });
             let constants = [
                 ("VIEW_FOUR", key.view_four as u32 as f64),

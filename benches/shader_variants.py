@@ -1,0 +1,100 @@
+#!/usr/bin/env python3
+"""Writes the timing-only variants of the BTF pass's WGSL behind BENCHMARKS.md #5 ("Where the
+remaining overhead sits"): each removes one part of the per-pixel work so that the cost sweep
+can time what is left. The images they render are not valid; only their frame times count.
+
+Usage: python3 benches/shader_variants.py OUT_DIR
+Then, per variant (idle machine; `benches/quiet.sh` pauses everything else):
+  BTF_PASS_WGSL=OUT_DIR/NAME.wgsl BTF_SWEEP_SIZE=128 BTF_SWEEP_COMPONENTS=4 \
+    CARGO_PROFILE_DEV_OPT_LEVEL=3 cargo test -p btf-render --test measure cost_sweep \
+    -- --ignored --nocapture
+and read the row "| 4 | per-pixel | four |".
+"""
+import os
+import sys
+
+SRC = os.path.join(os.path.dirname(__file__), "..", "btf-render", "src")
+
+
+def replace(text, old, new):
+    """`text` with `old` replaced once; fails when the shader changed under the script."""
+    if old not in text:
+        sys.exit(f"shader_variants.py: pattern not found (the shader changed):\n{old}")
+    return text.replace(old, new, 1)
+
+
+TAU_SUM = """    var sum = w.w.x * weights[rows.x];
+    if (LIGHT_FOUR) {
+        sum = sum + w.w.y * weights[rows.y] + w.w.z * weights[rows.z] + w.w.w * weights[rows.w];
+    }
+    return sum;"""
+# Keeps the operands alive so the compiler cannot drop the index arithmetic.
+TAU_CONST = "    return w.w * vec4<f32>(rows) * 1e-9;"
+
+VIEW = """fn view_weights(a: vec2<f32>, four: bool) -> W4 {
+    return interp_weights(VIEW, a, four);"""
+VIEW_CONST = """fn view_weights(a: vec2<f32>, four: bool) -> W4 {
+    return W4(vec4<u32>(0u, 1u, 2u, 3u), vec4<f32>(0.25) + vec4<f32>(a.x * 1e-9), select(1u, 4u, four));"""
+LIGHT = """fn light_weights(a: vec2<f32>, four: bool) -> W4 {
+    if (!(a.x < 90.0)) {"""
+LIGHT_CONST = """fn light_weights(a: vec2<f32>, four: bool) -> W4 {
+    if (a.x < 1000.0) { return W4(vec4<u32>(0u, 1u, 2u, 3u), vec4<f32>(0.25) + vec4<f32>(a.x * 1e-9), select(1u, 4u, four)); }
+    if (!(a.x < 90.0)) {"""
+
+READS_ONLY = """fn slot_pixel(j: u32, uv: vec2<f32>) -> vec3<f32> {
+    let g_count = samplings.info.x;
+    var acc = textureSampleGrad(mean_tex, tex_sampler, uv, j, duv_dx, duv_dy);
+    for (var g = 0u; g < g_count; g = g + 1u) {
+        let layer = j * 3u * g_count + 3u * g;
+        acc = acc + textureSampleGrad(eigen_tex, tex_sampler, uv, layer, duv_dx, duv_dy);
+        acc = acc + textureSampleGrad(eigen_tex, tex_sampler, uv, layer + 1u, duv_dx, duv_dy);
+        acc = acc + textureSampleGrad(eigen_tex, tex_sampler, uv, layer + 2u, duv_dx, duv_dy);
+    }
+    reads = reads + 1u + 3u * g_count;
+    return acc.rgb * le[0];
+}
+
+"""
+
+TRIVIAL_FS = (
+    """fn fs_pixel(in: VertexOut) -> @location(0) vec4<f32> {
+    let rgb = pixel_lights(in);""",
+    """fn fs_pixel(in: VertexOut) -> @location(0) vec4<f32> {
+    let rgb = vec3<f32>(in.uv, 0.0);""",
+)
+
+
+def reads_only(text):
+    start = text.index("fn slot_pixel(j: u32, uv: vec2<f32>) -> vec3<f32> {")
+    end = text.index("fn count_reads() {")
+    return text[:start] + READS_ONLY + text[end:]
+
+
+def main():
+    if len(sys.argv) != 2:
+        sys.exit(__doc__)
+    out = sys.argv[1]
+    os.makedirs(out, exist_ok=True)
+    src = "".join(
+        open(os.path.join(SRC, f), encoding="utf-8").read()
+        for f in ("interp.wgsl", "btf_pass.wgsl", "btf_vertex.wgsl")
+    )
+    const = replace(replace(src, VIEW, VIEW_CONST), LIGHT, LIGHT_CONST)
+    variants = {
+        "as_is": src,
+        "no_weight_rows": replace(src, TAU_SUM, TAU_CONST),
+        "constant_weights": const,
+        "no_weight_rows_constant_weights": replace(const, TAU_SUM, TAU_CONST),
+        "reads_only": reads_only(src),
+        "reads_only_constant_view": replace(reads_only(src), VIEW, VIEW_CONST),
+        "trivial_fragment": replace(src, *TRIVIAL_FS),
+    }
+    for name, text in variants.items():
+        path = os.path.join(out, f"{name}.wgsl")
+        with open(path, "w", encoding="utf-8") as f:
+            f.write(text)
+        print(path)
+
+
+if __name__ == "__main__":
+    main()
