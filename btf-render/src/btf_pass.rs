@@ -170,7 +170,9 @@ fn shader_source() -> Result<std::borrow::Cow<'static, str>> {
         return Ok(SOURCE.into());
     };
     let path = std::path::PathBuf::from(path);
-    std::fs::read_to_string(&path).map(Into::into).map_err(|source| crate::Error::Io { path, source })
+    std::fs::read_to_string(&path)
+        .map(Into::into)
+        .map_err(|source| crate::Error::Io { path, source })
 }
 
 fn entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
