@@ -110,9 +110,17 @@ mod tests {
 
     #[test]
     fn direct_write_holds_the_bytes_or_declines_leaving_nothing() {
-        // Payloads of an aligned length, an unaligned one and one shorter than a page.
-        let dir = tempfile::tempdir().unwrap();
-        for len in [3 * ALIGN, 2 * ALIGN + 777, 100] {
+        // Payloads of an aligned length, an unaligned one and one shorter than a page, on
+        // the temporary folder's file system and on tmpfs (which refuses O_DIRECT before
+        // Linux 6.6) where there is one.
+        let shm = Path::new("/dev/shm");
+        let mut dirs = vec![tempfile::tempdir().unwrap()];
+        if shm.is_dir() {
+            dirs.extend(tempfile::tempdir_in(shm).ok());
+        }
+        for (dir, len) in
+            dirs.iter().flat_map(|d| [3 * ALIGN, 2 * ALIGN + 777, 100].map(|l| (d, l)))
+        {
             let payload: Vec<u8> = (0..len).map(|i| (i * 31 % 251) as u8).collect();
             let path = dir.path().join(format!("sub/c/{len}"));
             match write_atomic_direct(&path, &payload, &[1, 2, 3, 4]).unwrap() {
