@@ -73,7 +73,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
             Some(Baseline::ReadBound { reads_per_pixel })
         }
     };
-    let options = RenderOptions { count_reads: args.count_reads, baseline };
+    let options = RenderOptions { count_reads: args.count_reads, baseline, ..Default::default() };
     let renderer = Renderer::new(&gpu, &scene, options)
         .with_context(|| format!("preparing {}", args.scene.display()))?;
     let mut frame = renderer.render(&gpu)?;

@@ -27,6 +27,10 @@ pub fn color_format(msaa: u32) -> wgpu::TextureFormat {
 /// Depth format of the pass.
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
+/// Format of the corner-id targets of [`BtfPass::corner_ids_pipeline`]: vertex indices as
+/// `f32` (exact below 2²⁴), a format every adapter can multisample.
+pub const CORNER_ID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
+
 /// What selects a pipeline variant.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct BtfPassKey {
@@ -55,6 +59,18 @@ impl BtfPassKey {
     /// Whether the pass reads per-vertex coefficients (group 2).
     pub fn uses_vertex_coefficients(&self) -> bool {
         self.evaluation == Evaluation::PerVertex || self.environment
+    }
+
+    /// The pipeline-overridable constants of the shader for this key.
+    fn constants(&self) -> [(&'static str, f64); 6] {
+        [
+            ("VIEW_FOUR", self.view_four as u32 as f64),
+            ("LIGHT_FOUR", self.light_four as u32 as f64),
+            ("COUNT_READS", self.count_reads as u32 as f64),
+            ("SHADOWS", self.shadows as f64),
+            ("SMOOTH_BOUNDARY", self.smooth_boundary as u32 as f64),
+            ("N_LIGHTS", self.lights as f64),
+        ]
     }
 
     fn vertex_entry(&self) -> &'static str {
@@ -157,6 +173,9 @@ pub struct BtfPass {
     pub vertex_layout: Option<wgpu::BindGroupLayout>,
     /// The key it was built for.
     pub key: BtfPassKey,
+    /// The shader module and pipeline layout (for [`BtfPass::corner_ids_pipeline`]).
+    module: wgpu::ShaderModule,
+    layout: wgpu::PipelineLayout,
 }
 
 /// Environment variable naming a WGSL file to build the pass from instead of [`SOURCE`]:
@@ -245,14 +264,7 @@ impl BtfPass {
                 label: Some("btf_pass.wgsl"),
                 source: wgpu::ShaderSource::Wgsl(source),
             });
-            let constants = [
-                ("VIEW_FOUR", key.view_four as u32 as f64),
-                ("LIGHT_FOUR", key.light_four as u32 as f64),
-                ("COUNT_READS", key.count_reads as u32 as f64),
-                ("SHADOWS", key.shadows as f64),
-                ("SMOOTH_BOUNDARY", key.smooth_boundary as u32 as f64),
-                ("N_LIGHTS", key.lights as f64),
-            ];
+            let constants = key.constants();
             let options = wgpu::PipelineCompilationOptions {
                 constants: &constants,
                 zero_initialize_workgroup_memory: true,
@@ -278,7 +290,43 @@ impl BtfPass {
                 multiview_mask: None,
                 cache: None,
             });
-            BtfPass { pipeline, frame_layout, material_layout, vertex_layout, key }
+            BtfPass { pipeline, frame_layout, material_layout, vertex_layout, key, module, layout }
+        })
+    }
+
+    /// A pipeline that rasterises exactly as [`BtfPass::pipeline`] does — the same module,
+    /// vertex entry point, constants, layout, depth test and sample count — but writes, per
+    /// sample, the three vertex indices of the triangle in front (as `f32`, one
+    /// [`CORNER_ID_FORMAT`] target each): which vertices a frame of this camera reads.
+    pub fn corner_ids_pipeline(&self, gpu: &Gpu) -> Result<wgpu::RenderPipeline> {
+        let constants = self.key.constants();
+        let options = wgpu::PipelineCompilationOptions {
+            constants: &constants,
+            zero_initialize_workgroup_memory: true,
+        };
+        let target = Some(wgpu::ColorTargetState::from(CORNER_ID_FORMAT));
+        gpu.scoped("building the corner-id pass", || {
+            gpu.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("corner ids"),
+                layout: Some(&self.layout),
+                vertex: wgpu::VertexState {
+                    module: &self.module,
+                    entry_point: Some(self.key.vertex_entry()),
+                    compilation_options: options.clone(),
+                    buffers: &[Some(corner_buffer_layout())],
+                },
+                primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+                depth_stencil: Some(mesh_depth_state(true)),
+                multisample: wgpu::MultisampleState { count: self.key.msaa, ..Default::default() },
+                fragment: Some(wgpu::FragmentState {
+                    module: &self.module,
+                    entry_point: Some("fs_corner_ids"),
+                    compilation_options: options,
+                    targets: &[target.clone(), target.clone(), target],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
         })
     }
 

@@ -110,6 +110,19 @@ fn vs_main(v: CornerIn) -> VertexOut {
     return corner_out(v);
 }
 
+// The corner-id pass (camera_sides.rs): the three vertex indices of the triangle in front at
+// each sample, rasterised by the same vertex stage as the BTF pass.
+struct CornerIds {
+    @location(0) a: f32,
+    @location(1) b: f32,
+    @location(2) c: f32,
+}
+
+@fragment
+fn fs_corner_ids(in: VertexOut) -> CornerIds {
+    return CornerIds(f32(in.tri.x), f32(in.tri.y), f32(in.tri.z));
+}
+
 fn corner_out(v: CornerIn) -> VertexOut {
     var out: VertexOut;
     out.clip = frame.view_proj * vec4<f32>(v.position, 1.0);

@@ -22,6 +22,7 @@
 //! - [`env_background`]: the environment map drawn behind the scene.
 
 pub mod btf_pass;
+pub mod camera_sides;
 pub mod cost_sweep;
 pub mod env_background;
 pub mod envlight;

@@ -45,6 +45,10 @@ pub struct RenderOptions {
     pub count_reads: bool,
     /// Draw a cost baseline instead of the BTF shader (same mesh, targets and textures).
     pub baseline: Option<Baseline>,
+    /// Compute an environment light's visibility for every vertex side, not only for the
+    /// sides the scene's camera shows (for a viewer whose camera moves; a fixed camera
+    /// needs only its own, see [`crate::camera_sides`]).
+    pub all_env_sides: bool,
 }
 
 struct LoadedMaterial {
@@ -60,7 +64,7 @@ struct Draw {
 }
 
 /// Camera matrices and the quantities shaders need.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CameraSetup {
     /// World → clip.
     pub view_proj: Mat4,
@@ -104,25 +108,76 @@ struct EnvState {
     map: Option<EnvMap>,
 }
 
-/// Loads the environment map of the scene's environment light (if any) and computes the
-/// visibility maps and weights.
-fn build_environment(
-    scene: &Scene,
-    mesh: &Mesh,
-    tangents: &[[f32; 4]],
-    materials: &[&MaterialData],
-) -> Result<Option<EnvState>> {
-    let Some((light, desc)) = scene.environment() else { return Ok(None) };
-    let map = EnvMap::load(&desc.path)?;
-    let env_mesh = EnvMesh {
-        positions: &mesh.positions,
-        normals: &mesh.normals,
-        tangents,
-        triangles: &mesh.triangles,
-    };
-    let env = SceneEnvironment::new(desc.params(), &map, &env_mesh, materials)?;
-    let map = scene.output.show_environment.then_some(map);
-    Ok(Some(EnvState { light, env, map }))
+impl Renderer {
+    /// Loads the environment map of the scene's environment light (if any) and computes
+    /// the visibility maps and weights — for the vertex sides this camera shows (the
+    /// corner-id pass, [`crate::camera_sides`]) unless every side is asked for or a thin
+    /// material needs the far sides too.
+    fn build_environment(&self, gpu: &Gpu) -> Result<Option<EnvState>> {
+        let scene = &self.scene;
+        let Some((light, desc)) = scene.environment() else { return Ok(None) };
+        let map = EnvMap::load(&desc.path)?;
+        let mesh = &self.mesh;
+        let env_mesh = EnvMesh {
+            positions: &mesh.positions,
+            normals: &mesh.normals,
+            tangents: &self.tangents,
+            triangles: &mesh.triangles,
+        };
+        let params = desc.params();
+        let wanted = if self.options.all_env_sides
+            || self.thin.is_some()
+            || mesh.positions.len() >= crate::camera_sides::MAX_VERTICES
+        {
+            None
+        } else {
+            Some(self.camera_frames(gpu, params.two_sided)?)
+        };
+        let mats: Vec<&MaterialData> = self.materials.iter().map(|m| &m.data).collect();
+        let env = SceneEnvironment::with_frames(params, &map, &env_mesh, &mats, wanted)?;
+        let map = scene.output.show_environment.then_some(map);
+        Ok(Some(EnvState { light, env, map }))
+    }
+
+    /// The hemicube frames this camera reads: the shown side of every vertex that some
+    /// sample of the frame sees.
+    fn camera_frames(&self, gpu: &Gpu, two_sided: bool) -> Result<Vec<bool>> {
+        gpu.queue.write_buffer(&self.frame_uniform, 0, bytemuck::bytes_of(&self.frame_raw()));
+        let draws = self
+            .draws
+            .iter()
+            .map(|d| (&self.materials[d.material].bind_group, d.first, d.count))
+            .collect();
+        let seen = crate::camera_sides::seen_vertices(
+            gpu,
+            &crate::camera_sides::CornerDraws {
+                btf: &self.btf,
+                corners: &self.corners,
+                frame_group: &self.frame_group,
+                draws,
+                vertices: self.mesh.positions.len(),
+                width: self.scene.output.width,
+                height: self.scene.output.height,
+            },
+        )?;
+        let mats: Vec<&MaterialData> = self.materials.iter().map(|m| &m.data).collect();
+        let view = self.view_input(&mats);
+        Ok(crate::envlight::shown_frames(&view, two_sided, &seen))
+    }
+
+    /// The camera and mesh inputs of the environment's per-vertex fill.
+    fn view_input<'a>(&'a self, mats: &'a [&'a MaterialData]) -> ViewInput<'a> {
+        ViewInput {
+            eye: self.camera.eye,
+            ortho_to_camera: self.camera.ortho_to_camera,
+            view_mode: self.scene.effects.view_blend,
+            positions: &self.mesh.positions,
+            normals: &self.mesh.normals,
+            tangents: &self.tangents,
+            material_of: &self.vertex_material,
+            materials: mats,
+        }
+    }
 }
 
 /// Merges the scene's meshes and assigns each triangle a scene material index.
@@ -304,8 +359,6 @@ impl Renderer {
                 Some(crate::read_bound::build(gpu, &btf, reads_per_pixel, m.groups, views)?)
             }
         };
-        let mats: Vec<&MaterialData> = materials.iter().map(|m| &m.data).collect();
-        let environment = build_environment(scene, &mesh, &tangents, &mats)?;
         let shadowing =
             if scene.wants_shadow_pass() { Some(Shadowing::new(gpu, scene, &mesh)?) } else { None };
         let extra_depth = shadowing.as_ref().map_or(0.0, |s| s.extra_camera_depth());
@@ -335,7 +388,7 @@ impl Renderer {
         };
         let frame_group =
             frame_bind_group(gpu, &btf, &frame_uniform, &boundary, &inputs, &counters);
-        Ok(Renderer {
+        let mut renderer = Renderer {
             scene: scene.clone(),
             mesh,
             tangents,
@@ -349,13 +402,15 @@ impl Renderer {
             frame_group,
             counters,
             shadowing,
-            environment,
+            environment: None,
             thin,
             thin_env_key: Mutex::new(None),
             camera,
             options,
             material_bytes,
-        })
+        };
+        renderer.environment = renderer.build_environment(gpu)?;
+        Ok(renderer)
     }
 
     /// The environment light's run-time state, when the scene has one.
@@ -401,10 +456,12 @@ impl Renderer {
         let Some(e) = &self.environment else { return Vec::new() };
         let t = &e.env.timings;
         let mut out = vec![PassStat {
-            name: if t.visibility_cached {
-                "env visibility maps (cache)".into()
-            } else {
-                format!("env visibility maps ({} frames, cpu)", e.env.visibility().frames)
+            name: match (t.visibility_cached, e.env.computed_frames(), e.env.frames()) {
+                (true, _, _) => "env visibility maps (cache)".into(),
+                (false, c, all) if c == all => format!("env visibility maps ({all} frames, cpu)"),
+                (false, c, all) => {
+                    format!("env visibility maps ({c} of {all} frames the camera sees, cpu)")
+                }
             },
             ms: t.visibility_ms,
         }];
@@ -767,16 +824,7 @@ impl Renderer {
         }
         if let Some(e) = &self.environment {
             let t = Instant::now();
-            let view = ViewInput {
-                eye: self.camera.eye,
-                ortho_to_camera: self.camera.ortho_to_camera,
-                view_mode: self.scene.effects.view_blend,
-                positions: &self.mesh.positions,
-                normals: &self.mesh.normals,
-                tangents: &self.tangents,
-                material_of: &self.vertex_material,
-                materials: &mats,
-            };
+            let view = self.view_input(&mats);
             let (l, entries) = if per_vertex { (e.light, lights.len()) } else { (0, 1) };
             let stride = per_vertex::stride(input.groups_stride);
             e.env.fill(&mut vc, &view, l, entries, stride);

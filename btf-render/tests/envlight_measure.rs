@@ -139,7 +139,23 @@ fn visibility_only() {
     let cube = Hemicube::new(32).unwrap();
     // `BTF_ONE_SIDED=1`: the front sides only, what a `two_sided = false` scene computes.
     let two_sided = !std::env::var("BTF_ONE_SIDED").is_ok_and(|v| v == "1");
-    let frames = HemicubeFrame::of_mesh(&mesh.positions, &mesh.normals, &tangents, two_sided);
+    let mut frames = HemicubeFrame::of_mesh(&mesh.positions, &mesh.normals, &tangents, two_sided);
+    if std::env::var("BTF_CAMERA_SIDES").is_ok_and(|v| v == "1") {
+        // The side of every vertex the measurement camera sees.
+        let n = mesh.positions.len();
+        let eye = [0.0f32, -3.0, 0.5];
+        let all = HemicubeFrame::of_mesh(&mesh.positions, &mesh.normals, &tangents, true);
+        frames = (0..n)
+            .map(|v| {
+                let to = [0, 1, 2].map(|a| eye[a] - mesh.positions[v][a]);
+                let nn = all[v].axes[2];
+                let d: f32 = (0..3).map(|i| to[i] * nn[i]).sum();
+                if d >= 0.0 { all[v] } else { all[n + v] }
+            })
+            .collect();
+        let backs = (0..n).filter(|&v| frames[v] != all[v]).count();
+        eprintln!("{name}: camera sides: {backs} of {n} vertices show their back side");
+    }
     if std::env::var("BTF_FAST_ONLY").is_ok_and(|v| v == "1") {
         // For `perf stat`: the rasteriser alone.
         let t = Instant::now();

@@ -186,7 +186,10 @@ impl Viewer {
     /// Rebuilds the renderer from [`Viewer::scene_now`]; on failure keeps the old one and
     /// the settings it was built with.
     fn rebuild(&mut self, gpu: &Gpu) {
-        match Renderer::new(gpu, &self.scene_now(), RenderOptions::default()) {
+        // The camera orbits: every vertex side's visibility, once, instead of recomputing
+        // the sides a new camera shows after each move.
+        let options = RenderOptions { all_env_sides: true, ..Default::default() };
+        match Renderer::new(gpu, &self.scene_now(), options) {
             Ok(r) => {
                 self.renderer = Some(r);
                 self.applied = (self.effects.clone(), self.fabric);
@@ -357,7 +360,9 @@ impl Viewer {
             self.swap_env(gpu, i);
         }
         let Some(r) = self.renderer.as_mut() else { return };
-        r.set_camera(&self.orbit.camera);
+        if let Err(e) = r.set_camera(&self.orbit.camera) {
+            self.errors.push(e.to_string());
+        }
         if let Err(e) = r.set_lights(gpu, &self.lights) {
             self.errors.push(e.to_string());
         }

@@ -104,6 +104,32 @@ impl CameraCache {
     }
 }
 
+/// The side of vertex `v` the camera of `view` shows — whether it is the back side — its
+/// frame `(T, B, ±N)` and the unit direction towards the camera.
+fn shown_side(view: &ViewInput, v: usize) -> (bool, (Vec3, Vec3, Vec3), Vec3) {
+    let p = Vec3::from(view.positions[v]);
+    let (t, b, mut n) = tangent::frame(view.normals[v], view.tangents[v]);
+    let to_cam = view.ortho_to_camera.unwrap_or(view.eye - p).try_normalize(0.0).unwrap_or(n);
+    let back = to_cam.dot(&n) < 0.0;
+    if back {
+        n = -n;
+    }
+    (back, (t, b, n), to_cam)
+}
+
+/// The hemicube frames the camera of `view` reads (what [`SceneEnvironment::fill`] picks):
+/// for every vertex with `seen[v]`, the side it shows — front frame `v`, or back frame `V +
+/// v` when `two_sided`. The input of [`SceneEnvironment::with_frames`] for a fixed camera.
+pub fn shown_frames(view: &ViewInput, two_sided: bool, seen: &[bool]) -> Vec<bool> {
+    let n = view.positions.len();
+    let mut out = vec![false; if two_sided { 2 * n } else { n }];
+    for v in (0..n).filter(|&v| seen[v]) {
+        let back = shown_side(view, v).0;
+        out[if back && two_sided { n + v } else { v }] = true;
+    }
+    out
+}
+
 impl SceneEnvironment {
     /// The view slots every vertex with a material reads for `view`.
     fn picks(&self, view: &ViewInput) -> Vec<Pick> {
@@ -113,15 +139,8 @@ impl SceneEnvironment {
             if material >= self.coefficients.len() || material >= view.materials.len() {
                 continue;
             }
-            let p = Vec3::from(view.positions[v]);
-            let (t, b, mut n) = tangent::frame(view.normals[v], view.tangents[v]);
-            let to_cam =
-                view.ortho_to_camera.unwrap_or(view.eye - p).try_normalize(0.0).unwrap_or(n);
-            let back = to_cam.dot(&n) < 0.0;
-            if back {
-                n = -n;
-            }
-            let Some(dir) = Direction::from_vector(tangent::to_tangent(to_cam, (t, b, n))) else {
+            let (back, tbn, to_cam) = shown_side(view, v);
+            let Some(dir) = Direction::from_vector(tangent::to_tangent(to_cam, tbn)) else {
                 continue;
             };
             let frame = if back && self.params.two_sided { self.vertices + v } else { v };

@@ -34,6 +34,9 @@ impl WeightSet {
                 |s, (v, (fo, bo))| {
                     let bits =
                         [input.visibility.frame_bits(v), input.visibility.frame_bits(half + v)];
+                    if bits.iter().all(|b| occluded(b)) {
+                        return; // no visible pixel: g stays 0, as every sum would be
+                    }
                     s.run(input, &sources, &input.frames[v], bits, rot);
                     s.write(0, fo);
                     s.write(1, bo);
@@ -44,6 +47,9 @@ impl WeightSet {
                 || Scratch::new(n_l, sources.len()),
                 |s, (f, out)| {
                     let bits = input.visibility.frame_bits(f);
+                    if occluded(bits) {
+                        return;
+                    }
                     s.run(input, &sources, &input.frames[f], [bits, &[]], rot);
                     s.write(0, out);
                 },
@@ -51,6 +57,12 @@ impl WeightSet {
         }
         WeightSet { frames: n, lights: n_l, g }
     }
+}
+
+/// Whether a frame sees nothing: fully occluded, or not computed (a vertex side the
+/// camera never shows). Its sums are all zero, so the gather skips it.
+fn occluded(bits: &[u64]) -> bool {
+    bits.iter().all(|&w| w == 0)
 }
 
 /// `Some(V)` when the frames are `V` front sides followed by their mirrored back sides

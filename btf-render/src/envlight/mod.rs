@@ -26,6 +26,7 @@ pub mod scene_env;
 pub mod visibility;
 pub mod weights;
 
+pub use camera_basis::shown_frames;
 pub use eigenweights::EigenWeightSets;
 pub use envmap::{EnvCube, EnvMap};
 pub use hemicube::{Hemicube, LightTable};

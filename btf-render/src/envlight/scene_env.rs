@@ -80,6 +80,8 @@ pub struct SceneEnvironment {
     pub(super) vertices: usize,
     lights: usize,
     vis: VisibilityMaps,
+    /// The frames whose visibility was computed (`None`: all); the others are zero.
+    wanted: Option<Vec<bool>>,
     pub(super) coefficients: Vec<CoefficientMatrix>,
     env: EnvCube,
     /// `G` of the current rotation (formed on first use after an eigenweightset rotation).
@@ -103,6 +105,20 @@ impl SceneEnvironment {
         mesh: &EnvMesh,
         materials: &[&MaterialData],
     ) -> Result<Self> {
+        Self::with_frames(params, env, mesh, materials, None)
+    }
+
+    /// [`SceneEnvironment::new`] with visibility for the frames with `wanted[f]` only
+    /// (front sides `0..V`, back sides `V..2V`; `None`: all): the vertex sides a fixed
+    /// camera shows. Every other frame is left all-occluded, so its weights are zero;
+    /// [`SceneEnvironment::complete`] computes them when another camera needs them.
+    pub fn with_frames(
+        params: EnvironmentParams,
+        env: &EnvMap,
+        mesh: &EnvMesh,
+        materials: &[&MaterialData],
+        wanted: Option<Vec<bool>>,
+    ) -> Result<Self> {
         let first = materials
             .first()
             .ok_or_else(|| Error::Invalid("environment light without materials".into()))?;
@@ -115,14 +131,24 @@ impl SceneEnvironment {
         let table = LightTable::new(&cube, &first.light_sampling, InterpMode::Four)?;
         let frames =
             HemicubeFrame::of_mesh(mesh.positions, mesh.normals, mesh.tangents, params.two_sided);
+        if let Some(w) = &wanted
+            && w.len() != frames.len()
+        {
+            return Err(Error::Invalid(format!(
+                "{} wanted flags for {} hemicube frames",
+                w.len(),
+                frames.len()
+            )));
+        }
+        let wanted = wanted.filter(|w| !w.iter().all(|&x| x));
         let t = Instant::now();
-        let (vis, cached) = match &params.cache_dir {
-            Some(dir) => {
-                VisibilityMaps::cached(dir, &cube, &frames, mesh.positions, mesh.triangles)?
+        let (pos, tris) = (mesh.positions, mesh.triangles);
+        let (vis, cached) = match (&params.cache_dir, &wanted) {
+            (Some(dir), w) => {
+                VisibilityMaps::cached_some(dir, &cube, &frames, w.as_deref(), pos, tris)?
             }
-            None => {
-                (VisibilityMaps::compute(&cube, &frames, mesh.positions, mesh.triangles), false)
-            }
+            (None, Some(w)) => (VisibilityMaps::compute_some(&cube, &frames, w, pos, tris), false),
+            (None, None) => (VisibilityMaps::compute(&cube, &frames, pos, tris), false),
         };
         let timings =
             EnvTimings { visibility_ms: ms(t), visibility_cached: cached, ..Default::default() };
@@ -136,6 +162,7 @@ impl SceneEnvironment {
             vertices: mesh.positions.len(),
             lights: first.light_sampling.len(),
             vis,
+            wanted,
             coefficients,
             env: env_cube,
             weights: OnceLock::new(),
@@ -173,6 +200,51 @@ impl SceneEnvironment {
     pub fn set_environment(&mut self, env: &EnvMap) -> Result<()> {
         let t = Instant::now();
         self.env = EnvCube::new(env, Self::cube_res(self.params.visibility_res));
+        self.prepare_weights(t)
+    }
+
+    /// Frames whose visibility was computed, of [`SceneEnvironment::frames`].
+    pub fn computed_frames(&self) -> usize {
+        self.wanted.as_ref().map_or(self.frames.len(), |w| w.iter().filter(|&&x| x).count())
+    }
+
+    /// Hemicube frames of the mesh (`V`, or `2V` when two-sided).
+    pub fn frames(&self) -> usize {
+        self.frames.len()
+    }
+
+    /// Whether frame `f`'s visibility was computed.
+    pub fn has_frame(&self, f: usize) -> bool {
+        self.wanted.as_ref().is_none_or(|w| w[f])
+    }
+
+    /// Computes the visibility of every frame left out by [`SceneEnvironment::with_frames`]
+    /// and gathers the weights again (with the eigenweightsets when on): what a camera move
+    /// needs when the new camera may show other vertex sides. Returns whether there was
+    /// anything to compute. `mesh` must be the mesh the environment was built for.
+    pub fn complete(&mut self, mesh: &EnvMesh) -> Result<bool> {
+        let Some(wanted) = self.wanted.take() else { return Ok(false) };
+        let t = Instant::now();
+        let rest: Vec<bool> = wanted.iter().map(|w| !w).collect();
+        let more = VisibilityMaps::compute_some(
+            &self.cube,
+            &self.frames,
+            &rest,
+            mesh.positions,
+            mesh.triangles,
+        );
+        self.vis.merge_from(&more, &rest);
+        if let Some(dir) = &self.params.cache_dir {
+            let key = super::visibility::cache_key(self.vis.res, &self.frames, mesh.triangles);
+            self.vis.write(&super::visibility::cache_path(dir, key))?;
+        }
+        self.timings.visibility_ms += ms(t);
+        self.prepare_weights(Instant::now())?;
+        Ok(true)
+    }
+
+    /// Gathers `g` of the current environment (and builds its eigenweightsets when on).
+    fn prepare_weights(&mut self, t: Instant) -> Result<()> {
         self.revision += 1;
         self.set_weights(self.gather(self.params.rotation_deg));
         self.timings.weights_ms = ms(t);

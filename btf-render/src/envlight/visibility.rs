@@ -99,6 +99,42 @@ impl VisibilityMaps {
         VisibilityMaps { res: cube.res, frames: frames.len(), words, bits }
     }
 
+    /// [`VisibilityMaps::compute`] for the frames with `wanted[f]` only; the others are
+    /// left all-occluded (zero bits) — what a scene gets for vertex sides its camera never
+    /// shows (see `Renderer`'s camera sides). Same bits as the full computation on every
+    /// wanted frame.
+    pub fn compute_some(
+        cube: &Hemicube,
+        frames: &[HemicubeFrame],
+        wanted: &[bool],
+        positions: &[[f32; 3]],
+        triangles: &[[u32; 3]],
+    ) -> VisibilityMaps {
+        assert_eq!(wanted.len(), frames.len(), "one wanted flag per frame");
+        let bvh = Bvh::new(positions, triangles);
+        let eps = offset(positions);
+        let words = cube.len().div_ceil(64);
+        let mut bits = vec![0u64; frames.len() * words];
+        bits.par_chunks_mut(words)
+            .zip(frames.par_iter().zip(wanted.par_iter()))
+            .filter(|(_, (_, w))| **w)
+            .for_each_init(
+                || FrameRaster::new(cube),
+                |raster, (out, (f, _))| raster.run(&bvh, f, eps, out),
+            );
+        VisibilityMaps { res: cube.res, frames: frames.len(), words, bits }
+    }
+
+    /// Copies the bits of every frame with `take[f]` from `other` (same frames and
+    /// resolution).
+    pub fn merge_from(&mut self, other: &VisibilityMaps, take: &[bool]) {
+        assert!(other.frames == self.frames && other.words == self.words);
+        let w = self.words;
+        for (f, _) in take.iter().enumerate().filter(|(_, t)| **t) {
+            self.bits[f * w..(f + 1) * w].copy_from_slice(&other.bits[f * w..(f + 1) * w]);
+        }
+    }
+
     /// The reference: one any-hit ray per pixel of every frame against the mesh.
     pub fn compute_ray_cast(
         cube: &Hemicube,
@@ -153,6 +189,36 @@ impl VisibilityMaps {
             return Ok((m, true));
         }
         let maps = VisibilityMaps::compute(cube, frames, positions, triangles);
+        maps.write(&path)?;
+        Ok((maps, false))
+    }
+
+    /// [`VisibilityMaps::cached`] for the `wanted` frames only (`None`: all). Maps of all
+    /// frames already in the cache serve any subset; a subset is cached under its own key.
+    pub fn cached_some(
+        dir: &Path,
+        cube: &Hemicube,
+        frames: &[HemicubeFrame],
+        wanted: Option<&[bool]>,
+        positions: &[[f32; 3]],
+        triangles: &[[u32; 3]],
+    ) -> Result<(VisibilityMaps, bool)> {
+        let Some(wanted) = wanted.filter(|w| !w.iter().all(|&x| x)) else {
+            return VisibilityMaps::cached(dir, cube, frames, positions, triangles);
+        };
+        let full = cache_key(cube.res, frames, triangles);
+        if let Some(m) = read_cache(&cache_path(dir, full), cube, frames.len()) {
+            return Ok((m, true));
+        }
+        let mut h = fnv1a(full, b"subset");
+        for &w in wanted {
+            h = fnv1a(h, &[w as u8]);
+        }
+        let path = cache_path(dir, h);
+        if let Some(m) = read_cache(&path, cube, frames.len()) {
+            return Ok((m, true));
+        }
+        let maps = VisibilityMaps::compute_some(cube, frames, wanted, positions, triangles);
         maps.write(&path)?;
         Ok((maps, false))
     }

@@ -12,11 +12,27 @@ use crate::shadow::{ShadowInputs, Shadowing};
 use crate::{Error, Gpu, Result, terminator};
 
 impl Renderer {
-    /// Replaces the camera; the next frame uses it and nothing else is recomputed.
-    pub fn set_camera(&mut self, camera: &Camera) {
+    /// Replaces the camera; the next frame uses it and nothing else is recomputed — except,
+    /// the first time the camera really moves, the visibility of the vertex sides an
+    /// environment light had left out for the old camera (all of them, then the gathers:
+    /// [`SceneEnvironment::complete`](crate::envlight::SceneEnvironment::complete)).
+    pub fn set_camera(&mut self, camera: &Camera) -> Result<()> {
         self.scene.camera = camera.clone();
         let extra_depth = self.shadowing.as_ref().map_or(0.0, |s| s.extra_camera_depth());
-        self.camera = camera_setup(&self.scene, &self.mesh, extra_depth);
+        let setup = camera_setup(&self.scene, &self.mesh, extra_depth);
+        if setup != self.camera
+            && let Some(e) = self.environment.as_mut()
+        {
+            let mesh = crate::envlight::scene_env::EnvMesh {
+                positions: &self.mesh.positions,
+                normals: &self.mesh.normals,
+                tangents: &self.tangents,
+                triangles: &self.mesh.triangles,
+            };
+            e.env.complete(&mesh)?;
+        }
+        self.camera = setup;
+        Ok(())
     }
 
     /// Replaces the lights (same count and kinds of light as before, so the passes the

@@ -1,0 +1,96 @@
+//! An environment light computes visibility and weights only for the vertex sides the
+//! camera shows (`camera_sides.rs`): the frame is the same as with every side computed,
+//! bit for bit, with and without MSAA, for a camera that sees the inside of the shirt
+//! through its neck; a camera move computes the rest and again equals the full renderer.
+
+mod common;
+
+use btf_core::eigen::Quantization;
+use btf_render::{Frame, RenderOptions, Renderer, Scene};
+use common::*;
+use datasets::mesh::{MeshKind, Resolution};
+use std::path::Path;
+
+/// Writes the low shirt, a checker store, a sky with a sun, and returns the scene text for
+/// a perspective camera at `eye` with `msaa` samples.
+fn setup(dir: &Path) {
+    let m = datasets::mesh::synth_mesh(MeshKind::Shirt, Resolution::Low).unwrap();
+    datasets::mesh::write_obj(&m, &dir.join("shirt.obj"), "shirt").unwrap();
+    write_store(dir, "m.eigen", Pattern::Checker, 4, 4, 8, Quantization::F16);
+    let (w, h) = (64usize, 32usize);
+    exr::prelude::write_rgb_file(dir.join("sky.exr"), w, h, |x, y| {
+        let theta = std::f32::consts::PI * (y as f32 + 0.5) / h as f32;
+        let phi = std::f32::consts::TAU * (x as f32 + 0.5) / w as f32;
+        let sun = if (10..12).contains(&y) && (20..22).contains(&x) { 200.0 } else { 0.0 };
+        let l = 0.6 + 0.3 * phi.cos() + 0.4 * theta.cos().max(0.0) + sun;
+        (l, 0.9 * l, 0.8 * l)
+    })
+    .unwrap();
+}
+
+fn scene(dir: &Path, eye: [f32; 3], msaa: u32) -> Scene {
+    let text = format!(
+        "[output]\nwidth = 40\nheight = 40\n[[meshes]]\npath = \"shirt.obj\"\n\
+         [[materials]]\nstore = \"m.eigen\"\n[camera]\neye = {eye:?}\ntarget = [0.0, 0.0, 0.1]\n\
+         fov_y_deg = 40.0\n[[lights]]\nkind = \"environment\"\npath = \"sky.exr\"\n\
+         visibility_res = 8\n[effects]\nmsaa = {msaa}\n"
+    );
+    Scene::load(&write(dir, &format!("scene-{msaa}.toml"), &text)).unwrap()
+}
+
+fn build(gpu: &btf_render::Gpu, scene: &Scene, all: bool) -> Renderer {
+    Renderer::new(gpu, scene, RenderOptions { all_env_sides: all, ..Default::default() }).unwrap()
+}
+
+fn identical(a: &Frame, b: &Frame) -> usize {
+    a.rgb.iter().zip(&b.rgb).filter(|(x, y)| x.to_bits() != y.to_bits()).count()
+}
+
+/// From the front and a little above: the front's outside and, through the neck, the
+/// inside of the back.
+const FRONT: [f32; 3] = [0.0, -2.2, 1.0];
+
+#[test]
+fn camera_sides_render_the_frame_of_all_sides_bit_for_bit() {
+    let Some(gpu) = gpu("camera_sides_render_the_frame_of_all_sides_bit_for_bit") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    setup(dir.path());
+    for msaa in [1, 4] {
+        let s = scene(dir.path(), FRONT, msaa);
+        let (some, all) = (build(&gpu, &s, false), build(&gpu, &s, true));
+        let (e_some, e_all) = (some.environment().unwrap(), all.environment().unwrap());
+        let (computed, frames) = (e_some.computed_frames(), e_some.frames());
+        let backs = (frames / 2..frames).filter(|&f| e_some.has_frame(f)).count();
+        eprintln!("msaa {msaa}: {computed} of {frames} frames computed, {backs} back sides");
+        assert_eq!(e_all.computed_frames(), frames);
+        // At most one side per vertex, and far fewer than all: the back of the shirt is
+        // hidden behind its front.
+        assert!(computed * 10 <= frames * 4, "{computed} of {frames}");
+        assert!(backs > 0, "the camera sees some inside through the neck");
+        let (a, b) = (some.render(&gpu).unwrap(), all.render(&gpu).unwrap());
+        let lit = a.rgb.iter().filter(|&&v| v > 0.0).count();
+        assert!(lit > a.rgb.len() / 10, "the shirt fills part of the frame ({lit} values lit)");
+        assert_eq!(identical(&a, &b), 0, "msaa {msaa}: frames differ");
+        // Computed frames carry the same bits as the full computation.
+        let (va, vb) = (e_some.visibility(), e_all.visibility());
+        for f in (0..frames).filter(|&f| e_some.has_frame(f)) {
+            assert_eq!(va.frame_bits(f), vb.frame_bits(f), "frame {f}");
+        }
+    }
+}
+
+#[test]
+fn a_camera_move_computes_the_other_sides() {
+    let Some(gpu) = gpu("a_camera_move_computes_the_other_sides") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    setup(dir.path());
+    let (s, back) = (scene(dir.path(), FRONT, 1), scene(dir.path(), [0.4, 2.4, 0.6], 1));
+    let mut moved = build(&gpu, &s, false);
+    let before = moved.environment().unwrap().computed_frames();
+    moved.set_camera(&back.camera).unwrap();
+    let env = moved.environment().unwrap();
+    assert_eq!(env.computed_frames(), env.frames(), "{before} frames before the move");
+    let fresh = build(&gpu, &back, true);
+    let (a, b) = (moved.render(&gpu).unwrap(), fresh.render(&gpu).unwrap());
+    assert_eq!(identical(&a, &b), 0, "the moved renderer differs from a fresh one");
+}
