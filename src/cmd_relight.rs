@@ -77,6 +77,10 @@ struct Summary {
     visibility_s: f64,
     visibility_cached: bool,
     visibility_frames: usize,
+    /// Frames whose visibility was computed: the vertex sides the camera shows.
+    visibility_frames_computed: usize,
+    /// Finding those sides (the corner-id pass), seconds; included in `visibility_s`.
+    camera_sides_s: f64,
     weights_s_per_env: f64,
     frame_ms: f64,
     frames_rendered: usize,
@@ -312,9 +316,11 @@ fn summarise(
     let frame_ms = envs.iter().map(|e| e.frame_ms_mean * e.frames_rendered as f64).sum::<f64>()
         / frames.max(1) as f64;
     Ok(Summary {
-        visibility_s: env.timings.visibility_ms / 1e3,
+        visibility_s: (env.timings.visibility_ms + env.timings.sides_ms) / 1e3,
         visibility_cached: env.timings.visibility_cached,
         visibility_frames: env.visibility().frames,
+        visibility_frames_computed: env.computed_frames(),
+        camera_sides_s: env.timings.sides_ms / 1e3,
         weights_s_per_env: prepared.iter().map(|e| e.gather_s + e.eigen_s).sum::<f64>()
             / prepared.len().max(1) as f64,
         frame_ms,

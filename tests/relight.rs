@@ -285,6 +285,10 @@ fn relight_renders_every_environment_and_rotation_and_resumes() {
         assert!(s[k].as_f64().is_some_and(|v| v.is_finite() && v >= 0.0), "{k}: {s}");
     }
     assert_eq!(s["envs"].as_array().unwrap().len(), 2);
+    // The camera shows one side of each vertex it sees: at most half the frames computed.
+    let (computed, frames) =
+        (s["visibility_frames_computed"].as_u64(), s["visibility_frames"].as_u64());
+    assert!(computed.zip(frames).is_some_and(|(c, f)| c > 0 && 2 * c <= f), "{s}");
     let px = read_exr(&d.path("out/white_r002.exr")).2;
     assert!(px.iter().all(|v| (v / ALBEDO - 1.0).abs() < 0.01), "furnace through relight");
     // Interrupted job: one frame missing. Only it is rendered; visibility comes from the cache.

@@ -125,6 +125,7 @@ impl Renderer {
             triangles: &mesh.triangles,
         };
         let params = desc.params();
+        let t = Instant::now();
         let wanted = if self.options.all_env_sides
             || self.thin.is_some()
             || mesh.positions.len() >= crate::camera_sides::MAX_VERTICES
@@ -134,7 +135,9 @@ impl Renderer {
             Some(self.camera_frames(gpu, params.two_sided)?)
         };
         let mats: Vec<&MaterialData> = self.materials.iter().map(|m| &m.data).collect();
-        let env = SceneEnvironment::with_frames(params, &map, &env_mesh, &mats, wanted)?;
+        let sides_ms = if wanted.is_some() { t.elapsed().as_secs_f64() * 1e3 } else { 0.0 };
+        let mut env = SceneEnvironment::with_frames(params, &map, &env_mesh, &mats, wanted)?;
+        env.timings.sides_ms = sides_ms;
         let map = scene.output.show_environment.then_some(map);
         Ok(Some(EnvState { light, env, map }))
     }
@@ -455,7 +458,11 @@ impl Renderer {
     pub fn setup_stats(&self) -> Vec<PassStat> {
         let Some(e) = &self.environment else { return Vec::new() };
         let t = &e.env.timings;
-        let mut out = vec![PassStat {
+        let mut out = Vec::new();
+        if t.sides_ms > 0.0 {
+            out.push(PassStat { name: "env camera sides (corner-id pass)".into(), ms: t.sides_ms });
+        }
+        out.push(PassStat {
             name: match (t.visibility_cached, e.env.computed_frames(), e.env.frames()) {
                 (true, _, _) => "env visibility maps (cache)".into(),
                 (false, c, all) if c == all => format!("env visibility maps ({all} frames, cpu)"),
@@ -464,7 +471,7 @@ impl Renderer {
                 }
             },
             ms: t.visibility_ms,
-        }];
+        });
         out.push(PassStat { name: "env gather g (cpu)".into(), ms: t.weights_ms });
         if let Some(ews) = e.env.eigenweightsets() {
             out.push(PassStat {

@@ -139,23 +139,7 @@ fn visibility_only() {
     let cube = Hemicube::new(32).unwrap();
     // `BTF_ONE_SIDED=1`: the front sides only, what a `two_sided = false` scene computes.
     let two_sided = !std::env::var("BTF_ONE_SIDED").is_ok_and(|v| v == "1");
-    let mut frames = HemicubeFrame::of_mesh(&mesh.positions, &mesh.normals, &tangents, two_sided);
-    if std::env::var("BTF_CAMERA_SIDES").is_ok_and(|v| v == "1") {
-        // The side of every vertex the measurement camera sees.
-        let n = mesh.positions.len();
-        let eye = [0.0f32, -3.0, 0.5];
-        let all = HemicubeFrame::of_mesh(&mesh.positions, &mesh.normals, &tangents, true);
-        frames = (0..n)
-            .map(|v| {
-                let to = [0, 1, 2].map(|a| eye[a] - mesh.positions[v][a]);
-                let nn = all[v].axes[2];
-                let d: f32 = (0..3).map(|i| to[i] * nn[i]).sum();
-                if d >= 0.0 { all[v] } else { all[n + v] }
-            })
-            .collect();
-        let backs = (0..n).filter(|&v| frames[v] != all[v]).count();
-        eprintln!("{name}: camera sides: {backs} of {n} vertices show their back side");
-    }
+    let frames = HemicubeFrame::of_mesh(&mesh.positions, &mesh.normals, &tangents, two_sided);
     if std::env::var("BTF_FAST_ONLY").is_ok_and(|v| v == "1") {
         // For `perf stat`: the rasteriser alone.
         let t = Instant::now();
@@ -164,6 +148,78 @@ fn visibility_only() {
         return;
     }
     visibility(name, &cube, &frames, &mesh, &dir.path().join("cache"));
+}
+
+/// Through the renderer: visibility and the gather for the vertex sides the camera shows
+/// (corner-id pass included) against every side, same scene, same run, alternating:
+/// `… envlight_measure camera_sides -- --ignored --nocapture` (`BTF_MEASURE_HIGH=1`: the
+/// 9160-vertex shirt). The frames of both are compared bit for bit.
+#[test]
+#[ignore = "a measurement: camera sides against all sides, through the renderer"]
+fn camera_sides() {
+    let Some(gpu) = common::gpu("camera_sides") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let high = std::env::var("BTF_MEASURE_HIGH").is_ok_and(|v| v == "1");
+    let (name, res) =
+        if high { ("shirt high", Resolution::High) } else { ("shirt low", Resolution::Low) };
+    let mesh = shirt(dir.path(), res);
+    let n = mesh.positions.len();
+    common::write_store(
+        dir.path(),
+        "m.eigen",
+        common::Pattern::Checker,
+        4,
+        4,
+        16,
+        Quantization::F16,
+    );
+    let env = datasets::env::synth_env(
+        datasets::env::EnvKind::Sky,
+        &datasets::env::EnvParams::default(),
+        512,
+    )
+    .unwrap();
+    datasets::env::write_exr(&env, &dir.path().join("sky.exr")).unwrap();
+    let (lo, hi) = mesh.bounds();
+    let target: [f32; 3] = [0, 1, 2].map(|a| 0.5 * (lo[a] + hi[a]));
+    for (size, msaa) in [(256, 1), (512, 4)] {
+        let text = format!(
+            "[output]\nwidth = {size}\nheight = {size}\n[[meshes]]\npath = \"shirt.obj\"\n\
+             [[materials]]\nstore = \"m.eigen\"\n[camera]\neye = [0.0, -3.0, 0.5]\n\
+             target = {target:?}\nfov_y_deg = 35.0\n[[lights]]\nkind = \"environment\"\n\
+             path = \"sky.exr\"\nvisibility_res = 32\n[effects]\nmsaa = {msaa}\n"
+        );
+        let path = dir.path().join("scene.toml");
+        std::fs::write(&path, text).unwrap();
+        let scene = btf_render::Scene::load(&path).unwrap();
+        let mut frames: Vec<Option<btf_render::Frame>> = vec![None, None];
+        for round in 0..2 {
+            for all in [true, false] {
+                let opts = btf_render::RenderOptions { all_env_sides: all, ..Default::default() };
+                let r = btf_render::Renderer::new(&gpu, &scene, opts).unwrap();
+                let e = r.environment().unwrap();
+                let t = e.timings;
+                let prep = t.sides_ms + t.visibility_ms;
+                eprintln!(
+                    "{name} {size}² msaa {msaa} round {round}, {}: {} of {} frames; camera sides {:.0} ms + visibility {:.0} ms = {:.3} ms per vertex; gather {:.1} ms",
+                    if all { "all sides" } else { "camera sides" },
+                    e.computed_frames(),
+                    e.frames(),
+                    t.sides_ms,
+                    t.visibility_ms,
+                    prep / n as f64,
+                    t.weights_ms
+                );
+                if round == 0 {
+                    frames[all as usize] = Some(r.render(&gpu).unwrap());
+                }
+            }
+        }
+        let (a, b) = (frames[0].as_ref().unwrap(), frames[1].as_ref().unwrap());
+        let differ = a.rgb.iter().zip(&b.rgb).filter(|(x, y)| x.to_bits() != y.to_bits()).count();
+        eprintln!("{name} {size}² msaa {msaa}: {differ} differing values between the frames");
+        assert_eq!(differ, 0);
+    }
 }
 
 /// Rasteriser (all frames, then through the cache) against the reference ray cast (all

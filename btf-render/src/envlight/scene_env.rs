@@ -59,6 +59,9 @@ pub struct EnvMesh<'a> {
 /// Costs of the last preparation steps, milliseconds.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct EnvTimings {
+    /// Finding the vertex sides the camera shows (the renderer's corner-id pass; 0 when
+    /// every side is computed).
+    pub sides_ms: f64,
     /// Visibility maps (0 when loaded from the cache).
     pub visibility_ms: f64,
     /// Whether the visibility maps came from the cache.
