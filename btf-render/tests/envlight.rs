@@ -315,6 +315,24 @@ fn visibility_cache_round_trips_and_survives_corruption() {
     assert!(!hit);
     // Back sides (two-sided cloth) of the floor see the lower hemisphere: unoccluded.
     assert!((a.visible_fraction(&cube, frames.len() / 2 + 12) - 1.0).abs() < 1e-12);
+    // A subset of the frames: served by the maps of all frames when those are cached, else
+    // computed and cached under a key of its own.
+    let (pos, tris) = (&mesh.positions, &mesh.triangles);
+    let wanted: Vec<bool> = (0..frames.len()).map(|f| f % 3 == 0).collect();
+    let (d, hit) =
+        VisibilityMaps::cached_some(dir.path(), &cube, &frames, Some(&wanted), pos, tris).unwrap();
+    assert!(hit && d == a, "the full maps serve a subset");
+    let fresh = tempfile::tempdir().unwrap();
+    let run =
+        || VisibilityMaps::cached_some(fresh.path(), &cube, &frames, Some(&wanted), pos, tris);
+    let ((e, hit_e), (f, hit_f)) = (run().unwrap(), run().unwrap());
+    assert!(!hit_e && hit_f && e == f);
+    for k in 0..frames.len() {
+        let expect = if wanted[k] { a.frame_bits(k).to_vec() } else { vec![0; a.words] };
+        assert_eq!(e.frame_bits(k), &expect[..], "frame {k}");
+    }
+    let (g, hit) = VisibilityMaps::cached(fresh.path(), &cube, &frames, pos, tris).unwrap();
+    assert!(!hit && g == a, "a subset never stands in for all frames");
 }
 
 #[test]
@@ -411,11 +429,26 @@ fn fast_gather_reproduces_the_frame_by_frame_sums_bit_for_bit() {
     let mesh = crumpled_sheet();
     let (env, _) = sun_env(256, [0.5, 0.3, 0.812]);
     let cube_env = EnvCube::new(&env, 16);
-    for two_sided in [false, true] {
+    // Every frame, and a subset as a camera leaves it (a third of the vertices with neither
+    // side, whose frames the gather skips; one side for the others).
+    for (two_sided, subset) in [(false, false), (true, false), (false, true), (true, true)] {
         let (mut s, _d) = setup(&mesh, 16, Pattern::Checker, 4);
         let tangents = compute_tangents(&mesh);
         s.frames = HemicubeFrame::of_mesh(&mesh.positions, &mesh.normals, &tangents, two_sided);
-        s.vis = VisibilityMaps::compute(&s.cube, &s.frames, &mesh.positions, &mesh.triangles);
+        let (pos, tris) = (&mesh.positions, &mesh.triangles);
+        s.vis = VisibilityMaps::compute(&s.cube, &s.frames, pos, tris);
+        if subset {
+            let n = mesh.positions.len();
+            let wanted: Vec<bool> =
+                (0..s.frames.len()).map(|f| f % n % 3 != 0 && (f < n) == (f % 2 == 0)).collect();
+            let some = VisibilityMaps::compute_some(&s.cube, &s.frames, &wanted, pos, tris);
+            for f in 0..s.frames.len() {
+                let expect: Vec<u64> =
+                    if wanted[f] { s.vis.frame_bits(f).to_vec() } else { vec![0; s.vis.words] };
+                assert_eq!(some.frame_bits(f), &expect[..], "frame {f}");
+            }
+            s.vis = some;
+        }
         let input = GatherInput {
             table: &s.table,
             visibility: &s.vis,
@@ -427,7 +460,7 @@ fn fast_gather_reproduces_the_frame_by_frame_sums_bit_for_bit() {
             let fast = WeightSet::gather(&input, &cube_env, delta);
             let reference = WeightSet::gather_reference(&input, &cube_env, delta);
             assert!(fast.g.iter().any(|&g| g > 0.0));
-            assert_eq!(fast, reference, "two-sided {two_sided}, δ = {delta}");
+            assert_eq!(fast, reference, "two-sided {two_sided}, subset {subset}, δ = {delta}");
         }
     }
 }
