@@ -65,7 +65,7 @@ impl Block {
     /// when the shape changes: a caller that rewrites the first `width` columns of every
     /// row keeps the padding zero.
     pub fn shape(&mut self, rows: usize, width: usize) {
-        let stride = width.div_ceil(LANES) * LANES;
+        let stride = padded_stride(width.div_ceil(LANES) * LANES, LANES);
         if rows != self.rows || stride != self.stride || !width.is_multiple_of(LANES) {
             self.rows = rows;
             self.stride = stride;
@@ -78,6 +78,13 @@ impl Block {
     pub fn row_mut(&mut self, i: usize) -> &mut [f64] {
         &mut self.data[i * self.stride..(i + 1) * self.stride]
     }
+}
+
+/// A row pitch of `stride` values, one vector (`lanes` values, 64 bytes) longer when
+/// `stride` spans a whole number of 4 KB: rows exactly 4 KB apart all fall into the same
+/// L1 cache sets, so the tiles' ten (the lift's 81) row streams would evict each other.
+pub(crate) fn padded_stride(stride: usize, lanes: usize) -> usize {
+    if stride > 0 && (stride * 64 / lanes).is_multiple_of(4096) { stride + lanes } else { stride }
 }
 
 fn has_avx512() -> bool {

@@ -367,10 +367,17 @@ fn lift_pass<T: Texel>(
     data.resize(cp * mp, 0.0);
     let mut blk = Block::default();
     let (mut hi, mut lo) = (vec![0f64; c], vec![0f64; c]);
+    // The lift writes whole rows of the block's pitch: into `tmp`, then `w` columns on.
+    let mut tmp = Vec::new();
     for c0 in (0..m).step_by(BLOCK) {
         let w = BLOCK.min(m - c0);
         load_shifted(x, c0, w, Some(x[0]), &mut blk, None);
-        lift_rows(&blk, &coef, cp, &mut data, mp, c0);
+        tmp.resize(cp * blk.stride, 0.0);
+        lift_rows(&blk, &coef, cp, &mut tmp, blk.stride, 0);
+        for k in 0..cp {
+            let from = &tmp[k * blk.stride..k * blk.stride + w];
+            data[k * mp + c0..k * mp + c0 + w].copy_from_slice(from);
+        }
         for k in 0..effective {
             max_min(&data[k * mp + c0..k * mp + c0 + w], &mut hi[k], &mut lo[k]);
         }

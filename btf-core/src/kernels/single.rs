@@ -32,7 +32,7 @@ impl Block32 {
 
     /// Reshapes to `rows × width` (zeroed when the shape changes or the width is ragged).
     pub fn shape(&mut self, rows: usize, width: usize) {
-        let stride = width.div_ceil(LANES32) * LANES32;
+        let stride = super::padded_stride(width.div_ceil(LANES32) * LANES32, LANES32);
         if rows != self.rows || stride != self.stride || !width.is_multiple_of(LANES32) {
             self.rows = rows;
             self.stride = stride;

@@ -76,8 +76,9 @@ pub(super) fn lift_store_f16<T: Texel>(
     let halves: &mut [f16] =
         if in_place { bytemuck::cast_slice_mut(&mut raw[..]) } else { &mut own };
     let Blocks { y: yb, s: sb, y32, e32, lifted } = blocks;
-    // Every value of the block of B is written by the lift before it is read.
-    lifted.resize(cp * BLOCK, 0.0);
+    // Every value of the block of B is written by the lift before it is read (rows of the
+    // block's pitch, which may exceed BLOCK).
+    lifted.resize(cp * crate::kernels::padded_stride(BLOCK, crate::kernels::LANES), 0.0);
     let mut narrow = vec![0f32; BLOCK];
     let (mut cross_acc, mut bgram_acc) = (CrossAcc32::new(c, n), DotAcc::new(c, c, true));
     let (mut hi, mut lo) = (vec![0f64; c], vec![0f64; c]);
