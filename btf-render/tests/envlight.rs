@@ -439,8 +439,9 @@ fn fast_gather_reproduces_the_frame_by_frame_sums_bit_for_bit() {
         s.vis = VisibilityMaps::compute(&s.cube, &s.frames, pos, tris);
         if subset {
             let n = mesh.positions.len();
-            let wanted: Vec<bool> =
-                (0..s.frames.len()).map(|f| f % n % 3 != 0 && (f < n) == (f % 2 == 0)).collect();
+            let wanted: Vec<bool> = (0..s.frames.len())
+                .map(|f| !(f % n).is_multiple_of(3) && (f < n) == f.is_multiple_of(2))
+                .collect();
             let some = VisibilityMaps::compute_some(&s.cube, &s.frames, &wanted, pos, tris);
             for f in 0..s.frames.len() {
                 let expect: Vec<u64> =
