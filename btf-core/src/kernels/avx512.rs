@@ -311,6 +311,20 @@ pub(super) unsafe fn tile32<const S: usize>(
     }
 }
 
+/// `to[t] = from[t]` widened to `f32` (exact), sixteen at a time.
+#[target_feature(enable = "avx512f")]
+pub(super) fn widen_to_f32<T: Texel>(from: &[T], to: &mut [f32]) {
+    let n = from.len().min(to.len());
+    let body = n - n % 16;
+    for t in (0..body).step_by(16) {
+        // SAFETY: t + 16 ≤ body ≤ the length of both slices.
+        unsafe { _mm512_storeu_ps(to.as_mut_ptr().add(t), load16(from.as_ptr().add(t))) };
+    }
+    for t in body..n {
+        to[t] = from[t].widen();
+    }
+}
+
 /// `to[t] = from[t] as f32` (round to nearest), eight at a time.
 #[target_feature(enable = "avx512f")]
 pub(super) fn round_to_f32(from: &[f64], to: &mut [f32]) {

@@ -4,9 +4,10 @@
 //! products need a relative precision of about `2⁻¹¹` less than the rest: in `f32`, with
 //! 16 lanes per register, they cost half the instructions of `f64`. Within one block of
 //! columns (at most 1024) every output sums in `f32` lanes; across blocks, in `f64`.
-//! The images enter as `Y` rounded to `f32` (a relative change of `2⁻²⁴`).
+//! The images enter widened to `f32` (exact for `f32` and `f16` data) or as a `f64` block
+//! rounded to `f32` (a relative change of `2⁻²⁴`).
 
-use super::{Block, has_avx512};
+use super::{Block, Texel, has_avx512};
 
 /// `f32` lanes of one AVX-512 register.
 pub const LANES32: usize = 16;
@@ -44,6 +45,26 @@ impl Block32 {
     /// Row `i` (all `stride` columns).
     pub fn row_mut(&mut self, i: usize) -> &mut [f32] {
         &mut self.data[i * self.stride..(i + 1) * self.stride]
+    }
+
+    /// Columns `c0..c0 + width` of every row of `x`, widened to `f32` (exact for `f32` and
+    /// `f16` data).
+    pub fn widen_from<T: Texel>(&mut self, x: &[&[T]], c0: usize, width: usize) {
+        self.shape(x.len(), width);
+        let simd = has_avx512();
+        for (i, row) in x.iter().enumerate() {
+            let from = &row[c0..c0 + width];
+            let to = &mut self.data[i * self.stride..i * self.stride + width];
+            if simd {
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: AVX-512F detected at run time; the function is safe code.
+                unsafe {
+                    super::avx512::widen_to_f32(from, to)
+                };
+            } else {
+                to.iter_mut().zip(from).for_each(|(t, &f)| *t = f.widen());
+            }
+        }
     }
 
     /// The first `width` columns of every row of `src`, rounded to `f32`.

@@ -4,7 +4,9 @@
 //! `E = S − B` while the block of `Y` is still in the cache, so the correction `E·Yᵀ` and
 //! the Gram matrix `SSᵀ` that the least-squares weights need come from the same read.
 //! `E·Yᵀ` is a correction of relative size `2⁻¹¹`, so it is summed in `f32`
-//! ([`crate::kernels::CrossAcc32`]) from `E` and `Y` rounded to `f32`.
+//! ([`crate::kernels::CrossAcc32`]) from `E` rounded to `f32` and the images `X` widened to
+//! `f32` exactly: `X = Y + 1x₀ᵀ`, and the row-centring the weights apply to `E·Xᵀ` removes
+//! the shift's constant `E·x₀` from every row.
 //!
 //! That needs the rounding to be fixed before the whole of `B` is known. It is: the
 //! eigentextures have unit norm, so every entry is at most 1 in magnitude and rounds to
@@ -32,7 +34,7 @@ pub(super) struct Blocks {
     pub y: Block,
     /// `S` in `f64`.
     s: Block,
-    /// `Y` and `E` rounded to `f32`.
+    /// `X` widened and `E` rounded to `f32`.
     y32: Block32,
     e32: Block32,
     /// The block of `B` (`cp × BLOCK`).
@@ -45,7 +47,7 @@ pub(super) struct Fused {
     pub raw: Vec<u8>,
     /// `[2^e, 0]` per component.
     pub scale_offset: Vec<[f32; 2]>,
-    /// `E·Yᵀ` (`c × n`, row-major), signs applied.
+    /// `E·Xᵀ` (`c × n`, row-major; equal to `E·Yᵀ` once each row is centred), signs applied.
     pub cross: Vec<f64>,
     /// `SSᵀ` (`c × c`, full), signs applied.
     pub bgram: Vec<f64>,
@@ -102,7 +104,9 @@ pub(super) fn lift_store_f16<T: Texel>(
                 &mut narrow,
             );
         }
-        y32.round_from(yb, w);
+        // The images themselves, not Y: the row-centring of the cross terms below removes
+        // the shift by the first image (a constant per row of E), and X widens exactly.
+        y32.widen_from(x, c0, w);
         cross_acc.add(e32, y32);
         bgram_acc.add(sb, sb);
     }
