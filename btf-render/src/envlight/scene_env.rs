@@ -5,7 +5,8 @@
 //! view blending of eq. 5), in the layout of [`crate::per_vertex`].
 //!
 //! Visibility is computed once per mesh and resolution (and cached on disk when a cache
-//! folder is given); a new environment costs one gather (eq. 10) and, with
+//! folder is given), for every frame or for those a fixed camera shows
+//! ([`SceneEnvironment::with_frames`]; the rest on demand, [`SceneEnvironment::complete`]); a new environment costs one gather (eq. 10) and, with
 //! eigenweightsets, one PCA over `A` rotations, after which a rotation costs `e` vector
 //! additions (eq. 13). Back sides of two-sided cloth have hemicubes of their own.
 

@@ -12,7 +12,10 @@
 //! the vertex along the side's normal so the vertex's own triangles do not shadow it.
 //!
 //! Maps are bit sets, cached on disk under a key hashing the mesh, the frames and the
-//! resolution; the file is written to a temporary name and renamed into place.
+//! resolution; the file is written to a temporary name and renamed into place. A scene's
+//! camera needs only some frames ([`VisibilityMaps::compute_some`], `camera_sides.rs`): the
+//! others stay all-occluded, and such a subset is cached under its own key (maps of all
+//! frames, when cached, serve it too).
 
 use super::bvh::Bvh;
 use super::hemicube::Hemicube;
