@@ -29,11 +29,16 @@ fn setup(dir: &Path) {
 }
 
 fn scene(dir: &Path, eye: [f32; 3], msaa: u32) -> Scene {
+    scene_with(dir, eye, msaa, "")
+}
+
+/// The scene with `extra` lines in its environment light's table.
+fn scene_with(dir: &Path, eye: [f32; 3], msaa: u32, extra: &str) -> Scene {
     let text = format!(
         "[output]\nwidth = 40\nheight = 40\n[[meshes]]\npath = \"shirt.obj\"\n\
          [[materials]]\nstore = \"m.eigen\"\n[camera]\neye = {eye:?}\ntarget = [0.0, 0.0, 0.1]\n\
          fov_y_deg = 40.0\n[[lights]]\nkind = \"environment\"\npath = \"sky.exr\"\n\
-         visibility_res = 8\n[effects]\nmsaa = {msaa}\n"
+         visibility_res = 8\n{extra}[effects]\nmsaa = {msaa}\n"
     );
     Scene::load(&write(dir, &format!("scene-{msaa}.toml"), &text)).unwrap()
 }
@@ -93,4 +98,27 @@ fn a_camera_move_computes_the_other_sides() {
     let fresh = build(&gpu, &back, true);
     let (a, b) = (moved.render(&gpu).unwrap(), fresh.render(&gpu).unwrap());
     assert_eq!(identical(&a, &b), 0, "the moved renderer differs from a fresh one");
+}
+
+#[test]
+fn cached_maps_of_every_side_serve_a_camera() {
+    let Some(gpu) = gpu("cached_maps_of_every_side_serve_a_camera") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    setup(dir.path());
+    let s = scene_with(dir.path(), FRONT, 1, "cache_dir = \"cache\"\n");
+    // A camera's subset first: cached under its own key, and again from there.
+    let some = build(&gpu, &s, false);
+    let e = some.environment().unwrap();
+    assert!(!e.timings.visibility_cached && e.computed_frames() < e.frames());
+    let again = build(&gpu, &s, false);
+    let e = again.environment().unwrap();
+    assert!(e.timings.visibility_cached && e.computed_frames() < e.frames());
+    // Once every side is cached, a camera takes all of them (nothing left to complete).
+    let all = build(&gpu, &s, true);
+    assert!(!all.environment().unwrap().timings.visibility_cached);
+    let served = build(&gpu, &s, false);
+    let e = served.environment().unwrap();
+    assert!(e.timings.visibility_cached && e.computed_frames() == e.frames());
+    let (a, b) = (some.render(&gpu).unwrap(), served.render(&gpu).unwrap());
+    assert_eq!(identical(&a, &b), 0, "the subset and the full maps render alike");
 }

@@ -5,10 +5,10 @@
 //! view blending of eq. 5), in the layout of [`crate::per_vertex`].
 //!
 //! Visibility is computed once per mesh and resolution (and cached on disk when a cache
-//! folder is given), for every frame or for those a fixed camera shows
-//! ([`SceneEnvironment::with_frames`]; the rest on demand, [`SceneEnvironment::complete`]); a new environment costs one gather (eq. 10) and, with
-//! eigenweightsets, one PCA over `A` rotations, after which a rotation costs `e` vector
-//! additions (eq. 13). Back sides of two-sided cloth have hemicubes of their own.
+//! folder is given), for every frame or only for those a fixed camera shows
+//! ([`SceneEnvironment::with_frames`]; the rest on demand: [`SceneEnvironment::complete`]).
+//! A new environment costs one gather (eq. 10) and, with eigenweightsets, one PCA over `A`
+//! rotations, after which a rotation costs `e` vector additions (eq. 13). Back sides of two-sided cloth have hemicubes of their own.
 
 use super::camera_basis::CameraCache;
 pub use super::camera_basis::ViewInput;
@@ -144,16 +144,21 @@ impl SceneEnvironment {
                 frames.len()
             )));
         }
-        let wanted = wanted.filter(|w| !w.iter().all(|&x| x));
+        let mut wanted = wanted.filter(|w| !w.iter().all(|&x| x));
         let t = Instant::now();
         let (pos, tris) = (mesh.positions, mesh.triangles);
-        let (vis, cached) = match (&params.cache_dir, &wanted) {
+        let (vis, cached, all) = match (&params.cache_dir, &wanted) {
             (Some(dir), w) => {
                 VisibilityMaps::cached_some(dir, &cube, &frames, w.as_deref(), pos, tris)?
             }
-            (None, Some(w)) => (VisibilityMaps::compute_some(&cube, &frames, w, pos, tris), false),
-            (None, None) => (VisibilityMaps::compute(&cube, &frames, pos, tris), false),
+            (None, Some(w)) => {
+                (VisibilityMaps::compute_some(&cube, &frames, w, pos, tris), false, false)
+            }
+            (None, None) => (VisibilityMaps::compute(&cube, &frames, pos, tris), false, true),
         };
+        if all {
+            wanted = None; // the cache held every frame
+        }
         let timings =
             EnvTimings { visibility_ms: ms(t), visibility_cached: cached, ..Default::default() };
         let coefficients = materials.iter().map(|m| CoefficientMatrix::from_material(m)).collect();

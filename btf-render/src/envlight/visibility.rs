@@ -198,6 +198,8 @@ impl VisibilityMaps {
 
     /// [`VisibilityMaps::cached`] for the `wanted` frames only (`None`: all). Maps of all
     /// frames already in the cache serve any subset; a subset is cached under its own key.
+    /// Returns the maps, whether they came from the cache, and whether they hold every
+    /// frame.
     pub fn cached_some(
         dir: &Path,
         cube: &Hemicube,
@@ -205,13 +207,14 @@ impl VisibilityMaps {
         wanted: Option<&[bool]>,
         positions: &[[f32; 3]],
         triangles: &[[u32; 3]],
-    ) -> Result<(VisibilityMaps, bool)> {
+    ) -> Result<(VisibilityMaps, bool, bool)> {
         let Some(wanted) = wanted.filter(|w| !w.iter().all(|&x| x)) else {
-            return VisibilityMaps::cached(dir, cube, frames, positions, triangles);
+            let (m, hit) = VisibilityMaps::cached(dir, cube, frames, positions, triangles)?;
+            return Ok((m, hit, true));
         };
         let full = cache_key(cube.res, frames, triangles);
         if let Some(m) = read_cache(&cache_path(dir, full), cube, frames.len()) {
-            return Ok((m, true));
+            return Ok((m, true, true));
         }
         let mut h = fnv1a(full, b"subset");
         for &w in wanted {
@@ -219,11 +222,11 @@ impl VisibilityMaps {
         }
         let path = cache_path(dir, h);
         if let Some(m) = read_cache(&path, cube, frames.len()) {
-            return Ok((m, true));
+            return Ok((m, true, false));
         }
         let maps = VisibilityMaps::compute_some(cube, frames, wanted, positions, triangles);
         maps.write(&path)?;
-        Ok((maps, false))
+        Ok((maps, false, false))
     }
 
     /// Writes the maps atomically (temporary file, then rename).
