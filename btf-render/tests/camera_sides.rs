@@ -113,12 +113,15 @@ fn cached_maps_of_every_side_serve_a_camera() {
     let again = build(&gpu, &s, false);
     let e = again.environment().unwrap();
     assert!(e.timings.visibility_cached && e.computed_frames() < e.frames());
-    // Once every side is cached, a camera takes all of them (nothing left to complete).
+    assert!(e.timings.sides_ms > 0.0, "the subset's key needs the corner-id pass");
+    // Once every side is cached, a camera takes all of them (nothing left to complete),
+    // without a corner-id pass.
     let all = build(&gpu, &s, true);
     assert!(!all.environment().unwrap().timings.visibility_cached);
     let served = build(&gpu, &s, false);
     let e = served.environment().unwrap();
     assert!(e.timings.visibility_cached && e.computed_frames() == e.frames());
+    assert_eq!(e.timings.sides_ms, 0.0);
     let (a, b) = (some.render(&gpu).unwrap(), served.render(&gpu).unwrap());
     assert_eq!(identical(&a, &b), 0, "the subset and the full maps render alike");
 }

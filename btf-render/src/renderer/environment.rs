@@ -34,6 +34,7 @@ impl Renderer {
         let wanted = if self.options.all_env_sides
             || self.thin.is_some()
             || mesh.positions.len() >= crate::camera_sides::MAX_VERTICES
+            || all_sides_cached(&params, &env_mesh)
         {
             None
         } else {
@@ -225,4 +226,19 @@ impl Renderer {
         *last = Some(key);
         Ok(())
     }
+}
+
+/// Whether the cache folder already holds the maps of every frame (then a camera takes
+/// them all and the corner-id pass is not needed).
+fn all_sides_cached(params: &crate::envlight::EnvironmentParams, mesh: &EnvMesh) -> bool {
+    let Some(dir) = &params.cache_dir else { return false };
+    let frames = crate::envlight::HemicubeFrame::of_mesh(
+        mesh.positions,
+        mesh.normals,
+        mesh.tangents,
+        params.two_sided,
+    );
+    let key =
+        crate::envlight::visibility::cache_key(params.visibility_res, &frames, mesh.triangles);
+    crate::envlight::visibility::cache_path(dir, key).is_file()
 }
