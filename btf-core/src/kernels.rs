@@ -149,6 +149,55 @@ pub(crate) fn lift_rows_with(
     }
 }
 
+/// [`lift_rows`] on a block of `f32` rows (each value widened to `f64` exactly as it is
+/// loaded): `out[k·ldo + c0 + t] = Σ_i coef[i·cp + k]·y_i[t]` for every column of `y`.
+pub fn lift_rows32(y: &Block32, coef: &[f64], cp: usize, out: &mut [f64], ldo: usize, c0: usize) {
+    lift_rows32_with(y, coef, cp, out, ldo, c0, has_avx512());
+}
+
+/// [`lift_rows32`] with the kernel chosen by the caller.
+pub(crate) fn lift_rows32_with(
+    y: &Block32,
+    coef: &[f64],
+    cp: usize,
+    out: &mut [f64],
+    ldo: usize,
+    c0: usize,
+    simd: bool,
+) {
+    let (n, w) = (y.rows, y.stride);
+    assert!(cp.is_multiple_of(LIFT_COMPONENTS) && coef.len() >= n * cp);
+    assert!(cp == 0 || out.len() >= (cp - 1) * ldo + c0 + w, "lift output too small");
+    assert!(y.data.len() >= n * w && w.is_multiple_of(LANES));
+    let simd = simd && has_avx512();
+    for k0 in (0..cp).step_by(LIFT_COMPONENTS) {
+        let o = &mut out[k0 * ldo + c0..];
+        if simd {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: AVX-512F checked at run time; y holds n rows of w values, coef n·cp,
+            // and out LIFT_COMPONENTS rows of ldo values from c0 with w ≤ ldo − c0 (asserted).
+            unsafe {
+                avx512::lift32(
+                    y.data.as_ptr(),
+                    n,
+                    w,
+                    coef.as_ptr().add(k0),
+                    cp,
+                    o.as_mut_ptr(),
+                    ldo,
+                )
+            };
+        } else {
+            for t in 0..w {
+                for k in 0..LIFT_COMPONENTS {
+                    o[k * ldo + t] =
+                        (0..n).map(|i| coef[i * cp + k0 + k] * y.data[i * w + t] as f64).sum();
+                }
+            }
+        }
+    }
+}
+
 /// Asks the cache to fetch columns `c0..c0 + w` of every row ahead of their use. Each row's
 /// piece of a block is its own page (1024 `f32`), where the hardware prefetcher stops, so
 /// without this every block of a pass starts with one cache miss per row and line.
@@ -291,7 +340,7 @@ mod f16_round;
 mod single;
 pub use dot::DotAcc;
 pub use f16_round::round_to_f16;
-pub use single::{Block32, CrossAcc32};
+pub use single::{Block32, CrossAcc32, LANES32};
 
 #[cfg(test)]
 mod tests;

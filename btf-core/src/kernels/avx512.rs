@@ -237,6 +237,67 @@ pub(super) unsafe fn lift(
     }
 }
 
+/// [`lift`] on `f32` rows (widened to `f64` as they are loaded). Safety: as for [`lift`],
+/// with `y` valid for `n·w` `f32` reads.
+#[target_feature(enable = "avx512f")]
+pub(super) unsafe fn lift32(
+    y: *const f32,
+    n: usize,
+    w: usize,
+    coef: *const f64,
+    cp: usize,
+    out: *mut f64,
+    ldo: usize,
+) {
+    let vectors = w / LANES;
+    let mut v = 0;
+    // SAFETY (both loops): forwarded from the caller's contract.
+    while v + 3 <= vectors {
+        unsafe { lift_tile32::<3>(y, n, w, v * LANES, coef, cp, out, ldo) };
+        v += 3;
+    }
+    while v < vectors {
+        unsafe { lift_tile32::<1>(y, n, w, v * LANES, coef, cp, out, ldo) };
+        v += 1;
+    }
+}
+
+/// [`lift_tile`] reading `f32` rows.
+#[target_feature(enable = "avx512f")]
+unsafe fn lift_tile32<const NV: usize>(
+    y: *const f32,
+    n: usize,
+    w: usize,
+    t: usize,
+    coef: *const f64,
+    cp: usize,
+    out: *mut f64,
+    ldo: usize,
+) {
+    let mut acc = [[_mm512_setzero_pd(); NV]; LIFT_COMPONENTS];
+    for i in 0..n {
+        // SAFETY: i < n and t + 8·NV ≤ w, coefficient k < 8 of row i.
+        unsafe {
+            let mut yv = [_mm512_setzero_pd(); NV];
+            for (q, v) in yv.iter_mut().enumerate() {
+                *v = _mm512_cvtps_pd(_mm256_loadu_ps(y.add(i * w + t + q * LANES)));
+            }
+            for (k, a) in acc.iter_mut().enumerate() {
+                let c = _mm512_set1_pd(*coef.add(i * cp + k));
+                for q in 0..NV {
+                    a[q] = _mm512_fmadd_pd(c, yv[q], a[q]);
+                }
+            }
+        }
+    }
+    for (k, a) in acc.iter().enumerate() {
+        for (q, v) in a.iter().enumerate() {
+            // SAFETY: k < 8, t + 8·(q + 1) ≤ w.
+            unsafe { _mm512_storeu_pd(out.add(k * ldo + t + q * LANES), *v) };
+        }
+    }
+}
+
 /// Eight components × `NV` vectors of columns from column `t`.
 #[target_feature(enable = "avx512f")]
 unsafe fn lift_tile<const NV: usize>(

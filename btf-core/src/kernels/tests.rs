@@ -97,6 +97,32 @@ fn lift_rows_matches_naive_sums_for_both_kernels() {
 }
 
 #[test]
+fn lift_rows32_matches_naive_sums_for_both_kernels() {
+    // 13 rows of f16 data widened to f32, 2 groups of 8 components, 48 columns (3 + 3 tiles),
+    // offset c0: the block pitch is the f32 block's.
+    let (n, w, cp, c0) = (13, 48, 16, 8);
+    let x: Vec<Vec<half::f16>> = (0..n)
+        .map(|i| values(w, 10 + i as u64).iter().map(|&v| half::f16::from_f32(v)).collect())
+        .collect();
+    let rows: Vec<&[half::f16]> = x.iter().map(|r| &r[..]).collect();
+    let mut y = Block32::default();
+    y.widen_from(&rows, 0, w);
+    let coef: Vec<f64> = values(n * cp, 4).iter().map(|&v| v as f64).collect();
+    let ldo = c0 + y.stride + 3;
+    for simd in [false, true] {
+        let mut out = vec![7.0; cp * ldo];
+        lift_rows32_with(&y, &coef, cp, &mut out, ldo, c0, simd);
+        for k in 0..cp {
+            for t in c0..c0 + w {
+                let want: f64 = (0..n).map(|i| coef[i * cp + k] * x[i][t - c0].to_f64()).sum();
+                assert!((out[k * ldo + t] - want).abs() < 1e-12, "simd {simd} ({k}, {t})");
+            }
+            assert!(out[k * ldo..k * ldo + c0].iter().all(|&v| v == 7.0), "before c0");
+        }
+    }
+}
+
+#[test]
 fn load_shifted_is_exact_and_reports_statistics_for_both_kernels() {
     // 37 columns: two groups of 16 and a tail of 5.
     let (n, m, c0, w) = (3, 50, 4, 37);

@@ -1,12 +1,13 @@
 //! Passes 2 and 3 of the per-slot PCA (Sattler et al. 2003, eq. 1) in one sweep over the
-//! data, for `f16` eigentextures: each block of columns is lifted to the eigentextures
-//! `B = (C·lift)ᵀY`, rounded to `f16` and turned into the stored basis `S` and its error
-//! `E = S − B` while the block of `Y` is still in the cache, so the correction `E·Yᵀ` and
-//! the Gram matrix `SSᵀ` that the least-squares weights need come from the same read.
-//! `E·Yᵀ` is a correction of relative size `2⁻¹¹`, so it is summed in `f32`
-//! ([`crate::kernels::CrossAcc32`]) from `E` rounded to `f32` and the images `X` widened to
-//! `f32` exactly: `X = Y + 1x₀ᵀ`, and the row-centring the weights apply to `E·Xᵀ` removes
-//! the shift's constant `E·x₀` from every row.
+//! data, for `f16` eigentextures. Each block of columns of the images `X` is widened to
+//! `f32` once (exact for `f32` and `f16` data) and lifted to the eigentextures
+//! `B = (C·lift)ᵀY = (C·lift)ᵀX` in `f64` (the centred coefficients sum to zero over the
+//! images, so the shift `Y = X − 1x₀ᵀ` drops out), rounded to `f16` and turned into the
+//! stored basis `S` and its error `E = S − B` while the block is still in the cache, so the
+//! correction and the Gram matrix `SSᵀ` that the least-squares weights need come from the
+//! same read. The correction is of relative size `2⁻¹¹`, so it is summed in `f32`
+//! ([`crate::kernels::CrossAcc32`]) as `E·Xᵀ`, `E` rounded to `f32`; the row-centring the
+//! weights apply to it removes the shift's constant `E·x₀` from every row, leaving `X̃Eᵀ`.
 //!
 //! That needs the rounding to be fixed before the whole of `B` is known. It is: the
 //! eigentextures have unit norm, so every entry is at most 1 in magnitude and rounds to
@@ -21,8 +22,8 @@
 
 use super::{BLOCK, centred_coef, finish_symmetric};
 use crate::kernels::{
-    Block, Block32, CrossAcc32, DotAcc, LIFT_COMPONENTS, Texel, lift_rows, load_shifted,
-    prefetch_rows, round_to_f16,
+    Block, Block32, CrossAcc32, DotAcc, LIFT_COMPONENTS, Texel, lift_rows32, prefetch_rows,
+    round_to_f16,
 };
 use half::f16;
 use half::slice::HalfFloatSliceExt;
@@ -77,19 +78,22 @@ pub(super) fn lift_store_f16<T: Texel>(
     let mut own = if in_place { Vec::new() } else { vec![f16::ZERO; c * m] };
     let halves: &mut [f16] =
         if in_place { bytemuck::cast_slice_mut(&mut raw[..]) } else { &mut own };
-    let Blocks { y: yb, s: sb, y32, e32, lifted } = blocks;
+    let Blocks { s: sb, y32, e32, lifted, .. } = blocks;
     // Every value of the block of B is written by the lift before it is read (rows of the
     // block's pitch, which may exceed BLOCK).
-    lifted.resize(cp * crate::kernels::padded_stride(BLOCK, crate::kernels::LANES), 0.0);
+    lifted.resize(cp * crate::kernels::padded_stride(BLOCK, crate::kernels::LANES32), 0.0);
     let mut narrow = vec![0f32; BLOCK];
     let (mut cross_acc, mut bgram_acc) = (CrossAcc32::new(c, n), DotAcc::new(c, c, true));
     let (mut hi, mut lo) = (vec![0f64; c], vec![0f64; c]);
     for c0 in (0..m).step_by(BLOCK) {
         let w = BLOCK.min(m - c0);
-        load_shifted(x, c0, w, Some(x[0]), yb, None);
-        let ws = yb.stride;
+        // The images themselves, widened exactly to f32: the lift's coefficients are
+        // centred (each column sums to zero over the images), so B = coefᵀX = coefᵀY, and
+        // the row-centring of the cross terms below removes the shift by the first image.
+        y32.widen_from(x, c0, w);
+        let ws = y32.stride;
         prefetch_rows(x, c0 + w, BLOCK);
-        lift_rows(yb, &coef, cp, lifted, ws, 0);
+        lift_rows32(y32, &coef, cp, lifted, ws, 0);
         sb.shape(c, w);
         e32.shape(c, w);
         for k in 0..c {
@@ -104,9 +108,6 @@ pub(super) fn lift_store_f16<T: Texel>(
                 &mut narrow,
             );
         }
-        // The images themselves, not Y: the row-centring of the cross terms below removes
-        // the shift by the first image (a constant per row of E), and X widens exactly.
-        y32.widen_from(x, c0, w);
         cross_acc.add(e32, y32);
         bgram_acc.add(sb, sb);
     }
