@@ -170,22 +170,23 @@ pub(crate) fn lift_rows32_with(
     assert!(cp == 0 || out.len() >= (cp - 1) * ldo + c0 + w, "lift output too small");
     assert!(y.data.len() >= n * w && w.is_multiple_of(LANES));
     let simd = simd && has_avx512();
-    for k0 in (0..cp).step_by(LIFT_COMPONENTS) {
+    let mut k0 = 0;
+    while k0 < cp {
         let o = &mut out[k0 * ldo + c0..];
+        // Sixteen components at once where there are (each widened vector feeds 16 FMAs).
+        let step = if simd && cp - k0 >= 2 * LIFT_COMPONENTS { 16 } else { LIFT_COMPONENTS };
         if simd {
             #[cfg(target_arch = "x86_64")]
-            // SAFETY: AVX-512F checked at run time; y holds n rows of w values, coef n·cp,
-            // and out LIFT_COMPONENTS rows of ldo values from c0 with w ≤ ldo − c0 (asserted).
+            // SAFETY: AVX-512F checked at run time; y holds n rows of w values, coef n·cp
+            // (step components from k0), and out `step` rows of ldo values from c0 with
+            // w ≤ ldo − c0 (asserted).
             unsafe {
-                avx512::lift32(
-                    y.data.as_ptr(),
-                    n,
-                    w,
-                    coef.as_ptr().add(k0),
-                    cp,
-                    o.as_mut_ptr(),
-                    ldo,
-                )
+                let (yp, cf, op) = (y.data.as_ptr(), coef.as_ptr().add(k0), o.as_mut_ptr());
+                if step == 16 {
+                    avx512::lift32_16(yp, n, w, cf, cp, op, ldo)
+                } else {
+                    avx512::lift32(yp, n, w, cf, cp, op, ldo)
+                }
             };
         } else {
             for t in 0..w {
@@ -195,6 +196,7 @@ pub(crate) fn lift_rows32_with(
                 }
             }
         }
+        k0 += step;
     }
 }
 

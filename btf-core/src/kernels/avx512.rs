@@ -262,6 +262,40 @@ pub(super) unsafe fn lift32(
     }
 }
 
+/// [`lift32`] for sixteen components at once (`coef` rows of at least 16): each widened
+/// vector of `y` feeds sixteen FMAs, so every value is loaded and widened once per
+/// sixteen components instead of once per eight. Safety: as for [`lift32`], with out
+/// valid for 16 rows of `ldo`.
+#[target_feature(enable = "avx512f")]
+pub(super) unsafe fn lift32_16(
+    y: *const f32,
+    n: usize,
+    w: usize,
+    coef: *const f64,
+    cp: usize,
+    out: *mut f64,
+    ldo: usize,
+) {
+    let mut t = 0;
+    while t < w {
+        let mut acc = [_mm512_setzero_pd(); 16];
+        for i in 0..n {
+            // SAFETY: i < n, t + 8 ≤ w, coefficients k < 16 of row i (cp ≥ 16).
+            unsafe {
+                let yv = _mm512_cvtps_pd(_mm256_loadu_ps(y.add(i * w + t)));
+                for (k, a) in acc.iter_mut().enumerate() {
+                    *a = _mm512_fmadd_pd(_mm512_set1_pd(*coef.add(i * cp + k)), yv, *a);
+                }
+            }
+        }
+        for (k, a) in acc.iter().enumerate() {
+            // SAFETY: k < 16, t + 8 ≤ w.
+            unsafe { _mm512_storeu_pd(out.add(k * ldo + t), *a) };
+        }
+        t += LANES;
+    }
+}
+
 /// [`lift_tile`] reading `f32` rows.
 #[target_feature(enable = "avx512f")]
 unsafe fn lift_tile32<const NV: usize>(
