@@ -98,9 +98,10 @@ fn lift_rows_matches_naive_sums_for_both_kernels() {
 
 #[test]
 fn lift_rows32_matches_naive_sums_for_both_kernels() {
-    // 13 rows of f16 data widened to f32, 2 groups of 8 components, 48 columns (3 + 3 tiles),
-    // offset c0: the block pitch is the f32 block's.
-    let (n, w, cp, c0) = (13, 48, 16, 8);
+    // 13 rows of f16 data widened to f32, 24 components (one group of 16, one of 8: both
+    // kernels), 48 columns (3 + 3 tiles of the 8-component kernel), offset c0: the block
+    // pitch is the f32 block's.
+    let (n, w, cp, c0) = (13, 48, 24, 8);
     let x: Vec<Vec<half::f16>> = (0..n)
         .map(|i| values(w, 10 + i as u64).iter().map(|&v| half::f16::from_f32(v)).collect())
         .collect();
