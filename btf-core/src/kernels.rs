@@ -99,58 +99,9 @@ fn has_avx512() -> bool {
 }
 
 /// `out[k·ldo + c0 + t] = Σ_i coef[i·cp + k]·y_i[t]` for `k < cp` (`cp` a multiple of
-/// [`LIFT_COMPONENTS`]) and every column `t` of the block `y`: the columns `c0..` of
-/// `Lᵀ·Y` for an `n × cp` coefficient matrix `L`.
-pub fn lift_rows(y: &Block, coef: &[f64], cp: usize, out: &mut [f64], ldo: usize, c0: usize) {
-    lift_rows_with(y, coef, cp, out, ldo, c0, has_avx512());
-}
-
-/// [`lift_rows`] with the kernel chosen by the caller.
-pub(crate) fn lift_rows_with(
-    y: &Block,
-    coef: &[f64],
-    cp: usize,
-    out: &mut [f64],
-    ldo: usize,
-    c0: usize,
-    simd: bool,
-) {
-    let (n, w) = (y.rows, y.stride);
-    assert!(cp.is_multiple_of(LIFT_COMPONENTS) && coef.len() >= n * cp);
-    assert!(cp == 0 || out.len() >= (cp - 1) * ldo + c0 + w, "lift output too small");
-    assert!(y.data.len() >= n * w);
-    let simd = simd && has_avx512();
-    for k0 in (0..cp).step_by(LIFT_COMPONENTS) {
-        let o = &mut out[k0 * ldo + c0..];
-        if simd {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: AVX-512F checked at run time; y holds n rows of w values, coef n·cp,
-            // and out LIFT_COMPONENTS rows of ldo values from c0 with w ≤ ldo − c0 (asserted).
-            unsafe {
-                avx512::lift(y.data.as_ptr(), n, w, coef.as_ptr().add(k0), cp, o.as_mut_ptr(), ldo)
-            };
-        } else {
-            for t in (0..w).step_by(LANES) {
-                let mut acc = [[0f64; LANES]; LIFT_COMPONENTS];
-                for i in 0..n {
-                    let yi = &y.data[i * w + t..i * w + t + LANES];
-                    for (k, a) in acc.iter_mut().enumerate() {
-                        let c = coef[i * cp + k0 + k];
-                        for l in 0..LANES {
-                            a[l] += c * yi[l];
-                        }
-                    }
-                }
-                for (k, a) in acc.iter().enumerate() {
-                    o[k * ldo + t..k * ldo + t + LANES].copy_from_slice(a);
-                }
-            }
-        }
-    }
-}
-
-/// [`lift_rows`] on a block of `f32` rows (each value widened to `f64` exactly as it is
-/// loaded): `out[k·ldo + c0 + t] = Σ_i coef[i·cp + k]·y_i[t]` for every column of `y`.
+/// [`LIFT_COMPONENTS`]) and every column `t` of the block `y` of `f32` rows, each value
+/// widened to `f64` exactly as it is loaded: the columns `c0..` of `Lᵀ·Y` for an `n × cp`
+/// coefficient matrix `L`, summed in `f64`.
 pub fn lift_rows32(y: &Block32, coef: &[f64], cp: usize, out: &mut [f64], ldo: usize, c0: usize) {
     lift_rows32_with(y, coef, cp, out, ldo, c0, has_avx512());
 }
@@ -173,24 +124,25 @@ pub(crate) fn lift_rows32_with(
     let mut k0 = 0;
     while k0 < cp {
         let o = &mut out[k0 * ldo + c0..];
-        // Sixteen components at once where there are (each widened vector feeds 16 FMAs).
-        let step = if simd && cp - k0 >= 2 * LIFT_COMPONENTS { 16 } else { LIFT_COMPONENTS };
+        // Sixteen components at once where there are: each widened vector feeds 16 FMAs.
+        let step =
+            if cp - k0 >= 2 * LIFT_COMPONENTS { 2 * LIFT_COMPONENTS } else { LIFT_COMPONENTS };
         if simd {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: AVX-512F checked at run time; y holds n rows of w values, coef n·cp
-            // (step components from k0), and out `step` rows of ldo values from c0 with
+            // (`step` components from k0), and out `step` rows of ldo values from c0 with
             // w ≤ ldo − c0 (asserted).
             unsafe {
                 let (yp, cf, op) = (y.data.as_ptr(), coef.as_ptr().add(k0), o.as_mut_ptr());
-                if step == 16 {
-                    avx512::lift32_16(yp, n, w, cf, cp, op, ldo)
+                if step == 2 * LIFT_COMPONENTS {
+                    avx512::lift32::<{ 2 * LIFT_COMPONENTS }>(yp, n, w, cf, cp, op, ldo)
                 } else {
-                    avx512::lift32(yp, n, w, cf, cp, op, ldo)
+                    avx512::lift32::<LIFT_COMPONENTS>(yp, n, w, cf, cp, op, ldo)
                 }
             };
         } else {
             for t in 0..w {
-                for k in 0..LIFT_COMPONENTS {
+                for k in 0..step {
                     o[k * ldo + t] =
                         (0..n).map(|i| coef[i * cp + k0 + k] * y.data[i * w + t] as f64).sum();
                 }

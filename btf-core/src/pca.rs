@@ -17,7 +17,7 @@
 use crate::eigen::{Quantization, QuantizedSlot, dequantize, quantize};
 use crate::gemm::{Mat, dgemm};
 use crate::kernels::{
-    Block, DotAcc, LANES, LIFT_COMPONENTS, Texel, lift_rows, load_shifted, prefetch_rows,
+    Block, Block32, DotAcc, LANES, LIFT_COMPONENTS, Texel, lift_rows32, load_shifted, prefetch_rows,
 };
 use crate::store::SlotData;
 use crate::{Error, Result};
@@ -365,15 +365,16 @@ fn lift_pass<T: Texel>(
     let coef = centred_coef(lift, n, c, cp);
     // Every value is written by the lift below: no need to clear a reused buffer.
     data.resize(cp * mp, 0.0);
-    let mut blk = Block::default();
+    let mut blk = Block32::default();
     let (mut hi, mut lo) = (vec![0f64; c], vec![0f64; c]);
     // The lift writes whole rows of the block's pitch: into `tmp`, then `w` columns on.
     let mut tmp = Vec::new();
     for c0 in (0..m).step_by(BLOCK) {
         let w = BLOCK.min(m - c0);
-        load_shifted(x, c0, w, Some(x[0]), &mut blk, None);
+        // The images widened exactly; the centred coefficients give coefᵀX = coefᵀY.
+        blk.widen_from(x, c0, w);
         tmp.resize(cp * blk.stride, 0.0);
-        lift_rows(&blk, &coef, cp, &mut tmp, blk.stride, 0);
+        lift_rows32(&blk, &coef, cp, &mut tmp, blk.stride, 0);
         for k in 0..cp {
             let from = &tmp[k * blk.stride..k * blk.stride + w];
             data[k * mp + c0..k * mp + c0 + w].copy_from_slice(from);

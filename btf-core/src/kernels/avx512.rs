@@ -1,7 +1,7 @@
 //! AVX-512 versions of the kernels in `kernels.rs` (the same sums, eight `f64` lanes per
 //! register, fused multiply-adds); callers check the CPU feature at run time.
 
-use super::{LANES, LIFT_COMPONENTS, TB, Texel};
+use super::{LANES, TB, Texel};
 use std::arch::x86_64::*;
 
 /// 16 stored values from `p` as `f32` (`vcvtph2ps` for `f16`, exact). Safety: AVX-512F
@@ -211,63 +211,12 @@ pub(super) unsafe fn tile_upper(a: *const f64, w: usize, (k0, k1): (usize, usize
     }
 }
 
-/// See `lift_rows_with`. Safety: AVX-512F present; `y` valid for `n·w` reads, `coef`
-/// for reads at `i·cp + k` (`i < n`, `k < 8`), `out` for writes at `k·ldo + t`
-/// (`k < 8`, `t < w`); `w` a multiple of 8.
+/// See `lift_rows32_with`: `K` components (8 or 16) over all `w` columns, eight columns at
+/// a time, each widened vector of `y` feeding `K` FMAs. Safety: AVX-512F present; `y`
+/// valid for `n·w` reads, `coef` for reads at `i·cp + k` (`i < n`, `k < K`), `out` for
+/// writes at `k·ldo + t` (`k < K`, `t < w`); `w` a multiple of 8.
 #[target_feature(enable = "avx512f")]
-pub(super) unsafe fn lift(
-    y: *const f64,
-    n: usize,
-    w: usize,
-    coef: *const f64,
-    cp: usize,
-    out: *mut f64,
-    ldo: usize,
-) {
-    let vectors = w / LANES;
-    let mut v = 0;
-    // SAFETY (both loops): forwarded from the caller's contract.
-    while v + 3 <= vectors {
-        unsafe { lift_tile::<3>(y, n, w, v * LANES, coef, cp, out, ldo) };
-        v += 3;
-    }
-    while v < vectors {
-        unsafe { lift_tile::<1>(y, n, w, v * LANES, coef, cp, out, ldo) };
-        v += 1;
-    }
-}
-
-/// [`lift`] on `f32` rows (widened to `f64` as they are loaded). Safety: as for [`lift`],
-/// with `y` valid for `n·w` `f32` reads.
-#[target_feature(enable = "avx512f")]
-pub(super) unsafe fn lift32(
-    y: *const f32,
-    n: usize,
-    w: usize,
-    coef: *const f64,
-    cp: usize,
-    out: *mut f64,
-    ldo: usize,
-) {
-    let vectors = w / LANES;
-    let mut v = 0;
-    // SAFETY (both loops): forwarded from the caller's contract.
-    while v + 3 <= vectors {
-        unsafe { lift_tile32::<3>(y, n, w, v * LANES, coef, cp, out, ldo) };
-        v += 3;
-    }
-    while v < vectors {
-        unsafe { lift_tile32::<1>(y, n, w, v * LANES, coef, cp, out, ldo) };
-        v += 1;
-    }
-}
-
-/// [`lift32`] for sixteen components at once (`coef` rows of at least 16): each widened
-/// vector of `y` feeds sixteen FMAs, so every value is loaded and widened once per
-/// sixteen components instead of once per eight. Safety: as for [`lift32`], with out
-/// valid for 16 rows of `ldo`.
-#[target_feature(enable = "avx512f")]
-pub(super) unsafe fn lift32_16(
+pub(super) unsafe fn lift32<const K: usize>(
     y: *const f32,
     n: usize,
     w: usize,
@@ -278,9 +227,9 @@ pub(super) unsafe fn lift32_16(
 ) {
     let mut t = 0;
     while t < w {
-        let mut acc = [_mm512_setzero_pd(); 16];
+        let mut acc = [_mm512_setzero_pd(); K];
         for i in 0..n {
-            // SAFETY: i < n, t + 8 ≤ w, coefficients k < 16 of row i (cp ≥ 16).
+            // SAFETY: i < n, t + 8 ≤ w, coefficients k < K of row i.
             unsafe {
                 let yv = _mm512_cvtps_pd(_mm256_loadu_ps(y.add(i * w + t)));
                 for (k, a) in acc.iter_mut().enumerate() {
@@ -289,82 +238,10 @@ pub(super) unsafe fn lift32_16(
             }
         }
         for (k, a) in acc.iter().enumerate() {
-            // SAFETY: k < 16, t + 8 ≤ w.
+            // SAFETY: k < K, t + 8 ≤ w.
             unsafe { _mm512_storeu_pd(out.add(k * ldo + t), *a) };
         }
         t += LANES;
-    }
-}
-
-/// [`lift_tile`] reading `f32` rows.
-#[target_feature(enable = "avx512f")]
-unsafe fn lift_tile32<const NV: usize>(
-    y: *const f32,
-    n: usize,
-    w: usize,
-    t: usize,
-    coef: *const f64,
-    cp: usize,
-    out: *mut f64,
-    ldo: usize,
-) {
-    let mut acc = [[_mm512_setzero_pd(); NV]; LIFT_COMPONENTS];
-    for i in 0..n {
-        // SAFETY: i < n and t + 8·NV ≤ w, coefficient k < 8 of row i.
-        unsafe {
-            let mut yv = [_mm512_setzero_pd(); NV];
-            for (q, v) in yv.iter_mut().enumerate() {
-                *v = _mm512_cvtps_pd(_mm256_loadu_ps(y.add(i * w + t + q * LANES)));
-            }
-            for (k, a) in acc.iter_mut().enumerate() {
-                let c = _mm512_set1_pd(*coef.add(i * cp + k));
-                for q in 0..NV {
-                    a[q] = _mm512_fmadd_pd(c, yv[q], a[q]);
-                }
-            }
-        }
-    }
-    for (k, a) in acc.iter().enumerate() {
-        for (q, v) in a.iter().enumerate() {
-            // SAFETY: k < 8, t + 8·(q + 1) ≤ w.
-            unsafe { _mm512_storeu_pd(out.add(k * ldo + t + q * LANES), *v) };
-        }
-    }
-}
-
-/// Eight components × `NV` vectors of columns from column `t`.
-#[target_feature(enable = "avx512f")]
-unsafe fn lift_tile<const NV: usize>(
-    y: *const f64,
-    n: usize,
-    w: usize,
-    t: usize,
-    coef: *const f64,
-    cp: usize,
-    out: *mut f64,
-    ldo: usize,
-) {
-    let mut acc = [[_mm512_setzero_pd(); NV]; LIFT_COMPONENTS];
-    for i in 0..n {
-        // SAFETY: i < n and t + 8·NV ≤ w, coefficient k < 8 of row i.
-        unsafe {
-            let mut yv = [_mm512_setzero_pd(); NV];
-            for (q, v) in yv.iter_mut().enumerate() {
-                *v = _mm512_loadu_pd(y.add(i * w + t + q * LANES));
-            }
-            for (k, a) in acc.iter_mut().enumerate() {
-                let c = _mm512_set1_pd(*coef.add(i * cp + k));
-                for q in 0..NV {
-                    a[q] = _mm512_fmadd_pd(c, yv[q], a[q]);
-                }
-            }
-        }
-    }
-    for (k, a) in acc.iter().enumerate() {
-        for (q, v) in a.iter().enumerate() {
-            // SAFETY: k < 8, t + 8·(q + 1) ≤ w.
-            unsafe { _mm512_storeu_pd(out.add(k * ldo + t + q * LANES), *v) };
-        }
     }
 }
 
