@@ -112,16 +112,17 @@ impl SceneEnvironment {
         Self::with_frames(params, env, mesh, materials, None)
     }
 
-    /// [`SceneEnvironment::new`] with visibility for the frames with `wanted[f]` only
-    /// (front sides `0..V`, back sides `V..2V`; `None`: all): the vertex sides a fixed
-    /// camera shows. Every other frame is left all-occluded, so its weights are zero;
-    /// [`SceneEnvironment::complete`] computes them when another camera needs them.
+    /// [`SceneEnvironment::new`] with visibility only for the frames `wanted()` flags (front
+    /// sides `0..V`, back sides `V..2V`): the vertex sides a fixed camera shows. `wanted` is
+    /// not called when the cache already holds every frame (then all are taken); its time
+    /// is [`EnvTimings::sides_ms`]. Every other frame is left all-occluded, so its weights
+    /// are zero; [`SceneEnvironment::complete`] computes them when another camera needs them.
     pub fn with_frames(
         params: EnvironmentParams,
         env: &EnvMap,
         mesh: &EnvMesh,
         materials: &[&MaterialData],
-        wanted: Option<Vec<bool>>,
+        wanted: Option<&mut dyn FnMut() -> Result<Vec<bool>>>,
     ) -> Result<Self> {
         let first = materials
             .first()
@@ -135,6 +136,16 @@ impl SceneEnvironment {
         let table = LightTable::new(&cube, &first.light_sampling, InterpMode::Four)?;
         let frames =
             HemicubeFrame::of_mesh(mesh.positions, mesh.normals, mesh.tangents, params.two_sided);
+        let t = Instant::now();
+        let all_cached = params.cache_dir.as_ref().is_some_and(|dir| {
+            let key = super::visibility::cache_key(cube.res, &frames, mesh.triangles);
+            super::visibility::cache_path(dir, key).is_file()
+        });
+        let wanted = match wanted {
+            Some(f) if !all_cached => Some(f()?),
+            _ => None,
+        };
+        let sides_ms = if wanted.is_some() { ms(t) } else { 0.0 };
         if let Some(w) = &wanted
             && w.len() != frames.len()
         {
@@ -159,8 +170,12 @@ impl SceneEnvironment {
         if all {
             wanted = None; // the cache held every frame
         }
-        let timings =
-            EnvTimings { visibility_ms: ms(t), visibility_cached: cached, ..Default::default() };
+        let timings = EnvTimings {
+            sides_ms,
+            visibility_ms: ms(t),
+            visibility_cached: cached,
+            ..Default::default()
+        };
         let coefficients = materials.iter().map(|m| CoefficientMatrix::from_material(m)).collect();
         let env_cube = EnvCube { res: 1, dirs: vec![], power: vec![] };
         let mut s = SceneEnvironment {

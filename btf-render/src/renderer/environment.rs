@@ -30,20 +30,15 @@ impl Renderer {
             triangles: &mesh.triangles,
         };
         let params = desc.params();
-        let t = Instant::now();
-        let wanted = if self.options.all_env_sides
+        let camera_sides = !(self.options.all_env_sides
             || self.thin.is_some()
-            || mesh.positions.len() >= crate::camera_sides::MAX_VERTICES
-            || all_sides_cached(&params, &env_mesh)
-        {
-            None
-        } else {
-            Some(self.camera_frames(gpu, params.two_sided)?)
-        };
+            || mesh.positions.len() >= crate::camera_sides::MAX_VERTICES);
+        let two_sided = params.two_sided;
+        let mut camera = || self.camera_frames(gpu, two_sided);
+        let camera: Option<&mut dyn FnMut() -> Result<Vec<bool>>> =
+            if camera_sides { Some(&mut camera) } else { None };
         let mats: Vec<&MaterialData> = self.materials.iter().map(|m| &m.data).collect();
-        let sides_ms = if wanted.is_some() { t.elapsed().as_secs_f64() * 1e3 } else { 0.0 };
-        let mut env = SceneEnvironment::with_frames(params, &map, &env_mesh, &mats, wanted)?;
-        env.timings.sides_ms = sides_ms;
+        let env = SceneEnvironment::with_frames(params, &map, &env_mesh, &mats, camera)?;
         let map = scene.output.show_environment.then_some(map);
         Ok(Some(EnvState { light, env, map }))
     }
@@ -226,19 +221,4 @@ impl Renderer {
         *last = Some(key);
         Ok(())
     }
-}
-
-/// Whether the cache folder already holds the maps of every frame (then a camera takes
-/// them all and the corner-id pass is not needed).
-fn all_sides_cached(params: &crate::envlight::EnvironmentParams, mesh: &EnvMesh) -> bool {
-    let Some(dir) = &params.cache_dir else { return false };
-    let frames = crate::envlight::HemicubeFrame::of_mesh(
-        mesh.positions,
-        mesh.normals,
-        mesh.tangents,
-        params.two_sided,
-    );
-    let key =
-        crate::envlight::visibility::cache_key(params.visibility_res, &frames, mesh.triangles);
-    crate::envlight::visibility::cache_path(dir, key).is_file()
 }
