@@ -313,21 +313,26 @@ fn line_centre(
     (sw > 0.0 && s.abs() < half).then(|| [q0[0] + s * n_img[0], q0[1] + s * n_img[1]])
 }
 
+/// The plate's nine point markers of the default capture layout (mm; the last one the
+/// orientation marker), for this crate's unit tests.
+#[cfg(test)]
+pub(crate) const TEST_MARKS: [[f64; 2]; 9] = [
+    [-60.0, -60.0],
+    [0.0, -60.0],
+    [60.0, -60.0],
+    [60.0, 0.0],
+    [60.0, 60.0],
+    [0.0, 60.0],
+    [-60.0, 60.0],
+    [-60.0, 0.0],
+    [30.0, 60.0],
+];
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    const MARKS: [[f64; 2]; 9] = [
-        [-60.0, -60.0],
-        [0.0, -60.0],
-        [60.0, -60.0],
-        [60.0, 0.0],
-        [60.0, 60.0],
-        [0.0, 60.0],
-        [-60.0, 60.0],
-        [-60.0, 0.0],
-        [30.0, 60.0],
-    ];
+    const MARKS: [[f64; 2]; 9] = TEST_MARKS;
 
     /// Point-sampled plate (as the virtual gonioreflectometer renders it), `ss²` samples
     /// per pixel.

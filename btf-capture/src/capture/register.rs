@@ -242,18 +242,7 @@ pub fn nominal(layout: &CaptureLayout, view: usize, why: String) -> Registration
 mod tests {
     use super::*;
 
-    /// The plate's nine point markers (as in the default capture layout).
-    const MARKS: [[f64; 2]; 9] = [
-        [-60.0, -60.0],
-        [0.0, -60.0],
-        [60.0, -60.0],
-        [60.0, 0.0],
-        [60.0, 60.0],
-        [0.0, 60.0],
-        [-60.0, 60.0],
-        [-60.0, 0.0],
-        [30.0, 60.0],
-    ];
+    const MARKS: [[f64; 2]; 9] = super::super::markers::TEST_MARKS;
 
     /// Detections of the markers `which` (the others missed).
     fn found(which: &[usize]) -> Vec<Detection> {
