@@ -49,19 +49,8 @@ pub fn seen_vertices(gpu: &Gpu, d: &CornerDraws) -> Result<Vec<bool>> {
     let samples = d.btf.key.msaa;
     let dev = &gpu.device;
     let pipeline = d.btf.corner_ids_pipeline(gpu)?;
-    let size = wgpu::Extent3d { width: d.width, height: d.height, depth_or_array_layers: 1 };
-    let target = |format, usage| {
-        dev.create_texture(&wgpu::TextureDescriptor {
-            label: Some("corner ids"),
-            size,
-            mip_level_count: 1,
-            sample_count: samples,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage,
-            view_formats: &[],
-        })
-    };
+    let target =
+        |format, usage| gpu.target("corner ids", (d.width, d.height), samples, format, usage);
     let att = wgpu::TextureUsages::RENDER_ATTACHMENT;
     let ids: Vec<wgpu::Texture> = (0..3)
         .map(|_| target(CORNER_ID_FORMAT, att | wgpu::TextureUsages::TEXTURE_BINDING))

@@ -140,6 +140,28 @@ impl Gpu {
         Ok(bytes)
     }
 
+    /// A 2-D, single-layer, single-mip `width × height` texture of `samples` samples: the
+    /// render targets of a frame.
+    pub fn target(
+        &self,
+        label: &str,
+        (width, height): (u32, u32),
+        samples: u32,
+        format: wgpu::TextureFormat,
+        usage: wgpu::TextureUsages,
+    ) -> wgpu::Texture {
+        self.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: samples,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
+        })
+    }
+
     /// Reads layer 0 of a `width × height` texture with `bytes_per_texel`-byte texels,
     /// returning tightly packed rows.
     pub fn read_texture(&self, texture: &wgpu::Texture, bytes_per_texel: u32) -> Result<Vec<u8>> {

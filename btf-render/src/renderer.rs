@@ -398,18 +398,8 @@ impl Renderer {
                 &self.camera,
             )?;
         }
-        let target = |format, samples, usage| {
-            gpu.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("btf target"),
-                size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
-                mip_level_count: 1,
-                sample_count: samples,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage,
-                view_formats: &[],
-            })
-        };
+        let target =
+            |format, samples, usage| gpu.target("btf target", (w, h), samples, format, usage);
         let att = wgpu::TextureUsages::RENDER_ATTACHMENT;
         let color = target(
             color_format(msaa),
