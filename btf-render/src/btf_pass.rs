@@ -129,6 +129,22 @@ pub fn mesh_depth_state(write: bool) -> wgpu::DepthStencilState {
     }
 }
 
+/// A depth attachment of the mesh passes' depth buffer, cleared to the far plane, stored
+/// (`store`: a later pass reads it) or discarded.
+pub fn cleared_depth(
+    view: &wgpu::TextureView,
+    store: bool,
+) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+    wgpu::RenderPassDepthStencilAttachment {
+        view,
+        depth_ops: Some(wgpu::Operations {
+            load: wgpu::LoadOp::Clear(1.0),
+            store: if store { wgpu::StoreOp::Store } else { wgpu::StoreOp::Discard },
+        }),
+        stencil_ops: None,
+    }
+}
+
 /// GPU mirror of one light (`LightRaw` in WGSL).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, bytemuck::Pod, bytemuck::Zeroable)]

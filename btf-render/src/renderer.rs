@@ -447,14 +447,10 @@ impl Renderer {
                             store: wgpu::StoreOp::Store,
                         },
                     })],
-                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: &depth_view,
-                        depth_ops: Some(wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(1.0),
-                            store: wgpu::StoreOp::Discard,
-                        }),
-                        stencil_ops: None,
-                    }),
+                    depth_stencil_attachment: Some(crate::btf_pass::cleared_depth(
+                        &depth_view,
+                        false,
+                    )),
                     timestamp_writes: ts,
                     occlusion_query_set: None,
                     multiview_mask: None,
