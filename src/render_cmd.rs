@@ -1,10 +1,10 @@
 //! `btf render SCENE.toml -o out.png [--exr out.exr] [--width W --height H] [--stats]
-//! [--stats-json] [--baseline plain|read-bound]`: renders a scene (TOML, see `examples/scenes/`) headless on the GPU
+//! [--stats-json] [--baseline plain|read-bound|read-bound-groups]`: renders a scene (TOML, see `examples/scenes/`) headless on the GPU
 //! (lavapipe without one) and writes an sRGB PNG (exposure from the scene) and optionally a
 //! linear EXR.
 
 use anyhow::{Context, Result, bail};
-use btf_render::{Baseline, Gpu, RenderOptions, Renderer, Scene, Stats};
+use btf_render::{Baseline, Gpu, ReadForm, RenderOptions, Renderer, Scene, Stats};
 use std::path::PathBuf;
 
 /// Arguments of `btf render`.
@@ -37,8 +37,10 @@ pub struct RenderArgs {
     #[arg(long)]
     pub count_reads: bool,
     /// Draw a cost baseline instead of the BTF: `plain` (mean texture of slot 0) or
-    /// `read-bound` (the BTF pass's reads per pixel, counted first, merely summed).
-    #[arg(long, value_parser = ["plain", "read-bound"])]
+    /// `read-bound` (the BTF pass's reads per pixel, counted first, merely summed; one read
+    /// per loop iteration) or `read-bound-groups` (the same reads, three per iteration of a
+    /// constant-length loop).
+    #[arg(long, value_parser = ["plain", "read-bound", "read-bound-groups"])]
     pub baseline: Option<String>,
 }
 
@@ -64,13 +66,14 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let baseline = match args.baseline.as_deref() {
         None => None,
         Some("plain") => Some(Baseline::Plain),
-        Some(_) => {
+        Some(name) => {
+            let form = if name == "read-bound" { ReadForm::Loop } else { ReadForm::Groups };
             let counting = RenderOptions { count_reads: true, ..Default::default() };
             let counted = Renderer::new(&gpu, &scene, counting)
                 .with_context(|| format!("preparing {}", args.scene.display()))?
                 .render(&gpu)?;
             let reads_per_pixel = counted.stats.reads_per_pixel.unwrap_or(0.0);
-            Some(Baseline::ReadBound { reads_per_pixel })
+            Some(Baseline::ReadBound { reads_per_pixel, form })
         }
     };
     let options = RenderOptions { count_reads: args.count_reads, baseline, ..Default::default() };

@@ -53,6 +53,9 @@ pub struct BtfPassKey {
     pub smooth_boundary: bool,
     /// Lights of the scene (`≤ MAX_LIGHTS`; fixed for a renderer's life).
     pub lights: u32,
+    /// Groups of four components shared by every material drawn, or 0 when they differ
+    /// (the shader then reads each material's own count at run time, which is slower).
+    pub groups: u32,
 }
 
 impl BtfPassKey {
@@ -62,7 +65,7 @@ impl BtfPassKey {
     }
 
     /// The pipeline-overridable constants of the shader for this key.
-    fn constants(&self) -> [(&'static str, f64); 6] {
+    fn constants(&self) -> [(&'static str, f64); 7] {
         [
             ("VIEW_FOUR", self.view_four as u32 as f64),
             ("LIGHT_FOUR", self.light_four as u32 as f64),
@@ -70,6 +73,7 @@ impl BtfPassKey {
             ("SHADOWS", self.shadows as f64),
             ("SMOOTH_BOUNDARY", self.smooth_boundary as u32 as f64),
             ("N_LIGHTS", self.lights as f64),
+            ("GROUPS", self.groups as f64),
         ]
     }
 

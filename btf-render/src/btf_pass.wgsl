@@ -29,6 +29,11 @@ override SMOOTH_BOUNDARY: bool = true;
 // so per-light data lives in registers, not in dynamically indexed arrays. Entries beyond
 // the active lights have weight 0, so the default (all four) is correct, only slower.
 override N_LIGHTS: u32 = 4u;
+// Groups of four components G of every material the pipeline draws (0: each material's own,
+// samplings.info.x, at run time). A constant G makes the group loops fixed-length, which
+// llvmpipe compiles to straight-line reads: at c = 4 the pass took 1.5–1.85× its read bound
+// against 2.3× with G read at run time (BENCHMARKS.md #5).
+override GROUPS: u32 = 0u;
 
 struct LightRaw {
     // xyz: position (w = 1, point) or direction towards the light (w = 0, directional)
@@ -300,10 +305,14 @@ fn combine(acc_a: vec4<f32>, acc_b: vec4<f32>, acc_c: vec4<f32>) -> vec3<f32> {
     );
 }
 
+fn group_count() -> u32 {
+    return select(samplings.info.x, GROUPS, GROUPS > 0u);
+}
+
 // Rows of the weight buffer for slot j and the four light weights of `w`, plus `at`.
 fn weight_rows(j: u32, w: W4, at: u32) -> vec4<u32> {
     let n_l = samplings.info.y;
-    return (vec4<u32>(j * n_l) + w.idx) * (samplings.info.x + 1u) + vec4<u32>(at);
+    return (vec4<u32>(j * n_l) + w.idx) * (group_count() + 1u) + vec4<u32>(at);
 }
 
 // Σ_n τ_n · weights[row_n] over the light weights (one term for nearest light interpolation).
@@ -316,7 +325,7 @@ fn tau_sum(w: W4, rows: vec4<u32>) -> vec4<f32> {
 }
 
 fn slot_pixel(j: u32, uv: vec2<f32>) -> vec3<f32> {
-    let g_count = samplings.info.x;
+    let g_count = group_count();
     var mc = vec3<f32>(0.0);
     var bias = vec3<f32>(0.0);
     for (var a = 0u; a < N_LIGHTS; a = a + 1u) {

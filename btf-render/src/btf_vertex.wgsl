@@ -71,7 +71,7 @@ fn first_occurrences(s: SlotSets) -> u32 {
 // each distinct slot read once. Per slot j, its members are the vertices holding it (bit k
 // of `members`) at coefficient offset base[k] (light 0; light l adds l·4·stride).
 fn vertex_sum(in: VertexOut, uv: vec2<f32>, n_entries: u32) -> vec3<f32> {
-    let g_count = samplings.info.x;
+    let g_count = group_count();
     let stride = 2u + 3u * frame.info.z;
     let light_step = 4u * stride;
     let s = slot_sets(in);

@@ -51,6 +51,6 @@ pub mod transmission;
 pub use error::{Error, Result};
 pub use frame::{Frame, PassStat, Stats};
 pub use gpu::Gpu;
-pub use plain_texture::Baseline;
+pub use plain_texture::{Baseline, ReadForm};
 pub use renderer::{RenderOptions, Renderer, render_scene};
 pub use scene::Scene;

@@ -22,7 +22,19 @@ pub enum Baseline {
     ReadBound {
         /// Mean texture reads per shaded pixel of the BTF pass being bounded.
         reads_per_pixel: f64,
+        /// How the reads are written (the sweep times both and takes the faster).
+        form: ReadForm,
     },
+}
+
+/// Two ways to write the read bound's loop over a slot's eigentexture layers; which one
+/// llvmpipe runs faster depends on the group count, so the cost sweep times both.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ReadForm {
+    /// One read per iteration of a loop whose length is read from a uniform.
+    Loop,
+    /// Three reads (one group) per iteration of a loop of pipeline-constant length.
+    Groups,
 }
 
 /// A baseline pipeline ready to replace the BTF pipeline in the frame's colour pass.
@@ -35,13 +47,14 @@ pub struct BaselinePass {
     pub name: String,
 }
 
-/// Builds a baseline pipeline from `source` with fragment entry `fragment`, on the BTF
-/// pass's frame and material layouts and an optional extra group 2.
+/// Builds a baseline pipeline from `source` with fragment entry `fragment` and its override
+/// `constants`, on the BTF pass's frame and material layouts and an optional extra group 2.
 pub fn pipeline(
     gpu: &Gpu,
     btf: &BtfPass,
     source: &str,
     fragment: &str,
+    constants: &[(&str, f64)],
     extra: Option<&wgpu::BindGroupLayout>,
 ) -> Result<wgpu::RenderPipeline> {
     let dev = &gpu.device;
@@ -74,7 +87,10 @@ pub fn pipeline(
             fragment: Some(wgpu::FragmentState {
                 module: &module,
                 entry_point: Some(fragment),
-                compilation_options: Default::default(),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants,
+                    ..Default::default()
+                },
                 targets: &[Some(color_format(btf.key.msaa).into())],
             }),
             multiview_mask: None,
@@ -86,7 +102,7 @@ pub fn pipeline(
 /// The plain-texture baseline.
 pub fn build(gpu: &Gpu, btf: &BtfPass) -> Result<BaselinePass> {
     Ok(BaselinePass {
-        pipeline: pipeline(gpu, btf, SOURCE, "fs_plain", None)?,
+        pipeline: pipeline(gpu, btf, SOURCE, "fs_plain", &[], None)?,
         group: None,
         name: "plain texture (baseline)".into(),
     })

@@ -13,7 +13,7 @@
 //! by an `if`) executed two samples per read and timed 1.25–2× its reads.
 
 use crate::btf_pass::BtfPass;
-use crate::plain_texture::{BaselinePass, pipeline};
+use crate::plain_texture::{BaselinePass, ReadForm, pipeline};
 use crate::{Error, Gpu, Result};
 use wgpu::util::DeviceExt;
 
@@ -33,13 +33,15 @@ struct ReadBoundRaw {
 }
 
 /// The read-bound baseline for `reads_per_pixel` reads, on a material of `groups` groups of
-/// four components (`3·groups` eigentexture layers per slot) and `views` slots.
+/// four components (`3·groups` eigentexture layers per slot) and `views` slots, its reads
+/// written in `form`.
 pub fn build(
     gpu: &Gpu,
     btf: &BtfPass,
     reads_per_pixel: f64,
     groups: usize,
     views: usize,
+    form: ReadForm,
 ) -> Result<BaselinePass> {
     if !(reads_per_pixel.is_finite() && (0.0..=4096.0).contains(&reads_per_pixel)) {
         return Err(Error::Invalid(format!(
@@ -66,9 +68,19 @@ pub fn build(
         entries: &[wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() }],
     });
     Ok(BaselinePass {
-        pipeline: pipeline(gpu, btf, SOURCE, "fs_read_bound", Some(&layout))?,
+        pipeline: pipeline(
+            gpu,
+            btf,
+            SOURCE,
+            match form {
+                ReadForm::Loop => "fs_read_bound",
+                ReadForm::Groups => "fs_read_bound_groups",
+            },
+            &[("GROUPS", groups as f64)],
+            Some(&layout),
+        )?,
         group: Some(group),
-        name: format!("read bound (baseline, {reads_per_pixel:.1} reads)"),
+        name: format!("read bound (baseline, {reads_per_pixel:.1} reads, {form:?})"),
     })
 }
 

@@ -105,6 +105,10 @@ pub struct Renderer {
     pub material_bytes: u64,
 }
 
+/// Largest group count compiled into the BTF pass as a constant (`BtfPassKey::groups`;
+/// BENCHMARKS.md #5 has the measurements behind it).
+const MAX_CONSTANT_GROUPS: usize = 4;
+
 impl Renderer {
     /// Loads meshes and materials and builds the passes the scene asks for.
     pub fn new(gpu: &Gpu, scene: &Scene, options: RenderOptions) -> Result<Renderer> {
@@ -121,6 +125,12 @@ impl Renderer {
             datas.push(MaterialData::load(&scene.materials[d].store, scene.effects.components)?);
         }
         let fx = &scene.effects;
+        let groups = match datas.first() {
+            Some(first) if datas.iter().all(|d| d.groups == first.groups) => first.groups,
+            _ => 0,
+        };
+        // a constant group count up to 4 (c ≤ 16); beyond, llvmpipe runs the loop faster
+        let groups = if groups <= MAX_CONSTANT_GROUPS { groups as u32 } else { 0 };
         let key = BtfPassKey {
             evaluation: fx.evaluation,
             view_four: fx.view_blend == InterpMode::Four,
@@ -135,6 +145,7 @@ impl Renderer {
             },
             smooth_boundary: scene.wants_shadow_pass() && fx.smooth_boundary,
             lights: scene.lights.len() as u32,
+            groups,
         };
         let btf = BtfPass::new(gpu, key)?;
         let sampler = gpu.device.create_sampler(&wgpu::SamplerDescriptor {
@@ -213,10 +224,10 @@ impl Renderer {
         let baseline = match options.baseline {
             None => None,
             Some(Baseline::Plain) => Some(crate::plain_texture::build(gpu, &btf)?),
-            Some(Baseline::ReadBound { reads_per_pixel }) => {
+            Some(Baseline::ReadBound { reads_per_pixel, form }) => {
                 let m = &materials[0].data;
                 let views = m.view_sampling.len();
-                Some(crate::read_bound::build(gpu, &btf, reads_per_pixel, m.groups, views)?)
+                Some(crate::read_bound::build(gpu, &btf, reads_per_pixel, m.groups, views, form)?)
             }
         };
         let shadowing =

@@ -9,7 +9,7 @@ mod common;
 use btf_core::eigen::Quantization;
 use btf_render::cost_sweep::{self, SweepConfig};
 use btf_render::material::MaterialData;
-use btf_render::{Baseline, RenderOptions, Scene, render_scene};
+use btf_render::{Baseline, ReadForm, RenderOptions, Scene, render_scene};
 use common::*;
 use half::f16;
 
@@ -60,17 +60,34 @@ fn baselines_read_what_they_claim() {
     }
     let plain = render(&scene, &gpu, Baseline::Plain);
     let e = assert_close("plain-texture", SIZE, SIZE, &mean, &plain.rgb, 1e-3);
-    let full = render(&scene, &gpu, Baseline::ReadBound { reads_per_pixel: 13.0 });
+    let full =
+        render(&scene, &gpu, Baseline::ReadBound { reads_per_pixel: 13.0, form: ReadForm::Loop });
     let e13 = assert_close("read-bound-13", SIZE, SIZE, &bound13, &full.rgb, 1e-3);
     assert!(plain.stats.ran("plain texture") && full.stats.ran("read bound"));
+    // the grouped form makes the same reads (three per constant-length loop iteration)
+    for reads in [13.0, 19.5] {
+        let looped = render(
+            &scene,
+            &gpu,
+            Baseline::ReadBound { reads_per_pixel: reads, form: ReadForm::Loop },
+        );
+        let grouped = render(
+            &scene,
+            &gpu,
+            Baseline::ReadBound { reads_per_pixel: reads, form: ReadForm::Groups },
+        );
+        assert_close("read-bound groups vs loop", SIZE, SIZE, &looped.rgb, &grouped.rgb, 1e-6);
+    }
     // 19.5 reads = 1.5 slots of 13: slot 0 everywhere, a second slot on about half the pixels.
-    let half = render(&scene, &gpu, Baseline::ReadBound { reads_per_pixel: 19.5 });
+    let half =
+        render(&scene, &gpu, Baseline::ReadBound { reads_per_pixel: 19.5, form: ReadForm::Loop });
     let differ = (0..texels)
         .filter(|&t| (0..3).any(|k| (half.rgb[t * 3 + k] - full.rgb[t * 3 + k]).abs() > 1e-4))
         .count() as f64
         / texels as f64;
     // below one slot: no reads on most pixels (black), the whole slot on the rest
-    let tenth = render(&scene, &gpu, Baseline::ReadBound { reads_per_pixel: 1.3 });
+    let tenth =
+        render(&scene, &gpu, Baseline::ReadBound { reads_per_pixel: 1.3, form: ReadForm::Loop });
     let black = (0..texels).filter(|&t| (0..3).all(|k| tenth.rgb[t * 3 + k] == 0.0)).count() as f64
         / texels as f64;
     eprintln!(
