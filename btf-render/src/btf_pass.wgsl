@@ -137,13 +137,17 @@ fn corner_out(v: CornerIn) -> VertexOut {
     out.uv = v.uv;
     out.bary = vec3<f32>(f32(v.corner == 0u), f32(v.corner == 1u), f32(v.corner == 2u));
     out.tri = v.tri;
-    // eq. 6: u = (1 + cos(α + ∠(n, l))) / 2, for both sides of a two-sided sheet
-    let n = normalize(v.normal);
-    let alpha = frame.terminator.x;
-    for (var l = 0u; l < frame.info.x; l = l + 1u) {
-        let ang = acos(clamp(dot(n, light_dir(l, v.position).xyz), -1.0, 1.0));
-        out.u_front[l] = 0.5 * (1.0 + cos(alpha + ang));
-        out.u_back[l] = 0.5 * (1.0 + cos(alpha + PI - ang));
+    // eq. 6: u = (1 + cos(α + ∠(n, l))) / 2, for both sides of a two-sided sheet; compiled
+    // out where the pass does not apply the smooth boundary (at 128² on the sweep's mesh this
+    // per-corner work was 0.25× the read bound of a c = 4 frame)
+    if (SHADOWS != 0u && SMOOTH_BOUNDARY) {
+        let n = normalize(v.normal);
+        let alpha = frame.terminator.x;
+        for (var l = 0u; l < frame.info.x; l = l + 1u) {
+            let ang = acos(clamp(dot(n, light_dir(l, v.position).xyz), -1.0, 1.0));
+            out.u_front[l] = 0.5 * (1.0 + cos(alpha + ang));
+            out.u_back[l] = 0.5 * (1.0 + cos(alpha + PI - ang));
+        }
     }
     return out;
 }

@@ -104,19 +104,16 @@ fn nearest_on_ring(which: u32, r: u32, phi: f32) -> u32 {
     return u32(ring.w) + wrap_index(u32(floor(u + 0.5)), count);
 }
 
+// Appends (i, w) if w > 0. The directions interp_weights gives a positive weight are always
+// distinct (two rings share no index, and a one-sample ring gives its second neighbour weight
+// 0), so nothing needs merging; btf_core::interp merges anyway, to the same weights.
 fn w4_push(p: ptr<function, W4>, i: u32, w: f32) {
-    if (w <= 0.0) {
-        return;
+    if (w > 0.0) {
+        let k = (*p).n;
+        (*p).idx[k] = i;
+        (*p).w[k] = w;
+        (*p).n = k + 1u;
     }
-    for (var k = 0u; k < (*p).n; k = k + 1u) {
-        if ((*p).idx[k] == i) {
-            (*p).w[k] = (*p).w[k] + w;
-            return;
-        }
-    }
-    (*p).idx[(*p).n] = i;
-    (*p).w[(*p).n] = w;
-    (*p).n = (*p).n + 1u;
 }
 
 fn interp_weights(which: u32, a: vec2<f32>, four: bool) -> W4 {
@@ -149,12 +146,30 @@ fn view_weights(a: vec2<f32>, four: bool) -> W4 {
     return interp_weights(VIEW, a, four);
 }
 
+// The light weights of interp_weights in fixed places, not compacted: the light sums run over
+// all four entries anyway, and an entry of weight 0 keeps a valid index (at a one-sample ring,
+// or when both rings are the same, its weight is 0). n is 4 (four) or 1 (nearest).
+fn light_interp(a: vec2<f32>, four: bool) -> W4 {
+    let b = ring_bracket(LIGHT, a.x);
+    let r0 = u32(b.x);
+    let r1 = u32(b.y);
+    let t = b.z;
+    if (four) {
+        let p = ring_neighbours(LIGHT, r0, a.y);
+        let q = ring_neighbours(LIGHT, r1, a.y);
+        let w = vec4<f32>((1.0 - t) * (1.0 - p.s), (1.0 - t) * p.s, t * (1.0 - q.s), t * q.s);
+        return W4(vec4<u32>(p.i0, p.i1, q.i0, q.i1), w, 4u);
+    }
+    let i = nearest_on_ring(LIGHT, select(r0, r1, t > 0.5), a.y);
+    return W4(vec4<u32>(i, 0u, 0u, 0u), vec4<f32>(1.0, 0.0, 0.0, 0.0), 1u);
+}
+
 // Light weights τ (eq. 3) with the horizon fade.
 fn light_weights(a: vec2<f32>, four: bool) -> W4 {
     if (!(a.x < 90.0)) {
         return W4(vec4<u32>(0u), vec4<f32>(0.0), 0u);
     }
-    var w = interp_weights(LIGHT, a, four);
+    var w = light_interp(a, four);
     let last = ring_of(LIGHT, samplings.n_rings[LIGHT] - 1u).x;
     if (a.x > last) {
         let f = cos(radians(a.x)) / cos(radians(last));
