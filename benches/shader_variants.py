@@ -64,6 +64,66 @@ TRIVIAL_FS = (
 )
 
 
+# The layered variants of session 6 (c = 4 only: one group, three eigentexture layers per
+# slot): each keeps the BTF pipeline and the reconstruction's reads (counted, so the bound
+# matches) and adds one part of the per-pixel work, so that successive differences are what
+# each part costs.
+FS_PIXEL = """fn fs_pixel(in: VertexOut) -> @location(0) vec4<f32> {
+    let rgb = pixel_lights(in);
+    count_reads();
+    return vec4<f32>(rgb, 1.0);
+}"""
+LAYER_SETUP = """    let uv = tex_uv(in.uv);
+    duv_dx = dpdx(uv);
+    duv_dy = dpdy(uv);
+"""
+HASHED_SLOTS = (
+    "    let nslots = 4u - select(0u, 1u, fract(in.clip.x * 0.37 + in.clip.y * 0.61) < 0.3);\n"
+)
+VIEWS = """    let v = to_camera(in.world);
+    let f = tangent_frame(in, v);
+    let views = view_weights(dir_angles(vec3<f32>(dot(v, f.t), dot(v, f.b), dot(v, f.n))), VIEW_FOUR);
+"""
+LIGHTS = "    let lit = gather_lights(in, f);\n"
+OUT = "    return vec4<f32>(acc.rgb * OUT_SCALE + vec3<f32>(acc.a * 1e-6), 1.0);"
+
+
+def slot_reads(slot, weight, count):
+    return f"""    var acc = vec4<f32>(0.0);
+    reads = 0u;
+    for (var m = 0u; m < {count}; m = m + 1u) {{
+        let j = {slot};
+        var s = textureSampleGrad(mean_tex, tex_sampler, uv, j, duv_dx, duv_dy);
+        for (var r = 0u; r < 3u; r = r + 1u) {{
+            s = s + textureSampleGrad(eigen_tex, tex_sampler, uv, j * 3u + r, duv_dx, duv_dy);
+        }}
+        acc = acc + {weight} * s;
+        reads = reads + 4u;
+    }}
+    count_reads();
+"""
+
+
+def layered(text, body, scale="1.0"):
+    return replace(text, FS_PIXEL, "fn fs_pixel(in: VertexOut) -> @location(0) vec4<f32> {\n"
+                   + LAYER_SETUP + body + OUT.replace("OUT_SCALE", scale) + "\n}")
+
+
+def layered_variants(src):
+    lit_scale = "le[0] * dot(lw[0].w, vec4<f32>(1.0))"
+    return {
+        "layer_pipeline_reads": layered(src, HASHED_SLOTS + slot_reads("m", "1.0", "nslots")),
+        "layer_view_weights": layered(src, VIEWS + HASHED_SLOTS + slot_reads("m", "views.w[m]", "nslots")),
+        "layer_view_slots": layered(src, VIEWS + slot_reads("views.idx[m]", "views.w[m]", "views.n")),
+        "layer_lights": layered(
+            src,
+            VIEWS.replace("    let views", LIGHTS + "    let views")
+            + slot_reads("views.idx[m]", "views.w[m]", "views.n"),
+            lit_scale,
+        ),
+    }
+
+
 def reads_only(text):
     start = text.index("fn slot_pixel(j: u32, uv: vec2<f32>) -> vec3<f32> {")
     end = text.index("fn count_reads() {")
@@ -88,6 +148,7 @@ def main():
         "reads_only": reads_only(src),
         "reads_only_constant_view": replace(reads_only(src), VIEW, VIEW_CONST),
         "trivial_fragment": replace(src, *TRIVIAL_FS),
+        **layered_variants(src),
     }
     for name, text in variants.items():
         path = os.path.join(out, f"{name}.wgsl")
