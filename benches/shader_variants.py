@@ -23,13 +23,23 @@ def replace(text, old, new):
     return text.replace(old, new, 1)
 
 
-TAU_SUM = """    var sum = w.w.x * weights[rows.x];
-    if (LIGHT_FOUR) {
-        sum = sum + w.w.y * weights[rows.y] + w.w.z * weights[rows.z] + w.w.w * weights[rows.w];
-    }
-    return sum;"""
-# Keeps the operands alive so the compiler cannot drop the index arithmetic.
-TAU_CONST = "    return w.w * vec4<f32>(rows) * 1e-9;"
+GAMMA_ROW = """fn gamma_row(e: u32, g: u32) -> vec4<f32> {
+    if (PACKED) {"""
+BIAS_OF = """fn bias_of(e: u32) -> f32 {
+    let g = group_count();"""
+# The weight rows replaced by constants; the operands stay alive so the compiler cannot drop
+# the index arithmetic.
+GAMMA_CONST = """fn gamma_row(e: u32, g: u32) -> vec4<f32> {
+    if (e < 0xffffffffu) { return vec4<f32>(f32(e + g) * 1e-9); }
+    if (PACKED) {"""
+BIAS_CONST = """fn bias_of(e: u32) -> f32 {
+    if (e < 0xffffffffu) { return f32(e) * 1e-9; }
+    let g = group_count();"""
+
+
+def no_weight_rows(text):
+    return replace(replace(text, GAMMA_ROW, GAMMA_CONST), BIAS_OF, BIAS_CONST)
+
 
 VIEW = """fn view_weights(a: vec2<f32>, four: bool) -> W4 {
     return interp_weights(VIEW, a, four);"""
@@ -142,9 +152,9 @@ def main():
     const = replace(replace(src, VIEW, VIEW_CONST), LIGHT, LIGHT_CONST)
     variants = {
         "as_is": src,
-        "no_weight_rows": replace(src, TAU_SUM, TAU_CONST),
+        "no_weight_rows": no_weight_rows(src),
         "constant_weights": const,
-        "no_weight_rows_constant_weights": replace(const, TAU_SUM, TAU_CONST),
+        "no_weight_rows_constant_weights": no_weight_rows(const),
         "reads_only": reads_only(src),
         "reads_only_constant_view": replace(reads_only(src), VIEW, VIEW_CONST),
         "trivial_fragment": replace(src, *TRIVIAL_FS),

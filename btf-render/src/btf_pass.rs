@@ -56,6 +56,9 @@ pub struct BtfPassKey {
     /// Groups of four components shared by every material drawn, or 0 when they differ
     /// (the shader then reads each material's own count at run time, which is slower).
     pub groups: u32,
+    /// The materials' weights are in the packed `f16` layout (`material.rs`; only with
+    /// `groups > 0`).
+    pub packed: bool,
 }
 
 impl BtfPassKey {
@@ -65,7 +68,7 @@ impl BtfPassKey {
     }
 
     /// The pipeline-overridable constants of the shader for this key.
-    fn constants(&self) -> [(&'static str, f64); 7] {
+    fn constants(&self) -> [(&'static str, f64); 8] {
         [
             ("VIEW_FOUR", self.view_four as u32 as f64),
             ("LIGHT_FOUR", self.light_four as u32 as f64),
@@ -74,6 +77,7 @@ impl BtfPassKey {
             ("SMOOTH_BOUNDARY", self.smooth_boundary as u32 as f64),
             ("N_LIGHTS", self.lights as f64),
             ("GROUPS", self.groups as f64),
+            ("PACKED", self.packed as u32 as f64),
         ]
     }
 

@@ -34,6 +34,8 @@ override N_LIGHTS: u32 = 4u;
 // llvmpipe compiles to straight-line reads: at c = 4 the pass took 1.5–1.85× its read bound
 // against 2.3× with G read at run time (BENCHMARKS.md #5).
 override GROUPS: u32 = 0u;
+// The weights in material.rs's packed f16 layout (set only with GROUPS > 0).
+override PACKED: bool = false;
 
 struct LightRaw {
     // xyz: position (w = 1, point) or direction towards the light (w = 0, directional)
@@ -73,7 +75,8 @@ struct FrameRaw {
 @group(1) @binding(1) var eigen_tex: texture_2d_array<f32>;
 @group(1) @binding(2) var mean_tex: texture_2d_array<f32>;
 @group(1) @binding(3) var tex_sampler: sampler;
-@group(1) @binding(4) var<storage, read> weights: array<vec4<f32>>;
+// f32 rows (bitcast), or f16 halves when PACKED (material.rs)
+@group(1) @binding(4) var<storage, read> weights: array<vec4<u32>>;
 
 struct CornerIn {
     @location(0) position: vec3<f32>,
@@ -313,17 +316,50 @@ fn group_count() -> u32 {
     return select(samplings.info.x, GROUPS, GROUPS > 0u);
 }
 
-// Rows of the weight buffer for slot j and the four light weights of `w`, plus `at`.
-fn weight_rows(j: u32, w: W4, at: u32) -> vec4<u32> {
-    let n_l = samplings.info.y;
-    return (vec4<u32>(j * n_l) + w.idx) * (group_count() + 1u) + vec4<u32>(at);
+// First rows of the weight entries of slot j and the four light samples of `w`.
+fn weight_entries(j: u32, w: W4) -> vec4<u32> {
+    let g = group_count();
+    let stride = select(g + 1u, (4u * g + 8u) / 8u, PACKED);
+    return (vec4<u32>(j * samplings.info.y) + w.idx) * stride;
 }
 
-// Σ_n τ_n · weights[row_n] over the light weights (one term for nearest light interpolation).
-fn tau_sum(w: W4, rows: vec4<u32>) -> vec4<f32> {
-    var sum = w.w.x * weights[rows.x];
+// The scaled weights of group g of the entry at row e.
+fn gamma_row(e: u32, g: u32) -> vec4<f32> {
+    if (PACKED) {
+        let q = weights[e + g / 2u];
+        let h = select(q.xy, q.zw, (g & 1u) == 1u);
+        return vec4<f32>(unpack2x16float(h.x), unpack2x16float(h.y));
+    }
+    return bitcast<vec4<f32>>(weights[e + g]);
+}
+
+// The bias b_ij of the entry at row e (packed: half 4G, in the same load as group G − 1's
+// weights when G is odd).
+fn bias_of(e: u32) -> f32 {
+    let g = group_count();
+    if (PACKED) {
+        let q = weights[e + g / 2u];
+        return unpack2x16float(select(q.x, q.z, (g & 1u) == 1u)).x;
+    }
+    return bitcast<f32>(weights[e + g].x);
+}
+
+// Σ_n τ_n · (group g of entry n) over the light weights (one term for nearest light
+// interpolation).
+fn tau_sum(w: W4, entries: vec4<u32>, g: u32) -> vec4<f32> {
+    var sum = w.w.x * gamma_row(entries.x, g);
     if (LIGHT_FOUR) {
-        sum = sum + w.w.y * weights[rows.y] + w.w.z * weights[rows.z] + w.w.w * weights[rows.w];
+        sum = sum + w.w.y * gamma_row(entries.y, g) + w.w.z * gamma_row(entries.z, g)
+            + w.w.w * gamma_row(entries.w, g);
+    }
+    return sum;
+}
+
+// Σ_n τ_n b_{j,i_n}.
+fn tau_bias(w: W4, entries: vec4<u32>) -> f32 {
+    var sum = w.w.x * bias_of(entries.x);
+    if (LIGHT_FOUR) {
+        sum = sum + w.w.y * bias_of(entries.y) + w.w.z * bias_of(entries.z) + w.w.w * bias_of(entries.w);
     }
     return sum;
 }
@@ -335,7 +371,7 @@ fn slot_pixel(j: u32, uv: vec2<f32>) -> vec3<f32> {
     for (var a = 0u; a < N_LIGHTS; a = a + 1u) {
         let w = lw[a];
         mc = mc + dot(w.w, vec4<f32>(1.0)) * le[a];
-        bias = bias + tau_sum(w, weight_rows(j, w, g_count)).x * le[a];
+        bias = bias + tau_bias(w, weight_entries(j, w)) * le[a];
     }
     var col = mc * textureSampleGrad(mean_tex, tex_sampler, uv, j, duv_dx, duv_dy).rgb + bias;
     var acc_a = vec4<f32>(0.0);
@@ -346,7 +382,7 @@ fn slot_pixel(j: u32, uv: vec2<f32>) -> vec3<f32> {
         var cb = vec4<f32>(0.0);
         var cc = vec4<f32>(0.0);
         for (var a = 0u; a < N_LIGHTS; a = a + 1u) {
-            let gam = tau_sum(lw[a], weight_rows(j, lw[a], g));
+            let gam = tau_sum(lw[a], weight_entries(j, lw[a]), g);
             let e = le[a];
             ca = ca + vec4<f32>(gam.x * e, gam.y * e.r);
             cb = cb + vec4<f32>(gam.y * e.gb, gam.z * e.rg);

@@ -10,7 +10,11 @@
 //! (`·255` for `u8`), and the offsets into a per-(slot, light) constant
 //! `b_ij = Σ_k p_ikj · o_kj`, so dequantisation costs the shader nothing. The mean `μ_j` is
 //! one `Rgba16Float` layer per slot. Weights sit in a storage buffer, `G + 1` vec4 per
-//! (slot, light): the scaled weights, then `(b_ij, 0, 0, 0)`.
+//! (slot, light): the scaled weights, then `(b_ij, 0, 0, 0)`. Or, packed (when the pass has
+//! a constant group count and every value fits `f16`), as `f16` halves: the `4G` scaled
+//! weights then `b_ij`, two halves per `u32`, `⌈(4G + 1)/8⌉` `vec4<u32>` per (slot, light),
+//! so one load brings a light sample's bias and first eight weights (llvmpipe pays per
+//! load, lane by lane, not per byte). Its error: ≤ 2⁻¹¹ relative per weight.
 //!
 //! Error of the layout: `f16` keeps 11 significant bits of each eigentexture value scaled
 //! to `[−1, 1]` (≤ 2⁻¹¹ of the component's largest magnitude), `u8` ≤ half a step of
@@ -157,6 +161,31 @@ impl MaterialData {
         self.weight_group(j, i, self.groups)[0]
     }
 
+    /// The weights in the packed `f16` layout (see the module notes), or `None` when a value
+    /// is beyond the `f16` range (an HDR store), which keeps the `f32` rows.
+    pub fn packed_weights(&self) -> Option<Vec<[u32; 4]>> {
+        let g = self.groups;
+        let stride = packed_stride(g);
+        let entries = self.weights.len() / (g + 1);
+        let mut out = vec![[0u32; 4]; entries * stride];
+        let mut halves = vec![0u16; stride * 8];
+        for (e, rows) in self.weights.chunks_exact(g + 1).enumerate() {
+            halves.fill(0);
+            let values = rows[..g].iter().flatten().chain(std::iter::once(&rows[g][0]));
+            for (h, &v) in halves.iter_mut().zip(values) {
+                let x = f16::from_f32(v);
+                if !x.is_finite() {
+                    return None;
+                }
+                *h = x.to_bits();
+            }
+            for (k, pair) in halves.chunks_exact(2).enumerate() {
+                out[e * stride + k / 4][k % 4] = u32::from(pair[0]) | (u32::from(pair[1]) << 16);
+            }
+        }
+        Some(out)
+    }
+
     /// Texture reads one slot costs per pixel: the mean plus three per group.
     pub fn reads_per_slot(&self) -> usize {
         1 + 3 * self.groups
@@ -223,15 +252,17 @@ pub struct MaterialGpu {
 impl MaterialGpu {
     /// Uploads `data` with full mip chains (`mips.rs`), checking the device's limits first.
     pub fn upload(gpu: &crate::Gpu, data: &MaterialData, name: &str) -> Result<MaterialGpu> {
-        Self::upload_with(gpu, data, name, true)
+        Self::upload_with(gpu, data, name, true, None)
     }
 
-    /// Uploads `data`, with mip chains or the base level only.
+    /// Uploads `data`, with mip chains or the base level only, and its weights as `f32` rows
+    /// or as `packed` (`MaterialData::packed_weights`).
     pub fn upload_with(
         gpu: &crate::Gpu,
         data: &MaterialData,
         name: &str,
         mipmaps: bool,
+        packed: Option<&[[u32; 4]]>,
     ) -> Result<MaterialGpu> {
         use wgpu::util::DeviceExt;
         let limits = gpu.device.limits();
@@ -304,14 +335,21 @@ impl MaterialGpu {
                 n_v,
                 bytemuck::cast_slice(&mean_layers),
             );
+            let weight_bytes: &[u8] = match packed {
+                Some(p) => bytemuck::cast_slice(p),
+                None => bytemuck::cast_slice(&data.weights),
+            };
             let weights = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("weights"),
-                contents: bytemuck::cast_slice(&data.weights),
+                contents: weight_bytes,
                 usage: wgpu::BufferUsages::STORAGE,
             });
-            let bytes =
-                (eigen_layers.len() + mean_layers.len() * 2 + data.weights.len() * 16) as u64;
+            let bytes = (eigen_layers.len() + mean_layers.len() * 2 + weight_bytes.len()) as u64;
             MaterialGpu { eigen, mean, weights, bytes }
         })
     }
+}
+/// `vec4<u32>` per (slot, light) in the packed weight layout: `4G + 1` halves, eight per vec4.
+pub fn packed_stride(groups: usize) -> usize {
+    (4 * groups + 8) / 8
 }

@@ -131,6 +131,9 @@ impl Renderer {
         };
         // a constant group count up to 4 (c ≤ 16); beyond, llvmpipe runs the loop faster
         let groups = if groups <= MAX_CONSTANT_GROUPS { groups as u32 } else { 0 };
+        // f16 weight rows where every material's fit (else all keep f32 rows)
+        let packed: Option<Vec<Vec<[u32; 4]>>> =
+            if groups > 0 { datas.iter().map(|d| d.packed_weights()).collect() } else { None };
         let key = BtfPassKey {
             evaluation: fx.evaluation,
             view_four: fx.view_blend == InterpMode::Four,
@@ -146,6 +149,7 @@ impl Renderer {
             smooth_boundary: scene.wants_shadow_pass() && fx.smooth_boundary,
             lights: scene.lights.len() as u32,
             groups,
+            packed: packed.is_some(),
         };
         let btf = BtfPass::new(gpu, key)?;
         let sampler = gpu.device.create_sampler(&wgpu::SamplerDescriptor {
@@ -167,6 +171,7 @@ impl Renderer {
                 &data,
                 &desc.store.display().to_string(),
                 fx.mipmaps,
+                packed.as_ref().map(|p| p[k].as_slice()),
             )?;
             material_bytes += gpu_mat.bytes;
             let samplings = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {

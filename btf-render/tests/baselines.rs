@@ -155,3 +155,40 @@ fn sweep_rows_have_predicted_reads_and_falling_error() {
     assert!(r.per_pixel_reads_le_per_vertex);
     assert_eq!(r.fits.len(), 4);
 }
+
+/// The packed f16 weight layout (material.rs) holds every scaled weight and bias at its
+/// documented place, within f16's rounding (2⁻¹¹ relative), for an odd and an even `G`.
+#[test]
+fn packed_weights_hold_every_weight_and_bias() {
+    let dir = tempfile::tempdir().unwrap();
+    for (components, name) in [(4, "g1.eigen"), (8, "g2.eigen"), (12, "g3.eigen")] {
+        let store =
+            write_store(dir.path(), name, Pattern::Checker, 8, 8, components, Quantization::F16);
+        let data = MaterialData::load(&store, None).unwrap();
+        let packed = data.packed_weights().expect("test weights fit f16");
+        let g = data.groups;
+        let stride = btf_render::material::packed_stride(g);
+        let n_l = data.light_sampling.len();
+        let half = |e: usize, h: usize| {
+            let word = packed[e * stride + h / 8][(h % 8) / 2];
+            f16::from_bits((word >> (16 * (h % 2))) as u16).to_f32()
+        };
+        let close = |a: f32, b: f32| (a - b).abs() <= b.abs() * 2f32.powi(-11) + 1e-7;
+        for j in 0..data.view_sampling.len() {
+            for i in 0..n_l {
+                let e = j * n_l + i;
+                for q in 0..g {
+                    let row = data.weight_group(j, i, q);
+                    for (k, &w) in row.iter().enumerate() {
+                        assert!(
+                            close(half(e, 4 * q + k), w),
+                            "{name} slot {j} light {i} group {q}"
+                        );
+                    }
+                }
+                assert!(close(half(e, 4 * g), data.bias(j, i)), "{name} slot {j} light {i} bias");
+            }
+        }
+        assert_eq!(packed.len(), n_l * data.view_sampling.len() * stride);
+    }
+}

@@ -79,10 +79,13 @@ pub(super) fn pipeline(
             label: Some("transmission.wgsl"),
             source: wgpu::ShaderSource::Wgsl(SOURCE.into()),
         });
+        // the material layout of the BTF pass it draws after (its weights may be packed)
         let constants = [
             ("VIEW_FOUR", key.view_four as u32 as f64),
             ("LIGHT_FOUR", key.light_four as u32 as f64),
             ("COUNT_READS", 0.0),
+            ("GROUPS", btf.key.groups as f64),
+            ("PACKED", btf.key.packed as u32 as f64),
         ];
         let options = wgpu::PipelineCompilationOptions {
             constants: &constants,
