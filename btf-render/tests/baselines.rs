@@ -190,5 +190,9 @@ fn packed_weights_hold_every_weight_and_bias() {
             }
         }
         assert_eq!(packed.len(), n_l * data.view_sampling.len() * stride);
+        // a weight beyond f16 (an HDR store) keeps the f32 rows
+        let mut hdr = data.clone();
+        hdr.weights[0][0] = 1e6;
+        assert!(hdr.packed_weights().is_none(), "{name}: 1e6 must not be packed as f16");
     }
 }
