@@ -4,7 +4,8 @@
 // per-vertex coefficients (eq. 11) added to per-pixel lights.
 
 // per-vertex mode: per (vertex, light, slot m): mean coefficient, bias, 3G coefficient vec4
-@group(2) @binding(0) var<storage, read> vertex_coef: array<vec4<f32>>;
+// f32 vec4s (bitcast), or with GROUPS > 0 f16 halves and a scale per entry (per_vertex.rs)
+@group(2) @binding(0) var<storage, read> vertex_coef: array<vec4<u32>>;
 @group(2) @binding(1) var<storage, read> vertex_slots: array<vec4<u32>>;
 
 // vs_main plus the triangle's slot sets for the per-vertex layout: loaded once per corner
@@ -72,7 +73,7 @@ fn first_occurrences(s: SlotSets) -> u32 {
 // of `members`) at coefficient offset base[k] (light 0; light l adds l·4·stride).
 fn vertex_sum(in: VertexOut, uv: vec2<f32>, n_entries: u32) -> vec3<f32> {
     let g_count = group_count();
-    let stride = 2u + 3u * frame.info.z;
+    let stride = select(2u + 3u * frame.info.z, (4u + 6u * frame.info.z + 3u) / 4u, GROUPS > 0u);
     let light_step = 4u * stride;
     let s = slot_sets(in);
     var todo = first_occurrences(s);
@@ -116,8 +117,8 @@ fn slot_looped(in: VertexOut, uv: vec2<f32>, j: u32, members: u32, base: vec3<u3
         for (var l = 0u; l < n_entries; l = l + 1u) {
             let w = in.bary[k] * vis[l];
             let b = base[k] + l * light_step;
-            mc = mc + w * vertex_coef[b].rgb;
-            bias = bias + w * vertex_coef[b + 1u].rgb;
+            mc = mc + w * bitcast<vec4<f32>>(vertex_coef[b]).rgb;
+            bias = bias + w * bitcast<vec4<f32>>(vertex_coef[b + 1u]).rgb;
         }
     }
     var col = mc * textureSampleGrad(mean_tex, tex_sampler, uv, j, duv_dx, duv_dy).rgb + bias;
@@ -138,9 +139,9 @@ fn slot_looped(in: VertexOut, uv: vec2<f32>, j: u32, members: u32, base: vec3<u3
             for (var l = 0u; l < n_entries; l = l + 1u) {
                 let w = in.bary[k] * vis[l];
                 let b = base[k] + l * light_step + 2u + 3u * g;
-                ca = ca + w * vertex_coef[b];
-                cb = cb + w * vertex_coef[b + 1u];
-                cc = cc + w * vertex_coef[b + 2u];
+                ca = ca + w * bitcast<vec4<f32>>(vertex_coef[b]);
+                cb = cb + w * bitcast<vec4<f32>>(vertex_coef[b + 1u]);
+                cc = cc + w * bitcast<vec4<f32>>(vertex_coef[b + 2u]);
             }
         }
         let layer = j * 3u * g_count + 3u * g;
@@ -149,6 +150,25 @@ fn slot_looped(in: VertexOut, uv: vec2<f32>, j: u32, members: u32, base: vec3<u3
         acc_c = acc_c + cc * textureSampleGrad(eigen_tex, tex_sampler, uv, layer + 2u, duv_dx, duv_dy);
     }
     return col + combine(acc_a, acc_b, acc_c);
+}
+
+// The 12 coefficients of group g of the packed entry at b (per_vertex::pack_f16): six u32
+// from word 4 + 6g on, over two loads (groups 2k and 2k + 1 share the middle one).
+fn group_coefficients(b: u32, g: u32) -> array<vec4<f32>, 3> {
+    let first = b + 1u + (3u * g) / 2u;
+    let q0 = vertex_coef[first];
+    let q1 = vertex_coef[first + 1u];
+    var u: array<u32, 6>;
+    if ((g & 1u) == 0u) {
+        u = array<u32, 6>(q0.x, q0.y, q0.z, q0.w, q1.x, q1.y);
+    } else {
+        u = array<u32, 6>(q0.z, q0.w, q1.x, q1.y, q1.z, q1.w);
+    }
+    return array<vec4<f32>, 3>(
+        vec4<f32>(unpack2x16float(u[0]), unpack2x16float(u[1])),
+        vec4<f32>(unpack2x16float(u[2]), unpack2x16float(u[3])),
+        vec4<f32>(unpack2x16float(u[4]), unpack2x16float(u[5])),
+    );
 }
 
 // slot_looped with the group count a pipeline constant (GROUPS ≤ 4): the members are visited
@@ -168,15 +188,17 @@ fn slot_fixed(in: VertexOut, uv: vec2<f32>, j: u32, members: u32, base: vec3<u32
         let k = firstTrailingBit(todo_m);
         todo_m = todo_m & (todo_m - 1u);
         for (var l = 0u; l < n_entries; l = l + 1u) {
-            let w = in.bary[k] * vis[l];
             let b = base[k] + l * light_step;
-            mc = mc + w * vertex_coef[b].rgb;
-            bias = bias + w * vertex_coef[b + 1u].rgb;
+            let head = vertex_coef[b];
+            let w = in.bary[k] * vis[l] * bitcast<f32>(head.x);
+            let mb = vec3<f32>(unpack2x16float(head.y), unpack2x16float(head.z).x);
+            mc = mc + w * mb;
+            bias = bias + w * vec3<f32>(unpack2x16float(head.z).y, unpack2x16float(head.w));
             for (var g = 0u; g < min(GROUPS, 4u); g = g + 1u) {
-                let bg = b + 2u + 3u * g;
-                ca[g] = ca[g] + w * vertex_coef[bg];
-                cb[g] = cb[g] + w * vertex_coef[bg + 1u];
-                cc[g] = cc[g] + w * vertex_coef[bg + 2u];
+                let c = group_coefficients(b, g);
+                ca[g] = ca[g] + w * c[0];
+                cb[g] = cb[g] + w * c[1];
+                cc[g] = cc[g] + w * c[2];
             }
         }
     }

@@ -58,6 +58,45 @@ pub fn stride(groups: usize) -> usize {
     2 + 3 * groups
 }
 
+/// `vec4<u32>` per (vertex, light, slot) in the packed layout of [`pack_f16`].
+pub fn packed_stride(groups: usize) -> usize {
+    (4 + 6 * groups).div_ceil(4)
+}
+
+/// The coefficients as `f16` halves with one `f32` scale per (vertex, light, slot) entry:
+/// `[scale bits, mean coefficient and bias (6 halves)]`, then each group's 12 coefficients
+/// (6 `u32`), all divided by the entry's largest magnitude, so that any HDR irradiance fits.
+/// Fewer loads for the shader (llvmpipe pays per load, lane by lane): `⌈(4 + 6G)/4⌉`
+/// instead of `2 + 3G`; the error is ≤ 2⁻¹¹ of the entry's largest coefficient.
+pub fn pack_f16(coef: &[[f32; 4]], groups: usize) -> Vec<[u32; 4]> {
+    use half::f16;
+    let (k, p) = (stride(groups), packed_stride(groups));
+    let mut out = vec![[0u32; 4]; coef.len() / k * p];
+    let mut words = vec![0u32; 4 * p];
+    for (entry, dst) in coef.chunks_exact(k).zip(out.chunks_exact_mut(p)) {
+        let max = entry.iter().flatten().fold(0f32, |m, v| m.max(v.abs()));
+        let scale = if max > 0.0 && max.is_finite() { max } else { 1.0 };
+        let half = |v: f32| u32::from(f16::from_f32(v / scale).to_bits());
+        let pair = |a: f32, b: f32| half(a) | (half(b) << 16);
+        let (m, b) = (entry[0], entry[1]);
+        words.fill(0);
+        words[..4].copy_from_slice(&[
+            scale.to_bits(),
+            pair(m[0], m[1]),
+            pair(m[2], b[0]),
+            pair(b[1], b[2]),
+        ]);
+        let values: Vec<f32> = entry[2..].iter().flatten().copied().collect();
+        for (w, two) in words[4..].iter_mut().zip(values.chunks_exact(2)) {
+            *w = pair(two[0], two[1]);
+        }
+        for (d, w) in dst.iter_mut().zip(words.chunks_exact(4)) {
+            d.copy_from_slice(w);
+        }
+    }
+    out
+}
+
 fn dir_of(v: Vec3, frame: (Vec3, Vec3, Vec3)) -> Option<Direction> {
     Direction::from_vector(tangent::to_tangent(v, frame))
 }
@@ -149,5 +188,63 @@ fn fold_slot(
         dst[2 + 3 * g] = [gam[0] * e[0], gam[0] * e[1], gam[0] * e[2], gam[1] * e[0]];
         dst[3 + 3 * g] = [gam[1] * e[1], gam[1] * e[2], gam[2] * e[0], gam[2] * e[1]];
         dst[4 + 3 * g] = [gam[2] * e[2], gam[3] * e[0], gam[3] * e[1], gam[3] * e[2]];
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use half::f16;
+
+    /// Unpacks entry `e` of `pack_f16`'s output back to `stride(groups)` vec4 (mirrors the
+    /// shader's `slot_fixed` / `group_coefficients`).
+    fn unpack(p: &[[u32; 4]], groups: usize, e: usize) -> Vec<[f32; 4]> {
+        let words: Vec<u32> = p[e * packed_stride(groups)..][..packed_stride(groups)]
+            .iter()
+            .flatten()
+            .copied()
+            .collect();
+        let scale = f32::from_bits(words[0]);
+        let h = |k: usize| f16::from_bits((words[k / 2] >> (16 * (k % 2))) as u16).to_f32() * scale;
+        let mut out = vec![[h(2), h(3), h(4), 0.0], [h(5), h(6), h(7), 0.0]];
+        for g in 0..groups {
+            for q in 0..3 {
+                let at = 8 + 12 * g + 4 * q;
+                out.push([h(at), h(at + 1), h(at + 2), h(at + 3)]);
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn packed_coefficients_round_trip_within_f16_of_each_entry_across_hdr_scales() {
+        for groups in 1..=4 {
+            let k = stride(groups);
+            // three entries: ordinary, HDR (beyond f16's range), and all zero
+            let mut coef = vec![[0.0f32; 4]; 3 * k];
+            for (i, v) in coef[..2 * k].iter_mut().flatten().enumerate() {
+                let base = ((i * 37 % 101) as f32 - 50.0) / 7.0;
+                *v = if i < 4 * k { base } else { base * 1e6 };
+            }
+            for e in 0..3 {
+                coef[e * k][3] = 0.0; // the unused lanes of the mean and bias rows
+                coef[e * k + 1][3] = 0.0;
+            }
+            let packed = pack_f16(&coef, groups);
+            assert_eq!(packed.len(), 3 * packed_stride(groups));
+            for e in 0..3 {
+                let entry = &coef[e * k..(e + 1) * k];
+                let max = entry.iter().flatten().fold(0f32, |m, v| m.max(v.abs()));
+                for (a, b) in
+                    unpack(&packed, groups, e).iter().flatten().zip(entry.iter().flatten())
+                {
+                    assert!(
+                        (a - b).abs() <= max * 2f32.powi(-11),
+                        "G {groups} entry {e}: {a} vs {b}"
+                    );
+                    assert!(a.is_finite());
+                }
+            }
+        }
     }
 }

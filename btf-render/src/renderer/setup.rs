@@ -196,7 +196,13 @@ impl Renderer {
                 usage: wgpu::BufferUsages::STORAGE,
             })
         };
-        let coef = mk("vertex coefficients", bytemuck::cast_slice(&vc.coef));
+        // f16 with a scale per entry where the pass has a constant group count (slot_fixed)
+        let coef = if self.btf.key.groups > 0 {
+            let packed = per_vertex::pack_f16(&vc.coef, input.groups_stride);
+            mk("vertex coefficients", bytemuck::cast_slice(&packed))
+        } else {
+            mk("vertex coefficients", bytemuck::cast_slice(&vc.coef))
+        };
         let slots = mk("vertex slots", bytemuck::cast_slice(&vc.slots));
         let layout = self
             .btf
