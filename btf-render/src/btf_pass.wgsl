@@ -31,8 +31,8 @@ override SMOOTH_BOUNDARY: bool = true;
 override N_LIGHTS: u32 = 4u;
 // Groups of four components G of every material the pipeline draws (0: each material's own,
 // samplings.info.x, at run time). A constant G makes the group loops fixed-length, which
-// llvmpipe compiles to straight-line reads: at c = 4 the pass took 1.5–1.85× its read bound
-// against 2.3× with G read at run time (BENCHMARKS.md #5).
+// llvmpipe compiles to straight-line reads: at c = 4 the pass took 1.80–1.93× its read bound
+// against 2.28–2.32× with G read at run time (BENCHMARKS.md #5, session 6).
 override GROUPS: u32 = 0u;
 // The weights in material.rs's packed f16 layout (set only with GROUPS > 0).
 override PACKED: bool = false;
@@ -368,10 +368,13 @@ fn slot_pixel(j: u32, uv: vec2<f32>) -> vec3<f32> {
     let g_count = group_count();
     var mc = vec3<f32>(0.0);
     var bias = vec3<f32>(0.0);
+    // the lights' weight entries for this slot, found once for the bias and every group
+    var entries: array<vec4<u32>, 4>;
     for (var a = 0u; a < N_LIGHTS; a = a + 1u) {
         let w = lw[a];
+        entries[a] = weight_entries(j, w);
         mc = mc + dot(w.w, vec4<f32>(1.0)) * le[a];
-        bias = bias + tau_bias(w, weight_entries(j, w)) * le[a];
+        bias = bias + tau_bias(w, entries[a]) * le[a];
     }
     var col = mc * textureSampleGrad(mean_tex, tex_sampler, uv, j, duv_dx, duv_dy).rgb + bias;
     var acc_a = vec4<f32>(0.0);
@@ -382,7 +385,7 @@ fn slot_pixel(j: u32, uv: vec2<f32>) -> vec3<f32> {
         var cb = vec4<f32>(0.0);
         var cc = vec4<f32>(0.0);
         for (var a = 0u; a < N_LIGHTS; a = a + 1u) {
-            let gam = tau_sum(lw[a], weight_entries(j, lw[a]), g);
+            let gam = tau_sum(lw[a], entries[a], g);
             let e = le[a];
             ca = ca + vec4<f32>(gam.x * e, gam.y * e.r);
             cb = cb + vec4<f32>(gam.y * e.gb, gam.z * e.rg);

@@ -172,11 +172,10 @@ fn time_setting(gpu: &Gpu, scene: &Scene, reads: f64, repeats: usize) -> Result<
             t[4].push(b[1]);
         }
     }
+    let [btf_ms, frame_ms, plain_ms, loop_ms, groups_ms] = t.clone().map(median);
     // the bound is the faster of the two ways to write the same reads
-    let k = if median(t[4].clone()) < median(t[3].clone()) { 4 } else { 3 };
+    let (k, read_bound_ms) = if groups_ms < loop_ms { (4, groups_ms) } else { (3, loop_ms) };
     let ratio_read_bound = median(t[0].iter().zip(&t[k]).map(|(f, b)| f / b).collect());
-    let [btf_ms, frame_ms, plain_ms, loop_ms, groups_ms] = t.map(median);
-    let read_bound_ms = if k == 4 { groups_ms } else { loop_ms };
     Ok(Timing { btf_ms, frame_ms, plain_ms, read_bound_ms, ratio_read_bound })
 }
 

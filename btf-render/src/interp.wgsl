@@ -116,27 +116,31 @@ fn w4_push(p: ptr<function, W4>, i: u32, w: f32) {
     }
 }
 
-fn interp_weights(which: u32, a: vec2<f32>, four: bool) -> W4 {
-    var w = W4(vec4<u32>(0u), vec4<f32>(0.0), 0u);
+// The weights in fixed places, not compacted: four-way, the two neighbours on each of the
+// two bracketing rings (an entry of weight 0 keeps a valid index: at a one-sample ring, or
+// when both rings are the same one); nearest, the one direction in idx.x. n is 4 or 1.
+fn fixed_weights(which: u32, a: vec2<f32>, four: bool) -> W4 {
     let b = ring_bracket(which, a.x);
     let r0 = u32(b.x);
     let r1 = u32(b.y);
     let t = b.z;
     if (four) {
         let p = ring_neighbours(which, r0, a.y);
-        w4_push(&w, p.i0, (1.0 - t) * (1.0 - p.s));
-        w4_push(&w, p.i1, (1.0 - t) * p.s);
-        if (r1 != r0) {
-            let q = ring_neighbours(which, r1, a.y);
-            w4_push(&w, q.i0, t * (1.0 - q.s));
-            w4_push(&w, q.i1, t * q.s);
-        }
-    } else {
-        var r = r0;
-        if (t > 0.5) {
-            r = r1;
-        }
-        w4_push(&w, nearest_on_ring(which, r, a.y), 1.0);
+        let q = ring_neighbours(which, r1, a.y);
+        let w = vec4<f32>((1.0 - t) * (1.0 - p.s), (1.0 - t) * p.s, t * (1.0 - q.s), t * q.s);
+        return W4(vec4<u32>(p.i0, p.i1, q.i0, q.i1), w, 4u);
+    }
+    let i = nearest_on_ring(which, select(r0, r1, t > 0.5), a.y);
+    return W4(vec4<u32>(i, 0u, 0u, 0u), vec4<f32>(1.0, 0.0, 0.0, 0.0), 1u);
+}
+
+// fixed_weights with the zero-weight entries dropped (for views, each entry costs a slot's
+// reads).
+fn interp_weights(which: u32, a: vec2<f32>, four: bool) -> W4 {
+    let f = fixed_weights(which, a, four);
+    var w = W4(vec4<u32>(0u), vec4<f32>(0.0), 0u);
+    for (var k = 0u; k < f.n; k = k + 1u) {
+        w4_push(&w, f.idx[k], f.w[k]);
     }
     return w;
 }
@@ -146,30 +150,13 @@ fn view_weights(a: vec2<f32>, four: bool) -> W4 {
     return interp_weights(VIEW, a, four);
 }
 
-// The light weights of interp_weights in fixed places, not compacted: the light sums run over
-// all four entries anyway, and an entry of weight 0 keeps a valid index (at a one-sample ring,
-// or when both rings are the same, its weight is 0). n is 4 (four) or 1 (nearest).
-fn light_interp(a: vec2<f32>, four: bool) -> W4 {
-    let b = ring_bracket(LIGHT, a.x);
-    let r0 = u32(b.x);
-    let r1 = u32(b.y);
-    let t = b.z;
-    if (four) {
-        let p = ring_neighbours(LIGHT, r0, a.y);
-        let q = ring_neighbours(LIGHT, r1, a.y);
-        let w = vec4<f32>((1.0 - t) * (1.0 - p.s), (1.0 - t) * p.s, t * (1.0 - q.s), t * q.s);
-        return W4(vec4<u32>(p.i0, p.i1, q.i0, q.i1), w, 4u);
-    }
-    let i = nearest_on_ring(LIGHT, select(r0, r1, t > 0.5), a.y);
-    return W4(vec4<u32>(i, 0u, 0u, 0u), vec4<f32>(1.0, 0.0, 0.0, 0.0), 1u);
-}
-
 // Light weights τ (eq. 3) with the horizon fade.
 fn light_weights(a: vec2<f32>, four: bool) -> W4 {
     if (!(a.x < 90.0)) {
         return W4(vec4<u32>(0u), vec4<f32>(0.0), 0u);
     }
-    var w = light_interp(a, four);
+    // not compacted: the light sums run over all four entries anyway
+    var w = fixed_weights(LIGHT, a, four);
     let last = ring_of(LIGHT, samplings.n_rings[LIGHT] - 1u).x;
     if (a.x > last) {
         let f = cos(radians(a.x)) / cos(radians(last));

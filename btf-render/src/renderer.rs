@@ -106,10 +106,18 @@ pub struct Renderer {
 }
 
 /// Largest group count compiled into the BTF pass as a constant (`BtfPassKey::groups`;
-/// BENCHMARKS.md #5 has the measurements behind it).
+/// BENCHMARKS.md #5 has the measurements behind it). `slot_fixed` in `btf_vertex.wgsl` holds
+/// at most four groups in registers, so this must not exceed 4.
 const MAX_CONSTANT_GROUPS: usize = 4;
+const _: () = assert!(MAX_CONSTANT_GROUPS <= 4, "slot_fixed holds at most four groups");
 
 impl Renderer {
+    /// The BTF pass's pipeline key: which variant the scene built (evaluation, blending,
+    /// constant group count, packed weights, …).
+    pub fn pass_key(&self) -> BtfPassKey {
+        self.btf.key
+    }
+
     /// Loads meshes and materials and builds the passes the scene asks for.
     pub fn new(gpu: &Gpu, scene: &Scene, options: RenderOptions) -> Result<Renderer> {
         let (mesh, tri_desc) = load_meshes(scene)?;

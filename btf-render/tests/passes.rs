@@ -5,7 +5,7 @@
 mod common;
 
 use btf_core::eigen::Quantization;
-use btf_render::{RenderOptions, Scene, render_scene};
+use btf_render::{RenderOptions, Renderer, Scene, render_scene};
 use common::*;
 
 fn scene(dir: &std::path::Path, obj: &str, effects: &str, light: &str, eye: [f32; 3]) -> Scene {
@@ -34,6 +34,26 @@ fn scene(dir: &std::path::Path, obj: &str, effects: &str, light: &str, eye: [f32
 
 const SUN: &str =
     "[[lights]]\nkind = \"directional\"\ndirection = [0.3, 0.2, 1.0]\nirradiance = [1.0, 1.0, 1.0]";
+
+/// The pass compiles the group count in (and packs the weights as f16) only where it may:
+/// one shared G ≤ 4; with G = 8 it keeps the run-time loop and f32 rows.
+#[test]
+fn constant_group_count_and_packed_weights_only_where_they_apply() {
+    let Some(gpu) = gpu("constant_group_count_and_packed_weights_only_where_they_apply") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    write_store(dir.path(), "m.eigen", Pattern::Checker, 16, 16, 32, Quantization::F16);
+    write(dir.path(), "plane.obj", &plane_obj(2, false));
+    let key = |effects: &str| {
+        let s = scene(dir.path(), "plane.obj", effects, SUN, [0.5, -0.4, 1.0]);
+        let k = Renderer::new(&gpu, &s, RenderOptions::default()).unwrap().pass_key();
+        (k.groups, k.packed)
+    };
+    assert_eq!(key("components = 4"), (1, true));
+    assert_eq!(key("components = 16"), (4, true));
+    assert_eq!(key("components = 32"), (0, false), "G = 8 keeps the run-time loop");
+}
 
 #[test]
 fn only_requested_work_is_done() {

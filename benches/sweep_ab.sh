@@ -1,0 +1,23 @@
+#!/bin/bash
+# Alternates the renderer's cost sweep (issue #5) between test binaries built from different
+# commits, ROUNDS times, and prints every row tagged with its binary: how BENCHMARKS.md #5's
+# before/after figures were taken. Build each binary with
+#   git checkout COMMIT && CARGO_PROFILE_DEV_OPT_LEVEL=3 cargo test -p btf-render --test measure --no-run
+# and copy target/debug/deps/measure-<hash> aside (its name does not change between commits).
+# Sweep settings come from the environment (defaults: 128², c = 4,8,16,32, 31 frames).
+# Example: benches/quiet.sh benches/sweep_ab.sh 2 /tmp/measure_old /tmp/measure_new
+set -euo pipefail
+if [ $# -lt 2 ]; then
+  sed -n '2,8p' "$0" >&2
+  exit 2
+fi
+rounds=$1
+shift
+cd "$(dirname "$0")/../btf-render"
+for _ in $(seq "$rounds"); do
+  for bin in "$@"; do
+    BTF_SWEEP_SIZE=${BTF_SWEEP_SIZE:-128} BTF_SWEEP_COMPONENTS=${BTF_SWEEP_COMPONENTS:-4,8,16,32} \
+      BTF_SWEEP_REPEATS=${BTF_SWEEP_REPEATS:-31} "$bin" cost_sweep --ignored --nocapture 2>&1 |
+      grep -E '^\| [0-9]+ \|' | sed "s|^|$(basename "$bin") |"
+  done
+done
