@@ -62,13 +62,19 @@ pub struct BtfPassKey {
 }
 
 impl BtfPassKey {
+    /// Whether the per-vertex coefficients are in the separable layout (`per_vertex.rs`):
+    /// per-vertex mode with only point and directional lights.
+    pub fn separable(&self) -> bool {
+        self.evaluation == Evaluation::PerVertex && !self.environment
+    }
+
     /// Whether the pass reads per-vertex coefficients (group 2).
     pub fn uses_vertex_coefficients(&self) -> bool {
         self.evaluation == Evaluation::PerVertex || self.environment
     }
 
     /// The pipeline-overridable constants of the shader for this key.
-    fn constants(&self) -> [(&'static str, f64); 8] {
+    fn constants(&self) -> [(&'static str, f64); 9] {
         [
             ("VIEW_FOUR", self.view_four as u32 as f64),
             ("LIGHT_FOUR", self.light_four as u32 as f64),
@@ -78,6 +84,7 @@ impl BtfPassKey {
             ("N_LIGHTS", self.lights as f64),
             ("GROUPS", self.groups as f64),
             ("PACKED", self.packed as u32 as f64),
+            ("SEPARABLE", self.separable() as u32 as f64),
         ]
     }
 
@@ -272,7 +279,11 @@ impl BtfPass {
             let vertex_layout = key.uses_vertex_coefficients().then(|| {
                 dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                     label: Some("btf per-vertex"),
-                    entries: &[entry(0, storage(true)), entry(1, storage(true))],
+                    entries: &[
+                        entry(0, storage(true)),
+                        entry(1, storage(true)),
+                        entry(2, storage(true)),
+                    ],
                 })
             });
             let mut groups = vec![Some(&frame_layout), Some(&material_layout)];

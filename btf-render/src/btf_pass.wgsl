@@ -36,6 +36,9 @@ override N_LIGHTS: u32 = 4u;
 override GROUPS: u32 = 0u;
 // The weights in material.rs's packed f16 layout (set only with GROUPS > 0).
 override PACKED: bool = false;
+// Per-vertex mode without an environment light: the per-vertex coefficients in the
+// separable layout (scalars per slot, the irradiance once per vertex and light; per_vertex.rs).
+override SEPARABLE: bool = false;
 
 struct LightRaw {
     // xyz: position (w = 1, point) or direction towards the light (w = 0, directional)
@@ -312,6 +315,16 @@ fn combine(acc_a: vec4<f32>, acc_b: vec4<f32>, acc_c: vec4<f32>) -> vec3<f32> {
     );
 }
 
+// Four components' scalar coefficients γ times an RGB irradiance e, in the three layers'
+// order (R G B R | G B R G | B R G B, combine's inverse).
+fn spread(gam: vec4<f32>, e: vec3<f32>) -> array<vec4<f32>, 3> {
+    return array<vec4<f32>, 3>(
+        vec4<f32>(gam.x * e, gam.y * e.r),
+        vec4<f32>(gam.y * e.gb, gam.z * e.rg),
+        vec4<f32>(gam.z * e.b, gam.w * e),
+    );
+}
+
 fn group_count() -> u32 {
     return select(samplings.info.x, GROUPS, GROUPS > 0u);
 }
@@ -385,11 +398,10 @@ fn slot_pixel(j: u32, uv: vec2<f32>) -> vec3<f32> {
         var cb = vec4<f32>(0.0);
         var cc = vec4<f32>(0.0);
         for (var a = 0u; a < N_LIGHTS; a = a + 1u) {
-            let gam = tau_sum(lw[a], entries[a], g);
-            let e = le[a];
-            ca = ca + vec4<f32>(gam.x * e, gam.y * e.r);
-            cb = cb + vec4<f32>(gam.y * e.gb, gam.z * e.rg);
-            cc = cc + vec4<f32>(gam.z * e.b, gam.w * e);
+            let c = spread(tau_sum(lw[a], entries[a], g), le[a]);
+            ca = ca + c[0];
+            cb = cb + c[1];
+            cc = cc + c[2];
         }
         let layer = j * 3u * g_count + 3u * g;
         acc_a = acc_a + ca * textureSampleGrad(eigen_tex, tex_sampler, uv, layer, duv_dx, duv_dy);

@@ -4,9 +4,12 @@
 // per-vertex coefficients (eq. 11) added to per-pixel lights.
 
 // per-vertex mode: per (vertex, light, slot m): mean coefficient, bias, 3G coefficient vec4
-// f32 vec4s (bitcast), or with GROUPS > 0 f16 halves and a scale per entry (per_vertex.rs)
+// f32 vec4s (bitcast), or with GROUPS > 0 f16 halves and a scale per entry; SEPARABLE: the
+// scalars [ωΣτ, ωΣτ b], γ per group, f32 or (PACKED) f16 (per_vertex.rs)
 @group(2) @binding(0) var<storage, read> vertex_coef: array<vec4<u32>>;
 @group(2) @binding(1) var<storage, read> vertex_slots: array<vec4<u32>>;
+// SEPARABLE: e_l per (vertex, light), rgb
+@group(2) @binding(2) var<storage, read> vertex_irradiance: array<vec4<f32>>;
 
 // vs_main plus the triangle's slot sets for the per-vertex layout: loaded once per corner
 // instead of once per fragment (flat varyings cost lavapipe next to nothing per fragment).
@@ -22,6 +25,59 @@ fn vs_vertex(v: CornerIn) -> VertexOut {
 // ---- per-vertex evaluation (the paper's blending) ----
 
 var<private> vis: vec4<f32>;
+// SEPARABLE: vis[l] · e_l of the triangle's vertex k at 4k + l
+var<private> virr: array<vec3<f32>, 12>;
+
+// vec4s per (vertex, light, slot) entry of the per-vertex layout (per_vertex.rs)
+fn entry_stride() -> u32 {
+    let g = frame.info.z;
+    if (SEPARABLE) {
+        return select(1u + g, (4u + 2u * g) / 4u, PACKED);
+    }
+    return select(2u + 3u * g, (4u + 6u * g + 3u) / 4u, GROUPS > 0u);
+}
+
+// Fills virr for the n_entries lights of the separable layout (once per fragment: the
+// lights' irradiance is shared by the vertex's four slots).
+fn load_irradiance(in: VertexOut, n_entries: u32) {
+    for (var k = 0u; k < 3u; k = k + 1u) {
+        for (var l = 0u; l < n_entries; l = l + 1u) {
+            virr[4u * k + l] = vis[l] * vertex_irradiance[in.tri[k] * frame.info.w + l].rgb;
+        }
+    }
+}
+
+// A separable entry: h = (ωΣτ, ωΣτ b), gam[g] = group g's ωΣτ γ.
+struct ScalarEntry {
+    h: vec2<f32>,
+    gam: array<vec4<f32>, 4>,
+}
+
+// The separable entry at b (GROUPS > 0): f32 vec4s, or packed halves loaded in ⌈(1 + 2G)/4⌉
+// vec4s (word 0 the head, words 1 + 2g and 2 + 2g group g).
+fn scalar_entry(b: u32) -> ScalarEntry {
+    var out: ScalarEntry;
+    if (PACKED) {
+        var w: array<u32, 12>;
+        for (var q = 0u; q < min((4u + 2u * GROUPS) / 4u, 3u); q = q + 1u) {
+            let v = vertex_coef[b + q];
+            w[4u * q] = v.x;
+            w[4u * q + 1u] = v.y;
+            w[4u * q + 2u] = v.z;
+            w[4u * q + 3u] = v.w;
+        }
+        out.h = unpack2x16float(w[0]);
+        for (var g = 0u; g < min(GROUPS, 4u); g = g + 1u) {
+            out.gam[g] = vec4<f32>(unpack2x16float(w[1u + 2u * g]), unpack2x16float(w[2u + 2u * g]));
+        }
+    } else {
+        out.h = bitcast<vec4<f32>>(vertex_coef[b]).xy;
+        for (var g = 0u; g < min(GROUPS, 4u); g = g + 1u) {
+            out.gam[g] = bitcast<vec4<f32>>(vertex_coef[b + 1u + g]);
+        }
+    }
+    return out;
+}
 
 // 1, 2, 4, 8 where `b` holds: the four slots of a vertex as four bits.
 fn pack_bits(b: vec4<bool>) -> u32 {
@@ -73,8 +129,7 @@ fn first_occurrences(s: SlotSets) -> u32 {
 // of `members`) at coefficient offset base[k] (light 0; light l adds l·4·stride).
 fn vertex_sum(in: VertexOut, uv: vec2<f32>, n_entries: u32) -> vec3<f32> {
     let g_count = group_count();
-    let stride = select(2u + 3u * frame.info.z, (4u + 6u * frame.info.z + 3u) / 4u, GROUPS > 0u);
-    let light_step = 4u * stride;
+    let light_step = 4u * entry_stride();
     let s = slot_sets(in);
     var todo = first_occurrences(s);
     var rgb = vec3<f32>(0.0);
@@ -90,7 +145,7 @@ fn vertex_sum(in: VertexOut, uv: vec2<f32>, n_entries: u32) -> vec3<f32> {
         let hit = vec3<u32>(pack_bits(s.s0 == jv), pack_bits(s.s1 == jv), pack_bits(s.s2 == jv));
         let members = pack_bits(vec4<bool>(hit != vec3<u32>(0u), false));
         // slot index m of each member = trailing bit of its hit mask
-        let base = ((in.tri * frame.info.w) * 4u + firstTrailingBit(hit)) * stride;
+        let base = ((in.tri * frame.info.w) * 4u + firstTrailingBit(hit)) * entry_stride();
         if (GROUPS > 0u) {
             rgb = rgb + slot_fixed(in, uv, j, members, base, n_entries, light_step);
         } else {
@@ -115,10 +170,17 @@ fn slot_looped(in: VertexOut, uv: vec2<f32>, j: u32, members: u32, base: vec3<u3
         let k = firstTrailingBit(todo_m);
         todo_m = todo_m & (todo_m - 1u);
         for (var l = 0u; l < n_entries; l = l + 1u) {
-            let w = in.bary[k] * vis[l];
             let b = base[k] + l * light_step;
-            mc = mc + w * bitcast<vec4<f32>>(vertex_coef[b]).rgb;
-            bias = bias + w * bitcast<vec4<f32>>(vertex_coef[b + 1u]).rgb;
+            if (SEPARABLE) {
+                let e = in.bary[k] * virr[4u * k + l];
+                let h = bitcast<vec4<f32>>(vertex_coef[b]).xy;
+                mc = mc + h.x * e;
+                bias = bias + h.y * e;
+            } else {
+                let w = in.bary[k] * vis[l];
+                mc = mc + w * bitcast<vec4<f32>>(vertex_coef[b]).rgb;
+                bias = bias + w * bitcast<vec4<f32>>(vertex_coef[b + 1u]).rgb;
+            }
         }
     }
     var col = mc * textureSampleGrad(mean_tex, tex_sampler, uv, j, duv_dx, duv_dy).rgb + bias;
@@ -137,11 +199,19 @@ fn slot_looped(in: VertexOut, uv: vec2<f32>, j: u32, members: u32, base: vec3<u3
             let k = firstTrailingBit(todo_g);
             todo_g = todo_g & (todo_g - 1u);
             for (var l = 0u; l < n_entries; l = l + 1u) {
-                let w = in.bary[k] * vis[l];
-                let b = base[k] + l * light_step + 2u + 3u * g;
-                ca = ca + w * bitcast<vec4<f32>>(vertex_coef[b]);
-                cb = cb + w * bitcast<vec4<f32>>(vertex_coef[b + 1u]);
-                cc = cc + w * bitcast<vec4<f32>>(vertex_coef[b + 2u]);
+                if (SEPARABLE) {
+                    let e = in.bary[k] * virr[4u * k + l];
+                    let c = spread(bitcast<vec4<f32>>(vertex_coef[base[k] + l * light_step + 1u + g]), e);
+                    ca = ca + c[0];
+                    cb = cb + c[1];
+                    cc = cc + c[2];
+                } else {
+                    let w = in.bary[k] * vis[l];
+                    let b = base[k] + l * light_step + 2u + 3u * g;
+                    ca = ca + w * bitcast<vec4<f32>>(vertex_coef[b]);
+                    cb = cb + w * bitcast<vec4<f32>>(vertex_coef[b + 1u]);
+                    cc = cc + w * bitcast<vec4<f32>>(vertex_coef[b + 2u]);
+                }
             }
         }
         let layer = j * 3u * g_count + 3u * g;
@@ -189,6 +259,19 @@ fn slot_fixed(in: VertexOut, uv: vec2<f32>, j: u32, members: u32, base: vec3<u32
         todo_m = todo_m & (todo_m - 1u);
         for (var l = 0u; l < n_entries; l = l + 1u) {
             let b = base[k] + l * light_step;
+            if (SEPARABLE) {
+                let e = in.bary[k] * virr[4u * k + l];
+                let s = scalar_entry(b);
+                mc = mc + s.h.x * e;
+                bias = bias + s.h.y * e;
+                for (var g = 0u; g < min(GROUPS, 4u); g = g + 1u) {
+                    let c = spread(s.gam[g], e);
+                    ca[g] = ca[g] + c[0];
+                    cb[g] = cb[g] + c[1];
+                    cc[g] = cc[g] + c[2];
+                }
+                continue;
+            }
             let head = vertex_coef[b];
             let w = in.bary[k] * vis[l] * bitcast<f32>(head.x);
             let mb = vec3<f32>(unpack2x16float(head.y), unpack2x16float(head.z).x);
@@ -226,6 +309,9 @@ fn fs_vertex(in: VertexOut) -> @location(0) vec4<f32> {
     duv_dy = dpdy(uv);
     for (var l = 0u; l < N_LIGHTS; l = l + 1u) {
         vis[l] = visibility(l, in, f.back);
+    }
+    if (SEPARABLE) {
+        load_irradiance(in, N_LIGHTS);
     }
     reads = 0u;
     let rgb = vertex_sum(in, uv, N_LIGHTS);

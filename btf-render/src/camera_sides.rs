@@ -76,6 +76,7 @@ pub fn seen_vertices(gpu: &Gpu, d: &CornerDraws) -> Result<Vec<bool>> {
             entries: &[
                 wgpu::BindGroupEntry { binding: 0, resource: coef.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 1, resource: slots.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: coef.as_entire_binding() },
             ],
         })
     });

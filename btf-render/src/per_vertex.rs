@@ -9,6 +9,13 @@
 //! Layout per (vertex, light `l`, slot `m`): `[e·ωΣτ, e·ωΣτ b_ij, 3·G coefficient vec4]`
 //! with the `G`-group packing of [`crate::material`]; `G` is the largest over the scene's
 //! materials so that all vertices share one stride. Slots are `u32::MAX` when unused.
+//!
+//! With only point and directional lights each entry is the outer product of the light's
+//! RGB irradiance `e_l` at the vertex and scalars (eq. 4's γ is a scalar per component), so
+//! the *separable* layout stores `[ωΣτ, ωΣτ b_ij, 0, 0]` and one vec4 `ωΣτ γ_kj` per group,
+//! and `e_l` once per (vertex, light): `1 + G` vec4 per entry instead of `2 + 3G`, fewer
+//! still packed as `f16` ([`pack_scalars_f16`]). An environment light's coefficients (eq.
+//! 11) mix colours per direction and keep the full layout.
 
 use crate::material::MaterialData;
 use crate::math::Vec3;
@@ -43,19 +50,59 @@ pub struct VertexEvalInput<'a> {
     pub light_mode: InterpMode,
     /// Largest `G` over the materials (layout stride).
     pub groups_stride: usize,
+    /// Write the separable layout (no environment light among the entries).
+    pub separable: bool,
 }
 
 /// Per-vertex slot indices and coefficient vec4s.
 pub struct VertexCoefficients {
     /// Four slot indices per vertex.
     pub slots: Vec<[u32; 4]>,
-    /// Coefficients, `vertices · lights · 4 · (2 + 3G)` vec4.
+    /// Coefficients, `vertices · lights · 4 · (2 + 3G)` vec4 (separable: `1 + G`).
     pub coef: Vec<[f32; 4]>,
+    /// Separable layout only: `e_l` (RGB, falloff included) per (vertex, light).
+    pub irradiance: Vec<[f32; 4]>,
 }
 
 /// Vec4 per (vertex, light, slot).
 pub fn stride(groups: usize) -> usize {
     2 + 3 * groups
+}
+
+/// Vec4 per (vertex, light, slot) in the separable layout.
+pub fn scalar_stride(groups: usize) -> usize {
+    1 + groups
+}
+
+/// `vec4<u32>` per (vertex, light, slot) in the packed layout of [`pack_scalars_f16`].
+pub fn packed_scalar_stride(groups: usize) -> usize {
+    (1 + 2 * groups).div_ceil(4)
+}
+
+/// The separable layout as `f16` halves: `[ωΣτ, ωΣτ b]` in word 0, then each group's four
+/// scalars in two words. No scale is needed: the scalars are convex combinations of the
+/// material's weights and biases (ω and τ are each ≤ 1 and sum to ≤ 1), so they fit `f16`
+/// whenever the material's packed weight rows do; the irradiance, the HDR part, stays `f32`.
+/// `⌈(1 + 2G)/4⌉` loads per entry: one at `G = 1`, against three for [`pack_f16`].
+pub fn pack_scalars_f16(coef: &[[f32; 4]], groups: usize) -> Vec<[u32; 4]> {
+    use half::f16;
+    let (k, p) = (scalar_stride(groups), packed_scalar_stride(groups));
+    let half = |v: f32| u32::from(f16::from_f32(v).to_bits());
+    let pair = |a: f32, b: f32| half(a) | (half(b) << 16);
+    let mut out = vec![[0u32; 4]; coef.len() / k * p];
+    let mut words = vec![0u32; 4 * p];
+    for (entry, dst) in coef.chunks_exact(k).zip(out.chunks_exact_mut(p)) {
+        words.fill(0);
+        words[0] = pair(entry[0][0], entry[0][1]);
+        for (g, gam) in entry[1..].iter().enumerate() {
+            words[1 + 2 * g] = pair(gam[0], gam[1]);
+            words[2 + 2 * g] = pair(gam[2], gam[3]);
+        }
+        for (d, w) in dst.iter_mut().zip(words.chunks_exact(4)) {
+            d.copy_from_slice(w);
+        }
+    }
+    out
 }
 
 /// `vec4<u32>` per (vertex, light, slot) in the packed layout of [`pack_f16`].
@@ -111,11 +158,16 @@ pub fn compute(
     input: &VertexEvalInput,
 ) -> VertexCoefficients {
     let n_l = input.lights.len().max(1);
-    let k = stride(input.groups_stride);
+    let k = if input.separable {
+        scalar_stride(input.groups_stride)
+    } else {
+        stride(input.groups_stride)
+    };
     let per_vertex = n_l * 4 * k;
     let mut out = VertexCoefficients {
         slots: vec![[NO_SLOT; 4]; positions.len()],
         coef: vec![[0.0; 4]; positions.len() * per_vertex],
+        irradiance: vec![[0.0; 4]; if input.separable { positions.len() * n_l } else { 0 }],
     };
     for v in 0..positions.len() {
         let Some(&mi) = material_of.get(v) else { continue };
@@ -148,14 +200,62 @@ pub fn compute(
             let Some(ld) = dir_of(dir, frame) else { continue };
             let lw = mat.light_sampling.light_weights(ld, input.light_mode);
             let e = light.color.map(|c| c * falloff);
+            if input.separable {
+                out.irradiance[v * n_l + l] = [e[0], e[1], e[2], 0.0];
+            }
             for (m, &(j, omega)) in vw.as_slice().iter().enumerate() {
                 let base = ((v * n_l + l) * 4 + m) * k;
                 let dst = &mut out.coef[base..base + k];
-                fold_slot(mat, j, omega as f32, &lw, e, dst);
+                if input.separable {
+                    fold_slot_scalars(mat, j, omega as f32, &lw, dst);
+                } else {
+                    fold_slot(mat, j, omega as f32, &lw, e, dst);
+                }
             }
         }
     }
     out
+}
+
+/// `ωΣτ`, `ωΣτ b_ij` and group `g`'s `ωΣτ γ` of slot `j` for one light (eq. 3–4).
+fn slot_scalars<'a>(
+    mat: &'a MaterialData,
+    j: usize,
+    omega: f32,
+    lw: &'a btf_core::Weights,
+) -> (f32, f32, impl Fn(usize) -> [f32; 4] + 'a) {
+    let mut tau_sum = 0f32;
+    let mut bias = 0f32;
+    for &(i, tau) in lw.as_slice() {
+        tau_sum += tau as f32;
+        bias += tau as f32 * mat.bias(j, i);
+    }
+    let group = move |g: usize| {
+        let mut gam = [0f32; 4];
+        for &(i, tau) in lw.as_slice() {
+            let w = mat.weight_group(j, i, g);
+            for c in 0..4 {
+                gam[c] += omega * tau as f32 * w[c];
+            }
+        }
+        gam
+    };
+    (omega * tau_sum, omega * bias, group)
+}
+
+/// Writes the separable entry `[ωΣτ, ωΣτ b, 0, 0], γ_0 … γ_{G−1}` of slot `j`.
+fn fold_slot_scalars(
+    mat: &MaterialData,
+    j: usize,
+    omega: f32,
+    lw: &btf_core::Weights,
+    dst: &mut [[f32; 4]],
+) {
+    let (s, sb, group) = slot_scalars(mat, j, omega, lw);
+    dst[0] = [s, sb, 0.0, 0.0];
+    for g in 0..mat.groups {
+        dst[1 + g] = group(g);
+    }
 }
 
 /// Writes `[mean coef, bias, A_g, B_g, C_g …]` of slot `j` for one light.
@@ -167,24 +267,11 @@ fn fold_slot(
     e: [f32; 3],
     dst: &mut [[f32; 4]],
 ) {
-    let mut tau_sum = 0f32;
-    let mut bias = 0f32;
-    for &(i, tau) in lw.as_slice() {
-        tau_sum += tau as f32;
-        bias += tau as f32 * mat.bias(j, i);
-    }
-    let s = omega * tau_sum;
+    let (s, sb, group) = slot_scalars(mat, j, omega, lw);
     dst[0] = [s * e[0], s * e[1], s * e[2], 0.0];
-    let sb = omega * bias;
     dst[1] = [sb * e[0], sb * e[1], sb * e[2], 0.0];
     for g in 0..mat.groups {
-        let mut gam = [0f32; 4];
-        for &(i, tau) in lw.as_slice() {
-            let w = mat.weight_group(j, i, g);
-            for c in 0..4 {
-                gam[c] += omega * tau as f32 * w[c];
-            }
-        }
+        let gam = group(g);
         dst[2 + 3 * g] = [gam[0] * e[0], gam[0] * e[1], gam[0] * e[2], gam[1] * e[0]];
         dst[3 + 3 * g] = [gam[1] * e[1], gam[1] * e[2], gam[2] * e[0], gam[2] * e[1]];
         dst[4 + 3 * g] = [gam[2] * e[2], gam[3] * e[0], gam[3] * e[1], gam[3] * e[2]];

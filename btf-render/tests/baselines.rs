@@ -196,3 +196,96 @@ fn packed_weights_hold_every_weight_and_bias() {
         assert!(hdr.packed_weights().is_none(), "{name}: 1e6 must not be packed as f16");
     }
 }
+
+/// The separable per-vertex layout (per_vertex.rs) holds the same coefficients as the full
+/// one: its scalars times each vertex's irradiance give every entry of the full layout, for
+/// coloured HDR point and directional lights, and its f16 packing keeps each scalar within
+/// f16's rounding.
+#[test]
+fn separable_per_vertex_layout_times_irradiance_is_the_full_layout() {
+    use btf_core::InterpMode;
+    use btf_render::math::Vec3;
+    use btf_render::mesh::Mesh;
+    use btf_render::per_vertex::{self, VertexEvalInput, VertexLight};
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = Mesh::parse_obj(&plane_obj(3, false), "plane.obj", None).unwrap();
+    let tangents = btf_render::tangent::compute_tangents(&mesh);
+    let lights = [
+        VertexLight { pos_or_dir: Vec3::new(0.4, 0.3, 0.6), point: true, color: [3e4, 2e4, 1e4] },
+        VertexLight { pos_or_dir: Vec3::new(-0.2, 0.5, 0.8), point: false, color: [0.7, 1.1, 0.4] },
+    ];
+    for (components, name) in [(4, "g1.eigen"), (12, "g3.eigen")] {
+        let store =
+            write_store(dir.path(), name, Pattern::Checker, 8, 8, components, Quantization::F16);
+        let data = MaterialData::load(&store, None).unwrap();
+        let g = data.groups;
+        let n = mesh.positions.len();
+        let compute = |separable| {
+            let input = VertexEvalInput {
+                eye: Vec3::new(0.6, 0.2, 1.5),
+                ortho_to_camera: None,
+                lights: &lights,
+                view_mode: InterpMode::Four,
+                light_mode: InterpMode::Four,
+                groups_stride: g,
+                separable,
+            };
+            per_vertex::compute(
+                &mesh.positions,
+                &mesh.normals,
+                &tangents,
+                &vec![0; n],
+                &[&data],
+                &input,
+            )
+        };
+        let (full, sep) = (compute(false), compute(true));
+        assert_eq!(full.slots, sep.slots);
+        let (k, ks) = (per_vertex::stride(g), per_vertex::scalar_stride(g));
+        assert_eq!(sep.coef.len(), n * 2 * 4 * ks);
+        assert_eq!(sep.irradiance.len(), n * 2);
+        let packed = per_vertex::pack_scalars_f16(&sep.coef, g);
+        let ps = per_vertex::packed_scalar_stride(g);
+        assert_eq!(ps, (1 + 2 * g).div_ceil(4));
+        let mut checked = 0;
+        for v in 0..n {
+            for l in 0..2 {
+                let e = sep.irradiance[v * 2 + l];
+                for m in 0..4 {
+                    let entry = (v * 2 + l) * 4 + m;
+                    let f = &full.coef[entry * k..][..k];
+                    let s = &sep.coef[entry * ks..][..ks];
+                    let mut expect = vec![
+                        [s[0][0] * e[0], s[0][0] * e[1], s[0][0] * e[2], 0.0],
+                        [s[0][1] * e[0], s[0][1] * e[1], s[0][1] * e[2], 0.0],
+                    ];
+                    for q in 0..g {
+                        let y = s[1 + q];
+                        expect.push([y[0] * e[0], y[0] * e[1], y[0] * e[2], y[1] * e[0]]);
+                        expect.push([y[1] * e[1], y[1] * e[2], y[2] * e[0], y[2] * e[1]]);
+                        expect.push([y[2] * e[2], y[3] * e[0], y[3] * e[1], y[3] * e[2]]);
+                    }
+                    let scale = f.iter().flatten().fold(0f32, |a, x| a.max(x.abs()));
+                    for (a, b) in expect.iter().flatten().zip(f.iter().flatten()) {
+                        assert!((a - b).abs() <= 1e-6 * scale, "{name} v{v} l{l} m{m}: {a} vs {b}");
+                    }
+                    checked += (scale > 0.0) as usize;
+                    // the f16 scalars: word 0 the head, words 1 + 2q, 2 + 2q group q
+                    let words: Vec<u32> =
+                        packed[entry * ps..][..ps].iter().flatten().copied().collect();
+                    let h =
+                        |i: usize| f16::from_bits((words[i / 2] >> (16 * (i % 2))) as u16).to_f32();
+                    let mut want = vec![s[0][0], s[0][1]];
+                    want.extend(s[1..].iter().flatten());
+                    for (i, &w) in want.iter().enumerate() {
+                        assert!(
+                            (h(i) - w).abs() <= w.abs() * 2f32.powi(-11) + 2f32.powi(-24),
+                            "{name} v{v} l{l} m{m} scalar {i}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(checked > n, "{name}: most entries are lit ({checked})");
+    }
+}

@@ -536,8 +536,11 @@ fn renderer_rotation_through_the_camera_basis_equals_the_direct_path() {
         material_of: &material_of,
         materials: &mats,
     };
-    let blank =
-        || VertexCoefficients { slots: vec![[0; 4]; n], coef: vec![[0.0; 4]; n * 4 * stride] };
+    let blank = || VertexCoefficients {
+        slots: vec![[0; 4]; n],
+        coef: vec![[0.0; 4]; n * 4 * stride],
+        irradiance: Vec::new(),
+    };
     // The sheet is seen from both sides (the camera below it sees back sides).
     let view = view_from(Vec3::new(0.3, -2.0, -0.4));
     s.fill(&mut blank(), &view, 0, 1, stride);

@@ -376,8 +376,11 @@ fn renderer_rotation(
         material_of: &material_of,
         materials: &mats,
     };
-    let mut vc =
-        VertexCoefficients { slots: vec![[0; 4]; n], coef: vec![[0.0; 4]; n * 4 * stride] };
+    let mut vc = VertexCoefficients {
+        slots: vec![[0; 4]; n],
+        coef: vec![[0.0; 4]; n * 4 * stride],
+        irradiance: Vec::new(),
+    };
     s.fill(&mut vc, &view, 0, 1, stride);
     let t = Instant::now();
     s.set_rotation(3.0);

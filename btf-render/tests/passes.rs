@@ -5,6 +5,7 @@
 mod common;
 
 use btf_core::eigen::Quantization;
+use btf_render::btf_pass::BtfPassKey;
 use btf_render::{RenderOptions, Renderer, Scene, render_scene};
 use common::*;
 
@@ -47,12 +48,22 @@ fn constant_group_count_and_packed_weights_only_where_they_apply() {
     write(dir.path(), "plane.obj", &plane_obj(2, false));
     let key = |effects: &str| {
         let s = scene(dir.path(), "plane.obj", effects, SUN, [0.5, -0.4, 1.0]);
-        let k = Renderer::new(&gpu, &s, RenderOptions::default()).unwrap().pass_key();
+        Renderer::new(&gpu, &s, RenderOptions::default()).unwrap().pass_key()
+    };
+    let gp = |effects: &str| {
+        let k = key(effects);
         (k.groups, k.packed)
     };
-    assert_eq!(key("components = 4"), (1, true));
-    assert_eq!(key("components = 16"), (4, true));
-    assert_eq!(key("components = 32"), (0, false), "G = 8 keeps the run-time loop");
+    assert_eq!(gp("components = 4"), (1, true));
+    assert_eq!(gp("components = 16"), (4, true));
+    assert_eq!(gp("components = 32"), (0, false), "G = 8 keeps the run-time loop");
+    // the separable per-vertex layout: per-vertex mode with a directional light only
+    assert!(!key("components = 4").separable());
+    for c in [4, 32] {
+        let k = key(&format!("components = {c}\nevaluation = \"per-vertex\""));
+        assert!(k.separable(), "c = {c}: per-vertex under a sun is separable");
+        assert!(!BtfPassKey { environment: true, ..k }.separable(), "an environment is not");
+    }
 }
 
 #[test]

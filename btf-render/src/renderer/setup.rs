@@ -169,6 +169,7 @@ impl Renderer {
             view_mode: self.scene.effects.view_blend,
             light_mode: self.scene.effects.light_interp,
             groups_stride: mats.iter().map(|m| m.groups).max().unwrap_or(1),
+            separable: self.btf.key.separable(),
         };
         let mut vc = per_vertex::compute(
             &self.mesh.positions,
@@ -196,14 +197,19 @@ impl Renderer {
                 usage: wgpu::BufferUsages::STORAGE,
             })
         };
-        // f16 with a scale per entry where the pass has a constant group count (slot_fixed)
-        let coef = if self.btf.key.groups > 0 {
-            let packed = per_vertex::pack_f16(&vc.coef, input.groups_stride);
-            mk("vertex coefficients", bytemuck::cast_slice(&packed))
-        } else {
-            mk("vertex coefficients", bytemuck::cast_slice(&vc.coef))
+        // f16 where the pass has a constant group count (slot_fixed): the separable scalars
+        // as they are where the weight rows fit f16, the full layout with a scale per entry
+        let key = self.btf.key;
+        let coef = match (key.separable(), key.packed, key.groups > 0) {
+            (true, true, _) => per_vertex::pack_scalars_f16(&vc.coef, input.groups_stride),
+            (false, _, true) => per_vertex::pack_f16(&vc.coef, input.groups_stride),
+            _ => bytemuck::cast_slice(&vc.coef).to_vec(),
         };
+        let coef = mk("vertex coefficients", bytemuck::cast_slice(&coef));
         let slots = mk("vertex slots", bytemuck::cast_slice(&vc.slots));
+        // (a binding is never empty)
+        let irradiance = if vc.irradiance.is_empty() { vec![[0f32; 4]] } else { vc.irradiance };
+        let irradiance = mk("vertex irradiance", bytemuck::cast_slice(&irradiance));
         let layout = self
             .btf
             .vertex_layout
@@ -215,6 +221,7 @@ impl Renderer {
             entries: &[
                 wgpu::BindGroupEntry { binding: 0, resource: coef.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 1, resource: slots.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: irradiance.as_entire_binding() },
             ],
         });
         Ok((coef, slots, group))
