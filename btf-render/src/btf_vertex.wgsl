@@ -241,6 +241,46 @@ fn group_coefficients(b: u32, g: u32) -> array<vec4<f32>, 3> {
     );
 }
 
+// The (vertex k, light l) entry at b of the per-vertex layout (GROUPS > 0), weighted by the
+// vertex's barycentric and the light's visibility: mean coefficient, bias and each group's
+// three coefficient vec4 (separable: the scalars spread over vis·e_l; else the packed full
+// layout times its scale).
+struct EntryTerms {
+    mean: vec3<f32>,
+    bias: vec3<f32>,
+    a: array<vec4<f32>, 4>,
+    b: array<vec4<f32>, 4>,
+    c: array<vec4<f32>, 4>,
+}
+
+fn entry_terms(in: VertexOut, b: u32, k: u32, l: u32) -> EntryTerms {
+    var t: EntryTerms;
+    if (SEPARABLE) {
+        let e = in.bary[k] * virr[4u * k + l];
+        let s = scalar_entry(b);
+        t.mean = s.h.x * e;
+        t.bias = s.h.y * e;
+        for (var g = 0u; g < min(GROUPS, 4u); g = g + 1u) {
+            let c = spread(s.gam[g], e);
+            t.a[g] = c[0];
+            t.b[g] = c[1];
+            t.c[g] = c[2];
+        }
+    } else {
+        let head = vertex_coef[b];
+        let w = in.bary[k] * vis[l] * bitcast<f32>(head.x);
+        t.mean = w * vec3<f32>(unpack2x16float(head.y), unpack2x16float(head.z).x);
+        t.bias = w * vec3<f32>(unpack2x16float(head.z).y, unpack2x16float(head.w));
+        for (var g = 0u; g < min(GROUPS, 4u); g = g + 1u) {
+            let c = group_coefficients(b, g);
+            t.a[g] = w * c[0];
+            t.b[g] = w * c[1];
+            t.c[g] = w * c[2];
+        }
+    }
+    return t;
+}
+
 // slot_looped with the group count a pipeline constant (GROUPS ≤ 4): the members are visited
 // once, summing every group's coefficients into registers, then the slot's layers are read.
 // At c = 8 this took per-vertex four blending from 1.8–2.1× to 1.6–1.7× the read bound.
@@ -258,30 +298,13 @@ fn slot_fixed(in: VertexOut, uv: vec2<f32>, j: u32, members: u32, base: vec3<u32
         let k = firstTrailingBit(todo_m);
         todo_m = todo_m & (todo_m - 1u);
         for (var l = 0u; l < n_entries; l = l + 1u) {
-            let b = base[k] + l * light_step;
-            if (SEPARABLE) {
-                let e = in.bary[k] * virr[4u * k + l];
-                let s = scalar_entry(b);
-                mc = mc + s.h.x * e;
-                bias = bias + s.h.y * e;
-                for (var g = 0u; g < min(GROUPS, 4u); g = g + 1u) {
-                    let c = spread(s.gam[g], e);
-                    ca[g] = ca[g] + c[0];
-                    cb[g] = cb[g] + c[1];
-                    cc[g] = cc[g] + c[2];
-                }
-                continue;
-            }
-            let head = vertex_coef[b];
-            let w = in.bary[k] * vis[l] * bitcast<f32>(head.x);
-            let mb = vec3<f32>(unpack2x16float(head.y), unpack2x16float(head.z).x);
-            mc = mc + w * mb;
-            bias = bias + w * vec3<f32>(unpack2x16float(head.z).y, unpack2x16float(head.w));
+            let t = entry_terms(in, base[k] + l * light_step, k, l);
+            mc = mc + t.mean;
+            bias = bias + t.bias;
             for (var g = 0u; g < min(GROUPS, 4u); g = g + 1u) {
-                let c = group_coefficients(b, g);
-                ca[g] = ca[g] + w * c[0];
-                cb[g] = cb[g] + w * c[1];
-                cc[g] = cc[g] + w * c[2];
+                ca[g] = ca[g] + t.a[g];
+                cb[g] = cb[g] + t.b[g];
+                cc[g] = cc[g] + t.c[g];
             }
         }
     }
