@@ -111,7 +111,7 @@ pub struct CaptureArgs {
     #[arg(long, default_value = "320,240")]
     pub resolution: String,
     /// Robot pose error: rotation DEG and shift MM (standard deviations).
-    #[arg(long, default_value = "0.3,0.3")]
+    #[arg(long, default_value = "1,1")]
     pub pose_noise: String,
     /// Sensor noise: read noise (DN) and shot-noise variance per DN.
     #[arg(long, default_value = "2,0.5")]

@@ -57,15 +57,15 @@ pub struct CaptureSpec {
 }
 
 impl CaptureSpec {
-    /// Defaults: 320×240 pixels, 0.3° and 0.3 mm pose errors, 2 DN read noise, 0.5 DN²/DN
+    /// Defaults: 320×240 pixels, 1° and 1 mm pose errors (the robot tolerance issue #4 names), 2 DN read noise, 0.5 DN²/DN
     /// shot noise, natural vignetting.
     pub fn new(material: MaterialSpec) -> Self {
         CaptureSpec {
             material,
             width: 320,
             height: 240,
-            pose_noise_deg: 0.3,
-            pose_noise_mm: 0.3,
+            pose_noise_deg: 1.0,
+            pose_noise_mm: 1.0,
             read_noise_dn: 2.0,
             shot_noise_per_dn: 0.5,
             vignetting: 1.0,
