@@ -161,11 +161,31 @@ fn process(a: ProcessArgs) -> Result<()> {
         );
     }
     let worst = rep.registrations.iter().map(|r| r.marker_rms_px).fold(0.0, f64::max);
+    // How well the camera resolves the store: below ~1 px per texel along an axis, the
+    // store is finer than the raw images and the camera, not the processing, bounds its error.
+    let resolution = rep.pixels_per_texel();
+    let (least, least_view) = resolution
+        .iter()
+        .enumerate()
+        .map(|(v, r)| (r[0], v))
+        .fold((f64::INFINITY, 0), |m, x| if x.0 < m.0 { x } else { m });
+    let frontal = resolution.iter().map(|r| r[1]).fold(0.0, f64::max);
+    if least < 1.0 {
+        let d = layout.sampling.direction(least_view);
+        eprintln!(
+            "warning: the camera gives {least:.2} px per texel along the most foreshortened axis \
+             (view slot {least_view}, θ {:.0}°; up to {frontal:.2} px elsewhere): texel detail finer \
+             than a pixel is lost there, so the store's error is bounded by the camera — a smaller \
+             --size or a finer camera resolves it (BENCHMARKS.md, capture processing)",
+            d.theta_deg
+        );
+    }
     if a.json {
         let j = serde_json::json!({
             "images_written": rep.images_written, "images_kept": rep.images_kept, "seconds": seconds,
             "views": rep.registrations.len(), "fallback_views": rep.registrations.iter().filter(|r| r.fallback_nominal).map(|r| r.view).collect::<Vec<_>>(),
             "worst_marker_rms_px": worst, "texel_mm": rep.grid.texel_mm,
+            "pixels_per_texel": resolution,
         });
         println!("{j}");
     } else {

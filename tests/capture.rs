@@ -81,6 +81,29 @@ fn process_and_score_meet_the_accuracy_bounds() {
     assert_eq!((store.meta().width, store.meta().n_views()), (16, 5));
 }
 
+/// Pixels per texel per view slot: the frontal view resolves both texel axes alike, the 45°
+/// ring one axis cos 45° less; a store finer than the camera resolves gets a warning that
+/// names the worst view.
+#[test]
+fn the_camera_resolution_per_texel_is_reported_and_warned_about() {
+    let d = Dir::new();
+    synth(&d, "raw");
+    let p = process(&d, "raw", "m.btf", &[]);
+    let r: Vec<[f64; 2]> = serde_json::from_value(p["pixels_per_texel"].clone()).unwrap();
+    assert_eq!(r.len(), 5);
+    assert!((r[0][0] / r[0][1] - 1.0).abs() < 0.03 && r[0][1] > 2.5, "frontal {:?}", r[0]);
+    for v in &r[1..] {
+        let ratio = v[0] / v[1];
+        assert!((ratio - 45f64.to_radians().cos()).abs() < 0.05, "45° view {v:?}");
+    }
+    let o = d.btf(&["capture", "process", "raw", "-o", "fine.btf", "--size", "128"]);
+    assert!(o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("warning: the camera gives 0.") && err.contains("θ 45°"), "{err}");
+    let o = d.btf(&["capture", "process", "raw", "-o", "ok.btf", "--size", "16"]);
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("warning"));
+}
+
 #[test]
 fn light_incidence_correction_lowers_the_error() {
     // The same capture without the cos θ_l / cos θ_l' correction for the plates' ≤ 1°

@@ -95,6 +95,17 @@ pub struct ProcessReport {
     pub grid: Grid,
 }
 
+impl ProcessReport {
+    /// Per view slot, raw pixels per output texel along the worst- and best-resolved axis
+    /// ([`super::rectify::pixels_per_texel`] on the registered homography).
+    pub fn pixels_per_texel(&self) -> Vec<[f64; 2]> {
+        self.registrations
+            .iter()
+            .map(|r| super::rectify::pixels_per_texel(&r.matrix(), &self.grid))
+            .collect()
+    }
+}
+
 /// The output grid on the plate for `opt` (size + blend width texels over the ROI).
 pub fn output_grid(layout: &CaptureLayout, opt: &ProcessOptions) -> Result<Grid> {
     let file = layout.dir.join("capture.toml").display().to_string();

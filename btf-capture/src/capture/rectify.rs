@@ -69,6 +69,25 @@ impl Grid {
     }
 }
 
+/// Raw pixels per texel at the grid's centre through homography `h`, along the texel
+/// direction the camera resolves worst and best: the singular values of `J · texel`, `J`
+/// the homography's Jacobian there. Below about one pixel along an axis, texel detail finer
+/// than a pixel is lost before any filter sees it (BENCHMARKS.md #4: the camera's
+/// resolution, not the processing, then bounds the store's error).
+pub fn pixels_per_texel(h: &Matrix3<f64>, grid: &Grid) -> [f64; 2] {
+    let half = grid.n as f64 / 2.0 * grid.texel_mm;
+    let c = [grid.origin_mm[0] + half, grid.origin_mm[1] + half];
+    let t = grid.texel_mm;
+    let p = apply(h, c);
+    let d = |q: [f64; 2]| [q[0] - p[0], q[1] - p[1]];
+    let (u, v) = (d(apply(h, [c[0] + t, c[1]])), d(apply(h, [c[0], c[1] + t])));
+    // singular values of the 2×2 [u v]: √((a ± √(a² − 4 det²)) / 2), a its squared norm
+    let a = u[0] * u[0] + u[1] * u[1] + v[0] * v[0] + v[1] * v[1];
+    let det = u[0] * v[1] - u[1] * v[0];
+    let root = (a * a - 4.0 * det * det).max(0.0).sqrt();
+    [((a - root) / 2.0).max(0.0).sqrt(), ((a + root) / 2.0).sqrt()]
+}
+
 /// The resampling of one view slot: per texel, taps `(pixel index, weight)`.
 #[derive(Debug, Clone)]
 pub struct Plan {
@@ -199,6 +218,20 @@ mod tests {
         };
         assert!(err(Filter::Footprint) < 1e-6, "{}", err(Filter::Footprint));
         assert!(err(Filter::Bilinear) > 0.4);
+    }
+
+    #[test]
+    fn pixels_per_texel_are_the_footprints_axes() {
+        let grid = Grid { origin_mm: [-8.0, -8.0], texel_mm: 0.5, n: 32 };
+        // 3 px per mm along x, 3·cos 75° along y (a 75° view foreshortens one axis), rotated
+        let (c, s) = (0.6f64, 0.8f64);
+        let f = 75f64.to_radians().cos();
+        let h =
+            Matrix3::new(3.0 * c, -3.0 * f * s, 100.0, 3.0 * s, 3.0 * f * c, 50.0, 0.0, 0.0, 1.0);
+        let [lo, hi] = pixels_per_texel(&h, &grid);
+        assert!((hi - 1.5).abs() < 1e-12 && (lo - 1.5 * f).abs() < 1e-12, "{lo} {hi}");
+        let [lo, hi] = pixels_per_texel(&Matrix3::identity(), &grid);
+        assert!((lo - 0.5).abs() < 1e-12 && (hi - 0.5).abs() < 1e-12);
     }
 
     #[test]
