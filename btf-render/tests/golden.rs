@@ -94,14 +94,21 @@ fn flat_plane_per_pixel_matches_cpu_reconstruction() {
 fn per_vertex_converges_to_per_pixel_as_the_mesh_is_refined() {
     let Some(gpu) = gpu("per_vertex_converges_to_per_pixel_as_the_mesh_is_refined") else { return };
     let dir = tempfile::tempdir().unwrap();
-    // c = 4: constant G, f16 separable entries; c = 32: G = 8, the run-time group loop
-    for components in [4, 32] {
-        per_vertex_convergence(&gpu, dir.path(), components);
+    // c = 4: constant G, f16 separable entries; c = 32: G = 8, the run-time group loop;
+    // c = 4 with weights beyond f16 (×1e6): constant G with f32 weight rows and entries
+    for (components, scale) in [(4, 1.0), (32, 1.0), (4, 1e6)] {
+        per_vertex_convergence(&gpu, dir.path(), components, scale);
     }
 }
 
-fn per_vertex_convergence(gpu: &btf_render::Gpu, dir: &std::path::Path, components: usize) {
-    write_store(dir, "m.eigen", Pattern::Checker, 16, 16, components, Quantization::F16);
+fn per_vertex_convergence(
+    gpu: &btf_render::Gpu,
+    dir: &std::path::Path,
+    components: usize,
+    weight_scale: f32,
+) {
+    let (q, p) = (Quantization::F16, Pattern::Checker);
+    write_store_scaled(dir, "m.eigen", p, 16, 16, components, q, weight_scale);
     let size = 64;
     let mut errors = Vec::new();
     for n in [1usize, 2, 4, 8, 16] {
@@ -131,14 +138,22 @@ fn per_vertex_convergence(gpu: &btf_render::Gpu, dir: &std::path::Path, componen
                 "#
             );
             let scene = Scene::load(&write(dir, "scene.toml", &text)).unwrap();
+            if eval == "per-vertex" && n == 1 {
+                let key = btf_render::Renderer::new(gpu, &scene, RenderOptions::default())
+                    .unwrap()
+                    .pass_key();
+                let groups = if components <= 16 { components.div_ceil(4) as u32 } else { 0 };
+                assert_eq!((key.groups, key.packed), (groups, groups > 0 && weight_scale < 10.0));
+                assert!(key.separable());
+            }
             frames.push(render_scene(gpu, &scene, RenderOptions::default()).unwrap());
         }
         let e = rel_rmse(&frames[0].rgb, &frames[1].rgb);
         eprintln!(
-            "c = {components}, {n:>2}×{n:<2} quads: per-vertex vs per-pixel relative RMSE {e:.4}"
+            "c = {components} (weights ×{weight_scale}), {n:>2}×{n:<2} quads: per-vertex vs per-pixel relative RMSE {e:.4}"
         );
         errors.push(e);
-        if n == 16 && components == 4 {
+        if n == 16 && components == 4 && weight_scale == 1.0 {
             save_comparison("per-vertex-16", size, size, &frames[0].rgb, &frames[1].rgb);
         }
     }

@@ -35,6 +35,22 @@ pub fn write_store(
     c: usize,
     q: Quantization,
 ) -> PathBuf {
+    write_store_scaled(dir, name, pattern, w, h, c, q, 1.0)
+}
+
+/// [`write_store`] with every per-light weight times `weight_scale` (an HDR store whose
+/// weights leave `f16`'s range at 1e6).
+#[allow(clippy::too_many_arguments, dead_code)]
+pub fn write_store_scaled(
+    dir: &Path,
+    name: &str,
+    pattern: Pattern,
+    w: usize,
+    h: usize,
+    c: usize,
+    q: Quantization,
+    weight_scale: f32,
+) -> PathBuf {
     let views = Sampling::ubo81();
     let lights = Sampling::ubo81();
     let meta = EigenMeta {
@@ -84,9 +100,10 @@ pub fn write_store(
         for i in 0..lights.len() {
             let ld = lights.direction(i).to_vector();
             for k in 0..c {
-                weights[i * c + k] = (ld[2] as f32 * 2.0 - 1.0) * (1.0 + k as f32 * 0.1)
-                    + (ld[0] as f32 * (k + 1) as f32).sin()
-                    + 0.5 * ld[1] as f32 * ((k % 2) as f32 - 0.5);
+                weights[i * c + k] = weight_scale
+                    * ((ld[2] as f32 * 2.0 - 1.0) * (1.0 + k as f32 * 0.1)
+                        + (ld[0] as f32 * (k + 1) as f32).sin()
+                        + 0.5 * ld[1] as f32 * ((k % 2) as f32 - 0.5));
             }
         }
         let (eigentextures, scale_offset) = quantize(&basis, c, q);
