@@ -59,13 +59,17 @@ pub struct BtfPassKey {
     /// The materials' weights are in the packed `f16` layout (`material.rs`; only with
     /// `groups > 0`).
     pub packed: bool,
+    /// Keep the full per-vertex layout even where the separable one applies
+    /// (`RenderOptions::full_vertex_layout`).
+    pub full_vertex_layout: bool,
 }
 
 impl BtfPassKey {
     /// Whether the per-vertex coefficients are in the separable layout (`per_vertex.rs`):
-    /// per-vertex mode with only point and directional lights.
+    /// per-vertex mode with only point and directional lights (unless the full layout is
+    /// asked for).
     pub fn separable(&self) -> bool {
-        self.evaluation == Evaluation::PerVertex && !self.environment
+        self.evaluation == Evaluation::PerVertex && !self.environment && !self.full_vertex_layout
     }
 
     /// Whether the pass reads per-vertex coefficients (group 2).

@@ -129,7 +129,8 @@ fn first_occurrences(s: SlotSets) -> u32 {
 // of `members`) at coefficient offset base[k] (light 0; light l adds l·4·stride).
 fn vertex_sum(in: VertexOut, uv: vec2<f32>, n_entries: u32) -> vec3<f32> {
     let g_count = group_count();
-    let light_step = 4u * entry_stride();
+    let stride = entry_stride();
+    let light_step = 4u * stride;
     let s = slot_sets(in);
     var todo = first_occurrences(s);
     var rgb = vec3<f32>(0.0);
@@ -145,7 +146,7 @@ fn vertex_sum(in: VertexOut, uv: vec2<f32>, n_entries: u32) -> vec3<f32> {
         let hit = vec3<u32>(pack_bits(s.s0 == jv), pack_bits(s.s1 == jv), pack_bits(s.s2 == jv));
         let members = pack_bits(vec4<bool>(hit != vec3<u32>(0u), false));
         // slot index m of each member = trailing bit of its hit mask
-        let base = ((in.tri * frame.info.w) * 4u + firstTrailingBit(hit)) * entry_stride();
+        let base = ((in.tri * frame.info.w) * 4u + firstTrailingBit(hit)) * stride;
         if (GROUPS > 0u) {
             rgb = rgb + slot_fixed(in, uv, j, members, base, n_entries, light_step);
         } else {

@@ -54,6 +54,9 @@ pub struct RenderOptions {
     /// sides the scene's camera shows (for a viewer whose camera moves; a fixed camera
     /// needs only its own, see [`crate::camera_sides`]).
     pub all_env_sides: bool,
+    /// Keep the full RGB per-vertex layout where the separable one applies (per-vertex mode
+    /// under point and directional lights; `per_vertex.rs`): for comparing the two, slower.
+    pub full_vertex_layout: bool,
 }
 
 struct LoadedMaterial {
@@ -158,6 +161,7 @@ impl Renderer {
             lights: scene.lights.len() as u32,
             groups,
             packed: packed.is_some(),
+            full_vertex_layout: options.full_vertex_layout,
         };
         let btf = BtfPass::new(gpu, key)?;
         let sampler = gpu.device.create_sampler(&wgpu::SamplerDescriptor {

@@ -101,6 +101,56 @@ fn per_vertex_converges_to_per_pixel_as_the_mesh_is_refined() {
     }
 }
 
+/// The separable per-vertex layout renders what the full RGB layout renders, on a coarse
+/// mesh under a near coloured point light (its irradiance differs a lot between the
+/// vertices, so an entry read for the wrong vertex or light would show) plus a sun: within
+/// the layouts' f16 rounding at c = 4 (both packed) and c = 32 (both f32: to f32 rounding).
+#[test]
+fn separable_and_full_per_vertex_layouts_render_the_same() {
+    let Some(gpu) = gpu("separable_and_full_per_vertex_layouts_render_the_same") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "plane.obj", &plane_obj(2, false));
+    for (components, tol) in [(4usize, 2e-3), (32, 1e-5)] {
+        write_store(dir.path(), "m.eigen", Pattern::Checker, 16, 16, components, Quantization::F16);
+        let text = r#"
+            [output]
+            width = 48
+            height = 48
+            [[meshes]]
+            path = "plane.obj"
+            [[materials]]
+            store = "m.eigen"
+            [camera]
+            eye = [0.5, -0.6, 1.2]
+            target = [0.5, 0.5, 0.0]
+            up = [0.0, 0.0, 1.0]
+            fov_y_deg = 60.0
+            [[lights]]
+            kind = "point"
+            position = [0.9, 0.1, 0.3]
+            intensity = [0.3, 0.2, 0.1]
+            [[lights]]
+            kind = "directional"
+            direction = [-0.3, 0.4, 0.8]
+            irradiance = [0.2, 0.4, 0.6]
+            [effects]
+            evaluation = "per-vertex"
+            "#;
+        let scene = Scene::load(&write(dir.path(), "scene.toml", text)).unwrap();
+        let frame = |full_vertex_layout| {
+            let options = RenderOptions { full_vertex_layout, ..Default::default() };
+            let r = btf_render::Renderer::new(&gpu, &scene, options).unwrap();
+            assert_eq!(r.pass_key().separable(), !full_vertex_layout);
+            r.render(&gpu).unwrap()
+        };
+        let (sep, full) = (frame(false), frame(true));
+        let e = rel_rmse(&full.rgb, &sep.rgb);
+        eprintln!("c = {components}: separable vs full layout relative RMSE {e:.2e}");
+        assert!(e <= tol, "c = {components}: {e}");
+        assert!(sep.rgb.iter().all(|v| v.is_finite()) && sep.rgb.iter().any(|&v| v > 0.0));
+    }
+}
+
 fn per_vertex_convergence(
     gpu: &btf_render::Gpu,
     dir: &std::path::Path,
