@@ -145,12 +145,15 @@ fn process(a: ProcessArgs) -> Result<()> {
         ..ProcessOptions::default()
     };
     opt.register.use_lines = use_lines;
+    crate::guard::refuse_overlap(&[("-o", &a.output)], &[("raw folder", &a.raw_dir)])?;
     let layout = CaptureLayout::read(&a.raw_dir)?;
     let n = layout.sampling.len() as u64;
     let bar = crate::progress::bar(n * n, "rectify");
     let t0 = std::time::Instant::now();
-    let rep = cap::process(&a.raw_dir, &a.output, &opt, &|| bar.inc(1))
-        .with_context(|| format!("cannot process {}", a.raw_dir.display()))?;
+    let rep = crate::guard::resumable(&a.output, || {
+        cap::process(&a.raw_dir, &a.output, &opt, &|| bar.inc(1))
+            .with_context(|| format!("cannot process {}", a.raw_dir.display()))
+    })?;
     bar.finish_and_clear();
     let seconds = t0.elapsed().as_secs_f64();
     for r in rep.registrations.iter().filter(|r| r.fallback_nominal) {
@@ -187,9 +190,9 @@ fn process(a: ProcessArgs) -> Result<()> {
             "worst_marker_rms_px": worst, "texel_mm": rep.grid.texel_mm,
             "pixels_per_texel": resolution,
         });
-        println!("{j}");
+        crate::guard::outln!("{j}");
     } else {
-        println!(
+        crate::guard::outln!(
             "processed {} images ({} kept) of {} view slots into {} ({}², {} filter) in {:.1} s; worst marker RMS {:.3} px",
             rep.images_written,
             rep.images_kept,
@@ -267,8 +270,12 @@ fn score_cmd(a: ScoreArgs) -> Result<()> {
     })?;
     let json = serde_json::to_string_pretty(&s)?;
     if let Some(dir) = &a.report {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-        std::fs::write(dir.join("score.json"), &json)?;
+        crate::guard::refuse_overlap(
+            &[("--report", dir)],
+            &[("store", &a.store), ("--truth", &a.truth)],
+        )?;
+        crate::guard::output_folder(dir, "capture score", false, &|_| false)?;
+        btf_core::fs::write_atomic(&dir.join("score.json"), json.as_bytes())?;
         let md = format!(
             "# Capture score: {}\n\nmean reprojection {:.4} texel, max {:.4} texel (texel = {:.4} mm); rel. RMSE {:.5}\n\n{}",
             a.store.display(),
@@ -278,8 +285,8 @@ fn score_cmd(a: ScoreArgs) -> Result<()> {
             s.rel_rmse,
             score::filter_table_markdown(&s.filters)
         );
-        std::fs::write(dir.join("filters.md"), md)?;
+        btf_core::fs::write_atomic(&dir.join("filters.md"), md.as_bytes())?;
     }
-    println!("{json}");
+    crate::guard::outln!("{json}");
     Ok(())
 }

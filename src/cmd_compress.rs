@@ -1,6 +1,7 @@
 //! `btf compress`: per-view-slot PCA of a BTF store into an eigen store, or a sweep over the
 //! number of components with a report of what accuracy costs.
 
+use crate::guard::{self, outln};
 use crate::{progress, sweep};
 use anyhow::{Context, Result, bail};
 use btf_core::compress::{CompressParams, CompressReport, compress};
@@ -60,18 +61,20 @@ pub fn run(a: CompressArgs) -> Result<()> {
         if cs.is_empty() || cs.contains(&0) {
             bail!("--sweep needs component counts ≥ 1, e.g. --sweep 1,2,4,8,16");
         }
+        guard::refuse_overlap(&[("--report", &dir)], &[("input", &a.input)])?;
         return sweep::run(&input, &cs, quantization, &dir);
     }
     let Some(output) = a.output else { bail!("give -o OUT.eig (or --sweep LIST --report DIR)") };
+    guard::refuse_overlap(&[("-o", &output)], &[("input", &a.input)])?;
     let params = CompressParams { components: a.components, quantization, resume: a.resume };
-    let r = compress_with_progress(&input, &output, params)?;
+    let r = guard::resumable(&output, || compress_with_progress(&input, &output, params))?;
     for w in &r.warnings {
         eprintln!("warning: {w}");
     }
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&r)?);
+        outln!("{}", serde_json::to_string_pretty(&r)?);
     } else {
-        println!(
+        outln!(
             "compressed {} slots × {} lights to {} components ({}) in {:.2} s",
             r.slots.len(),
             input.meta().n_lights(),
@@ -79,18 +82,20 @@ pub fn run(a: CompressArgs) -> Result<()> {
             r.quantization.name(),
             r.seconds
         );
-        println!(
+        outln!(
             "  relative RMSE {:.3e} (exact PCA {:.3e}), PSNR {:.1} dB",
-            r.rel_rmse, r.rel_rmse_exact, r.psnr_db
+            r.rel_rmse,
+            r.rel_rmse_exact,
+            r.psnr_db
         );
-        println!(
+        outln!(
             "  {:.1} MiB → {:.1} MiB (ratio {:.1}:1)",
             r.input_bytes as f64 / 1048576.0,
             r.output_bytes as f64 / 1048576.0,
             r.input_bytes as f64 / r.output_bytes.max(1) as f64
         );
         if r.resumed_slots > 0 {
-            println!("  resumed {} slots from an interrupted run", r.resumed_slots);
+            outln!("  resumed {} slots from an interrupted run", r.resumed_slots);
         }
     }
     Ok(())

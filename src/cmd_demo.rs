@@ -63,12 +63,7 @@ fn stage(
 
 /// Runs `btf demo`.
 pub fn run(a: DemoArgs) -> Result<()> {
-    if a.fresh && a.out.exists() {
-        std::fs::remove_dir_all(&a.out)
-            .with_context(|| format!("cannot clear {}", a.out.display()))?;
-    }
-    std::fs::create_dir_all(&a.out)
-        .with_context(|| format!("cannot create {}", a.out.display()))?;
+    crate::guard::output_folder(&a.out, "demo", a.fresh, &crate::guard::report_output)?;
     let kind = datasets::MaterialKind::from_name(&a.kind)?;
     let (btf_path, eig_path) = (a.out.join("material.btf"), a.out.join("material.eig"));
     let mut stages = Vec::new();
@@ -148,7 +143,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
         )?;
     }
     crate::imageio::write_text(&a.out.join("report.md"), &report)?;
-    println!("{report}");
-    println!("demo written to {}", a.out.join("report.md").display());
+    crate::guard::outln!("{report}");
+    crate::guard::outln!("demo written to {}", a.out.join("report.md").display());
     Ok(())
 }

@@ -7,7 +7,6 @@ use anyhow::{Context, Result, bail};
 use btf_capture::bonn::export::{ImageEncoding, export_pvf, export_ubo2003};
 use btf_core::eigen::EigenStore;
 use btf_core::store::BtfStore;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `btf export`.
@@ -41,20 +40,19 @@ pub fn write_npy(path: &Path, rows: usize, cols: usize, data: &[f32]) -> Result<
     let total = 10 + header.len() + 1;
     header.push_str(&" ".repeat(total.div_ceil(64) * 64 - total));
     header.push('\n');
-    let tmp = path
-        .with_file_name(format!(".{}.tmp", path.file_name().unwrap_or_default().to_string_lossy()));
-    let mut f = std::io::BufWriter::new(
-        std::fs::File::create(&tmp).with_context(|| format!("cannot write {}", tmp.display()))?,
-    );
-    f.write_all(b"\x93NUMPY\x01\x00")?;
-    f.write_all(&(header.len() as u16).to_le_bytes())?;
-    f.write_all(header.as_bytes())?;
-    for v in data {
-        f.write_all(&v.to_le_bytes())?;
+    if let Some(i) = data.iter().position(|v| !v.is_finite()) {
+        bail!("{}: refusing to write a non-finite value (element {i})", path.display());
     }
-    f.into_inner().map_err(|e| e.into_error())?.sync_all()?;
-    std::fs::rename(&tmp, path)
-        .with_context(|| format!("cannot move output into place at {}", path.display()))
+    btf_core::fs::write_atomic_with(path, |f| {
+        f.write_all(b"\x93NUMPY\x01\x00")?;
+        f.write_all(&(header.len() as u16).to_le_bytes())?;
+        f.write_all(header.as_bytes())?;
+        for v in data {
+            f.write_all(&v.to_le_bytes())?;
+        }
+        Ok(())
+    })?;
+    Ok(())
 }
 
 /// Writes `layers` (name, `h·w·3` linear RGB) as one multi-layer float32 EXR, atomically.
@@ -84,11 +82,13 @@ pub fn write_layers_exr(
         .collect();
     let image =
         Image::from_layers(ImageAttributes::new(IntegerBounds::from_dimensions((w, h))), list);
-    let tmp = path
-        .with_file_name(format!(".{}.tmp", path.file_name().unwrap_or_default().to_string_lossy()));
-    image.write().to_file(&tmp).with_context(|| format!("cannot write {}", tmp.display()))?;
-    std::fs::rename(&tmp, path)
-        .with_context(|| format!("cannot move output into place at {}", path.display()))
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    image
+        .write()
+        .to_buffered(&mut bytes)
+        .with_context(|| format!("cannot encode {}", path.display()))?;
+    btf_core::fs::write_atomic(path, bytes.get_ref())?;
+    Ok(())
 }
 
 fn slot_arg(a: &ExportArgs, n_views: usize) -> Result<usize> {
@@ -115,6 +115,16 @@ fn open_btf(path: &Path) -> Result<BtfStore> {
 
 /// Runs `btf export`.
 pub fn run(a: ExportArgs) -> Result<()> {
+    crate::guard::refuse_overlap(&[("-o", &a.output)], &[("input", &a.input)])?;
+    let kind = match a.format.as_str() {
+        "npy" => Some(btf_core::fs::NPY),
+        "exr" => Some(btf_core::fs::EXR),
+        "pvf" => Some(btf_core::fs::OutputKind::File { magic: b"!PVF", format: "PVF" }),
+        _ => None,
+    };
+    if let Some(kind) = kind {
+        crate::guard::check_file(&a.output, kind)?;
+    }
     match a.format.as_str() {
         "npy" => {
             let store = open_btf(&a.input)?;
@@ -133,7 +143,7 @@ pub fn run(a: ExportArgs) -> Result<()> {
             let scale = export_ubo2003(&store, &a.output, &a.name, enc)
                 .with_context(|| format!("cannot export to {}", a.output.display()))?;
             let m = store.meta();
-            println!(
+            crate::guard::outln!(
                 "wrote {} images to {} (scale {scale}, in btf-export.json)",
                 m.n_views() * m.n_lights(),
                 a.output.display()

@@ -66,9 +66,13 @@ pub fn run(cmd: ImportCmd) -> Result<()> {
     let start = Instant::now();
     match cmd {
         ImportCmd::Ubo2003(a) => {
-            let rep = ubo2003::import(&a.input, &a.output, dtype(&a.dtype)?)
-                .with_context(|| format!("cannot import {}", a.input.display()))?;
-            println!(
+            crate::guard::refuse_overlap(&[("-o", &a.output)], &[("input", &a.input)])?;
+            let dtype = dtype(&a.dtype)?;
+            let rep = crate::guard::no_partial_on_error(&a.output, || {
+                ubo2003::import(&a.input, &a.output, dtype)
+                    .with_context(|| format!("cannot import {}", a.input.display()))
+            })?;
+            crate::guard::outln!(
                 "imported {} images ({} views x {} lights, {}x{} texels, scale {}) into {} in {:.2} s",
                 rep.images,
                 rep.samplings.0,
@@ -81,14 +85,22 @@ pub fn run(cmd: ImportCmd) -> Result<()> {
             );
         }
         ImportCmd::Ubo2014(a) => {
-            let rep = if a.eigen {
-                let q: Quantization = a.quantization.parse()?;
-                ubo2014::import_pvf_to_eigen(&a.input, &a.output, q)
-            } else {
-                ubo2014::import_to_store(&a.input, &a.output, dtype(&a.dtype)?, a.memory_mib << 20)
-            }
-            .with_context(|| format!("cannot import {}", a.input.display()))?;
-            println!(
+            crate::guard::refuse_overlap(&[("-o", &a.output)], &[("input", &a.input)])?;
+            let rep = crate::guard::no_partial_on_error(&a.output, || {
+                if a.eigen {
+                    let q: Quantization = a.quantization.parse()?;
+                    ubo2014::import_pvf_to_eigen(&a.input, &a.output, q)
+                } else {
+                    ubo2014::import_to_store(
+                        &a.input,
+                        &a.output,
+                        dtype(&a.dtype)?,
+                        a.memory_mib << 20,
+                    )
+                }
+                .with_context(|| format!("cannot import {}", a.input.display()))
+            })?;
+            crate::guard::outln!(
                 "imported {} ({} {}, {} views x {} lights, {}x{} texels) into {} in {:.2} s",
                 a.input.display(),
                 rep.signature,

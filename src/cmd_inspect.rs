@@ -49,24 +49,27 @@ pub fn inspect_json(path: &std::path::Path) -> Result<serde_json::Value> {
 pub fn run(a: InspectArgs) -> Result<()> {
     let v = inspect_json(&a.file)?;
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        crate::guard::outln!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
-    println!("{}: {} store", a.file.display(), v["kind"].as_str().unwrap_or("?"));
-    println!(
+    crate::guard::outln!("{}: {} store", a.file.display(), v["kind"].as_str().unwrap_or("?"));
+    crate::guard::outln!(
         "  sampling     {} views × {} lights ({} / {})",
-        v["n_views"], v["n_lights"], v["sampling"], v["light_sampling"]
+        v["n_views"],
+        v["n_lights"],
+        v["sampling"],
+        v["light_sampling"]
     );
-    println!("  texture      {} × {} texels, {}", v["width"], v["height"], v["dtype"]);
+    crate::guard::outln!("  texture      {} × {} texels, {}", v["width"], v["height"], v["dtype"]);
     if let Some(c) = v.get("components") {
-        println!("  components   {c}");
+        crate::guard::outln!("  components   {c}");
     }
-    println!(
+    crate::guard::outln!(
         "  bytes        {} ({:.1} MiB)",
         v["bytes"],
         v["bytes"].as_f64().unwrap_or(0.0) / 1048576.0
     );
-    println!("  colour space {}", v["color_space"].as_str().unwrap_or(""));
-    println!("  provenance   {}", v["provenance"]);
+    crate::guard::outln!("  colour space {}", v["color_space"].as_str().unwrap_or(""));
+    crate::guard::outln!("  provenance   {}", v["provenance"]);
     Ok(())
 }

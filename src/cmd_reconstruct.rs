@@ -56,6 +56,13 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
         light_mode: a.light_interp.parse()?,
         components: a.components,
     };
+    let mut outputs: Vec<(&str, &std::path::Path)> = vec![("-o", &a.output)];
+    if let Some(png) = &a.png {
+        outputs.push(("--png", png));
+        crate::guard::check_file(png, btf_core::fs::PNG)?;
+    }
+    crate::guard::refuse_overlap(&outputs, &[("input", &a.input)])?;
+    crate::guard::check_file(&a.output, btf_core::fs::EXR)?;
     let tex = reconstruct(&store, view, light, params)?;
     let m = &store.meta().btf;
     crate::imageio::write_exr(&a.output, m.width, m.height, &tex)?;

@@ -101,12 +101,14 @@ pub fn run(args: RelightArgs) -> Result<()> {
     let env_index = attach_environment(&mut scene, &args)?;
     scene.validate(&args.scene)?;
     let mut jobs = plan(&args, &scene, env_index)?;
+    let envs: Vec<(&str, &Path)> = args.envs.iter().map(|p| ("--env", p.as_path())).collect();
+    crate::guard::refuse_scene_overlap(&[("-o", &args.output)], &args.scene, &scene, &envs)?;
     prepare_output(&args, &scene)?;
     let pending: usize =
         jobs.iter().map(|j| j.frames.iter().filter(|(_, p)| !p.exists()).count()).sum();
     let all: usize = jobs.iter().map(|j| j.frames.len()).sum();
     if pending == 0 && jobs.iter().all(|j| j.report_done) {
-        println!("all {all} frames of {} already rendered", args.output.display());
+        crate::guard::outln!("all {all} frames of {} already rendered", args.output.display());
         return Ok(());
     }
     let first = jobs.iter().position(|j| !j.is_done()).unwrap_or(0);
@@ -144,7 +146,7 @@ pub fn run(args: RelightArgs) -> Result<()> {
     let summary = summarise(&renderer, &scene, &args, summaries)?;
     let text = serde_json::to_string_pretty(&summary)?;
     crate::imageio::write_text(&args.output.join("summary.json"), &text)?;
-    println!(
+    crate::guard::outln!(
         "{} frames rendered, {} reused; visibility {:.2} s, weights {:.3} s per environment, {:.1} ms per frame → {}",
         summary.frames_rendered,
         summary.frames_skipped,
@@ -238,14 +240,24 @@ fn plan(args: &RelightArgs, scene: &Scene, index: usize) -> Result<Vec<EnvJob>> 
     Ok(jobs)
 }
 
+/// What `btf relight` writes into its folder (and `--fresh` removes): frames
+/// `STEM_rNNN.{png,exr}`, `summary.json`, `job.json` and the `eigen/` report.
+fn relight_output(name: &str) -> bool {
+    let frame = name
+        .rsplit_once('.')
+        .filter(|(_, ext)| matches!(*ext, "png" | "exr"))
+        .and_then(|(stem, _)| stem.rsplit_once("_r"))
+        .is_some_and(|(_, r)| r.len() == 3 && r.bytes().all(|b| b.is_ascii_digit()));
+    frame
+        || matches!(name, "summary.json" | "job.json" | "eigen")
+        || btf_core::fs::is_temp_name(name)
+}
+
 /// Creates the folder and checks (or writes) `job.json`, so that frames of a different job
 /// are never mistaken for finished ones.
 fn prepare_output(args: &RelightArgs, scene: &Scene) -> Result<()> {
     let out = &args.output;
-    if args.fresh && out.exists() {
-        std::fs::remove_dir_all(out).with_context(|| format!("cannot clear {}", out.display()))?;
-    }
-    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    crate::guard::output_folder(out, "relight", args.fresh, &relight_output)?;
     let mut scene_for_key = scene.clone();
     if let Some((i, _)) = scene.environment() {
         set_env_path(&mut scene_for_key, i, Path::new(""));

@@ -3,7 +3,7 @@
 //! `btf_core::thin_slab`, thin-cloth paper eq. 4–5); `btf thin demo`: the curtain scene
 //! of `crate::thin_demo`.
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use btf_core::thin_slab::monte_carlo::{
     ErrorRow, McParams, TABLE_MU, TABLE_MU0, first_order_error_table,
 };
@@ -68,17 +68,12 @@ fn validate(a: ValidateArgs) -> Result<()> {
         "mu0": TABLE_MU0, "mu": TABLE_MU, "rows": rows,
     }))?;
     if let Some(dir) = &a.report {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        crate::guard::output_folder(dir, "thin validate", false, &|_| false)?;
         for (name, text) in [("thin-validate.md", &md), ("thin-validate.json", &json)] {
-            let path = dir.join(name);
-            let tmp = dir.join(format!(".{name}.partial"));
-            std::fs::write(&tmp, text)
-                .with_context(|| format!("cannot write {}", tmp.display()))?;
-            std::fs::rename(&tmp, &path)
-                .with_context(|| format!("cannot write {}", path.display()))?;
+            btf_core::fs::write_atomic(&dir.join(name), text.as_bytes())?;
         }
     }
-    println!("{}", if a.json { &json } else { &md });
+    crate::guard::outln!("{}", if a.json { &json } else { &md });
     Ok(())
 }
 

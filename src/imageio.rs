@@ -4,17 +4,7 @@
 
 use anyhow::{Context, Result, bail};
 use image::RgbImage;
-use std::path::{Path, PathBuf};
-
-fn temp_beside(path: &Path, ext: &str) -> PathBuf {
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    path.with_file_name(format!(".{name}.tmp-{}.{ext}", std::process::id()))
-}
-
-fn finish(tmp: &Path, path: &Path) -> Result<()> {
-    std::fs::rename(tmp, path)
-        .with_context(|| format!("cannot move output into place at {}", path.display()))
-}
+use std::path::Path;
 
 fn check_rgb(values: &[f32], w: usize, h: usize, path: &Path) -> Result<()> {
     if values.len() != w * h * 3 {
@@ -35,16 +25,18 @@ fn check_rgb(values: &[f32], w: usize, h: usize, path: &Path) -> Result<()> {
 /// Writes linear RGB (`[y][x][rgb]`) as a 32-bit float EXR.
 pub fn write_exr(path: &Path, w: usize, h: usize, rgb: &[f32]) -> Result<()> {
     check_rgb(rgb, w, h, path)?;
-    let tmp = temp_beside(path, "exr");
-    let written = exr::prelude::write_rgb_file(&tmp, w, h, |x, y| {
-        let i = (y * w + x) * 3;
+    use exr::prelude::{Image, SpecificChannels, Vec2, WritableImage};
+    let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
+        let i = (p.1 * w + p.0) * 3;
         (rgb[i], rgb[i + 1], rgb[i + 2])
     });
-    if let Err(e) = written {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(e).with_context(|| format!("cannot write {}", path.display()));
-    }
-    finish(&tmp, path)
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    Image::from_channels((w, h), channels)
+        .write()
+        .to_buffered(&mut bytes)
+        .with_context(|| format!("cannot encode {}", path.display()))?;
+    btf_core::fs::write_atomic(path, bytes.get_ref())?;
+    Ok(())
 }
 
 /// The sRGB transfer function of a linear value in `[0, 1]`.
@@ -70,12 +62,11 @@ pub fn write_png_linear(path: &Path, w: usize, h: usize, rgb: &[f32], exposure: 
 
 /// Writes an 8-bit RGB image as PNG.
 pub fn write_png(path: &Path, img: &RgbImage) -> Result<()> {
-    let tmp = temp_beside(path, "png");
-    if let Err(e) = img.save_with_format(&tmp, image::ImageFormat::Png) {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(e).with_context(|| format!("cannot write {}", path.display()));
-    }
-    finish(&tmp, path)
+    let mut bytes = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
+        .with_context(|| format!("cannot encode {}", path.display()))?;
+    btf_core::fs::write_atomic(path, &bytes)?;
+    Ok(())
 }
 
 /// An error heat-map: per texel, the length of the RGB error vector divided by `full_scale`,
@@ -115,7 +106,6 @@ pub fn upscale(img: &RgbImage, min_size: u32) -> RgbImage {
 
 /// Writes a text file atomically.
 pub fn write_text(path: &Path, text: &str) -> Result<()> {
-    let tmp = temp_beside(path, "txt");
-    std::fs::write(&tmp, text).with_context(|| format!("cannot write {}", path.display()))?;
-    finish(&tmp, path)
+    btf_core::fs::write_atomic(path, text.as_bytes())?;
+    Ok(())
 }

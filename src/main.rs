@@ -11,6 +11,7 @@ mod cmd_reconstruct;
 mod cmd_relight;
 mod cmd_thin;
 mod demo_scene;
+mod guard;
 mod imageio;
 mod plot;
 mod progress;
@@ -87,7 +88,10 @@ fn main() -> ExitCode {
         Command::View(a) => view::run(a),
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(()) => {
+            guard::flush_stdout();
+            ExitCode::SUCCESS
+        }
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE

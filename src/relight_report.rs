@@ -40,7 +40,7 @@ pub struct EigenRow {
 /// Measures `e = 1…8` against exact gathers, renders the heat maps and the `o_k(δ)` plot
 /// of the renderer's current environment, and leaves the rotation where it was.
 pub fn write(renderer: &mut Renderer, gpu: &Gpu, stem: &str, dir: &Path) -> Result<Vec<EigenRow>> {
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    crate::guard::output_folder(dir, "relight", false, &|_| false)?;
     let env = renderer.environment().context("no environment light")?;
     let ews = env.eigenweightsets().context("eigenweightsets are off")?;
     let (a_n, kept) = (ews.rotations, ews.kept().min(REPORT_COMPONENTS));

@@ -62,6 +62,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
             args.output.display()
         );
     }
+    let mut outputs: Vec<(&str, &std::path::Path)> = vec![("-o", &args.output)];
+    if let Some(exr) = &args.exr {
+        outputs.push(("--exr", exr));
+        crate::guard::check_file(exr, btf_core::fs::EXR)?;
+    }
+    crate::guard::refuse_scene_overlap(&outputs, &args.scene, &scene, &[])?;
+    crate::guard::check_file(&args.output, btf_core::fs::PNG)?;
     let gpu = Gpu::new().context("creating a headless GPU device")?;
     let baseline = match args.baseline.as_deref() {
         None => None,
@@ -94,25 +101,30 @@ pub fn run(args: RenderArgs) -> Result<()> {
         print_stats(&frame.stats, &gpu);
     }
     if args.stats_json {
-        println!("{}", serde_json::to_string(&frame.stats)?);
+        crate::guard::outln!("{}", serde_json::to_string(&frame.stats)?);
     }
     Ok(())
 }
 
 fn print_stats(s: &Stats, gpu: &Gpu) {
-    println!("adapter: {} ({:?}); timing: {}", gpu.info.name, gpu.info.backend, s.timing);
+    crate::guard::outln!(
+        "adapter: {} ({:?}); timing: {}",
+        gpu.info.name,
+        gpu.info.backend,
+        s.timing
+    );
     if !s.setup.is_empty() {
-        println!("setup (once per scene):");
+        crate::guard::outln!("setup (once per scene):");
         for p in &s.setup {
-            println!("  {:<40} {:>10.3} ms", p.name, p.ms);
+            crate::guard::outln!("  {:<40} {:>10.3} ms", p.name, p.ms);
         }
-        println!("per frame:");
+        crate::guard::outln!("per frame:");
     }
     for p in &s.passes {
-        println!("  {:<40} {:>10.3} ms", p.name, p.ms);
+        crate::guard::outln!("  {:<40} {:>10.3} ms", p.name, p.ms);
     }
-    println!("  {:<40} {:>10.3} ms", "frame", s.frame_ms);
+    crate::guard::outln!("  {:<40} {:>10.3} ms", "frame", s.frame_ms);
     if let (Some(r), Some(n)) = (s.reads_per_pixel, s.shaded_pixels) {
-        println!("  texture reads per shaded pixel: {r:.2} ({n} pixels)");
+        crate::guard::outln!("  texture reads per shaded pixel: {r:.2} ({n} pixels)");
     }
 }

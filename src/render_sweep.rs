@@ -48,10 +48,11 @@ pub fn run(a: RenderSweepArgs) -> Result<()> {
         !a.components.is_empty() && !a.components.contains(&0),
         "--components needs counts ≥ 1"
     );
+    crate::guard::refuse_scene_overlap(&[("-o", &a.output)], &a.scene, &scene, &[])?;
     let gpu = Gpu::new().context("creating a headless GPU device")?;
     let md = sweep_into(&gpu, &scene, &a.components, a.repeat as usize, &a.output)?;
-    println!("{md}");
-    println!("written to {}", a.output.join("render-cost.md").display());
+    crate::guard::outln!("{md}");
+    crate::guard::outln!("written to {}", a.output.join("render-cost.md").display());
     Ok(())
 }
 
@@ -64,7 +65,7 @@ pub fn sweep_into(
     repeats: usize,
     out: &Path,
 ) -> Result<String> {
-    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    crate::guard::output_folder(out, "render-sweep", false, &|_| false)?;
     let config = SweepConfig { components: components.to_vec(), repeats };
     let n = (components.len() * 4) as u64;
     let bar = crate::progress::bar(n, "render sweep");

@@ -7,7 +7,7 @@
 use crate::cmd_compress::compress_with_progress;
 use crate::imageio::{heatmap, side_by_side, to_srgb, upscale, write_png};
 use crate::plot::{Plot, Series, render};
-use anyhow::{Context, Result};
+use anyhow::Result;
 use btf_core::Direction;
 use btf_core::compress::CompressParams;
 use btf_core::eigen::{EigenStore, Quantization};
@@ -50,7 +50,7 @@ fn slot_near(store: &BtfStore, theta: f64, phi: f64) -> usize {
 
 /// Runs the sweep and writes the report into `dir`.
 pub fn run(input: &BtfStore, cs: &[usize], q: Quantization, dir: &Path) -> Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    crate::guard::output_folder(dir, "compress --sweep", false, &|_| false)?;
     let meta = input.meta();
     let (w, h) = (meta.width, meta.height);
     let work = dir.join(".sweep-stores");
@@ -229,8 +229,8 @@ pub fn run(input: &BtfStore, cs: &[usize], q: Quantization, dir: &Path) -> Resul
         "Difference heat-maps (length of the RGB error vector; green = 0, red ≥ 10 % of the image's peak):\n\n![heat-maps](heatmaps.png)"
     )?;
     crate::imageio::write_text(&dir.join("report.md"), &md)?;
-    println!("{}{quant_md}", std::fs::read_to_string(dir.join("sweep.md"))?);
-    println!("report written to {}", dir.join("report.md").display());
+    crate::guard::outln!("{}{quant_md}", std::fs::read_to_string(dir.join("sweep.md"))?);
+    crate::guard::outln!("report written to {}", dir.join("report.md").display());
     Ok(())
 }
 

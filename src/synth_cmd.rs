@@ -31,7 +31,7 @@ pub struct MaterialArgs {
     /// Texels per side.
     #[arg(long, default_value_t = 64)]
     pub size: usize,
-    /// View and light sampling: ubo81, ubo81-h1 or dome151.
+    /// View and light sampling: ubo81, ubo81-h1, dome151 or rings:θxCOUNT,… (e.g. rings:0x1,45x4).
     #[arg(long, default_value = "ubo81")]
     pub sampling: String,
     /// Seed of all random choices.
@@ -159,7 +159,7 @@ fn parse_rgb(s: &str) -> Result<[f64; 3]> {
 fn material(a: MaterialArgs) -> Result<()> {
     let kind = MaterialKind::from_name(&a.kind)?;
     let mut spec = MaterialSpec::new(kind, a.size);
-    spec.sampling = btf_core::Sampling::by_name(&a.sampling)?;
+    spec.sampling = datasets::capture::parse_sampling(&a.sampling)?;
     spec.seed = a.seed;
     spec.albedo = a.albedo.as_deref().map(parse_rgb).transpose()?;
     let dtype = if a.f16 { btf_core::zarr::DType::F16 } else { btf_core::zarr::DType::F32 };
@@ -191,6 +191,7 @@ fn env(a: EnvArgs) -> Result<()> {
         sun_azimuth_deg: a.sun_azimuth,
         turbidity: a.turbidity,
     };
+    crate::guard::check_file(&a.output, btf_core::fs::EXR)?;
     let map = datasets::synth_env(kind, &params, a.width)?;
     datasets::write_exr(&map, &a.output)?;
     let max = map.pixels.iter().flat_map(|p| p.iter()).fold(0f32, |m, &v| m.max(v));
@@ -208,6 +209,7 @@ fn env(a: EnvArgs) -> Result<()> {
 fn mesh(a: MeshArgs) -> Result<()> {
     let kind = datasets::MeshKind::from_name(&a.kind)?;
     let res = datasets::Resolution::from_name(&a.resolution)?;
+    crate::guard::check_file(&a.output, btf_core::fs::TEXT)?;
     let t0 = std::time::Instant::now();
     let mesh = datasets::synth_mesh(kind, res)?;
     let comment = format!("btf synth mesh --kind {} --resolution {}", a.kind, a.resolution);

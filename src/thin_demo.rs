@@ -122,10 +122,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
     if !(a.tau.is_finite() && a.tau > 0.0 && a.tau <= 10.0) {
         bail!("--tau must be in (0, 10], got {}", a.tau);
     }
-    if a.fresh && a.out.exists() {
-        std::fs::remove_dir_all(&a.out)
-            .with_context(|| format!("cannot clear {}", a.out.display()))?;
-    }
+    crate::guard::output_folder(&a.out, "thin demo", a.fresh, &crate::guard::report_output)?;
     std::fs::create_dir_all(a.out.join("frames"))
         .with_context(|| format!("cannot create {}", a.out.display()))?;
     let env_exposure = make_inputs(&a)?;

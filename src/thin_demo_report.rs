@@ -100,6 +100,6 @@ pub fn write(
         alpha.values, alpha.mean_alpha, alpha.max_alpha, alpha.bound, alpha.max_square_error
     )?;
     crate::imageio::write_text(&out.join("report.md"), &md)?;
-    println!("{md}");
+    crate::guard::outln!("{md}");
     Ok(())
 }

@@ -108,7 +108,8 @@ pub fn compress(
         ));
     }
     let emeta = EigenMeta { btf: meta.clone(), components: c, quantization: params.quantization };
-    let writer = EigenWriter::create(output, emeta, params.resume)?;
+    let job = serde_json::json!({ "input": crate::fs::input_identity(input.path()) });
+    let writer = EigenWriter::create_for_job(output, emeta, params.resume, job)?;
     // One worker per thread, each with its own slot buffers for the whole run (a slot is
     // 64 MB at 256²: allocating and faulting it in per slot would cost more than reading it).
     // A finished slot goes to the writer thread (its chunks written by direct I/O, which

@@ -277,8 +277,19 @@ pub struct EigenWriter {
 }
 
 impl EigenWriter {
-    /// Starts an eigen store at `path`.
+    /// Starts an eigen store at `path`; a resume must match `meta`.
     pub fn create(path: &Path, meta: EigenMeta, resume: bool) -> Result<Self> {
+        Self::create_for_job(path, meta, resume, serde_json::Value::Null)
+    }
+
+    /// [`EigenWriter::create`] with more to the job than the metadata (e.g. the identity of
+    /// the input store): a resume must match `job` too.
+    pub fn create_for_job(
+        path: &Path,
+        meta: EigenMeta,
+        resume: bool,
+        job: serde_json::Value,
+    ) -> Result<Self> {
         if meta.components == 0 || meta.components > meta.btf.n_lights() {
             return Err(Error::Invalid(format!(
                 "components {} not in 1..={}",
@@ -286,7 +297,8 @@ impl EigenWriter {
                 meta.btf.n_lights()
             )));
         }
-        let txn = StoreTxn::begin(path, resume)?;
+        let record = serde_json::json!({"store": "eigen", "meta": meta, "job": job});
+        let txn = StoreTxn::begin(path, resume, &record)?;
         let arrays = open_arrays(txn.dir(), &meta, true)?;
         Ok(EigenWriter { txn, meta, arrays })
     }
@@ -447,8 +459,34 @@ impl EigenStore {
         let weights = f32s(self.named(view, self.arrays.weights.read_chunk(&[v, 0, 0]))?);
         let eigenvalues =
             zarr::decode_f64(&self.named(view, self.arrays.values.read_chunk(&[v, 0]))?);
+        // A valid checksum only says the bytes are as written: refuse non-finite values
+        // here, naming the store, array and slot, so no command passes them on.
+        self.finite(view, "mean", mean.iter().map(|&x| x as f64))?;
+        self.finite(view, "scale_offset", so.iter().map(|&x| x as f64))?;
+        self.finite(view, "weights", weights.iter().map(|&x| x as f64))?;
+        self.finite(view, "eigenvalues", eigenvalues.iter().copied())?;
+        if self.meta.quantization == Quantization::F16 {
+            let bits = eigentextures.chunks_exact(2).map(|b| u16::from_le_bytes([b[0], b[1]]));
+            self.finite(
+                view,
+                "eigentextures",
+                bits.map(|h| if h & 0x7c00 == 0x7c00 { f64::NAN } else { 0.0 }),
+            )?;
+        }
         let scale_offset = so.chunks_exact(2).map(|p| [p[0], p[1]]).collect();
         Ok(QuantizedSlot { mean, eigentextures, scale_offset, weights, eigenvalues })
+    }
+
+    fn finite(&self, view: usize, array: &str, values: impl Iterator<Item = f64>) -> Result<()> {
+        for (i, x) in values.enumerate() {
+            if !x.is_finite() {
+                return Err(Error::Corrupt {
+                    path: self.path.join(array),
+                    what: format!("non-finite value ({x}) in view slot {view}, element {i}"),
+                });
+            }
+        }
+        Ok(())
     }
 
     /// Reads slot `view`, dequantised.

@@ -11,6 +11,8 @@
 //! - [`zarr`], [`store`], [`eigen`]: the chunked on-disk BTF and eigen stores;
 //! - [`pca`]: the per-view-slot PCA (eq. 1);
 //! - [`reconstruct`]: CPU reconstruction for any view and light (eq. 2–5);
+//! - [`fs`]: atomic writes, leftovers, and the output rules (never an input, replace only
+//!   what the toolkit made);
 //! - [`metrics`]: error measures (relative RMSE, PSNR, Eckart–Young);
 //! - [`thin_slab`]: thin semi-transparent cloth as an optically thin slab (first-order
 //!   reflection/transmission, direct transmittance, Monte-Carlo reference).
@@ -22,6 +24,7 @@ pub mod direct_io;
 pub mod direction;
 pub mod eigen;
 pub mod error;
+pub mod fs;
 pub mod gemm;
 pub mod interp;
 pub mod kernels;
@@ -33,6 +36,14 @@ pub mod sampling;
 pub mod store;
 pub mod thin_slab;
 pub mod zarr;
+
+/// The largest radiance (environment pixels), irradiance or intensity (lights) and the
+/// largest scale factor (exposures) any input may hold: 5·10⁴ times the solar disc's
+/// broadband radiance (≈ 2·10⁷ W m⁻² sr⁻¹). Products and sums of such values over a frame
+/// (a few lights, 2²⁷ map pixels, exposures) stay far inside `f32`, whose maximum (3.4·10³⁸)
+/// an RGBE exponent or an EXR pixel can otherwise reach, so a map or scene beyond it is
+/// refused by name instead of rendering infinities.
+pub const MAX_RADIANCE: f32 = 1e12;
 
 pub use direction::Direction;
 pub use error::{Error, Result};

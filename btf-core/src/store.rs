@@ -105,16 +105,53 @@ pub struct StoreTxn {
 }
 
 impl StoreTxn {
-    /// Starts (or, with `resume`, continues) writing a store at `path`.
-    pub fn begin(path: &Path, resume: bool) -> Result<Self> {
+    /// Starts (or, with `resume`, continues) writing a store at `path` for `job` (what made
+    /// it: the metadata, parameters and input identity). The partial's `zarr.json` records
+    /// the job from the start, so the partial is a valid Zarr group at every instant and a
+    /// resume by a different job is refused, naming the first field that differs.
+    pub fn begin(path: &Path, resume: bool, job: &Value) -> Result<Self> {
         let name = path
             .file_name()
             .ok_or_else(|| Error::Invalid(format!("{}: not a file name", path.display())))?;
+        crate::fs::check_replaceable(path, crate::fs::OutputKind::Store)?;
         let partial = path.with_file_name(format!("{}.partial", name.to_string_lossy()));
-        if partial.exists() && !resume {
+        if partial.exists() && resume {
+            let recorded =
+                zarr::read_group(&partial).ok().and_then(|a| a.get("partial_job").cloned());
+            match recorded {
+                Some(r) if &r == job => {}
+                Some(r) => {
+                    return Err(Error::Invalid(format!(
+                        "{} was begun by a different job ({}); it cannot be resumed by this \
+                         one: run without --resume to start over",
+                        partial.display(),
+                        first_difference(&r, job, "")
+                    )));
+                }
+                None => {
+                    return Err(Error::Invalid(format!(
+                        "{} records no job, so it cannot be told apart from another job's; \
+                         run without --resume to start over",
+                        partial.display()
+                    )));
+                }
+            }
+        } else if partial.exists() {
+            if !partial.is_dir()
+                || !crate::fs::is_toolkit_store(&partial) && !is_empty_dir(&partial)
+            {
+                return Err(Error::Invalid(format!(
+                    "{} exists and is not a partial store this toolkit began; refusing to \
+                     remove it",
+                    partial.display()
+                )));
+            }
             fs::remove_dir_all(&partial).map_err(|e| Error::io(&partial, e))?;
         }
         fs::create_dir_all(&partial).map_err(|e| Error::io(&partial, e))?;
+        if !partial.join("zarr.json").exists() {
+            zarr::write_group(&partial, &json!({ "partial_job": job }))?;
+        }
         Ok(StoreTxn { final_path: path.to_owned(), partial })
     }
 
@@ -127,6 +164,8 @@ impl StoreTxn {
     pub fn commit(self, attributes: Value) -> Result<()> {
         let mut attrs = attributes;
         attrs["complete"] = json!(true);
+        // A killed writer's temporary files must not travel into the finished store.
+        crate::fs::sweep_temps(&self.partial)?;
         zarr::write_group(&self.partial, &attrs)?;
         if self.final_path.exists() && exchange(&self.partial, &self.final_path).is_ok() {
             // One atomic step swapped the new store in; the old one now sits at `partial`.
@@ -149,6 +188,45 @@ impl StoreTxn {
                 .map_err(|e| Error::io(&self.final_path, e))?;
         }
         Ok(())
+    }
+}
+
+fn is_empty_dir(p: &Path) -> bool {
+    fs::read_dir(p).map(|mut d| d.next().is_none()).unwrap_or(false)
+}
+
+/// The first place where two job records differ, as `field: was A, now B`.
+pub fn first_difference(was: &Value, now: &Value, at: &str) -> String {
+    match (was, now) {
+        (Value::Object(a), Value::Object(b)) => {
+            let mut keys: Vec<&String> = a.keys().chain(b.keys()).collect();
+            keys.sort();
+            keys.dedup();
+            for k in keys {
+                let (x, y) = (a.get(k).unwrap_or(&Value::Null), b.get(k).unwrap_or(&Value::Null));
+                if x != y {
+                    let path = if at.is_empty() { k.clone() } else { format!("{at}.{k}") };
+                    return first_difference(x, y, &path);
+                }
+            }
+            format!("{}: no difference", if at.is_empty() { "job" } else { at })
+        }
+        _ => {
+            let short = |v: &Value| {
+                let s = v.to_string();
+                if s.chars().count() > 80 {
+                    format!("{}…", s.chars().take(80).collect::<String>())
+                } else {
+                    s
+                }
+            };
+            format!(
+                "{}: was {}, now {}",
+                if at.is_empty() { "job" } else { at },
+                short(was),
+                short(now)
+            )
+        }
     }
 }
 
@@ -228,15 +306,30 @@ fn normtexture_array(meta: &BtfMeta, dtype: DType) -> ArrayMeta {
 }
 
 impl BtfWriter {
-    /// Starts a store at `path` with element type `dtype` (`F16` or `F32`).
+    /// Starts a store at `path` with element type `dtype` (`F16` or `F32`). The job that a
+    /// resume must match is the metadata (with its provenance) and the element type.
     pub fn create(path: &Path, meta: BtfMeta, dtype: DType, resume: bool) -> Result<Self> {
+        Self::create_for_job(path, meta, dtype, resume, Value::Null)
+    }
+
+    /// [`BtfWriter::create`] for a job with more to it than the metadata says (the identity
+    /// of its input, options that shape the result): `job` is recorded in the partial and a
+    /// resume must match it too.
+    pub fn create_for_job(
+        path: &Path,
+        meta: BtfMeta,
+        dtype: DType,
+        resume: bool,
+        job: Value,
+    ) -> Result<Self> {
         if !matches!(dtype, DType::F16 | DType::F32) {
             return Err(Error::Unsupported(format!(
                 "normtexture dtype {dtype:?} (use f16 or f32)"
             )));
         }
         let meta = meta.validate(path)?;
-        let txn = StoreTxn::begin(path, resume)?;
+        let record = json!({"store": "btf", "meta": meta, "dtype": dtype.zarr_name(), "job": job});
+        let txn = StoreTxn::begin(path, resume, &record)?;
         let arr =
             ZarrArray::create(&txn.dir().join("normtextures"), normtexture_array(&meta, dtype))?;
         Ok(BtfWriter { txn, meta, arr })

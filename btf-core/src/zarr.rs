@@ -12,7 +12,6 @@ use crate::{Error, Result};
 use half::f16;
 use serde_json::{Value, json};
 use std::fs;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Element types the stores use.
@@ -201,17 +200,8 @@ impl ArrayMeta {
     }
 }
 
-/// Writes `bytes` to `path` through a temporary file in the same folder and a rename.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let dir = path.parent().unwrap_or(Path::new("."));
-    fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("file");
-    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
-    let mut f = fs::File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
-    f.write_all(bytes).map_err(|e| Error::io(&tmp, e))?;
-    drop(f);
-    fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
-}
+/// Writes `bytes` to `path` atomically and durably ([`crate::fs::write_atomic`]).
+pub use crate::fs::write_atomic;
 
 fn read_json(path: &Path) -> Result<Value> {
     let text = fs::read(path).map_err(|e| Error::io(path, e))?;
@@ -318,7 +308,7 @@ impl ZarrArray {
         let mut buf = Vec::with_capacity(raw.len() + 4);
         buf.extend_from_slice(raw);
         buf.extend_from_slice(&crc);
-        write_atomic(&path, &buf)
+        crate::fs::write_atomic_unsynced(&path, &buf)
     }
 
     /// Reads one chunk's raw element bytes after checking its size and checksum.

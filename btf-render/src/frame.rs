@@ -90,16 +90,26 @@ impl Frame {
                 path: path.into(),
                 what: "buffer size mismatch".into(),
             })?;
-        img.save(path).map_err(|e| Error::Image { path: path.into(), what: e.to_string() })
+        let mut png = Vec::new();
+        img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+            .map_err(|e| Error::Image { path: path.into(), what: e.to_string() })?;
+        Ok(btf_core::fs::write_atomic(path, &png)?)
     }
 
     /// Writes a linear float EXR (no exposure).
     pub fn write_exr(&self, path: &Path) -> Result<()> {
-        exr::prelude::write_rgb_file(path, self.width as usize, self.height as usize, |x, y| {
-            let p = self.pixel(x as u32, y as u32);
-            (p[0], p[1], p[2])
-        })
-        .map_err(|e| Error::Image { path: path.into(), what: e.to_string() })
+        use exr::prelude::{Image, SpecificChannels, Vec2, WritableImage};
+        let (w, h) = (self.width as usize, self.height as usize);
+        let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
+            let v = self.pixel(p.0 as u32, p.1 as u32);
+            (v[0], v[1], v[2])
+        });
+        let mut bytes = std::io::Cursor::new(Vec::new());
+        Image::from_channels((w, h), channels)
+            .write()
+            .to_buffered(&mut bytes)
+            .map_err(|e| Error::Image { path: path.into(), what: e.to_string() })?;
+        Ok(btf_core::fs::write_atomic(path, bytes.get_ref())?)
     }
 
     /// True when every value is finite.

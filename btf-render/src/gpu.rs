@@ -18,6 +18,9 @@ pub struct Gpu {
     pub timestamps: bool,
 }
 
+/// The most bytes of render targets one frame may take (see [`Gpu::check_frame`]).
+pub const MAX_FRAME_TARGET_BYTES: u64 = 3 << 30;
+
 impl Gpu {
     /// Creates a headless device on the first adapter wgpu finds (any backend, software
     /// adapters included), requesting the adapter's own limits so that large texture arrays
@@ -114,6 +117,40 @@ impl Gpu {
             return Err(Error::Gpu(format!("{what}: {e}")));
         }
         Ok(out)
+    }
+
+    /// Refuses a frame of `width × height` pixels at `samples` per pixel that this adapter
+    /// cannot hold, naming the limit, before anything is allocated: each side against
+    /// `max_texture_dimension_2d`, the linear read-back (16 bytes a pixel) against
+    /// `max_buffer_size`, and the frame's render targets (colour, depth and corner ids at
+    /// `samples`, about 32 bytes a sample) against [`MAX_FRAME_TARGET_BYTES`].
+    pub fn check_frame(&self, width: u32, height: u32, samples: u32) -> Result<()> {
+        let limits = self.device.limits();
+        let side = limits.max_texture_dimension_2d;
+        if width > side || height > side {
+            return Err(Error::Limit(format!(
+                "a {width} × {height} frame exceeds this adapter's max_texture_dimension_2d \
+                 ({side}); render at most {side} pixels on a side"
+            )));
+        }
+        let readback = width as u64 * height as u64 * 16;
+        if readback > limits.max_buffer_size {
+            return Err(Error::Limit(format!(
+                "a {width} × {height} frame needs a {readback}-byte read-back buffer, above this \
+                 adapter's max_buffer_size ({})",
+                limits.max_buffer_size
+            )));
+        }
+        let targets = width as u64 * height as u64 * (16 + 32 * samples.max(1) as u64);
+        if targets > MAX_FRAME_TARGET_BYTES {
+            return Err(Error::Limit(format!(
+                "a {width} × {height} frame at {samples} samples per pixel needs about {} MiB of \
+                 render targets, above the {} MiB this renderer allows",
+                targets >> 20,
+                MAX_FRAME_TARGET_BYTES >> 20
+            )));
+        }
+        Ok(())
     }
 
     /// Waits until all submitted work is done.

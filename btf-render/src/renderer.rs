@@ -123,6 +123,7 @@ impl Renderer {
 
     /// Loads meshes and materials and builds the passes the scene asks for.
     pub fn new(gpu: &Gpu, scene: &Scene, options: RenderOptions) -> Result<Renderer> {
+        gpu.check_frame(scene.output.width, scene.output.height, scene.effects.msaa)?;
         let (mesh, tri_desc) = load_meshes(scene)?;
         let tangents = tangent::compute_tangents(&mesh);
         // Materials actually used, each loaded once.

@@ -249,8 +249,11 @@ impl EnvironmentLight {
         if !self.rotation_deg.is_finite() {
             return bad("rotation_deg", "must be finite");
         }
-        if !(self.exposure.is_finite() && self.exposure >= 0.0) {
-            return bad("exposure", "must be a number ≥ 0");
+        if !(self.exposure.is_finite()
+            && self.exposure >= 0.0
+            && self.exposure <= btf_core::MAX_RADIANCE)
+        {
+            return bad("exposure", "must be a number in [0, 1e12]");
         }
         if !(2..=256).contains(&self.visibility_res) {
             return bad("visibility_res", "must be in 2..=256 pixels");
@@ -367,6 +370,29 @@ impl Scene {
         Ok(scene)
     }
 
+    /// Every file the scene reads, each with the name a user knows it by
+    /// (`[[meshes]] 0 path`), for commands that must never write over an input.
+    pub fn input_paths(&self) -> Vec<(String, PathBuf)> {
+        let mut out = Vec::new();
+        for (i, m) in self.meshes.iter().enumerate() {
+            out.push((format!("[[meshes]] {i} path"), m.path.clone()));
+        }
+        for (i, m) in self.materials.iter().enumerate() {
+            out.push((format!("[[materials]] {i} store"), m.store.clone()));
+            if let Some(t) = &m.transmission {
+                if let Some(crate::transmission::TauTexture::Image(p)) = &t.tau_texture {
+                    out.push((format!("[[materials]] {i} transmission.tau_texture"), p.clone()));
+                }
+            }
+        }
+        for (i, l) in self.lights.iter().enumerate() {
+            if let Light::Environment(e) = l {
+                out.push((format!("[[lights]] {i} path"), e.path.clone()));
+            }
+        }
+        out
+    }
+
     /// Checks ranges and counts; `path` names the file in errors.
     pub fn validate(&self, path: &Path) -> Result<()> {
         let bad = |key: String, what: &str| {
@@ -377,8 +403,8 @@ impl Scene {
         if !(1..=16384).contains(&o.width) || !(1..=16384).contains(&o.height) {
             return bad("output.width/height".into(), "must be in 1..=16384");
         }
-        if !(o.exposure.is_finite() && o.exposure > 0.0) {
-            return bad("output.exposure".into(), "must be a positive number");
+        if !(o.exposure.is_finite() && o.exposure > 0.0 && o.exposure <= btf_core::MAX_RADIANCE) {
+            return bad("output.exposure".into(), "must be a positive number ≤ 1e12");
         }
         if self.meshes.is_empty() {
             return bad("meshes".into(), "at least one [[meshes]] entry is needed");
@@ -430,6 +456,13 @@ impl Scene {
                 return bad(
                     format!("lights[{i}]"),
                     &format!("position/direction must be finite and {key} ≥ 0"),
+                );
+            }
+            if power.iter().any(|p| *p > btf_core::MAX_RADIANCE) || v.iter().any(|c| c.abs() > 1e12)
+            {
+                return bad(
+                    format!("lights[{i}].{key}"),
+                    "must be at most 1e12 (btf_core::MAX_RADIANCE), and positions within 1e12",
                 );
             }
             if let Light::Directional { direction, .. } = l

@@ -87,7 +87,7 @@ impl ApplicationHandler for App {
         let Some(r) = self.running.as_mut() else { return };
         match &event {
             WindowEvent::CloseRequested | WindowEvent::Destroyed => {
-                println!("closing");
+                crate::guard::outln!("closing");
                 event_loop.exit();
                 return;
             }
@@ -166,7 +166,7 @@ impl Running {
         let info = &gpu.info;
         let adapter_name = format!("{} ({:?}), {format:?}", info.name, info.backend);
         let viewer = Viewer::new(&gpu, scene, args.env.clone());
-        println!("window {} adapter {adapter_name}", u64::from(window.id()));
+        crate::guard::outln!("window {} adapter {adapter_name}", u64::from(window.id()));
         Ok(Running {
             window,
             surface,
@@ -199,7 +199,7 @@ impl Running {
             }
             if self.print_log {
                 let env = &self.viewer.env;
-                println!(
+                crate::guard::outln!(
                     "frame {} change={:?} update_ms={:.2} render_ms={:.2} env={:?} \
                      env_rotation_deg={} env_lighting={} env_error={:?} errors={}",
                     self.viewer.frames,
@@ -241,7 +241,7 @@ impl Running {
         let (fw, fh) = self.viewer.size();
         let rect = letterbox(area_px, fw, fh);
         if rect != self.frame_rect && self.print_log {
-            println!("layout {} {} {} {}", rect.x, rect.y, rect.w, rect.h);
+            crate::guard::outln!("layout {} {} {} {}", rect.x, rect.y, rect.w, rect.h);
         }
         self.frame_rect = rect;
         let jobs = self.egui_ctx.tessellate(shapes, ppp);
@@ -330,7 +330,7 @@ impl Running {
     fn act(&mut self, event_loop: &ActiveEventLoop, action: Action) {
         match action {
             Action::Quit => {
-                println!("closing");
+                crate::guard::outln!("closing");
                 event_loop.exit();
             }
             Action::TogglePanel => self.show_panel = !self.show_panel,
@@ -343,10 +343,17 @@ impl Running {
     /// Writes the frame of the current state (pending changes rendered first).
     fn screenshot(&mut self) {
         self.render_pending();
-        self.shots += 1;
-        let path = self.shot_dir.join(format!("shot-{:04}.png", self.shots));
+        // The next free number: a screenshot never replaces an earlier session's.
+        let mut path;
+        loop {
+            self.shots += 1;
+            path = self.shot_dir.join(format!("shot-{:04}.png", self.shots));
+            if !path.exists() {
+                break;
+            }
+        }
         match self.viewer.save_frame(&path) {
-            Ok(()) => println!("screenshot {}", path.display()),
+            Ok(()) => crate::guard::outln!("screenshot {}", path.display()),
             Err(e) => self.viewer.errors.push(format!("{e:#}")),
         }
     }

@@ -82,6 +82,8 @@ pub fn run(args: ViewArgs) -> Result<()> {
     if args.output.is_some() {
         bail!("-o is the folder of --turntable; screenshots go to --shots DIR");
     }
+    // Screenshots only add files under new names (the next free `shot-NNNN.png`), so the
+    // folder may hold anything, the scene included.
     std::fs::create_dir_all(&args.shots)
         .with_context(|| format!("cannot create the screenshot folder {}", args.shots.display()))?;
     app::run(args, scene)

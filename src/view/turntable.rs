@@ -31,7 +31,8 @@ fn start(args: &ViewArgs, scene: Scene) -> Result<(Gpu, Viewer)> {
 
 /// Writes `n` turntable frames to `out/turntable-NNNN.png`.
 pub fn export(args: &ViewArgs, scene: Scene, n: u32, out: &Path) -> Result<()> {
-    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    crate::guard::refuse_scene_overlap(&[("-o", out)], &args.scene, &scene, &[])?;
+    crate::guard::output_folder(out, "view --turntable", false, &|_| false)?;
     let (gpu, mut v) = start(args, scene)?;
     let (home_camera, home_lights) = (v.orbit.home.clone(), v.lights.clone());
     let (pivot, up) = (home_camera.target, home_camera.up);
@@ -60,7 +61,7 @@ pub fn export(args: &ViewArgs, scene: Scene, n: u32, out: &Path) -> Result<()> {
         bar.inc(1);
     }
     bar.finish_and_clear();
-    println!("{n} turntable frames in {}", out.display());
+    crate::guard::outln!("{n} turntable frames in {}", out.display());
     Ok(())
 }
 
@@ -102,10 +103,18 @@ pub fn bench(args: &ViewArgs, scene: Scene, n: u32) -> Result<()> {
         bail!("{e}");
     }
     let camera = median(rows[0].1.iter().map(Latency::total_ms).collect());
-    println!("adapter: {} ({:?}); {n} interactions each, medians", gpu.info.name, gpu.info.backend);
-    println!(
+    crate::guard::outln!(
+        "adapter: {} ({:?}); {n} interactions each, medians",
+        gpu.info.name,
+        gpu.info.backend
+    );
+    crate::guard::outln!(
         "{:<24} {:>10} {:>10} {:>10} {:>8}",
-        "change", "total ms", "update", "render", "ratio"
+        "change",
+        "total ms",
+        "update",
+        "render",
+        "ratio"
     );
     let mut json = Vec::new();
     for (kind, lats) in &rows {
@@ -113,16 +122,19 @@ pub fn bench(args: &ViewArgs, scene: Scene, n: u32) -> Result<()> {
         let update = median(lats.iter().map(|l| l.update_ms).collect());
         let render = median(lats.iter().map(|l| l.render_ms).collect());
         let ratio = total / camera;
-        println!("{:<24} {total:>10.2} {update:>10.2} {render:>10.2} {ratio:>8.2}", kind.name());
+        crate::guard::outln!(
+            "{:<24} {total:>10.2} {update:>10.2} {render:>10.2} {ratio:>8.2}",
+            kind.name()
+        );
         json.push(format!(
             r#"{{"change":"{}","total_ms":{total:.3},"update_ms":{update:.3},"render_ms":{render:.3},"ratio_to_camera":{ratio:.3}}}"#,
             kind.name()
         ));
     }
-    println!(
+    crate::guard::outln!(
         "environment lighting of the garment: {}",
         if v.env.lighting { "on" } else { "off (no environment light in this renderer/scene)" }
     );
-    println!("[{}]", json.join(","));
+    crate::guard::outln!("[{}]", json.join(","));
     Ok(())
 }

@@ -109,30 +109,38 @@ fn encode_image(
             let raw: Vec<u8> =
                 px.iter().map(|v| (srgb::encode(v / scale) * 255.0).round() as u8).collect();
             let img = image::RgbImage::from_raw(w32, h32, raw).expect("size matches");
+            let mut bytes = Vec::new();
             if let ImageEncoding::Jpeg(q) = enc {
-                let f = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
-                let mut enc = image::codecs::jpeg::JpegEncoder::new_with_quality(
-                    std::io::BufWriter::new(f),
-                    q,
-                );
-                enc.encode_image(&img).map_err(|e| bad(&e))
+                let mut enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut bytes, q);
+                enc.encode_image(&img).map_err(|e| bad(&e))?;
             } else {
-                img.save_with_format(path, image::ImageFormat::Png).map_err(|e| bad(&e))
+                img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
+                    .map_err(|e| bad(&e))?;
             }
+            btf_core::fs::write_atomic_unsynced(path, &bytes).map_err(Error::from)
         }
         ImageEncoding::Png16 => {
             let raw: Vec<u16> =
                 px.iter().map(|v| (srgb::encode(v / scale) * 65535.0).round() as u16).collect();
             let img = image::ImageBuffer::<image::Rgb<u16>, _>::from_raw(w32, h32, raw)
                 .expect("size matches");
-            img.save_with_format(path, image::ImageFormat::Png).map_err(|e| bad(&e))
+            let mut bytes = Vec::new();
+            img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
+                .map_err(|e| bad(&e))?;
+            btf_core::fs::write_atomic_unsynced(path, &bytes).map_err(Error::from)
         }
         ImageEncoding::Exr => {
             let get = |x: usize, y: usize| {
                 let i = (y * w + x) * 3;
                 (px[i], px[i + 1], px[i + 2])
             };
-            exr::prelude::write_rgb_file(path, w, h, get).map_err(|e| bad(&e))
+            use exr::prelude::{Image, SpecificChannels, Vec2, WritableImage};
+            let mut bytes = std::io::Cursor::new(Vec::new());
+            Image::from_channels((w, h), SpecificChannels::rgb(|p: Vec2<usize>| get(p.0, p.1)))
+                .write()
+                .to_buffered(&mut bytes)
+                .map_err(|e| bad(&e))?;
+            btf_core::fs::write_atomic_unsynced(path, bytes.get_ref()).map_err(Error::from)
         }
     }
 }
@@ -152,13 +160,70 @@ pub fn export_ubo2003(store: &BtfStore, dir: &Path, name: &str, enc: ImageEncodi
         }
         if peak > 1.0 { peak } else { 1.0 }
     };
+    // Replace only an earlier export (it carries the sidecar) or an empty folder; never a
+    // folder of somebody's files.
+    btf_core::fs::check_replaceable(
+        dir,
+        btf_core::fs::OutputKind::Folder { marker: super::ubo2003::SIDECAR },
+    )?;
     let tmp = dir.with_file_name(format!(
         "{}.partial",
         dir.file_name().unwrap_or_default().to_string_lossy()
     ));
     if tmp.exists() {
+        btf_core::fs::check_replaceable(
+            &tmp,
+            btf_core::fs::OutputKind::Folder { marker: super::ubo2003::SIDECAR },
+        )
+        .or_else(|_| {
+            if only_view_folders(&tmp) {
+                Ok(())
+            } else {
+                Err(Error::invalid(
+                    &tmp.display().to_string(),
+                    "folder",
+                    "exists and is not an unfinished export of this toolkit; refusing to remove it",
+                ))
+            }
+        })?;
         std::fs::remove_dir_all(&tmp).map_err(|e| Error::io(&tmp, e))?;
     }
+    let written = write_folder(store, &tmp, name, enc, scale);
+    if let Err(e) = written {
+        // A refusal or a failed write leaves nothing behind.
+        let _ = std::fs::remove_dir_all(&tmp);
+        return Err(e);
+    }
+    if dir.exists() {
+        let old = dir.with_file_name(format!(
+            ".{}.old-{}",
+            dir.file_name().unwrap_or_default().to_string_lossy(),
+            std::process::id()
+        ));
+        std::fs::rename(dir, &old).map_err(|e| Error::io(dir, e))?;
+        std::fs::rename(&tmp, dir).map_err(|e| Error::io(dir, e))?;
+        let _ = std::fs::remove_dir_all(&old);
+    } else {
+        std::fs::rename(&tmp, dir).map_err(|e| Error::io(dir, e))?;
+    }
+    Ok(scale)
+}
+
+/// True when `dir` holds nothing but the `tv…_pv…` view folders an export writes.
+fn only_view_folders(dir: &Path) -> bool {
+    std::fs::read_dir(dir).is_ok_and(|d| {
+        d.flatten().all(|e| e.file_name().to_str().is_some_and(|n| n.starts_with("tv")))
+    })
+}
+
+fn write_folder(
+    store: &BtfStore,
+    tmp: &Path,
+    name: &str,
+    enc: ImageEncoding,
+    scale: f32,
+) -> Result<()> {
+    let m = store.meta();
     let mut running = 0;
     for v in 0..m.n_views() {
         let vd = m.view_sampling.direction(v);
@@ -180,11 +245,9 @@ pub fn export_ubo2003(store: &BtfStore, dir: &Path, name: &str, enc: ImageEncodi
     let side = json!({"scale": scale, "encoding": format!("{enc:?}"), "note": "linear value = decoded value x scale",
         "view_sampling": m.view_sampling, "light_sampling": m.light_sampling});
     let sp = tmp.join(super::ubo2003::SIDECAR);
-    std::fs::write(&sp, serde_json::to_string_pretty(&side).unwrap_or_default())
-        .map_err(|e| Error::io(&sp, e))?;
-    if dir.exists() {
-        std::fs::remove_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    }
-    std::fs::rename(&tmp, dir).map_err(|e| Error::io(dir, e))?;
-    Ok(scale)
+    btf_core::fs::write_atomic(
+        &sp,
+        serde_json::to_string_pretty(&side).unwrap_or_default().as_bytes(),
+    )?;
+    Ok(())
 }

@@ -171,7 +171,9 @@ impl<R: Read + Seek> PvfReader<R> {
 
 /// Writes a PVF file slot by slot into `NAME.partial`, renamed on [`PvfWriter::finish`].
 pub struct PvfWriter {
-    out: BufWriter<std::fs::File>,
+    /// `None` once [`PvfWriter::finish`] has taken it; a writer dropped before that removes
+    /// its temporary file, so a failed export leaves nothing behind.
+    out: Option<BufWriter<std::fs::File>>,
     tmp: PathBuf,
     path: PathBuf,
     header: Header,
@@ -192,7 +194,7 @@ impl PvfWriter {
         put_u32(&mut out, components as u32).map_err(io)?;
         put_u32(&mut out, header.views.len() as u32).map_err(io)?;
         let left = header.views.len();
-        Ok(PvfWriter { out, tmp: tmp.clone(), path: path.to_owned(), header, left })
+        Ok(PvfWriter { out: Some(out), tmp: tmp.clone(), path: path.to_owned(), header, left })
     }
 
     /// Appends the next slot (file order = the header's view order), as `f32`.
@@ -215,20 +217,30 @@ impl PvfWriter {
                 "slot shape disagrees with the header",
             ));
         }
+        for part in [&s.eigenvalues, &s.mean, &s.basis, &s.weights] {
+            if let Some(i) = part.iter().position(|x| !x.is_finite()) {
+                return Err(Error::invalid(
+                    &self.path.display().to_string(),
+                    "slot",
+                    format!("non-finite value at element {i} of a slot; refusing to write it"),
+                ));
+            }
+        }
         let io = |e| Error::io(&self.tmp, e);
-        self.out.write_all(&[4]).map_err(io)?;
+        let out = self.out.as_mut().expect("a writer before finish");
+        out.write_all(&[4]).map_err(io)?;
         for v in [p, nw, dim] {
-            put_u32(&mut self.out, v as u32).map_err(io)?;
+            put_u32(out, v as u32).map_err(io)?;
         }
         for part in [&s.eigenvalues, &s.mean, &s.basis, &s.weights] {
-            put_scalars(&mut self.out, part, 4).map_err(io)?;
+            put_scalars(out, part, 4).map_err(io)?;
         }
         self.left -= 1;
         Ok(())
     }
 
     /// Checks every slot was written, flushes and moves the file into place.
-    pub fn finish(self) -> Result<()> {
+    pub fn finish(mut self) -> Result<()> {
         if self.left != 0 {
             return Err(Error::invalid(
                 &self.path.display().to_string(),
@@ -236,8 +248,18 @@ impl PvfWriter {
                 format!("{} slots never written", self.left),
             ));
         }
-        let f = self.out.into_inner().map_err(|e| Error::io(&self.tmp, e.into_error()))?;
+        let out = self.out.take().expect("a writer before finish");
+        let f = out.into_inner().map_err(|e| Error::io(&self.tmp, e.into_error()))?;
         f.sync_all().map_err(|e| Error::io(&self.tmp, e))?;
         std::fs::rename(&self.tmp, &self.path).map_err(|e| Error::io(&self.path, e))
+    }
+}
+
+impl Drop for PvfWriter {
+    fn drop(&mut self) {
+        // Dropped unfinished (an error, a refusal) or after a failed finish: no leftover.
+        if self.out.take().is_some() || self.tmp.exists() {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
     }
 }

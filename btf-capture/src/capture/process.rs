@@ -310,7 +310,14 @@ pub fn process(
     if layout.radiometry.is_none() {
         meta.units = "DN / sensor full scale (capture.toml has no light reference)".into();
     }
-    let mut writer = BtfWriter::create(out, meta, opt.dtype, opt.resume)?;
+    // The job a resume must match: which raw capture (its folder and its capture.toml) and
+    // every option that shapes the result.
+    let job = serde_json::json!({
+        "raw_dir": btf_core::fs::input_identity(raw_dir),
+        "capture_toml": btf_core::fs::input_identity(&raw_dir.join("capture.toml")),
+        "options": format!("{opt:?}"),
+    });
+    let mut writer = BtfWriter::create_for_job(out, meta, opt.dtype, opt.resume, job)?;
     let partial = writer.dir().to_owned();
     let result = run_slots(&layout, &writer, &grid, opt, tick);
     let outcome = result.and_then(|(regs, written, kept)| {
@@ -369,12 +376,8 @@ fn run_slots(
 }
 
 fn write_sidecar(path: &Path, reg: &Registration) -> Result<()> {
-    let dir = path.parent().expect("sidecar has a folder");
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    let tmp = path.with_extension("json.tmp");
     let text = serde_json::to_string_pretty(reg).expect("registration serialises");
-    std::fs::write(&tmp, text).map_err(|e| Error::io(&tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+    Ok(btf_core::fs::write_atomic_unsynced(path, text.as_bytes())?)
 }
 
 fn provenance(

@@ -44,8 +44,16 @@ impl EnvMap {
             )));
         }
         for (i, p) in pixels.iter().enumerate() {
-            if let Some(c) = p.iter().position(|v| !v.is_finite() || *v < 0.0) {
-                let what = if p[c].is_finite() { "negative" } else { "non-finite" };
+            if let Some(c) =
+                p.iter().position(|v| !v.is_finite() || *v < 0.0 || *v > btf_core::MAX_RADIANCE)
+            {
+                let what = if !p[c].is_finite() {
+                    "non-finite"
+                } else if p[c] < 0.0 {
+                    "negative"
+                } else {
+                    "beyond the radiance limit of 1e12 (btf_core::MAX_RADIANCE)"
+                };
                 return Err(Error::Invalid(format!(
                     "{name}: environment pixel x={}, y={} channel {} is {what} ({}); environment maps must hold finite radiance ≥ 0",
                     i % width,

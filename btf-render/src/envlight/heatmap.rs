@@ -34,9 +34,10 @@ pub fn write_rgb8(path: &Path, width: u32, height: u32, rgb: Vec<u8>) -> Result<
         path: path.into(),
         what: "pixel count does not match the size".into(),
     })?;
-    let tmp = path.with_extension("tmp.png");
-    img.save(&tmp).map_err(|e| Error::Image { path: path.into(), what: e.to_string() })?;
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+    let mut bytes = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
+        .map_err(|e| Error::Image { path: path.into(), what: e.to_string() })?;
+    Ok(btf_core::fs::write_atomic(path, &bytes)?)
 }
 
 /// Line plot of `curves` (each sampled at equal steps over `[0°, 360°)`) on a white

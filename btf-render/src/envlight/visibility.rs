@@ -242,9 +242,7 @@ impl VisibilityMaps {
         }
         let check = fnv1a(FNV_OFFSET, &bytes);
         bytes.extend_from_slice(&check.to_le_bytes());
-        let tmp = path.with_extension(format!("tmp-{}", std::process::id()));
-        std::fs::write(&tmp, &bytes).map_err(|e| Error::io(&tmp, e))?;
-        std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+        Ok(btf_core::fs::write_atomic(path, &bytes)?)
     }
 }
 

@@ -201,17 +201,40 @@ fn write_png(path: &Path, w: usize, h: usize, px: &[[u16; 3]]) -> Result<()> {
     let data: Vec<u16> = px.iter().flat_map(|p| p.map(|v| v << 4)).collect();
     let img = image::ImageBuffer::<image::Rgb<u16>, _>::from_raw(w as u32, h as u32, data)
         .ok_or_else(|| Error::Invalid("image buffer size".into()))?;
-    let tmp = path.with_extension(format!("tmp-{}.png", std::process::id()));
-    img.save(&tmp).map_err(|e| Error::Image { path: path.to_owned(), what: e.to_string() })?;
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+    let mut bytes = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
+        .map_err(|e| Error::Image { path: path.to_owned(), what: e.to_string() })?;
+    Ok(btf_core::fs::write_atomic_unsynced(path, &bytes)?)
+}
+
+/// Writes a file that describes the job (`capture.toml`, `truth.toml`). When the folder
+/// already holds one from an interrupted run, it must describe the same job — otherwise
+/// the images kept from that run would belong to another capture — and the error names
+/// the first field that differs.
+fn write_job_toml(path: &Path, value: &impl serde::Serialize) -> Result<()> {
+    if let Ok(old) = std::fs::read_to_string(path) {
+        let now = serde_json::to_value(value)
+            .map_err(|e| Error::Invalid(format!("{}: {e}", path.display())))?;
+        let was: serde_json::Value = toml::from_str(&old).unwrap_or(serde_json::Value::Null);
+        let now_rt: serde_json::Value =
+            toml::to_string(value).ok().and_then(|t| toml::from_str(&t).ok()).unwrap_or(now);
+        if was != now_rt {
+            return Err(Error::Invalid(format!(
+                "{} describes a different capture ({}); the images beside it belong to that \
+                 job: choose another folder or remove this one",
+                path.display(),
+                btf_core::store::first_difference(&was, &now_rt, "")
+            )));
+        }
+        return Ok(());
+    }
+    write_toml(path, value)
 }
 
 fn write_toml(path: &Path, value: &impl serde::Serialize) -> Result<()> {
     let text =
         toml::to_string(value).map_err(|e| Error::Invalid(format!("{}: {e}", path.display())))?;
-    let tmp = path.with_extension("toml.tmp");
-    std::fs::write(&tmp, text).map_err(|e| Error::io(&tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+    Ok(btf_core::fs::write_atomic(path, text.as_bytes())?)
 }
 
 /// The true pose of every view (deterministic in the seed).
@@ -249,6 +272,12 @@ pub fn capture(spec: &CaptureSpec, out: &Path, progress: bool) -> Result<Capture
     let material = Material::build(&spec.material)?;
     let s = &spec.material.sampling;
     let poses = true_poses(spec);
+    // A folder of somebody's files is refused; an earlier capture is resumed only when it
+    // is the same job (see `write_job_toml`).
+    btf_core::fs::check_replaceable(
+        out,
+        btf_core::fs::OutputKind::Folder { marker: "capture.toml" },
+    )?;
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let cam = Camera::new([0.0, 0.0, 1.0], spec.width, spec.height);
     let desc = CaptureDescription {
@@ -287,7 +316,7 @@ pub fn capture(spec: &CaptureSpec, out: &Path, progress: bool) -> Result<Capture
             m
         },
     };
-    write_toml(&out.join("capture.toml"), &desc)?;
+    write_job_toml(&out.join("capture.toml"), &desc)?;
     let truth = json!({
         "warning": "ground truth for evaluation only; capture processing must not read this file",
         "seed": spec.seed,
@@ -296,7 +325,7 @@ pub fn capture(spec: &CaptureSpec, out: &Path, progress: bool) -> Result<Capture
         "read_noise_dn": spec.read_noise_dn, "shot_noise_per_dn": spec.shot_noise_per_dn, "vignetting": spec.vignetting,
         "view_poses": poses.iter().enumerate().map(|(j, p)| json!({"view": j, "rotation": p.rotation, "translation_mm": p.translation_mm})).collect::<Vec<_>>(),
     });
-    write_toml(&out.join("truth.toml"), &truth)?;
+    write_job_toml(&out.join("truth.toml"), &truth)?;
     let pairs: Vec<(usize, usize)> =
         (0..s.len()).flat_map(|j| (0..s.len()).map(move |i| (j, i))).collect();
     let bar = if progress { ProgressBar::new(pairs.len() as u64) } else { ProgressBar::hidden() };

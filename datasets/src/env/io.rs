@@ -12,8 +12,16 @@ pub const MAX_PIXELS: usize = 1 << 27;
 
 fn check_pixels(path: &Path, m: &EnvMap) -> Result<()> {
     for (i, p) in m.pixels.iter().enumerate() {
-        if let Some(c) = p.iter().position(|v| !v.is_finite() || *v < 0.0) {
-            let what = if p[c].is_finite() { "negative" } else { "non-finite" };
+        if let Some(c) =
+            p.iter().position(|v| !v.is_finite() || *v < 0.0 || *v > btf_core::MAX_RADIANCE)
+        {
+            let what = if !p[c].is_finite() {
+                "non-finite"
+            } else if p[c] < 0.0 {
+                "negative"
+            } else {
+                "beyond the radiance limit of 1e12 (btf_core::MAX_RADIANCE):"
+            };
             return Err(Error::Invalid(format!(
                 "{}: {what} value {} at pixel x={}, y={}, channel {}",
                 path.display(),
@@ -102,16 +110,17 @@ pub fn load_env(path: &Path) -> Result<EnvMap> {
 /// Writes `map` as a 32-bit float RGB EXR, atomically (temporary file + rename).
 pub fn write_exr(map: &EnvMap, path: &Path) -> Result<()> {
     check_pixels(path, map)?;
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("env.exr");
-    let tmp = dir.join(format!(".{name}.tmp-{}.exr", std::process::id()));
-    exr::prelude::write_rgb_file(&tmp, map.width, map.height, |x, y| {
-        let p = map.pixels[y * map.width + x];
-        (p[0], p[1], p[2])
-    })
-    .map_err(|e| Error::Image { path: path.to_owned(), what: e.to_string() })?;
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+    use exr::prelude::{Image, SpecificChannels, Vec2, WritableImage};
+    let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
+        let v = map.pixels[p.1 * map.width + p.0];
+        (v[0], v[1], v[2])
+    });
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    Image::from_channels((map.width, map.height), channels)
+        .write()
+        .to_buffered(&mut bytes)
+        .map_err(|e| Error::Image { path: path.to_owned(), what: e.to_string() })?;
+    Ok(btf_core::fs::write_atomic(path, bytes.get_ref())?)
 }
 
 #[cfg(test)]

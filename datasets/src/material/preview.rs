@@ -73,6 +73,9 @@ pub fn write_contact_sheet(store: &BtfStore, dir: &Path, name: &str) -> Result<P
     }
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let path = dir.join(format!("{name}.png"));
-    img.save(&path).map_err(|e| Error::Image { path: path.clone(), what: e.to_string() })?;
+    let mut bytes = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
+        .map_err(|e| Error::Image { path: path.clone(), what: e.to_string() })?;
+    btf_core::fs::write_atomic(&path, &bytes)?;
     Ok(path)
 }
