@@ -59,9 +59,11 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
     let mut outputs: Vec<(&str, &std::path::Path)> = vec![("-o", &a.output)];
     if let Some(png) = &a.png {
         outputs.push(("--png", png));
-        crate::guard::check_file(png, btf_core::fs::PNG)?;
     }
     crate::guard::refuse_overlap(&outputs, &[("input", &a.input)])?;
+    if let Some(png) = &a.png {
+        crate::guard::check_file(png, btf_core::fs::PNG)?;
+    }
     crate::guard::check_file(&a.output, btf_core::fs::EXR)?;
     let tex = reconstruct(&store, view, light, params)?;
     let m = &store.meta().btf;

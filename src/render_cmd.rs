@@ -65,9 +65,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let mut outputs: Vec<(&str, &std::path::Path)> = vec![("-o", &args.output)];
     if let Some(exr) = &args.exr {
         outputs.push(("--exr", exr));
-        crate::guard::check_file(exr, btf_core::fs::EXR)?;
     }
     crate::guard::refuse_scene_overlap(&outputs, &args.scene, &scene, &[])?;
+    if let Some(exr) = &args.exr {
+        crate::guard::check_file(exr, btf_core::fs::EXR)?;
+    }
     crate::guard::check_file(&args.output, btf_core::fs::PNG)?;
     let gpu = Gpu::new().context("creating a headless GPU device")?;
     let baseline = match args.baseline.as_deref() {

@@ -115,6 +115,11 @@ impl StoreTxn {
             .ok_or_else(|| Error::Invalid(format!("{}: not a file name", path.display())))?;
         crate::fs::check_replaceable(path, crate::fs::OutputKind::Store)?;
         let partial = path.with_file_name(format!("{}.partial", name.to_string_lossy()));
+        if partial.exists() && resume && !partial.join("zarr.json").exists() {
+            // Killed between creating the folder and recording the job: nothing was
+            // written yet (the record comes before any chunk), so start afresh.
+            fs::remove_dir_all(&partial).map_err(|e| Error::io(&partial, e))?;
+        }
         if partial.exists() && resume {
             let recorded =
                 zarr::read_group(&partial).ok().and_then(|a| a.get("partial_job").cloned());

@@ -69,7 +69,18 @@ fn writers_on_a_full_disk_fail_and_keep_the_previous_output() {
         vec!["export", "A.btf", "--format", "npy", "--slot", "1", "-o", "full/s.npy"],
         vec!["compress", "A.btf", "-c", "3", "-o", "full/C.eig"],
         vec!["reconstruct", "B.eig", "--view", "30,0", "--light", "0,0", "-o", "full/r.exr"],
-        vec!["synth", "material", "--kind", "lambert", "--size", "8", "--sampling", "rings:0x1", "-o", "full/N.btf"],
+        vec![
+            "synth",
+            "material",
+            "--kind",
+            "lambert",
+            "--size",
+            "8",
+            "--sampling",
+            "rings:0x1",
+            "-o",
+            "full/N.btf",
+        ],
     ];
     if gpu {
         cases.push(vec!["render", "s.toml", "-o", "full/o.png", "--width", "24"]);

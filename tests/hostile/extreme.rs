@@ -6,7 +6,9 @@
 use crate::{assert_no_panic, fixture, scene_toml};
 
 fn env_scene(map: &str) -> String {
-    scene_toml(&format!("[[lights]]\nkind = \"environment\"\npath = \"{map}\"\nvisibility_res = 4\n"))
+    scene_toml(&format!(
+        "[[lights]]\nkind = \"environment\"\npath = \"{map}\"\nvisibility_res = 4\n"
+    ))
 }
 
 #[test]
@@ -17,8 +19,11 @@ fn lights_near_the_float_maximum_are_refused_before_rendering() {
     let err = d.fails(&["render", "hot.toml", "-o", "o.png"]);
     assert_no_panic(&err);
     assert!(err.contains("lights[0].irradiance") && err.contains("1e12"), "{err}");
-    std::fs::write(d.path("hot.toml"), scene_toml("").replace("width = 16", "width = 16\nexposure = 1e30"))
-        .unwrap();
+    std::fs::write(
+        d.path("hot.toml"),
+        scene_toml("").replace("width = 16", "width = 16\nexposure = 1e30"),
+    )
+    .unwrap();
     let err = d.fails(&["render", "hot.toml", "-o", "o.png"]);
     assert!(err.contains("output.exposure"), "{err}");
 }
@@ -43,9 +48,10 @@ fn environment_maps_near_the_float_maximum_are_refused_by_name() {
     std::fs::write(d.path("hot.hdr"), hdr).unwrap();
     for map in ["hot.exr", "hot.hdr"] {
         std::fs::write(d.path("e.toml"), env_scene(map)).unwrap();
+        let out = format!("rl-{map}");
         for args in [
             &["render", "e.toml", "-o", "o.png"][..],
-            &["relight", "s.toml", "--env", map, "--rotations", "1", "-o", "rl"],
+            &["relight", "s.toml", "--env", map, "--rotations", "1", "-o", out.as_str()],
         ] {
             let err = d.fails(args);
             assert_no_panic(&err);

@@ -43,8 +43,32 @@ struct Case {
 fn every_writer_survives_kill_9() {
     let cases = vec![
         Case {
-            v1: vec!["synth", "material", "--kind", "lambert", "--size", "32", "--sampling", "rings:0x1,45x8", "-o", "M.btf"],
-            v2: vec!["synth", "material", "--kind", "lambert", "--size", "32", "--sampling", "rings:0x1,45x8", "--seed", "2", "-o", "M.btf"],
+            v1: vec![
+                "synth",
+                "material",
+                "--kind",
+                "lambert",
+                "--size",
+                "32",
+                "--sampling",
+                "rings:0x1,45x8",
+                "-o",
+                "M.btf",
+            ],
+            v2: vec![
+                "synth",
+                "material",
+                "--kind",
+                "lambert",
+                "--size",
+                "32",
+                "--sampling",
+                "rings:0x1,45x8",
+                "--seed",
+                "2",
+                "-o",
+                "M.btf",
+            ],
             rerun: &["--resume"],
             out: "M.btf",
             gpu: false,
@@ -103,7 +127,11 @@ fn every_writer_survives_kill_9() {
         for ms in [2, 10, 40, 150] {
             kill_after(d.tmp.path(), &c.v2, ms);
             let now = content(&d.path(c.out));
-            assert!(now == old || now == want_new, "btf {:?} killed after {ms} ms left a mixture", c.v2);
+            assert!(
+                now == old || now == want_new,
+                "btf {:?} killed after {ms} ms left a mixture",
+                c.v2
+            );
         }
         let mut rerun = c.v2.clone();
         rerun.extend_from_slice(c.rerun);

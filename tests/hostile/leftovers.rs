@@ -8,7 +8,8 @@ fn refused_imports_leave_nothing() {
     let d = fixture();
     d.ok(&["export", "A.btf", "--format", "ubo2003", "--image", "png", "-o", "ex"]);
     // One image truncated: the import reads some images, then refuses.
-    let sub = std::fs::read_dir(d.path("ex")).unwrap().flatten().find(|e| e.path().is_dir()).unwrap();
+    let sub =
+        std::fs::read_dir(d.path("ex")).unwrap().flatten().find(|e| e.path().is_dir()).unwrap();
     let img = std::fs::read_dir(sub.path()).unwrap().flatten().last().unwrap().path();
     let bytes = std::fs::read(&img).unwrap();
     std::fs::write(&img, &bytes[..bytes.len() / 2]).unwrap();

@@ -55,7 +55,10 @@ pub fn leftovers(dir: &Path) -> Vec<String> {
     while let Some(d) = stack.pop() {
         for e in std::fs::read_dir(&d).unwrap().flatten() {
             let name = e.file_name().to_string_lossy().into_owned();
-            if name.ends_with(".partial") || btf_core::fs::is_temp_name(&name) || name.contains(".tmp") {
+            if name.ends_with(".partial")
+                || btf_core::fs::is_temp_name(&name)
+                || name.contains(".tmp")
+            {
                 bad.push(e.path().display().to_string());
             }
             if e.path().is_dir() {
@@ -70,7 +73,18 @@ pub fn leftovers(dir: &Path) -> Vec<String> {
 /// `B.eig` (c = 2), a plane mesh and a scene `s.toml` that renders `B.eig` on it.
 pub fn fixture() -> Dir {
     let d = Dir::new();
-    d.ok(&["synth", "material", "--kind", "corduroy", "--size", "8", "--sampling", "rings:0x1,45x4", "-o", "A.btf"]);
+    d.ok(&[
+        "synth",
+        "material",
+        "--kind",
+        "corduroy",
+        "--size",
+        "8",
+        "--sampling",
+        "rings:0x1,45x4",
+        "-o",
+        "A.btf",
+    ]);
     d.ok(&["compress", "A.btf", "-c", "2", "-o", "B.eig"]);
     std::fs::write(d.path("plane.obj"), common_plane()).unwrap();
     std::fs::write(d.path("s.toml"), scene_toml("")).unwrap();

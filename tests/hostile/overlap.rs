@@ -52,8 +52,6 @@ fn scene_commands_refuse_outputs_over_their_inputs() {
         &["render", "s.toml", "-o", "out.png", "--exr", "plane.obj"],
         &["render", "s.toml", "-o", "o.png", "--exr", "./o.png"],
         &["render-sweep", "s.toml", "-o", "."],
-        &["relight", "s.toml", "--env", "s.toml", "-o", "."],
-        &["relight", "s.toml", "-o", ".", "--fresh"],
         &["view", "s.toml", "--turntable", "2", "-o", "B.eig"],
     ];
     for args in cases {
@@ -70,7 +68,20 @@ fn scene_commands_refuse_outputs_over_their_inputs() {
 #[test]
 fn capture_process_refuses_its_raw_folder() {
     let d = crate::common::Dir::new();
-    d.ok(&["synth", "capture", "--material", "lambert", "--size", "8", "--sampling", "rings:0x1", "--resolution", "64,48", "--out", "raw"]);
+    d.ok(&[
+        "synth",
+        "capture",
+        "--material",
+        "lambert",
+        "--size",
+        "8",
+        "--sampling",
+        "rings:0x1",
+        "--resolution",
+        "64,48",
+        "--out",
+        "raw",
+    ]);
     let raw = snapshot(&d.path("raw"));
     for out in ["raw", "raw/m.btf", "."] {
         let err = d.fails(&["capture", "process", "raw", "-o", out, "--size", "8"]);

@@ -11,6 +11,7 @@ fn foreign_files_and_folders_are_not_replaced() {
     std::fs::write(d.path("notes.png"), "my notes").unwrap();
     std::fs::create_dir(d.path("photos")).unwrap();
     std::fs::write(d.path("photos/holiday.jpg"), "a photo").unwrap();
+    d.ok(&["synth", "env", "--kind", "sky", "--width", "16", "-o", "sky.exr"]);
     let before = snapshot(d.tmp.path());
     let cases: &[&[&str]] = &[
         &["compress", "A.btf", "-c", "2", "-o", "notes.eig"],
@@ -20,12 +21,47 @@ fn foreign_files_and_folders_are_not_replaced() {
         &["export", "A.btf", "--format", "npy", "--slot", "0", "-o", "notes.png"],
         &["export", "A.btf", "--format", "npy", "--slot", "0", "-o", "photos"],
         &["reconstruct", "B.eig", "--view", "0,0", "--light", "0,0", "-o", "notes.png"],
-        &["synth", "material", "--kind", "lambert", "--size", "8", "--sampling", "rings:0x1", "-o", "notes.eig"],
-        &["synth", "material", "--kind", "lambert", "--size", "8", "--sampling", "rings:0x1", "-o", "photos"],
+        &[
+            "synth",
+            "material",
+            "--kind",
+            "lambert",
+            "--size",
+            "8",
+            "--sampling",
+            "rings:0x1",
+            "-o",
+            "notes.eig",
+        ],
+        &[
+            "synth",
+            "material",
+            "--kind",
+            "lambert",
+            "--size",
+            "8",
+            "--sampling",
+            "rings:0x1",
+            "-o",
+            "photos",
+        ],
         &["synth", "env", "--kind", "sky", "--width", "16", "-o", "notes.png"],
-        &["synth", "capture", "--material", "lambert", "--size", "8", "--sampling", "rings:0x1", "--resolution", "64,48", "--out", "photos"],
+        &[
+            "synth",
+            "capture",
+            "--material",
+            "lambert",
+            "--size",
+            "8",
+            "--sampling",
+            "rings:0x1",
+            "--resolution",
+            "64,48",
+            "--out",
+            "photos",
+        ],
         &["render", "s.toml", "-o", "notes.png"],
-        &["relight", "s.toml", "-o", "photos", "--fresh"],
+        &["relight", "s.toml", "--env", "sky.exr", "-o", "photos", "--fresh"],
         &["demo", "-o", "photos", "--fresh"],
         &["thin", "demo", "-o", "photos", "--fresh"],
         &["view", "s.toml", "--turntable", "1", "-o", "photos"],
@@ -48,8 +84,30 @@ fn what_the_toolkit_made_is_replaced() {
     d.ok(&["export", "A.btf", "--format", "ubo2003", "-o", "ex"]);
     d.ok(&["export", "A.btf", "--format", "ubo2003", "--image", "png", "-o", "ex"]);
     assert!(d.path("ex/btf-export.json").is_file());
-    d.ok(&["reconstruct", "B.eig", "--view", "0,0", "--light", "0,0", "-o", "r.exr", "--png", "r.png"]);
-    d.ok(&["reconstruct", "B.eig", "--view", "10,0", "--light", "0,0", "-o", "r.exr", "--png", "r.png"]);
+    d.ok(&[
+        "reconstruct",
+        "B.eig",
+        "--view",
+        "0,0",
+        "--light",
+        "0,0",
+        "-o",
+        "r.exr",
+        "--png",
+        "r.png",
+    ]);
+    d.ok(&[
+        "reconstruct",
+        "B.eig",
+        "--view",
+        "10,0",
+        "--light",
+        "0,0",
+        "-o",
+        "r.exr",
+        "--png",
+        "r.png",
+    ]);
 }
 
 #[test]

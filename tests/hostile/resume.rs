@@ -34,11 +34,34 @@ pub fn kill_when(dir: &std::path::Path, args: &[&str], marker: &std::path::Path)
 #[test]
 fn synth_material_resume_refuses_another_kind() {
     let d = crate::common::Dir::new();
-    let args = ["synth", "material", "--kind", "corduroy", "--size", "48", "--sampling", "rings:0x1,45x8,75x8", "-o", "M.btf"];
+    let args = [
+        "synth",
+        "material",
+        "--kind",
+        "corduroy",
+        "--size",
+        "48",
+        "--sampling",
+        "rings:0x1,45x8,75x8",
+        "-o",
+        "M.btf",
+    ];
     let killed = kill_when(d.tmp.path(), &args, &d.path("M.btf.partial/normtextures/c/0"));
     assert!(killed, "the run ended before it could be interrupted");
     assert!(d.path("M.btf.partial").is_dir());
-    let err = d.fails(&["synth", "material", "--kind", "lambert", "--size", "48", "--sampling", "rings:0x1,45x8,75x8", "--resume", "-o", "M.btf"]);
+    let err = d.fails(&[
+        "synth",
+        "material",
+        "--kind",
+        "lambert",
+        "--size",
+        "48",
+        "--sampling",
+        "rings:0x1,45x8,75x8",
+        "--resume",
+        "-o",
+        "M.btf",
+    ]);
     assert_no_panic(&err);
     assert!(err.contains("different job") && err.contains("provenance.kind"), "{err}");
     assert!(err.contains("\"corduroy\"") && err.contains("\"lambert\""), "{err}");
@@ -53,7 +76,8 @@ fn synth_material_resume_refuses_another_kind() {
 
 fn partial_from(d: &crate::common::Dir, input: &str, out: &str) {
     let store = BtfStore::open(&d.path(input)).unwrap();
-    let meta = EigenMeta { btf: store.meta().clone(), components: 2, quantization: Quantization::F16 };
+    let meta =
+        EigenMeta { btf: store.meta().clone(), components: 2, quantization: Quantization::F16 };
     let job = serde_json::json!({ "input": btf_core::fs::input_identity(&d.path(input)) });
     drop(EigenWriter::create_for_job(&d.path(out), meta, false, job).unwrap());
 }
@@ -89,7 +113,20 @@ fn compress_resume_refuses_another_input_and_sweeps_temporaries() {
 #[test]
 fn synth_capture_refuses_to_mix_with_another_capture() {
     let d = crate::common::Dir::new();
-    let base = ["synth", "capture", "--material", "lambert", "--size", "8", "--sampling", "rings:0x1", "--resolution", "64,48", "--out", "raw"];
+    let base = [
+        "synth",
+        "capture",
+        "--material",
+        "lambert",
+        "--size",
+        "8",
+        "--sampling",
+        "rings:0x1",
+        "--resolution",
+        "64,48",
+        "--out",
+        "raw",
+    ];
     d.ok(&base);
     let mut other = base.to_vec();
     other.extend(["--seed", "9"]);
