@@ -51,6 +51,30 @@ pub enum Error {
         /// Which markers were missing and why.
         what: String,
     },
+    /// A configuration file (`capture.toml`, `truth.toml`) whose key holds a value out of
+    /// range: names the file, the key (`[table] key`) and the value.
+    #[error("{file}: {key} = {value}: {what}")]
+    ConfigValue {
+        /// The file at fault.
+        file: String,
+        /// The key, as `[table] key` (or `key` at the top level).
+        key: String,
+        /// The value as written.
+        value: String,
+        /// The rule it breaks.
+        what: String,
+    },
+    /// A configuration file that does not parse, has a key or table it does not know, or
+    /// lacks one it needs: names the file and the key or line.
+    #[error("{file}: {key}: {what}")]
+    Config {
+        /// The file at fault.
+        file: String,
+        /// The key (`[table] key`), table or line at fault.
+        key: String,
+        /// What is wrong.
+        what: String,
+    },
     /// An I/O error with the path it happened on.
     #[error("{path}: {source}")]
     Io {
@@ -81,6 +105,26 @@ impl Error {
     /// An [`Error::Unsupported`] for `file`.
     pub fn unsupported(file: &str, what: impl Into<String>) -> Self {
         Error::Unsupported { file: file.into(), what: what.into() }
+    }
+
+    /// An [`Error::ConfigValue`]: `key` of `file` holds `value`, which breaks `what`.
+    pub fn config_value(
+        file: &str,
+        key: &str,
+        value: impl std::fmt::Display,
+        what: impl Into<String>,
+    ) -> Self {
+        Error::ConfigValue {
+            file: file.into(),
+            key: key.into(),
+            value: value.to_string(),
+            what: what.into(),
+        }
+    }
+
+    /// An [`Error::Config`] for `key` of `file`.
+    pub fn config(file: &str, key: &str, what: impl Into<String>) -> Self {
+        Error::Config { file: file.into(), key: key.into(), what: what.into() }
     }
 
     /// An [`Error::Limit`] for `file` and `field`.

@@ -10,6 +10,7 @@
 //! centre from the view direction; its image up is the projection of the plate normal
 //! (sample `+y` for the frontal view), as the virtual gonioreflectometer does.
 
+use super::config::{self, Checker};
 use crate::{Error, Result};
 use btf_core::{Direction, Ring, Sampling};
 use nalgebra::{Matrix3, Vector3};
@@ -34,19 +35,43 @@ pub struct CaptureLayout {
 }
 
 #[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
 struct CaptureToml {
     version: u32,
     sampling: String,
     directions_deg: Vec<[f64; 2]>,
-    rings: Option<Vec<Ring>>,
+    rings: Option<Vec<RingToml>>,
+    naming: Option<String>,
     camera: CameraToml,
     plate: PlateToml,
     radiometry: Option<RadiometryToml>,
-    material: Option<toml::Value>,
+    material: Option<MaterialToml>,
+}
+
+/// `[[rings]]` of `capture.toml` (a [`Ring`], read strictly).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RingToml {
+    theta_deg: f64,
+    count: usize,
+    phi_offset_deg: f64,
+}
+
+/// `[material]` of `capture.toml`: the recipe of a synthetic capture's sample.
+#[derive(Debug, Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+struct MaterialToml {
+    kind: String,
+    size: u64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    seed: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    albedo: Option<[f64; 3]>,
 }
 
 /// `[camera]` of `capture.toml`.
 #[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct CameraToml {
     /// Image width (pixels).
     pub width: usize,
@@ -60,10 +85,17 @@ pub struct CameraToml {
     pub distance_mm: f64,
     /// Sensor bits (values are stored left-aligned in 16-bit files).
     pub bits: u32,
+    /// Description of the frontal view's image axes (informative).
+    #[serde(default)]
+    pub frontal_axes: Option<String>,
+    /// Description of the light (informative).
+    #[serde(default)]
+    pub light: Option<String>,
 }
 
 /// `[plate]` of `capture.toml` (all in sample millimetres, origin at the sample centre).
 #[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct PlateToml {
     /// Plate side.
     pub size_mm: f64,
@@ -81,6 +113,7 @@ pub struct PlateToml {
 
 /// `[radiometry]` of `capture.toml`.
 #[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct RadiometryToml {
     /// DN of a white Lambertian reference at normal incidence under the reference light.
     pub reference_white_dn: f64,
@@ -88,47 +121,70 @@ pub struct RadiometryToml {
     pub vignetting_cos_power: f64,
 }
 
-fn invalid(path: &Path, field: &str, what: impl Into<String>) -> Error {
-    Error::invalid(&path.display().to_string(), field, what)
-}
+/// Largest image side `capture.toml` may claim (pixels).
+pub const MAX_IMAGE_SIDE: usize = 16384;
+/// Largest plate side, focal length (pixels) and camera distance accepted (mm, px).
+pub const MAX_LENGTH: f64 = 1e6;
+/// Most point markers a layout may have: the consensus tries every 4-subset (O(n⁴)).
+pub const MAX_POINT_MARKERS: usize = 32;
+/// The image naming this reader supports (`naming` must start with it).
+pub const NAMING: &str = "tvTTT_pvPPP/tlTTT_plPPP_tvTTT_pvPPP";
 
 impl CaptureLayout {
-    /// Reads and checks `DIR/capture.toml`.
+    /// Reads and checks `DIR/capture.toml`: unknown keys and tables are errors, and every
+    /// number is range-checked; each message names the file and the key.
     pub fn read(dir: &Path) -> Result<Self> {
         let path = dir.join("capture.toml");
         let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
-        let t: CaptureToml =
-            toml::from_str(&text).map_err(|e| invalid(&path, "toml", e.to_string()))?;
+        let file = path.display().to_string();
+        let t: CaptureToml = config::parse(&file, &text)?;
+        let c = Checker { file: &file };
         if t.version != 1 {
-            return Err(Error::unsupported(&path.display().to_string(), "capture.toml version"));
+            return Err(c.bad("version", t.version, "unsupported (this toolkit reads version 1)"));
         }
-        let sampling = match t.rings {
-            Some(rings) => Sampling::new(t.sampling.clone(), rings),
-            None => Sampling::by_name(&t.sampling),
-        }
-        .map_err(|e| invalid(&path, "sampling", e.to_string()))?;
-        check_directions(&path, &sampling, &t.directions_deg)?;
-        let c = &t.camera;
-        let plausible = (1..=16384).contains(&c.width)
-            && (1..=16384).contains(&c.height)
-            && c.focal_px.is_finite()
-            && c.focal_px > 0.0
-            && c.distance_mm.is_finite()
-            && c.distance_mm > 0.0
-            && (1..=16).contains(&c.bits);
-        if !plausible {
-            return Err(invalid(
-                &path,
-                "camera",
-                "size, focal length, distance or bits out of range",
+        if let Some(n) = &t.naming
+            && !n.starts_with(NAMING)
+        {
+            return Err(c.bad(
+                "naming",
+                format!("{n:?}"),
+                format!("unsupported: expected {NAMING}"),
             ));
         }
-        let p = &t.plate;
-        if p.point_markers_mm.len() < 4 || !(p.sample_mm > 0.0 && p.marker_radius_mm > 0.0) {
-            return Err(invalid(&path, "plate", "needs ≥ 4 point markers and positive sizes"));
+        let sampling = match &t.rings {
+            Some(rings) => Sampling::new(
+                t.sampling.clone(),
+                rings
+                    .iter()
+                    .map(|r| Ring {
+                        theta_deg: r.theta_deg,
+                        count: r.count,
+                        phi_offset_deg: r.phi_offset_deg,
+                    })
+                    .collect(),
+            )
+            .map_err(|e| c.wrong("[[rings]]", e.to_string())),
+            None => Sampling::by_name(&t.sampling)
+                .map_err(|e| c.bad("sampling", format!("{:?}", t.sampling), e.to_string())),
+        }?;
+        check_directions(&c, &sampling, &t.directions_deg)?;
+        check_camera(&c, &t.camera)?;
+        check_plate(&c, &t.plate, &t.camera)?;
+        if let Some(r) = &t.radiometry {
+            c.positive("[radiometry] reference_white_dn", r.reference_white_dn, 1e12)?;
+            c.within("[radiometry] vignetting_cos_power", r.vignetting_cos_power, 0.0, 16.0)?;
         }
         let material = match t.material {
-            Some(m) => serde_json::to_value(m).unwrap_or_default(),
+            Some(m) => {
+                if m.kind.trim().is_empty() {
+                    return Err(c.bad("[material] kind", "\"\"", "must name a material kind"));
+                }
+                c.count("[material] size", m.size, 1, 8192)?;
+                for (k, a) in m.albedo.iter().flatten().enumerate() {
+                    c.within(&format!("[material] albedo[{k}]"), *a, 0.0, 1.0)?;
+                }
+                serde_json::to_value(m).unwrap_or_default()
+            }
             None => serde_json::Value::Null,
         };
         Ok(CaptureLayout {
@@ -235,27 +291,115 @@ impl CaptureLayout {
     }
 }
 
-fn check_directions(path: &Path, s: &Sampling, dirs: &[[f64; 2]]) -> Result<()> {
+fn check_directions(c: &Checker, s: &Sampling, dirs: &[[f64; 2]]) -> Result<()> {
     if dirs.len() != s.len() {
-        return Err(invalid(
-            path,
+        return Err(c.wrong(
             "directions_deg",
             format!("{} directions, but sampling {} has {}", dirs.len(), s.describe(), s.len()),
         ));
     }
     for (i, d) in dirs.iter().enumerate() {
+        let key = format!("directions_deg[{i}]");
+        c.within(&key, d[0], 0.0, 90.0)?;
+        c.finite(&key, d[1])?;
         let e = s.direction(i);
-        let dphi = ((d[1] - e.phi_deg + 540.0) % 360.0 - 180.0).abs();
+        let dphi = ((d[1] - e.phi_deg + 540.0).rem_euclid(360.0) - 180.0).abs();
         if (d[0] - e.theta_deg).abs() > 1e-6 || (e.theta_deg > 0.0 && dphi > 1e-6) {
-            return Err(invalid(
-                path,
-                "directions_deg",
-                format!(
-                    "direction {i} is {d:?}, the sampling says [{}, {}]",
-                    e.theta_deg, e.phi_deg
-                ),
+            return Err(c.bad(
+                &key,
+                format!("{d:?}"),
+                format!("the sampling says [{}, {}]", e.theta_deg, e.phi_deg),
             ));
         }
+    }
+    Ok(())
+}
+
+fn check_camera(c: &Checker, cam: &CameraToml) -> Result<()> {
+    let side = MAX_IMAGE_SIDE as u64;
+    c.count("[camera] width", cam.width as u64, 1, side)?;
+    c.count("[camera] height", cam.height as u64, 1, side)?;
+    c.positive("[camera] focal_px", cam.focal_px, MAX_LENGTH)?;
+    let [cx, cy] = cam.principal_point_px;
+    c.within("[camera] principal_point_px[0]", cx, 0.0, cam.width as f64)?;
+    c.within("[camera] principal_point_px[1]", cy, 0.0, cam.height as f64)?;
+    c.positive("[camera] distance_mm", cam.distance_mm, MAX_LENGTH)?;
+    c.count("[camera] bits", cam.bits as u64, 1, 16)?;
+    Ok(())
+}
+
+/// Whether the disc of radius `r` at `p` meets the axis-aligned rectangle `[lo, hi]`.
+fn disc_meets_rect(p: [f64; 2], r: f64, lo: [f64; 2], hi: [f64; 2]) -> bool {
+    let q = [p[0].clamp(lo[0], hi[0]), p[1].clamp(lo[1], hi[1])];
+    (p[0] - q[0]).hypot(p[1] - q[1]) < r
+}
+
+fn check_plate(c: &Checker, p: &PlateToml, cam: &CameraToml) -> Result<()> {
+    let size = c.positive("[plate] size_mm", p.size_mm, MAX_LENGTH)?;
+    let sample = c.positive("[plate] sample_mm", p.sample_mm, size)?;
+    let radius = c.positive("[plate] marker_radius_mm", p.marker_radius_mm, size / 4.0)?;
+    let offset = c.positive("[plate] border_offset_mm", p.border_offset_mm, size / 2.0)?;
+    let width = c.positive("[plate] border_width_mm", p.border_width_mm, size / 2.0)?;
+    let (inner, outer) = (offset - width / 2.0, offset + width / 2.0);
+    if inner < sample / 2.0 || outer > size / 2.0 {
+        return Err(c.bad(
+            "[plate] border_offset_mm",
+            offset,
+            format!(
+                "with border_width_mm = {width} the border lines span {inner}..{outer} mm from \
+                 the centre: they must lie between the sample's edge ({}) and the plate's ({})",
+                sample / 2.0,
+                size / 2.0
+            ),
+        ));
+    }
+    let half_diagonal = size / std::f64::consts::SQRT_2;
+    if cam.distance_mm <= half_diagonal {
+        return Err(c.bad(
+            "[camera] distance_mm",
+            cam.distance_mm,
+            format!("must exceed the plate's half-diagonal ({half_diagonal:.1} mm)"),
+        ));
+    }
+    let m = &p.point_markers_mm;
+    let n = m.len() as u64;
+    c.count("[plate] point_markers_mm (count)", n, 4, MAX_POINT_MARKERS as u64)?;
+    // The border lines as four rectangles (mm).
+    let lines = [
+        ([inner, -outer], [outer, outer]),
+        ([-outer, -outer], [-inner, outer]),
+        ([-outer, inner], [outer, outer]),
+        ([-outer, -outer], [outer, -inner]),
+    ];
+    for (k, &q) in m.iter().enumerate() {
+        let key = format!("[plate] point_markers_mm[{k}]");
+        c.finite(&key, q[0])
+            .and_then(|_| c.finite(&key, q[1]))
+            .map_err(|_| c.bad(&key, format!("{q:?}"), "must be finite"))?;
+        let fail = |what: String| c.bad(&key, format!("{q:?}"), what);
+        if q[0].abs() + radius > size / 2.0 || q[1].abs() + radius > size / 2.0 {
+            return Err(fail(format!(
+                "the marker (radius {radius}) must lie on the plate (±{})",
+                size / 2.0
+            )));
+        }
+        let h = sample / 2.0;
+        if disc_meets_rect(q, radius, [-h, -h], [h, h]) {
+            return Err(fail(format!("the marker (radius {radius}) overlaps the sample (±{h})")));
+        }
+        if lines.iter().any(|&(lo, hi)| disc_meets_rect(q, radius, lo, hi)) {
+            return Err(fail(format!("the marker (radius {radius}) overlaps a border line")));
+        }
+        if let Some(j) = m[..k].iter().position(|o| (o[0] - q[0]).hypot(o[1] - q[1]) < 2.0 * radius)
+        {
+            return Err(fail(format!("the marker overlaps marker {j} at {:?}", m[j])));
+        }
+    }
+    if !super::homography::general_position(m) {
+        return Err(c.wrong(
+            "[plate] point_markers_mm",
+            "no four markers are in general position (no three on a line): they cannot fix a homography",
+        ));
     }
     Ok(())
 }
@@ -283,6 +427,8 @@ pub(crate) mod tests {
                 principal_point_px: [640.0, 480.0],
                 distance_mm: 600.0,
                 bits: 12,
+                frontal_axes: None,
+                light: None,
             },
             plate: PlateToml {
                 size_mm: 140.0,
@@ -295,6 +441,188 @@ pub(crate) mod tests {
             radiometry: None,
             material: serde_json::Value::Null,
         }
+    }
+
+    /// `capture.toml` as `datasets` writes it (pole + four views at 75°, 480×360).
+    pub(crate) const GOOD: &str = r#"version = 1
+sampling = "custom"
+directions_deg = [[0.0, 0.0], [75.0, 0.0], [75.0, 90.0], [75.0, 180.0], [75.0, 270.0]]
+naming = "tvTTT_pvPPP/tlTTT_plPPP_tvTTT_pvPPP.png (rounded integer degrees)"
+
+[[rings]]
+theta_deg = 0.0
+count = 1
+phi_offset_deg = 0.0
+
+[[rings]]
+theta_deg = 75.0
+count = 4
+phi_offset_deg = 0.0
+
+[camera]
+width = 480
+height = 360
+focal_px = 864.0
+principal_point_px = [240.0, 180.0]
+distance_mm = 600.0
+bits = 12
+frontal_axes = "image right = sample +x, image up = sample +y (rows run along -y)"
+light = "distant lamp"
+
+[plate]
+size_mm = 140.0
+sample_mm = 80.0
+point_markers_mm = [[-60.0, -60.0], [0.0, -60.0], [60.0, -60.0], [60.0, 0.0], [60.0, 60.0], [0.0, 60.0], [-60.0, 60.0], [-60.0, 0.0], [30.0, 60.0]]
+marker_radius_mm = 4.0
+border_offset_mm = 46.0
+border_width_mm = 3.0
+
+[radiometry]
+reference_white_dn = 3685.5
+vignetting_cos_power = 4.0
+
+[material]
+kind = "knit"
+seed = 1
+size = 64
+"#;
+
+    /// Reads `text` as a `capture.toml`.
+    fn read_text(text: &str) -> Result<CaptureLayout> {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("capture.toml"), text).unwrap();
+        CaptureLayout::read(dir.path())
+    }
+
+    /// The message of reading `GOOD` with `from` replaced by `to` (which must occur).
+    fn refused(from: &str, to: &str) -> String {
+        assert!(GOOD.contains(from), "{from}");
+        let e = read_text(&GOOD.replacen(from, to, 1)).expect_err(to).to_string();
+        assert!(e.contains("capture.toml: "), "the file must be named: {e}");
+        e
+    }
+
+    #[test]
+    fn the_file_datasets_writes_is_read() {
+        let l = read_text(GOOD).unwrap();
+        assert_eq!((l.camera.width, l.sampling.len(), l.plate.point_markers_mm.len()), (480, 5, 9));
+        assert!((l.radiometry.unwrap().reference_white_dn - 3685.5).abs() < 1e-12);
+        assert_eq!(l.material["kind"], "knit");
+        assert_eq!(l.material["size"], 64);
+        // Optional parts may be left out.
+        let minimal = GOOD.replace("naming = ", "# naming = ").replace("[radiometry]", "[xx]");
+        let minimal = minimal.split("[xx]").next().unwrap();
+        assert!(read_text(minimal).unwrap().radiometry.is_none());
+    }
+
+    #[test]
+    fn unknown_tables_and_keys_are_refused_by_name() {
+        let e = refused("[radiometry]", "[radiometri]");
+        assert!(e.contains("[radiometri]") && e.contains("unknown field `radiometri`"), "{e}");
+        let e = refused("bits = 12", "bits = 12\nfocal = 3.0");
+        assert!(e.contains("[camera] focal: unknown field `focal`"), "{e}");
+        let e = refused("border_width_mm = 3.0", "border_width_mm = 3.0\nborder_colour = 1");
+        assert!(e.contains("[plate] border_colour"), "{e}");
+        let e = refused("vignetting_cos_power = 4.0", "vignetting_cos_power = 4.0\nwhite = 1.0");
+        assert!(e.contains("[radiometry] white"), "{e}");
+        let e = refused("size = 64", "size = 64\nsise = 32");
+        assert!(e.contains("[material] sise"), "{e}");
+        let e = refused("phi_offset_deg = 0.0", "phi_offset_deg = 0.0\nphi_ofset_deg = 0.0");
+        assert!(e.contains("[[rings]] phi_ofset_deg"), "{e}");
+        let e = refused("version = 1", "version = 1\nversoin = 1");
+        assert!(e.contains("versoin: unknown field"), "{e}");
+        let e = refused("focal_px = 864.0\n", "");
+        assert!(e.contains("[camera]") && e.contains("missing field `focal_px`"), "{e}");
+        let e = refused("width = 480", "width = -480");
+        assert!(e.contains("[camera] width"), "{e}");
+    }
+
+    #[test]
+    fn numbers_out_of_range_are_refused_naming_key_and_value() {
+        let cases = [
+            ("size_mm = 140.0", "size_mm = -140.0", "[plate] size_mm = -140: must be > 0"),
+            ("border_width_mm = 3.0", "border_width_mm = inf", "[plate] border_width_mm = inf"),
+            ("border_width_mm = 3.0", "border_width_mm = 0.0", "[plate] border_width_mm = 0"),
+            ("border_offset_mm = 46.0", "border_offset_mm = 30.0", "[plate] border_offset_mm = 30"),
+            ("border_offset_mm = 46.0", "border_offset_mm = 69.0", "[plate] border_offset_mm = 69"),
+            ("sample_mm = 80.0", "sample_mm = 200.0", "[plate] sample_mm = 200: must be ≤ 140"),
+            ("sample_mm = 80.0", "sample_mm = nan", "[plate] sample_mm = NaN"),
+            ("marker_radius_mm = 4.0", "marker_radius_mm = -4.0", "[plate] marker_radius_mm = -4"),
+            (
+                "[[-60.0, -60.0],",
+                "[[-68.0, -60.0],",
+                "[plate] point_markers_mm[0] = [-68.0, -60.0]",
+            ),
+            ("[[-60.0, -60.0],", "[[-30.0, -30.0],", "overlaps the sample"),
+            ("[[-60.0, -60.0],", "[[0.0, -57.0],", "overlaps marker"),
+            ("[[-60.0, -60.0],", "[[-46.0, -50.0],", "overlaps a border line"),
+            ("[[-60.0, -60.0],", "[[nan, -60.0],", "[plate] point_markers_mm[0] = [NaN, -60.0]"),
+            (
+                "principal_point_px = [240.0, 180.0]",
+                "principal_point_px = [nan, 180.0]",
+                "[camera] principal_point_px[0] = NaN: must be a finite number",
+            ),
+            (
+                "principal_point_px = [240.0, 180.0]",
+                "principal_point_px = [240.0, 400.0]",
+                "[camera] principal_point_px[1] = 400: must be in [0, 360]",
+            ),
+            ("width = 480", "width = 0", "[camera] width = 0: must be in 1..=16384"),
+            ("height = 360", "height = 100000", "[camera] height = 100000: must be in 1..=16384"),
+            ("focal_px = 864.0", "focal_px = -864.0", "[camera] focal_px = -864: must be > 0"),
+            ("focal_px = 864.0", "focal_px = inf", "[camera] focal_px = inf"),
+            ("distance_mm = 600.0", "distance_mm = 50.0", "[camera] distance_mm = 50: must exceed"),
+            ("bits = 12", "bits = 17", "[camera] bits = 17: must be in 1..=16"),
+            ("bits = 12", "bits = 0", "[camera] bits = 0"),
+            (
+                "reference_white_dn = 3685.5",
+                "reference_white_dn = 0.0",
+                "[radiometry] reference_white_dn = 0: must be > 0",
+            ),
+            (
+                "vignetting_cos_power = 4.0",
+                "vignetting_cos_power = -1.0",
+                "[radiometry] vignetting_cos_power = -1: must be in [0, 16]",
+            ),
+            ("size = 64", "size = 0", "[material] size = 0"),
+            ("seed = 1", "seed = 1\nalbedo = [0.5, 2.0, 0.5]", "[material] albedo[1] = 2"),
+            ("version = 1", "version = 2", "version = 2: unsupported"),
+            (
+                "naming = \"tvTTT",
+                "naming = \"img_%04d.png\" # \"tvTTT",
+                "naming = \"img_%04d.png\"",
+            ),
+            ("[75.0, 0.0], [75.0, 90.0]", "[nan, 0.0], [75.0, 90.0]", "directions_deg[1] = NaN"),
+            (
+                "[75.0, 0.0], [75.0, 90.0]",
+                "[75.0, 10.0], [75.0, 90.0]",
+                "directions_deg[1] = [75.0, 10.0]",
+            ),
+            (
+                "theta_deg = 75.0",
+                "theta_deg = 95.0",
+                "[[rings]]: invalid input: ring 1: theta 95 deg",
+            ),
+            ("count = 4", "count = 0", "[[rings]]: invalid input: ring 1: count 0"),
+        ];
+        for (from, to, expected) in cases {
+            let e = refused(from, to);
+            assert!(e.contains(expected), "{to}: expected '{expected}' in: {e}");
+        }
+        // Three markers, or every marker on one line, cannot fix a homography.
+        let e = refused(
+            "[[-60.0, -60.0], [0.0, -60.0], [60.0, -60.0], [60.0, 0.0], [60.0, 60.0], [0.0, 60.0], [-60.0, 60.0], [-60.0, 0.0], [30.0, 60.0]]",
+            "[[-60.0, -60.0], [0.0, -60.0], [60.0, -60.0]]",
+        );
+        assert!(e.contains("[plate] point_markers_mm (count) = 3: must be in 4..=32"), "{e}");
+        let e = refused(
+            "[[-60.0, -60.0], [0.0, -60.0], [60.0, -60.0], [60.0, 0.0], [60.0, 60.0], [0.0, 60.0], [-60.0, 60.0], [-60.0, 0.0], [30.0, 60.0]]",
+            "[[-60.0, -60.0], [-30.0, -60.0], [0.0, -60.0], [30.0, -60.0], [60.0, -60.0]]",
+        );
+        assert!(
+            e.contains("[plate] point_markers_mm: no four markers are in general position"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -3,6 +3,7 @@
 //!
 //! - [`layout`] — `capture.toml`: sampling, naming, intrinsics, marker layout, radiometry;
 //!   nominal cameras and homographies;
+//! - [`config`] — strict TOML reading and range checks naming the file and the key;
 //! - [`raw`] — raw images (PNG/TIFF with left-aligned `bits`, EXR) as linear DN;
 //! - [`markers`] — sub-pixel point-marker and border-line detection;
 //! - [`homography`] — normalised DLT, consensus outlier rejection, LM refinement;
@@ -14,6 +15,7 @@
 //! - [`score`] — accuracy against a synthetic capture's ground truth.
 
 pub mod blend;
+pub mod config;
 pub mod homography;
 pub mod incidence;
 pub mod layout;

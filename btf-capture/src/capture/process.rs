@@ -346,7 +346,8 @@ fn run_slots(
             let done = (0..n).all(|l| writer.has_image(view, l));
             if done
                 && let Ok(text) = std::fs::read_to_string(&side)
-                && let Ok(reg) = serde_json::from_str(&text)
+                && let Ok(reg) = serde_json::from_str::<Registration>(&text)
+                && sidecar_is_sound(&reg, view)
             {
                 (0..n).for_each(|_| tick());
                 return Ok((reg, 0));
@@ -373,6 +374,13 @@ fn run_slots(
         .collect::<Result<_>>()?;
     let written: usize = results.iter().map(|r| r.1).sum();
     Ok((results.into_iter().map(|r| r.0).collect(), written, n * n - written))
+}
+
+/// Whether a registration sidecar left by an interrupted run can be kept: it is the view's
+/// and its homography is finite and invertible (anything else is registered again).
+fn sidecar_is_sound(reg: &Registration, view: usize) -> bool {
+    let h = reg.matrix();
+    reg.view == view && h.iter().all(|v| v.is_finite()) && h.try_inverse().is_some()
 }
 
 fn write_sidecar(path: &Path, reg: &Registration) -> Result<()> {

@@ -19,6 +19,7 @@ use serde::{Deserialize, Serialize};
 
 /// The registration of a view slot, as recorded in the store's provenance.
 #[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Registration {
     /// View slot.
     pub view: usize,

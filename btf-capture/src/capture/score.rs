@@ -49,12 +49,25 @@ pub enum Truth {
 /// The truth normtexture of (view, light) on a grid: `grid.n²` RGB texels, row-major.
 pub type TruthFn<'a> = dyn Fn(usize, usize, &Grid, Truth) -> Vec<[f32; 3]> + Sync + 'a;
 
+/// `truth.toml` as the virtual gonioreflectometer writes it: the poses and, for the
+/// record, the noise parameters they were drawn with.
 #[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(dead_code)]
 struct TruthToml {
+    warning: Option<String>,
+    seed: Option<u64>,
+    pose_noise_deg: Option<f64>,
+    pose_noise_mm: Option<f64>,
+    supersample: Option<u64>,
+    read_noise_dn: Option<f64>,
+    shot_noise_per_dn: Option<f64>,
+    vignetting: Option<f64>,
     view_poses: Vec<PoseToml>,
 }
 
 #[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
 struct PoseToml {
     view: usize,
     rotation: [[f64; 3]; 3],
@@ -92,11 +105,30 @@ pub fn true_poses(layout: &CaptureLayout) -> Result<Vec<TruePose>> {
     let path = layout.dir.join("truth.toml");
     let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
     let file = path.display().to_string();
-    let t: TruthToml =
-        toml::from_str(&text).map_err(|e| Error::invalid(&file, "toml", e.to_string()))?;
+    let t: TruthToml = super::config::parse(&file, &text)?;
     let n = layout.sampling.len();
+    let c = super::config::Checker { file: &file };
     if t.view_poses.len() != n || t.view_poses.iter().enumerate().any(|(j, p)| p.view != j) {
-        return Err(Error::invalid(&file, "view_poses", format!("expected views 0..{n} in order")));
+        return Err(c.wrong("[[view_poses]]", format!("expected views 0..{n} in order")));
+    }
+    for (j, p) in t.view_poses.iter().enumerate() {
+        let r = Matrix3::from_fn(|a, b| p.rotation[a][b]);
+        let key = format!("[[view_poses]] (view {j}) rotation");
+        if !r.iter().all(|v| v.is_finite()) {
+            return Err(c.bad(&key, format!("{:?}", p.rotation), "must be finite"));
+        }
+        let off = (r.transpose() * r - Matrix3::identity()).amax();
+        if off > 1e-6 || r.determinant() <= 0.0 {
+            return Err(c.bad(
+                &key,
+                format!("{:?}", p.rotation),
+                format!("not a rotation (|RᵀR − I| = {off:.2e}, det {:.3})", r.determinant()),
+            ));
+        }
+        let key = format!("[[view_poses]] (view {j}) translation_mm");
+        for v in p.translation_mm {
+            c.within(&key, v, -layout.plate.size_mm, layout.plate.size_mm)?;
+        }
     }
     Ok(t.view_poses
         .iter()
@@ -185,9 +217,29 @@ pub fn recorded(store: &BtfStore) -> Result<Recorded> {
     };
     let registrations: Vec<Registration> =
         serde_json::from_value(p["registration"].clone()).map_err(|_| bad())?;
+    let size = store.meta().width;
+    let c = super::config::Checker { file: &file };
+    c.finite("provenance grid.origin_mm[0]", grid.origin_mm[0])?;
+    c.finite("provenance grid.origin_mm[1]", grid.origin_mm[1])?;
+    c.positive("provenance grid.texel_mm", grid.texel_mm, 1e6)?;
+    c.count("provenance grid.n", grid.n as u64, size as u64, 2 * size as u64)?;
+    for (j, r) in registrations.iter().enumerate() {
+        let key = format!("provenance registration[{j}]");
+        if r.view != j {
+            return Err(c.bad(&format!("{key}.view"), r.view, format!("must be {j}")));
+        }
+        let h = r.matrix();
+        if !h.iter().all(|v| v.is_finite()) || h.try_inverse().is_none() {
+            return Err(c.bad(
+                &format!("{key}.homography"),
+                format!("{:?}", r.homography),
+                "must be finite and invertible",
+            ));
+        }
+    }
     Ok(Recorded {
         grid,
-        size: store.meta().width,
+        size,
         registrations,
         light_incidence_correction: p["light_incidence_correction"].as_bool().unwrap_or(false),
     })
@@ -402,4 +454,48 @@ pub fn filter_table_markdown(rows: &[FilterRow]) -> String {
 /// Checks that `raw_dir` holds a synthetic capture's ground truth.
 pub fn has_truth(raw_dir: &Path) -> bool {
     raw_dir.join("truth.toml").is_file()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const POSE: &str = "[[view_poses]]\nrotation = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]\ntranslation_mm = [0.5, -0.25, 1.0]\nview = V\n\n";
+
+    /// `true_poses` of the five-view layout with `truth` as `truth.toml`.
+    fn read(truth: &str) -> Result<Vec<TruePose>> {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("capture.toml"), super::super::layout::tests::GOOD).unwrap();
+        std::fs::write(dir.path().join("truth.toml"), truth).unwrap();
+        true_poses(&CaptureLayout::read(dir.path())?)
+    }
+
+    fn truth(head: &str) -> String {
+        let poses: String = (0..5).map(|v| POSE.replace('V', &v.to_string())).collect();
+        format!("warning = \"ground truth\"\nseed = 1\npose_noise_deg = 1.0\n{head}\n{poses}")
+    }
+
+    #[test]
+    fn truth_toml_is_read_strictly() {
+        let p = read(&truth("")).unwrap();
+        assert_eq!(p.len(), 5);
+        assert!((p[4].translation_mm - Vector3::new(0.5, -0.25, 1.0)).amax() < 1e-12);
+        let e = read(&truth("pose_noise_dg = 1.0")).unwrap_err().to_string();
+        assert!(e.contains("truth.toml: pose_noise_dg: unknown field"), "{e}");
+        let t = truth("").replacen("translation_mm = [0.5", "translation_mm = [nan", 1);
+        let e = read(&t).unwrap_err().to_string();
+        assert!(e.contains("[[view_poses]] (view 0) translation_mm = NaN"), "{e}");
+        let t = truth("").replacen("[1.0, 0.0, 0.0]", "[2.0, 0.0, 0.0]", 1);
+        let e = read(&t).unwrap_err().to_string();
+        assert!(
+            e.contains("[[view_poses]] (view 0) rotation = ") && e.contains("not a rotation"),
+            "{e}"
+        );
+        let t = truth("").replacen("view = 3", "view = 7", 1);
+        let e = read(&t).unwrap_err().to_string();
+        assert!(e.contains("truth.toml: [[view_poses]]: expected views 0..5 in order"), "{e}");
+        let t = truth("").replacen("view = 0\n", "view = 0\nscale = 2\n", 1);
+        let e = read(&t).unwrap_err().to_string();
+        assert!(e.contains("[[view_poses]] scale: unknown field"), "{e}");
+    }
 }
