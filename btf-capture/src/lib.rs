@@ -3,6 +3,7 @@
 
 pub mod bonn;
 pub mod capture;
+pub mod decode;
 pub mod error;
 
 pub use error::{Error, Result};

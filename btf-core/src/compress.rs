@@ -287,6 +287,29 @@ mod tests {
     }
 
     #[test]
+    fn stores_claiming_8192_squared_texels_are_refused_before_allocating() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("m.btf");
+        tiny_store(&p);
+        let store = BtfStore::open(&p).unwrap();
+        let params = CompressParams { components: 3, ..Default::default() };
+        let eig = dir.path().join("a.eig");
+        compress(&store, &eig, params, &|| {}).unwrap();
+        crate::store::claim_texels(&p, 8192, 8192);
+        let big = BtfStore::open(&p).unwrap();
+        let e = compress(&big, &dir.path().join("b.eig"), params, &|| {}).unwrap_err();
+        assert!(matches!(e, Error::Corrupt { .. }), "{e}");
+        assert!(e.to_string().contains("normtextures/c/0/0/0/0/0"), "{e}");
+        // An eigen store claiming the same: the whole-store check names a chunk.
+        crate::store::claim_texels(&eig, 8192, 8192);
+        let e = crate::eigen::EigenStore::open(&eig).unwrap().check_chunks().unwrap_err();
+        assert!(matches!(e, Error::Corrupt { .. }), "{e}");
+        let e = e.to_string();
+        assert!(e.contains("mean/c/0/0/0/0") && e.contains("view slot 0"), "{e}");
+        assert!(crate::eigen::EigenStore::open(&eig).unwrap().read_slot(0).is_err());
+    }
+
+    #[test]
     fn non_finite_input_is_named_down_to_the_texel_and_scratch_reuse_changes_nothing() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("m.btf");

@@ -434,6 +434,27 @@ impl EigenStore {
         })
     }
 
+    /// Checks that every chunk of every view slot is on disk with the size the metadata
+    /// claims (sizes only, not checksums): a reader that allocates for the whole store at
+    /// once calls this first, so that metadata claiming more than the files hold is refused
+    /// by naming the chunk file instead of aborting on the allocation.
+    pub fn check_chunks(&self) -> Result<()> {
+        for view in 0..self.meta.btf.n_views() as u64 {
+            let a = &self.arrays;
+            let checks = [
+                a.mean.check_chunk_file(&[view, 0, 0, 0]),
+                a.eig.check_chunk_file(&[view, 0, 0, 0, 0]),
+                a.scale.check_chunk_file(&[view, 0, 0]),
+                a.weights.check_chunk_file(&[view, 0, 0]),
+                a.values.check_chunk_file(&[view, 0]),
+            ];
+            for c in checks {
+                self.named(view as usize, c)?;
+            }
+        }
+        Ok(())
+    }
+
     /// Per-slot statistics written at compression time, if present.
     pub fn slot_stats(&self, view: usize) -> Option<serde_json::Value> {
         read_stats_file(&self.path.join("stats").join(format!("{view}.json")))

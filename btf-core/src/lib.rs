@@ -29,6 +29,7 @@ pub mod gemm;
 pub mod interp;
 pub mod kernels;
 pub mod mapped;
+pub mod memory;
 pub mod metrics;
 pub mod pca;
 pub mod reconstruct;

@@ -500,8 +500,39 @@ impl BtfStore {
         if check { check_finite(out, view, light, self.meta.width) } else { Ok(()) }
     }
 
+    /// Checks, before anything is allocated for them, that the chunks of `lights` in view
+    /// slot `view` are on disk with the size the metadata claims and that `values` floats
+    /// fit in memory: a store whose metadata claims more than its files hold is refused by
+    /// name instead of aborting on the allocation.
+    fn check_claim(&self, view: usize, lights: std::ops::Range<usize>, values: u64) -> Result<()> {
+        if view >= self.meta.n_views() || lights.end > self.meta.n_lights() {
+            return Err(Error::Invalid(format!(
+                "{}: view slot {view}, lights {lights:?} are outside the sampling",
+                self.path.display()
+            )));
+        }
+        for l in lights {
+            self.arr.check_chunk_file(&[view as u64, l as u64, 0, 0, 0]).map_err(|e| match e {
+                Error::Corrupt { path, what } => {
+                    Error::Corrupt { path, what: format!("view slot {view}, light {l}: {what}") }
+                }
+                other => other,
+            })?;
+        }
+        crate::memory::check_alloc(
+            values.checked_mul(4),
+            &format!(
+                "{}: btf.width x btf.height = {} x {} texels",
+                self.path.join("zarr.json").display(),
+                self.meta.width,
+                self.meta.height
+            ),
+        )
+    }
+
     /// Reads one normtexture.
     pub fn read_image(&self, view: usize, light: usize) -> Result<Vec<f32>> {
+        self.check_claim(view, light..light + 1, self.meta.texel_values() as u64)?;
         let mut out = vec![0f32; self.meta.texel_values()];
         self.read_image_into(view, light, &mut out)?;
         Ok(out)
@@ -570,6 +601,8 @@ impl BtfStore {
         check: bool,
     ) -> Result<()> {
         let n = self.meta.texel_values();
+        let n_l = self.meta.n_lights();
+        self.check_claim(view, 0..n_l, (n as u64).saturating_mul(n_l as u64))?;
         slot.view = view;
         slot.n_lights = self.meta.n_lights();
         slot.texel_values = n;
@@ -581,9 +614,56 @@ impl BtfStore {
     }
 }
 
+/// Rewrites a store's metadata to claim `w × h` texels consistently (group attributes and
+/// the `y`/`x` dimensions of every array's shape and chunk shape), chunk files untouched:
+/// the hostile store of issue #26, class 3.
+#[cfg(test)]
+pub(crate) fn claim_texels(store: &Path, w: u64, h: u64) {
+    let group = store.join("zarr.json");
+    let mut g: Value = serde_json::from_slice(&fs::read(&group).unwrap()).unwrap();
+    g["attributes"]["btf"]["width"] = json!(w);
+    g["attributes"]["btf"]["height"] = json!(h);
+    fs::write(&group, serde_json::to_vec(&g).unwrap()).unwrap();
+    for e in fs::read_dir(store).unwrap() {
+        let meta = e.unwrap().path().join("zarr.json");
+        let Ok(bytes) = fs::read(&meta) else { continue };
+        let mut a: Value = serde_json::from_slice(&bytes).unwrap();
+        let names: Vec<String> = serde_json::from_value(a["dimension_names"].clone()).unwrap();
+        for (i, n) in names.iter().enumerate() {
+            let v = match n.as_str() {
+                "y" => h,
+                "x" => w,
+                _ => continue,
+            };
+            a["shape"][i] = json!(v);
+            a["chunk_grid"]["configuration"]["chunk_shape"][i] = json!(v);
+        }
+        fs::write(&meta, serde_json::to_vec(&a).unwrap()).unwrap();
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn metadata_claiming_8192_squared_texels_is_refused_before_allocating() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("m.btf");
+        write_store(&p, 1.0);
+        claim_texels(&p, 8192, 8192);
+        // Consistent metadata opens; reading refuses by naming the chunk file and the claim
+        // instead of allocating 4 × 805 MB for the slot.
+        let s = BtfStore::open(&p).unwrap();
+        assert_eq!((s.meta().width, s.meta().height), (8192, 8192));
+        for e in [s.read_slot(1).unwrap_err(), s.read_image(1, 2).unwrap_err()] {
+            assert!(matches!(e, Error::Corrupt { .. }), "{e}");
+            let e = e.to_string();
+            assert!(e.contains("normtextures/c/1/") && e.contains("view slot 1"), "{e}");
+            assert!(e.contains("claims 805306372"), "{e}");
+        }
+        assert!(s.map_slot(1).is_err());
+    }
 
     fn tiny_meta() -> BtfMeta {
         let s = Sampling::new(

@@ -379,6 +379,24 @@ impl ZarrArray {
         crate::mapped::MappedChunk::open(&self.chunk_path(idx), self.meta.chunk_bytes()?)
     }
 
+    /// Checks that chunk `idx` is on disk with the size the metadata claims (not its
+    /// checksum), so that a caller can refuse a claim before allocating for it; the error
+    /// names the chunk file, the claimed size and the real one.
+    pub fn check_chunk_file(&self, idx: &[u64]) -> Result<()> {
+        let path = self.chunk_path(idx);
+        let expect = self.meta.chunk_bytes()?;
+        let len = fs::metadata(&path).map_err(|e| Error::io(&path, e))?.len();
+        if len != expect {
+            return Err(Error::Corrupt {
+                path,
+                what: format!(
+                    "chunk has {len} bytes, but zarr.json (shape, chunk_shape, data_type) claims {expect} (truncated or foreign)"
+                ),
+            });
+        }
+        Ok(())
+    }
+
     /// True when the chunk exists with the right size (checksum not verified; used to resume).
     pub fn has_chunk(&self, idx: &[u64]) -> bool {
         let expect = self.meta.chunk_bytes().unwrap_or(0);

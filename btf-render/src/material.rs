@@ -84,6 +84,24 @@ impl MaterialData {
             Quantization::U8 => 1,
         };
         let texels = w * h;
+        // Everything below is allocated for the whole store at once: refuse metadata that
+        // claims more than the chunk files hold, or more than memory, before allocating.
+        store.check_chunks()?;
+        let prod = |f: &[usize]| f.iter().try_fold(1u64, |a, &b| a.checked_mul(b as u64));
+        let bytes = [
+            prod(&[n_v, 3 * g, texels, 4, elem]),
+            prod(&[n_v, texels, 4, 2]),
+            prod(&[n_v, n_l, g + 1, 16]),
+        ]
+        .iter()
+        .try_fold(0u64, |a, b| a.checked_add((*b)?));
+        btf_core::memory::check_alloc(
+            bytes,
+            &format!(
+                "{}: the store's GPU layers ({w} x {h} texels, {n_v} view slots)",
+                path.display()
+            ),
+        )?;
         let mut data = MaterialData {
             view_sampling: meta.btf.view_sampling.clone(),
             light_sampling: meta.btf.light_sampling.clone(),

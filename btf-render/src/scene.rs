@@ -347,7 +347,13 @@ impl Scene {
     /// Reads and validates a scene file; relative paths become relative to its folder.
     pub fn load(path: &Path) -> Result<Scene> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        let mut scene: Scene = toml::from_str(&text).map_err(|e| {
+        Scene::from_toml(&text, path)
+    }
+
+    /// Parses and validates scene text as [`Scene::load`] does for the file at `path`
+    /// (which names it in errors and anchors its relative paths; nothing is read from disk).
+    pub fn from_toml(text: &str, path: &Path) -> Result<Scene> {
+        let mut scene: Scene = toml::from_str(text).map_err(|e| {
             Error::Invalid(format!("{}: {}", path.display(), e.to_string().trim_end()))
         })?;
         let dir = path.parent().unwrap_or(Path::new("."));

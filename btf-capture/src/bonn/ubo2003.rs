@@ -182,7 +182,7 @@ pub fn decode_image(bytes: &[u8], name: &str) -> Result<(usize, usize, Vec<f32>)
     let mut rd =
         image::ImageReader::new(Cursor::new(bytes)).with_guessed_format().map_err(|e| bad(&e))?;
     rd.limits(image::Limits::default());
-    let img = rd.decode().map_err(|e| bad(&e))?;
+    let img = crate::decode::decode_image(rd, name)?;
     let (w, h) = (img.width() as usize, img.height() as usize);
     use image::DynamicImage as D;
     let px: Vec<f32> = match &img {
@@ -205,33 +205,13 @@ pub fn decode_image(bytes: &[u8], name: &str) -> Result<(usize, usize, Vec<f32>)
 }
 
 fn decode_exr(bytes: &[u8], name: &str) -> Result<(usize, usize, Vec<f32>)> {
-    let (w, h, px) = read_first_rgba_layer_from_file_bytes(bytes)
-        .map_err(|e| Error::Image { file: name.into(), what: e.to_string() })?;
+    // The header's size is checked before any pixel is allocated (`crate::decode`).
+    let (w, h, rgb) = crate::decode::read_exr_rgb(|| Ok(Cursor::new(bytes)), name)?;
+    let px: Vec<f32> = rgb.into_iter().flatten().collect();
     if let Some(i) = px.iter().position(|v| !v.is_finite()) {
         return Err(Error::invalid(name, "pixels", format!("non-finite value at texel {}", i / 3)));
     }
     Ok((w, h, px))
-}
-
-fn read_first_rgba_layer_from_file_bytes(
-    bytes: &[u8],
-) -> exr::error::Result<(usize, usize, Vec<f32>)> {
-    use exr::prelude::*;
-    let img = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .rgba_channels(
-            |res, _| (res.width(), vec![0f32; res.width() * res.height() * 3]),
-            |(w, px): &mut (usize, Vec<f32>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-                let i = (pos.y() * *w + pos.x()) * 3;
-                px[i..i + 3].copy_from_slice(&[r, g, b]);
-            },
-        )
-        .first_valid_layer()
-        .all_attributes()
-        .from_buffered(Cursor::new(bytes))?;
-    let size = img.layer_data.size;
-    Ok((size.width(), size.height(), img.layer_data.channel_data.pixels.1))
 }
 
 /// What an import found.
@@ -339,6 +319,22 @@ pub fn import(src: &Path, out: &Path, dtype: DType) -> Result<Ubo2003Report> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn images_claiming_huge_sizes_are_refused_naming_file_and_field() {
+        use crate::decode::crafted::*;
+        let cases = [
+            (exr_claiming(100_000, 100_000), "tl000_pl000_tv000_pv000.exr", "dataWindow"),
+            (png_claiming(100_000, 100_000), "tl000_pl000_tv000_pv000.png", "width x height"),
+            (hdr_claiming(100_000, 100_000), "tl000_pl000_tv000_pv000.hdr", "width x height"),
+        ];
+        for (bytes, name, field) in cases {
+            let e = decode_image(&bytes, name).unwrap_err();
+            assert!(matches!(e, Error::Limit { .. }), "{name}: {e}");
+            let e = e.to_string();
+            assert!(e.contains(name) && e.contains(field), "{e}");
+        }
+    }
 
     #[test]
     fn names_parse_by_tag_wherever_they_sit() {

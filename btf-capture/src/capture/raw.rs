@@ -32,14 +32,20 @@ fn image_err(path: &Path, what: impl ToString) -> Error {
 /// The size of an image from its header, without decoding it.
 pub fn dimensions(path: &Path) -> Result<(usize, usize)> {
     if is_exr(path) {
-        let img = read(path, 16)?;
-        return Ok((img.width, img.height));
+        // The header alone: reading the pixels to learn the size would allocate whatever
+        // the header claims.
+        return crate::decode::exr_dimensions(open_buffered(path)?, &path.display().to_string());
     }
     let (w, h) = image::image_dimensions(path).map_err(|e| match e {
         image::ImageError::IoError(io) => Error::io(path, io),
         other => image_err(path, other),
     })?;
     Ok((w as usize, h as usize))
+}
+
+fn open_buffered(path: &Path) -> Result<std::io::BufReader<std::fs::File>> {
+    let f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    Ok(std::io::BufReader::new(f))
 }
 
 fn is_exr(path: &Path) -> bool {
@@ -51,12 +57,11 @@ pub fn read(path: &Path, bits: u32) -> Result<RawImage> {
     if is_exr(path) {
         return read_exr(path);
     }
-    let img = image::ImageReader::open(path)
+    let reader = image::ImageReader::open(path)
         .map_err(|e| Error::io(path, e))?
         .with_guessed_format()
-        .map_err(|e| Error::io(path, e))?
-        .decode()
-        .map_err(|e| image_err(path, e))?;
+        .map_err(|e| Error::io(path, e))?;
+    let img = crate::decode::decode_image(reader, &path.display().to_string())?;
     let (width, height) = (img.width() as usize, img.height() as usize);
     let rgb = match img {
         image::DynamicImage::ImageRgb16(_)
@@ -86,24 +91,12 @@ pub fn read(path: &Path, bits: u32) -> Result<RawImage> {
 }
 
 fn read_exr(path: &Path) -> Result<RawImage> {
-    use exr::prelude::*;
-    let img = read_first_rgba_layer_from_file(
-        path,
-        |res, _| {
-            let (w, h) = (res.width(), res.height());
-            (w, vec![[0f32; 3]; w * h])
-        },
-        |(w, px): &mut (usize, Vec<[f32; 3]>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-            px[pos.y() * *w + pos.x()] = [r, g, b];
-        },
-    )
-    .map_err(|e| image_err(path, e))?;
-    let size = img.layer_data.size;
-    let (_, rgb) = img.layer_data.channel_data.pixels;
+    let (width, height, rgb) =
+        crate::decode::read_exr_rgb(|| open_buffered(path), &path.display().to_string())?;
     if rgb.iter().flatten().any(|v| !v.is_finite()) {
         return Err(image_err(path, "NaN or infinite values"));
     }
-    Ok(RawImage { width: size.width(), height: size.height(), rgb })
+    Ok(RawImage { width, height, rgb })
 }
 
 #[cfg(test)]
@@ -133,5 +126,22 @@ mod tests {
         std::fs::write(&path, b"\x89PNG\r\n\x1a\nnot really").unwrap();
         let e = read(&path, 12).unwrap_err().to_string();
         assert!(e.contains("broken.png"), "{e}");
+    }
+
+    #[test]
+    fn raw_image_claiming_a_huge_size_is_refused_by_its_header() {
+        let dir = tempfile::tempdir().unwrap();
+        let exr = dir.path().join("huge.exr");
+        std::fs::write(&exr, crate::decode::crafted::exr_claiming(100_000, 100_000)).unwrap();
+        for e in [dimensions(&exr).unwrap_err(), read(&exr, 12).unwrap_err()] {
+            assert!(matches!(e, Error::Limit { .. }), "{e}");
+            let e = e.to_string();
+            assert!(e.contains("huge.exr") && e.contains("dataWindow"), "{e}");
+        }
+        let png = dir.path().join("huge.png");
+        std::fs::write(&png, crate::decode::crafted::png_claiming(100_000, 100_000)).unwrap();
+        let e = read(&png, 12).unwrap_err();
+        assert!(matches!(e, Error::Limit { .. }), "{e}");
+        assert!(e.to_string().contains("huge.png") && e.to_string().contains("width x height"));
     }
 }

@@ -88,21 +88,32 @@ impl EnvMap {
             "exr" => {
                 let meta = exr::meta::MetaData::read_from_file(path, false)
                     .map_err(|e| img_err(e.to_string()))?;
-                let size = meta
-                    .headers
-                    .first()
-                    .map(|h| h.layer_size)
-                    .ok_or_else(|| img_err("no layer".into()))?;
-                check_size(&name, size.width(), size.height())?;
+                if meta.headers.is_empty() {
+                    return Err(img_err("no layer".into()));
+                }
+                for h in &meta.headers {
+                    check_size(&name, h.layer_size.width(), h.layer_size.height())?;
+                }
+                // Rows are allocated as they are decoded: a small file claiming a large
+                // map costs what it holds, not what its header claims.
                 let img = exr::prelude::read_first_rgba_layer_from_file(
                     path,
-                    |res, _| (res.width(), vec![[0f32; 3]; res.width() * res.height()]),
-                    |m: &mut (usize, Vec<[f32; 3]>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-                        m.1[pos.y() * m.0 + pos.x()] = [r, g, b];
+                    |res, _| btf_core::memory::LazyRows::<[f32; 3]>::new(res.width(), res.height()),
+                    |m: &mut btf_core::memory::LazyRows<[f32; 3]>,
+                     pos,
+                     (r, g, b, _a): (f32, f32, f32, f32)| {
+                        m.set(pos.x(), pos.y(), [r, g, b])
                     },
                 )
                 .map_err(|e| img_err(e.to_string()))?;
-                (size.width(), size.height(), img.layer_data.channel_data.pixels.1)
+                let size = img.layer_data.size;
+                let pixels = img
+                    .layer_data
+                    .channel_data
+                    .pixels
+                    .into_vec()
+                    .map_err(|y| img_err(format!("pixel row {y} is missing")))?;
+                (size.width(), size.height(), pixels)
             }
             "hdr" => {
                 let open = || {

@@ -65,20 +65,26 @@ pub fn load_env(path: &Path) -> Result<EnvMap> {
                 .map(|h| h.layer_size)
                 .ok_or_else(|| img_err("no layer".into()))?;
             check_size(path, size.width(), size.height())?;
+            for h in &meta.headers {
+                check_size(path, h.layer_size.width(), h.layer_size.height())?;
+            }
+            // Rows are allocated as they are decoded: a small file claiming a large map
+            // costs what it holds, not what its header claims.
             let img = exr::prelude::read_first_rgba_layer_from_file(
                 path,
-                |res, _| EnvMap {
-                    width: res.width(),
-                    height: res.height(),
-                    pixels: vec![[0.0; 3]; res.width() * res.height()],
-                },
-                |m: &mut EnvMap, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-                    let w = m.width;
-                    m.pixels[pos.y() * w + pos.x()] = [r, g, b];
+                |res, _| btf_core::memory::LazyRows::<[f32; 3]>::new(res.width(), res.height()),
+                |m: &mut btf_core::memory::LazyRows<[f32; 3]>,
+                 pos,
+                 (r, g, b, _a): (f32, f32, f32, f32)| {
+                    m.set(pos.x(), pos.y(), [r, g, b])
                 },
             )
             .map_err(|e| img_err(e.to_string()))?;
-            img.layer_data.channel_data.pixels
+            let size = img.layer_data.size;
+            let pixels = img.layer_data.channel_data.pixels.into_vec().map_err(|y| {
+                Error::Invalid(format!("{}: pixel row {y} is missing", path.display()))
+            })?;
+            EnvMap { width: size.width(), height: size.height(), pixels }
         }
         "hdr" => {
             let reader = image::ImageReader::open(path).map_err(|e| Error::io(path, e))?;

@@ -1,0 +1,16 @@
+//! Fuzzes `datasets::load_env`, the environment-map loader of `btf synth`/`btf demo`: the
+//! first input byte picks the extension (`.hdr` Radiance RGBE or `.exr`), the rest is the
+//! file, written to a tmpfs. Any input must load or give an error, never panic, abort or
+//! allocate beyond the limit.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    let Some((&pick, rest)) = data.split_first() else { return };
+    let name = if pick & 1 == 0 { "env.hdr" } else { "env.exr" };
+    let path = btf_fuzz::put(name, rest);
+    if let Ok(m) = datasets::load_env(&path) {
+        assert_eq!(m.pixels.len(), m.width * m.height);
+    }
+});
