@@ -240,8 +240,29 @@ fn an_interrupted_run_resumes() {
     process(&d, "raw", "m.btf", &[]);
     // Make the finished store look like an interrupted one: an incomplete partial folder
     // missing slot 2's images and its registration.
+    // The job record a real run writes into its partial the moment it begins: taken from
+    // a run killed right then, so the fabricated partial below is this job's.
+    let record = {
+        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_btf"))
+            .args(["capture", "process", "raw", "-o", "k.btf", "--size", "16"])
+            .current_dir(d.tmp.path())
+            .env("BTF_NO_PROGRESS", "1")
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        let marker = d.path("k.btf.partial/zarr.json");
+        let t0 = std::time::Instant::now();
+        while !marker.exists() && t0.elapsed().as_secs() < 60 {
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
+        let _ = child.kill();
+        let _ = child.wait();
+        std::fs::read(&marker).unwrap()
+    };
     let partial = d.path("m.btf.partial");
     copy_dir(&d.path("m.btf"), &partial);
+    std::fs::write(partial.join("zarr.json"), record).unwrap();
     let chunks = partial.join("normtextures/c/2");
     std::fs::remove_dir_all(&chunks).unwrap();
     std::fs::remove_file(partial.join("registration/view_0002.json")).unwrap();

@@ -315,7 +315,7 @@ pub fn process(
     let job = serde_json::json!({
         "raw_dir": btf_core::fs::input_identity(raw_dir),
         "capture_toml": btf_core::fs::input_identity(&raw_dir.join("capture.toml")),
-        "options": format!("{opt:?}"),
+        "options": format!("{:?}", ProcessOptions { resume: false, ..opt.clone() }),
     });
     let mut writer = BtfWriter::create_for_job(out, meta, opt.dtype, opt.resume, job)?;
     let partial = writer.dir().to_owned();
