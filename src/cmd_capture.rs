@@ -16,6 +16,9 @@ pub enum CaptureCmd {
     Process(ProcessArgs),
     /// Score a processed store against the capture's ground truth (synthetic captures).
     Score(ScoreArgs),
+    /// How far past the robot's tolerance registration holds: virtual captures registered
+    /// by camera resolution × pose error × view angle, a table and a plot.
+    RegistrationSweep(crate::registration_sweep::SweepArgs),
 }
 
 /// Arguments of `btf capture process`.
@@ -89,6 +92,7 @@ pub fn run(cmd: CaptureCmd) -> Result<()> {
     match cmd {
         CaptureCmd::Process(a) => process(a),
         CaptureCmd::Score(a) => score_cmd(a),
+        CaptureCmd::RegistrationSweep(a) => crate::registration_sweep::run(a),
     }
 }
 

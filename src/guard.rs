@@ -119,10 +119,15 @@ pub fn no_partial_on_error<T>(out: &Path, f: impl FnOnce() -> Result<T>) -> Resu
 }
 
 /// Runs `f`, which writes a store at `out` with `--resume` available; when it fails and a
-/// partial store is left, the error says so.
+/// partial store with finished work is left, the error says so. A partial that holds no
+/// chunk or side file yet (the run was refused before its first slot) is removed: there is nothing to
+/// resume, and a refusal leaves nothing behind.
 pub fn resumable<T>(out: &Path, f: impl FnOnce() -> Result<T>) -> Result<T> {
     f().map_err(|e| {
         let p = partial_of(out);
+        if p.is_dir() && btf_core::fs::is_toolkit_store(&p) && !holds_work(&p) {
+            let _ = std::fs::remove_dir_all(&p);
+        }
         if p.is_dir() {
             e.context(format!(
                 "the work done so far is kept in {}; run the same command with --resume to \
@@ -133,6 +138,24 @@ pub fn resumable<T>(out: &Path, f: impl FnOnce() -> Result<T>) -> Result<T> {
             e
         }
     })
+}
+
+/// Whether a store folder holds finished work: any file but the metadata documents
+/// (`zarr.json`) and temporaries, i.e. a chunk or a side file such as a registration.
+fn holds_work(store: &Path) -> bool {
+    let mut stack = vec![store.to_owned()];
+    while let Some(d) = stack.pop() {
+        let Ok(entries) = std::fs::read_dir(&d) else { continue };
+        for e in entries.flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            if e.path().is_dir() {
+                stack.push(e.path());
+            } else if name != "zarr.json" && !btf_core::fs::is_temp_name(&name) {
+                return true;
+            }
+        }
+    }
+    false
 }
 
 /// `NAME.partial` beside a store path.

@@ -15,6 +15,7 @@ mod guard;
 mod imageio;
 mod plot;
 mod progress;
+mod registration_sweep;
 mod relight_report;
 mod render_cmd;
 mod render_sweep;

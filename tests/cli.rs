@@ -150,10 +150,20 @@ fn interrupted_compression_resumes_and_keeps_previous_output() {
     d.ok(&["compress", "m.btf", "-c", "2", "-o", "m.eig"]);
     let before = std::fs::read(d.path("m.eig/eigentextures/c/0/0/0/0/0")).unwrap();
     // Simulate an interruption: a second run to the same output whose partial store has
-    // only some slots (copy the finished store's arrays, drop slots 3..7).
+    // only some slots (copy the finished store's arrays, drop slots 3..7). A partial
+    // records the job that began it from the first instant, as a killed run leaves it.
     let partial = d.path("m.eig.partial");
     copy_dir(&d.path("m.eig"), &partial);
-    std::fs::remove_file(partial.join("zarr.json")).unwrap();
+    // The record `compress -c 2` writes: the eigen store's metadata and the input's identity.
+    let btf = btf_core::store::BtfStore::open(&d.path("m.btf")).unwrap().meta().clone();
+    let meta = btf_core::eigen::EigenMeta {
+        btf,
+        components: 2,
+        quantization: btf_core::eigen::Quantization::F16,
+    };
+    let input = btf_core::fs::input_identity(&d.path("m.btf"));
+    let record = serde_json::json!({ "store": "eigen", "meta": meta, "job": { "input": input } });
+    btf_core::zarr::write_group(&partial, &serde_json::json!({ "partial_job": record })).unwrap();
     for v in 3..7 {
         std::fs::remove_file(partial.join(format!("eigenvalues/c/{v}/0"))).unwrap();
     }

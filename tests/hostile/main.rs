@@ -1,7 +1,8 @@
 //! The hostile suite (issue #26): every rule about what a command may do to files, run
 //! against every command it applies to, end to end through the `btf` binary.
 //!
-//! One module per class of fault: outputs that are inputs ([`overlap`]), replacing what
+//! One module per class of fault: outputs that are inputs ([`overlap`]), sizes claimed by
+//! headers and metadata ([`claims`], with each refusal's peak memory), replacing what
 //! the toolkit did not make ([`replace`]), leftovers after a refusal ([`leftovers`]),
 //! non-finite values ([`nonfinite`]), extreme finite values ([`extreme`]), panics
 //! ([`panics`]), a full disk ([`disk_full`]), resumes of another job ([`resume`]) and
@@ -11,6 +12,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod claims;
 mod disk_full;
 mod extreme;
 mod kill;

@@ -136,8 +136,14 @@ impl CaptureLayout {
     pub fn read(dir: &Path) -> Result<Self> {
         let path = dir.join("capture.toml");
         let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
-        let file = path.display().to_string();
-        let t: CaptureToml = config::parse(&file, &text)?;
+        Self::from_text(dir, &path.display().to_string(), &text)
+    }
+
+    /// [`CaptureLayout::read`] on `text`, the `capture.toml` of the images in `dir`
+    /// (messages name `file`).
+    pub fn from_text(dir: &Path, file: &str, text: &str) -> Result<Self> {
+        let file = file.to_owned();
+        let t: CaptureToml = config::parse(&file, text)?;
         let c = Checker { file: &file };
         if t.version != 1 {
             return Err(c.bad("version", t.version, "unsupported (this toolkit reads version 1)"));

@@ -129,13 +129,37 @@ pub fn detect_point(
         return Err(Miss::NoContrast);
     }
     let thr = bg + 0.5 * (level - bg);
-    let blob = flood(bw, bh, seed, |k| dist[k] <= search && val(k) > thr);
-    let touches = blob.iter().any(|&k| dist[k] > search - 1.0);
+    // Every bright component of the search disc is a candidate; the marker is the one of
+    // the right size that does not run into the window's rim (a border line, the sample's
+    // texture or a marker cut by the rim does), nearest to the prediction. A wide window
+    // may hold several; the brightest pixel alone could seed the wrong one.
+    let inside = |k: usize| dist[k] <= search && val(k) > thr;
     let expected = area_scale(h, centre_mm) * std::f64::consts::PI * radius_mm * radius_mm;
-    let area = blob.len() as f64;
-    if touches || area < 0.5 * expected - 2.0 || area > 1.6 * expected + 4.0 {
-        return Err(Miss::BadShape);
+    let mut labelled = vec![false; bw * bh];
+    let mut best: Option<(f64, Vec<usize>)> = None;
+    let mut any = false;
+    for &start in std::iter::once(&seed).chain(&search_px) {
+        if labelled[start] || !inside(start) {
+            continue;
+        }
+        let blob = flood(bw, bh, start, inside);
+        for &k in &blob {
+            labelled[k] = true;
+        }
+        any = true;
+        let touches = blob.iter().any(|&k| dist[k] > search - 1.0);
+        let area = blob.len() as f64;
+        if touches || area < 0.5 * expected - 2.0 || area > 1.6 * expected + 4.0 {
+            continue;
+        }
+        let near = blob.iter().map(|&k| dist[k]).fold(f64::INFINITY, f64::min);
+        if best.as_ref().is_none_or(|b| near < b.0) {
+            best = Some((near, blob));
+        }
     }
+    let Some((_, blob)) = best else {
+        return Err(if any { Miss::BadShape } else { Miss::NoContrast });
+    };
     // Centroid over the blob grown by one pixel, weights clamped to [0, 1].
     let mut in_blob = vec![false; bw * bh];
     for &k in &blob {

@@ -7,6 +7,7 @@
 //! - [`raw`] — raw images (PNG/TIFF with left-aligned `bits`, EXR) as linear DN;
 //! - [`markers`] — sub-pixel point-marker and border-line detection;
 //! - [`homography`] — normalised DLT, consensus outlier rejection, LM refinement;
+//! - [`pose`] — the plate pose behind a few markers (prior-regularised fit), to search by;
 //! - [`register`] — one view slot's homography from its images;
 //! - [`rectify`] — resampling onto the output texel grid (bilinear or footprint filter);
 //! - [`incidence`] — the lamp's cosine on the tilted plate (radiometric correction);
@@ -20,6 +21,7 @@ pub mod homography;
 pub mod incidence;
 pub mod layout;
 pub mod markers;
+pub mod pose;
 pub mod process;
 pub mod raw;
 pub mod rectify;

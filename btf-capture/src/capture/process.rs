@@ -203,7 +203,7 @@ pub fn radiometric_gain(layout: &CaptureLayout) -> impl Fn(f64, f64) -> f64 + '_
 
 /// The lights averaged to register a slot: the `k` most frontal ones with `θ ≤ 60°`
 /// (grazing lights leave the markers dim).
-fn registration_lights(layout: &CaptureLayout, k: usize) -> Vec<usize> {
+pub fn registration_lights(layout: &CaptureLayout, k: usize) -> Vec<usize> {
     let s = &layout.sampling;
     let mut idx: Vec<usize> = (0..s.len()).collect();
     idx.sort_by(|&a, &b| s.direction(a).theta_deg.total_cmp(&s.direction(b).theta_deg));

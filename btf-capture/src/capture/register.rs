@@ -5,7 +5,10 @@
 //! The images of the most frontal lights (brightest markers) are averaged, which lowers the
 //! noise by `√k`. Point markers are detected around their nominal positions, matched by
 //! layout index, and an exhaustive 4-subset consensus rejects outliers (H&Z Alg. 4.4);
-//! markers missed at first are looked for again around the consensus prediction. The
+//! markers missed at first are looked for again around the consensus prediction. When no
+//! four agree (a plate placed so far off that the far markers left their windows, or a
+//! window that held the wrong blob), a pose search fits the plate pose to every three
+//! markers found ([`super::pose`]) and looks again around each fitted pose. The
 //! centroids are then corrected for the perspective bias of a projected disc, the border
 //! lines are sampled, and Levenberg–Marquardt minimises the point and point-on-line
 //! residuals together (H&Z eq. 4.8); line samples further than `4 · 1.4826 · MAD` from
@@ -14,6 +17,7 @@
 use super::homography::{self, LineMatch, PointMatch};
 use super::layout::CaptureLayout;
 use super::markers::{self, Detection, Gray, Miss};
+use super::pose::{self, Pose, Prior};
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -63,11 +67,26 @@ pub struct RegisterOptions {
     /// Use the border lines in the refinement (off by default: their samples are biased
     /// by up to a quarter pixel in some views, see the crate README).
     pub use_lines: bool,
+    /// The plate's placement error assumed by the pose search ([`pose::fit`]).
+    pub pose_prior: Prior,
+    /// How far beyond a marker's rim the pose search looks for it around where a fitted
+    /// pose puts it (mm).
+    pub pose_margin_mm: f64,
+    /// Run the pose search when the markers found first do not agree (on by default; off
+    /// only to measure what it adds).
+    pub pose_search: bool,
 }
 
 impl Default for RegisterOptions {
     fn default() -> Self {
-        RegisterOptions { search_margin_mm: 6.0, consensus_tol_px: 2.0, use_lines: false }
+        RegisterOptions {
+            search_margin_mm: 6.0,
+            consensus_tol_px: 2.0,
+            use_lines: false,
+            pose_prior: Prior { rotation_deg: 3.0, translation_mm: 3.0 },
+            pose_margin_mm: 4.0,
+            pose_search: true,
+        }
     }
 }
 
@@ -120,14 +139,41 @@ pub fn register(
     };
     let first = raw(&found);
     let pts: Vec<PointMatch> = first.iter().map(|p| p.1).collect();
-    let Some((h1, _)) = homography::consensus(&pts, opt.consensus_tol_px) else {
-        let m = missed_text(&found);
-        return Err(format!(
-            "{} of {} point markers usable (need 4): {}",
-            pts.len(),
-            marks.len(),
-            m.join("; ")
-        ));
+    let h1 = match homography::consensus(&pts, opt.consensus_tol_px) {
+        Some((h, _)) => h,
+        None => {
+            match opt.pose_search.then(|| pose_search(layout, view, img, opt, &found)).flatten() {
+                Some((h, again)) => {
+                    found = again;
+                    h
+                }
+                None => {
+                    let m = missed_text(&found);
+                    let what = if pts.len() < 4 {
+                        format!(
+                            "{} of {} point markers found (4 must agree)",
+                            pts.len(),
+                            marks.len()
+                        )
+                    } else {
+                        format!(
+                            "{} of {} point markers found, but no 4 of them agree within {} px \
+                         under one homography",
+                            pts.len(),
+                            marks.len(),
+                            opt.consensus_tol_px
+                        )
+                    };
+                    return Err(format!(
+                        "{what}, nor does any plate pose fitted to 3 of them (prior {}° / {} mm) \
+                     find 4 that agree: {}",
+                        opt.pose_prior.rotation_deg,
+                        opt.pose_prior.translation_mm,
+                        m.join("; ")
+                    ));
+                }
+            }
+        }
     };
     for (k, d) in found.iter_mut().enumerate() {
         if d.is_err() {
@@ -182,6 +228,98 @@ pub fn register(
         fallback_nominal: false,
         missed: missed_text(&found),
     })
+}
+
+/// The pose search, when the markers found around the nominal pose (and the plate-height
+/// steps) do not give 4 that agree: the plate may sit so far from nominal that the far
+/// markers lie outside their windows, or a window held the wrong blob. From each search
+/// start (nominal, Δz = ±2, ±4 mm) and each 3 markers found there (2 when only 2 were), the
+/// plate pose is fitted ([`pose::fit`], with the robot's tolerance as a prior), every
+/// marker is looked for again within `pose_margin_mm` of where that pose puts it, and the
+/// consensus of what is found is scored; the set with the most agreeing markers (then the
+/// smaller summed error) wins. `None` when no set has 4 that agree. The starts also include
+/// the nominal pose searched with twice the window.
+fn pose_search(
+    layout: &CaptureLayout,
+    view: usize,
+    img: &Gray,
+    opt: &RegisterOptions,
+    nominal: &[Detection],
+) -> Option<(Matrix3<f64>, Vec<Detection>)> {
+    let plate = &layout.plate;
+    let (marks, radius) = (&plate.point_markers_mm, plate.marker_radius_mm);
+    let detect_all = |h: &Matrix3<f64>, margin: f64| -> Vec<Detection> {
+        marks.iter().map(|&m| markers::detect_point(img, h, m, radius, margin)).collect()
+    };
+    // Around the nominal pose with a window twice as wide too: a plate shifted in its own
+    // plane moves every marker alike, by up to 3σ of the translation error (9 mm at 3 mm).
+    let wide = detect_all(&layout.nominal_homography(view), 2.0 * opt.search_margin_mm);
+    let mut starts: Vec<(Pose, Vec<Detection>)> =
+        vec![(Pose::zeros(), nominal.to_vec()), (Pose::zeros(), wide)];
+    for dz in [-2.0, 2.0, -4.0, 4.0] {
+        let p = Pose::from_column_slice(&[0.0, 0.0, 0.0, 0.0, 0.0, dz]);
+        starts.push((p, detect_all(&pose::homography(layout, view, &p), opt.search_margin_mm)));
+    }
+    // Subsets already tried (marker index and position to 0.01 px), across the starts.
+    let mut tried = std::collections::HashSet::new();
+    let mut best: Option<(usize, f64, Matrix3<f64>, Vec<Detection>)> = None;
+    for (start, found) in &starts {
+        let ok: Vec<(usize, [f64; 2])> =
+            found.iter().enumerate().filter_map(|(k, d)| d.ok().map(|p| (k, p))).collect();
+        let size = ok.len().min(3);
+        if size < 2 {
+            continue;
+        }
+        for subset in combinations(ok.len(), size) {
+            let chosen: Vec<(usize, [f64; 2])> = subset.iter().map(|&i| ok[i]).collect();
+            let key: Vec<(usize, i64, i64)> = chosen
+                .iter()
+                .map(|(k, p)| (*k, (p[0] * 100.0).round() as i64, (p[1] * 100.0).round() as i64))
+                .collect();
+            if !tried.insert(key) {
+                continue;
+            }
+            let obs: Vec<([f64; 2], [f64; 2])> =
+                chosen.iter().map(|(k, p)| (marks[*k], *p)).collect();
+            let Some(p) = pose::fit(layout, view, &obs, start, &opt.pose_prior) else { continue };
+            let again = detect_all(&pose::homography(layout, view, &p), opt.pose_margin_mm);
+            let pts: Vec<PointMatch> = again
+                .iter()
+                .enumerate()
+                .filter_map(|(k, d)| d.ok().map(|q| PointMatch { plate_mm: marks[k], image_px: q }))
+                .collect();
+            let Some((h, inliers)) = homography::consensus(&pts, opt.consensus_tol_px) else {
+                continue;
+            };
+            let count = inliers.iter().filter(|k| **k).count();
+            let cost: f64 =
+                pts.iter().map(|m| homography::point_error(&h, m).min(opt.consensus_tol_px)).sum();
+            if best.as_ref().is_none_or(|b| count > b.0 || (count == b.0 && cost < b.1)) {
+                best = Some((count, cost, h, again));
+            }
+            if count == marks.len() {
+                break;
+            }
+        }
+    }
+    best.map(|(_, _, h, found)| (h, found))
+}
+
+/// Every `k`-subset of `0..n`, in lexicographic order.
+fn combinations(n: usize, k: usize) -> Vec<Vec<usize>> {
+    let mut out = Vec::new();
+    let mut idx: Vec<usize> = (0..k).collect();
+    if k > n {
+        return out;
+    }
+    loop {
+        out.push(idx.clone());
+        let Some(i) = (0..k).rev().find(|&i| idx[i] < n - k + i) else { return out };
+        idx[i] += 1;
+        for j in i + 1..k {
+            idx[j] = idx[j - 1] + 1;
+        }
+    }
 }
 
 /// Ranks a set of detections: first whether four found markers fix a homography (no three

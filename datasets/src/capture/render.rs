@@ -245,6 +245,53 @@ pub fn true_poses(spec: &CaptureSpec) -> Vec<Pose> {
         .collect()
 }
 
+/// `capture.toml` of `spec`: what the lab knows of the capture.
+pub fn description(spec: &CaptureSpec) -> CaptureDescription {
+    let cam = Camera::new([0.0, 0.0, 1.0], spec.width, spec.height);
+    CaptureDescription {
+        version: 1,
+        sampling: spec.material.sampling.name.clone(),
+        rings: spec.material.sampling.rings.clone(),
+        directions_deg: spec.material.sampling.directions().iter().map(|d| [d.theta_deg, d.phi_deg]).collect(),
+        naming: "tvTTT_pvPPP/tlTTT_plPPP_tvTTT_pvPPP.png (rounded integer degrees)".into(),
+        camera: CameraDescription {
+            width: spec.width,
+            height: spec.height,
+            focal_px: cam.focal_px,
+            principal_point_px: [cam.cx, cam.cy],
+            distance_mm: CAMERA_DISTANCE_MM,
+            bits: 12,
+            frontal_axes: "image right = sample +x, image up = sample +y (rows run along -y)".into(),
+            light: "distant lamp; irradiance 1 maps a white Lambertian at normal incidence to 0.9 of full scale".into(),
+        },
+        plate: PlateDescription {
+            size_mm: PLATE_MM,
+            sample_mm: SAMPLE_MM,
+            point_markers_mm: point_markers(),
+            marker_radius_mm: MARKER_RADIUS_MM,
+            border_offset_mm: BORDER_OFFSET_MM,
+            border_width_mm: BORDER_WIDTH_MM,
+        },
+        radiometry: RadiometryDescription {
+            reference_white_dn: 0.9 * 4095.0,
+            vignetting_cos_power: 4.0 * spec.vignetting,
+        },
+        material: {
+            let mut m = json!({"kind": spec.material.kind.name(), "size": spec.material.size, "seed": spec.material.seed});
+            if let Some(a) = spec.material.albedo {
+                m["albedo"] = json!(a);
+            }
+            m
+        },
+    }
+}
+
+/// The `capture.toml` text of `spec` (for tools that render a capture's images themselves,
+/// such as the registration sweep).
+pub fn description_toml(spec: &CaptureSpec) -> Result<String> {
+    toml::to_string(&description(spec)).map_err(|e| Error::Invalid(format!("capture.toml: {e}")))
+}
+
 /// Renders every raw image of `spec` into `out`, with `capture.toml` and `truth.toml`.
 pub fn capture(spec: &CaptureSpec, out: &Path, progress: bool) -> Result<CaptureReport> {
     let t0 = std::time::Instant::now();
@@ -279,43 +326,7 @@ pub fn capture(spec: &CaptureSpec, out: &Path, progress: bool) -> Result<Capture
         btf_core::fs::OutputKind::Folder { marker: "capture.toml" },
     )?;
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
-    let cam = Camera::new([0.0, 0.0, 1.0], spec.width, spec.height);
-    let desc = CaptureDescription {
-        version: 1,
-        sampling: s.name.clone(),
-        rings: s.rings.clone(),
-        directions_deg: s.directions().iter().map(|d| [d.theta_deg, d.phi_deg]).collect(),
-        naming: "tvTTT_pvPPP/tlTTT_plPPP_tvTTT_pvPPP.png (rounded integer degrees)".into(),
-        camera: CameraDescription {
-            width: spec.width,
-            height: spec.height,
-            focal_px: cam.focal_px,
-            principal_point_px: [cam.cx, cam.cy],
-            distance_mm: CAMERA_DISTANCE_MM,
-            bits: 12,
-            frontal_axes: "image right = sample +x, image up = sample +y (rows run along -y)".into(),
-            light: "distant lamp; irradiance 1 maps a white Lambertian at normal incidence to 0.9 of full scale".into(),
-        },
-        plate: PlateDescription {
-            size_mm: PLATE_MM,
-            sample_mm: SAMPLE_MM,
-            point_markers_mm: point_markers(),
-            marker_radius_mm: MARKER_RADIUS_MM,
-            border_offset_mm: BORDER_OFFSET_MM,
-            border_width_mm: BORDER_WIDTH_MM,
-        },
-        radiometry: RadiometryDescription {
-            reference_white_dn: 0.9 * 4095.0,
-            vignetting_cos_power: 4.0 * spec.vignetting,
-        },
-        material: {
-            let mut m = json!({"kind": spec.material.kind.name(), "size": spec.material.size, "seed": spec.material.seed});
-            if let Some(a) = spec.material.albedo {
-                m["albedo"] = json!(a);
-            }
-            m
-        },
-    };
+    let desc = description(spec);
     write_job_toml(&out.join("capture.toml"), &desc)?;
     let truth = json!({
         "warning": "ground truth for evaluation only; capture processing must not read this file",
