@@ -120,12 +120,14 @@ pub fn no_partial_on_error<T>(out: &Path, f: impl FnOnce() -> Result<T>) -> Resu
 
 /// Runs `f`, which writes a store at `out` with `--resume` available; when it fails and a
 /// partial store with finished work is left, the error says so. A partial that holds no
-/// chunk or side file yet (the run was refused before its first slot) is removed: there is nothing to
-/// resume, and a refusal leaves nothing behind.
+/// chunk or side file yet (this run began it and was refused before its first slot) is
+/// removed: there is nothing to resume, and a refusal leaves nothing behind. A partial that
+/// was there before the run is another job's and stays as it was.
 pub fn resumable<T>(out: &Path, f: impl FnOnce() -> Result<T>) -> Result<T> {
+    let existed = partial_of(out).exists();
     f().map_err(|e| {
         let p = partial_of(out);
-        if p.is_dir() && btf_core::fs::is_toolkit_store(&p) && !holds_work(&p) {
+        if !existed && p.is_dir() && btf_core::fs::is_toolkit_store(&p) && !holds_work(&p) {
             let _ = std::fs::remove_dir_all(&p);
         }
         if p.is_dir() {

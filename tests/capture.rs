@@ -207,7 +207,7 @@ fn occluded_markers_fail_or_fall_back_to_the_nominal_pose() {
     occlude_markers(&d.path("raw"));
     let e = d.fails(&["capture", "process", "raw", "-o", "m.btf", "--size", "16"]);
     assert!(
-        e.contains("tv045_pv180") && e.contains("need 4") && e.contains("--fallback nominal"),
+        e.contains("tv045_pv180") && e.contains("4 must agree") && e.contains("--fallback nominal"),
         "{e}"
     );
     no_store_left(&d, "m.btf");

@@ -1,7 +1,7 @@
 //! Ground-truth checks of the synthetic materials: the analytic Lambert case, the energy
 //! bound, corduroy's anisotropy, determinism and resuming.
 
-use btf_core::store::{BtfMeta, BtfStore, BtfWriter};
+use btf_core::store::{BtfStore, BtfWriter};
 use btf_core::zarr::DType;
 use btf_core::{Ring, Sampling};
 use datasets::material::{GenerateOptions, Material, MaterialKind, MaterialSpec, generate};
@@ -149,9 +149,10 @@ fn same_seed_same_bytes_other_seed_differs_and_resume_keeps_images() {
     // An interrupted run left two images; resuming renders only the 23 others.
     spec.seed = 7;
     let d = dir.path().join("d.btf");
-    let meta = BtfMeta::new(small_sampling(), small_sampling(), 16, 16);
-    let w = BtfWriter::create(&d, meta, DType::F32, false).unwrap();
+    // The partial carries the job's record as a killed run leaves it: the same metadata
+    // (samplings, size and the generator's provenance) as the finished store of seed 7.
     let a_store = BtfStore::open(&a).unwrap();
+    let w = BtfWriter::create(&d, a_store.meta().clone(), DType::F32, false).unwrap();
     w.write_image(0, 0, &a_store.read_image(0, 0).unwrap()).unwrap();
     w.write_image(3, 1, &a_store.read_image(3, 1).unwrap()).unwrap();
     drop(w);
