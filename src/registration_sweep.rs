@@ -256,12 +256,12 @@ fn grid_error(a: &Matrix3<f64>, b: &Matrix3<f64>, half: f64) -> f64 {
     worst
 }
 
-fn cell<'a>(
-    o: &'a [Outcome],
+fn cell(
+    o: &[Outcome],
     r: (usize, usize),
     sigma: f64,
     theta: f64,
-) -> impl Iterator<Item = &'a Outcome> {
+) -> impl Iterator<Item = &Outcome> {
     o.iter().filter(move |x| x.resolution == r && x.sigma == sigma && x.theta_deg == theta)
 }
 

@@ -385,10 +385,10 @@ impl Scene {
         }
         for (i, m) in self.materials.iter().enumerate() {
             out.push((format!("[[materials]] {i} store"), m.store.clone()));
-            if let Some(t) = &m.transmission {
-                if let Some(crate::transmission::TauTexture::Image(p)) = &t.tau_texture {
-                    out.push((format!("[[materials]] {i} transmission.tau_texture"), p.clone()));
-                }
+            if let Some(t) = &m.transmission
+                && let Some(crate::transmission::TauTexture::Image(p)) = &t.tau_texture
+            {
+                out.push((format!("[[materials]] {i} transmission.tau_texture"), p.clone()));
             }
         }
         for (i, l) in self.lights.iter().enumerate() {

@@ -21,6 +21,7 @@ const MAX_RSS_BYTES: u64 = 1 << 30;
 /// bytes (that child's own `ru_maxrss`, which Linux reports in KiB). The one `unsafe` of
 /// the suite: `std` has no way to read a child's resource usage.
 #[allow(unsafe_code)]
+#[allow(clippy::zombie_processes)] // reaped by `wait4` below, not by `Child::wait`
 fn run_measured(d: &Dir, args: &[&str]) -> (ExitStatus, String, u64) {
     let mut child = Command::new(env!("CARGO_BIN_EXE_btf"))
         .args(args)

@@ -41,7 +41,7 @@ struct Case {
 
 #[test]
 fn every_writer_survives_kill_9() {
-    let cases = vec![
+    let cases = [
         Case {
             v1: vec![
                 "synth",
