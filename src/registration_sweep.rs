@@ -73,6 +73,10 @@ struct Outcome {
     error_px: Option<f64>,
     /// Markers used, of a registration that succeeded.
     markers: usize,
+    /// The true plate pose away from nominal: rotation angle (degrees), shift (mm).
+    true_pose: (f64, f64),
+    /// The pose behind the registered homography, the same way (`None` if refused).
+    registered_pose: Option<(f64, f64)>,
     /// Why registration failed.
     refused: Option<String>,
 }
@@ -220,12 +224,19 @@ fn register_capture(spec: &CaptureSpec, pose_search: bool) -> Result<Vec<Outcome
                 let r = Matrix3::from_fn(|i, j| p.rotation[i][j]);
                 layout.homography(view, &r, &Vector3::from(p.translation_mm))
             };
-            let (error_px, markers, refused) =
+            let p = &poses[view];
+            let true_pose =
+                pose_size(&Matrix3::from_fn(|i, j| p.rotation[i][j]), &p.translation_mm);
+            let (error_px, markers, refused, registered_pose) =
                 match register::register(&layout, view, &gray, &opt.register) {
                     Ok(reg) => {
-                        (Some(grid_error(&reg.matrix(), &truth, 40.0)), reg.markers_used, None)
+                        let m = reg.matrix();
+                        let pose = layout
+                            .pose_from_homography(view, &m)
+                            .map(|(r, t)| pose_size(&r, &[t.x, t.y, t.z]));
+                        (Some(grid_error(&m, &truth, 40.0)), reg.markers_used, None, pose)
                     }
-                    Err(why) => (None, 0, Some(why)),
+                    Err(why) => (None, 0, Some(why), None),
                 };
             Outcome {
                 resolution: (w, h),
@@ -235,10 +246,18 @@ fn register_capture(spec: &CaptureSpec, pose_search: bool) -> Result<Vec<Outcome
                 theta_deg: s.direction(view).theta_deg,
                 error_px,
                 markers,
+                true_pose,
+                registered_pose,
                 refused,
             }
         })
         .collect())
+}
+
+/// A plate pose's distance from nominal: rotation angle (degrees) and shift length (mm).
+fn pose_size(r: &Matrix3<f64>, t: &[f64; 3]) -> (f64, f64) {
+    let angle = ((r.trace() - 1.0) / 2.0).clamp(-1.0, 1.0).acos().to_degrees();
+    (angle, Vector3::from(*t).norm())
 }
 
 /// Largest image distance between `a` and `b` over a 5 × 5 grid on the square `±half` mm.
@@ -327,11 +346,18 @@ fn summary(
 }
 
 fn csv(o: &[Outcome]) -> String {
-    let mut t = String::from("width,height,sigma,seed,view,theta_deg,error_px,markers,refused\n");
+    let mut t = String::from(
+        "width,height,sigma,seed,view,theta_deg,error_px,markers,true_rotation_deg,\
+         true_shift_mm,registered_rotation_deg,registered_shift_mm,refused\n",
+    );
     for x in o {
+        let (rr, rs) = match x.registered_pose {
+            Some((r, s)) => (format!("{r:.3}"), format!("{s:.3}")),
+            None => (String::new(), String::new()),
+        };
         let _ = writeln!(
             t,
-            "{},{},{},{},{},{},{},{},\"{}\"",
+            "{},{},{},{},{},{},{},{},{:.3},{:.3},{},{},\"{}\"",
             x.resolution.0,
             x.resolution.1,
             x.sigma,
@@ -340,6 +366,10 @@ fn csv(o: &[Outcome]) -> String {
             x.theta_deg,
             x.error_px.map(|e| format!("{e:.4}")).unwrap_or_default(),
             x.markers,
+            x.true_pose.0,
+            x.true_pose.1,
+            rr,
+            rs,
             x.refused.as_deref().unwrap_or("").replace('"', "'")
         );
     }

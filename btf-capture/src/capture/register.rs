@@ -75,6 +75,11 @@ pub struct RegisterOptions {
     /// Run the pose search when the markers found first do not agree (on by default; off
     /// only to measure what it adds).
     pub pose_search: bool,
+    /// A homography whose plate pose lies further from nominal than this many standard
+    /// deviations of `pose_prior` (rotation angle or shift length) is refused: markers
+    /// matched to their neighbours' blobs can agree under one homography, for a plate
+    /// that would have to sit some 20 mm off (seen at θ_v = 75° with 3°/3 mm errors).
+    pub pose_limit_sigmas: f64,
 }
 
 impl Default for RegisterOptions {
@@ -86,6 +91,7 @@ impl Default for RegisterOptions {
             pose_prior: Prior { rotation_deg: 3.0, translation_mm: 3.0 },
             pose_margin_mm: 4.0,
             pose_search: true,
+            pose_limit_sigmas: 5.0,
         }
     }
 }
@@ -139,42 +145,44 @@ pub fn register(
     };
     let first = raw(&found);
     let pts: Vec<PointMatch> = first.iter().map(|p| p.1).collect();
-    let h1 = match homography::consensus(&pts, opt.consensus_tol_px) {
-        Some((h, _)) => h,
-        None => {
-            match opt.pose_search.then(|| pose_search(layout, view, img, opt, &found)).flatten() {
-                Some((h, again)) => {
-                    found = again;
-                    h
-                }
-                None => {
-                    let m = missed_text(&found);
-                    let what = if pts.len() < 4 {
-                        format!(
-                            "{} of {} point markers found (4 must agree)",
-                            pts.len(),
-                            marks.len()
-                        )
-                    } else {
-                        format!(
-                            "{} of {} point markers found, but no 4 of them agree within {} px \
-                         under one homography",
-                            pts.len(),
-                            marks.len(),
-                            opt.consensus_tol_px
-                        )
-                    };
-                    return Err(format!(
-                        "{what}, nor does any plate pose fitted to 3 of them (prior {}° / {} mm) \
-                     find 4 that agree: {}",
-                        opt.pose_prior.rotation_deg,
-                        opt.pose_prior.translation_mm,
-                        m.join("; ")
-                    ));
-                }
-            }
+    let first_consensus = homography::consensus(&pts, opt.consensus_tol_px).map(|(h, _)| h);
+    let aliased = first_consensus.and_then(|h| implausible(layout, view, &h, opt));
+    let searched = match first_consensus.filter(|_| aliased.is_none()) {
+        Some(h) => Some((h, None)),
+        None if opt.pose_search => {
+            pose_search(layout, view, img, opt, &found).map(|(h, again)| (h, Some(again)))
         }
+        None => None,
     };
+    let Some((h1, again)) = searched else {
+        let m = missed_text(&found);
+        let what = if let Some(why) = &aliased {
+            format!("the {} point markers found agree only on {why}", pts.len())
+        } else if pts.len() < 4 {
+            format!("{} of {} point markers found (4 must agree)", pts.len(), marks.len())
+        } else {
+            format!(
+                "{} of {} point markers found, but no 4 of them agree within {} px under one \
+                 homography",
+                pts.len(),
+                marks.len(),
+                opt.consensus_tol_px
+            )
+        };
+        let search = if opt.pose_search {
+            format!(
+                ", nor does any plate pose fitted to 3 of them (prior {}° / {} mm) find 4 that \
+                 agree",
+                opt.pose_prior.rotation_deg, opt.pose_prior.translation_mm
+            )
+        } else {
+            " (pose search off)".to_string()
+        };
+        return Err(format!("{what}{search}: {}", m.join("; ")));
+    };
+    if let Some(again) = again {
+        found = again;
+    }
     for (k, d) in found.iter_mut().enumerate() {
         if d.is_err() {
             *d = markers::detect_point(img, &h1, marks[k], radius, 2.0);
@@ -214,6 +222,9 @@ pub fn register(
         if !h.iter().all(|v| v.is_finite()) {
             h = before;
         }
+    }
+    if let Some(why) = implausible(layout, view, &h, opt) {
+        return Err(format!("the markers agree only on {why}"));
     }
     let pts = markers::corrected_matches(&h, marks, radius, &found);
     let rms = |e: Vec<f64>| (e.iter().map(|x| x * x).sum::<f64>() / e.len().max(1) as f64).sqrt();
@@ -291,6 +302,9 @@ fn pose_search(
             let Some((h, inliers)) = homography::consensus(&pts, opt.consensus_tol_px) else {
                 continue;
             };
+            if implausible(layout, view, &h, opt).is_some() {
+                continue;
+            }
             let count = inliers.iter().filter(|k| **k).count();
             let cost: f64 =
                 pts.iter().map(|m| homography::point_error(&h, m).min(opt.consensus_tol_px)).sum();
@@ -303,6 +317,33 @@ fn pose_search(
         }
     }
     best.map(|(_, _, h, found)| (h, found))
+}
+
+/// Why the plate pose behind `h` cannot be the robot's: further from nominal than
+/// `pose_limit_sigmas` standard deviations of the prior in rotation angle or shift length
+/// (or no pose at all). `None` for a plausible pose.
+fn implausible(
+    layout: &CaptureLayout,
+    view: usize,
+    h: &Matrix3<f64>,
+    opt: &RegisterOptions,
+) -> Option<String> {
+    let Some((r, t)) = layout.pose_from_homography(view, h) else {
+        return Some("a homography no plate pose explains".into());
+    };
+    let angle = ((r.trace() - 1.0) / 2.0).clamp(-1.0, 1.0).acos().to_degrees();
+    let shift = t.norm();
+    let (max_angle, max_shift) = (
+        opt.pose_limit_sigmas * opt.pose_prior.rotation_deg,
+        opt.pose_limit_sigmas * opt.pose_prior.translation_mm,
+    );
+    (angle > max_angle || shift > max_shift).then(|| {
+        format!(
+            "a plate {angle:.1}° / {shift:.1} mm from its nominal pose, beyond {max_angle}° / \
+             {max_shift} mm ({} σ of the placement prior): markers matched to the wrong blobs",
+            opt.pose_limit_sigmas
+        )
+    })
 }
 
 /// Every `k`-subset of `0..n`, in lexicographic order.
@@ -415,5 +456,26 @@ mod tests {
         let all = found(&(0..9).collect::<Vec<_>>());
         let kept = best_detections(&MARKS, all, |_| unreachable!("no search needed"));
         assert_eq!(rank(&MARKS, &kept), (true, 9));
+    }
+
+    #[test]
+    fn a_pose_beyond_the_prior_is_refused_as_aliased() {
+        // 5 σ of the default prior is 15° / 15 mm: a plate 10 mm and 5° off passes, one
+        // 20 mm off (a neighbour's blob taken for each marker) does not, in every view.
+        let layout = super::super::layout::tests::layout();
+        let opt = RegisterOptions::default();
+        for view in 0..layout.sampling.len() {
+            let pose = |w: [f64; 3], t: [f64; 3]| {
+                let p = Pose::from_column_slice(&[w[0], w[1], w[2], t[0], t[1], t[2]]);
+                pose::homography(&layout, view, &p)
+            };
+            let near = pose([0.0, 5f64.to_radians(), 0.0], [6.0, -6.0, 5.0]);
+            assert_eq!(implausible(&layout, view, &near, &opt), None, "view {view}");
+            let far = pose([0.0, 0.0, 0.0], [20.0, 0.0, 0.0]);
+            let why = implausible(&layout, view, &far, &opt).expect("20 mm is refused");
+            assert!(why.contains("20.0 mm") && why.contains("15 mm"), "view {view}: {why}");
+            let turned = pose([0.0, 0.0, 20f64.to_radians()], [0.0; 3]);
+            assert!(implausible(&layout, view, &turned, &opt).is_some(), "view {view}");
+        }
     }
 }
