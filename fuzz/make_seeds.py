@@ -414,7 +414,7 @@ def svd(rows, cols, p=1, size=4):
 
 
 def env_seeds():
-    for target in ("env_datasets", "env_render"):
+    for target in ("envmap",):
         put(target, "flat-8x4.hdr", b"\x00" + hdr(8, 4, rle=False))
         put(target, "rle-16x8.hdr", b"\x00" + hdr(16, 8, rle=True))
         put(target, "none-8x4.exr", b"\x01" + exr(8, 4, 0))

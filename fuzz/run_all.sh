@@ -21,7 +21,7 @@ TIMEOUT_S=${TIMEOUT_S:-10}
 SANITIZER=${SANITIZER:-address}
 NICE=${NICE:-15}
 TRIPLE=x86_64-unknown-linux-gnu
-ALL=(env_datasets env_render scene_toml obj_mesh capture_toml zarr_array btf_store
+ALL=(envmap scene_toml obj_mesh capture_toml zarr_array btf_store
      eigen_store ubo2014 pvf raw_image ubo2003_image)
 targets=("$@")
 [ ${#targets[@]} -eq 0 ] && targets=("${ALL[@]}")
@@ -29,7 +29,7 @@ targets=("$@")
 # Largest input per target (bytes): room for a small image / store / file of the format.
 max_len() {
     case "$1" in
-        env_datasets|env_render|raw_image|ubo2003_image) echo 16384 ;;
+        envmap|raw_image|ubo2003_image) echo 16384 ;;
         capture_toml|eigen_store|pvf|ubo2014) echo 8192 ;;
         *) echo 4096 ;;
     esac

@@ -142,7 +142,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
             if s.reused { "reused" } else { "" }
         )?;
     }
-    crate::imageio::write_text(&a.out.join("report.md"), &report)?;
+    btf_image::write::write_text(&a.out.join("report.md"), &report)?;
     crate::guard::outln!("{report}");
     crate::guard::outln!("demo written to {}", a.out.join("report.md").display());
     Ok(())

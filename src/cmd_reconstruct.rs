@@ -67,10 +67,10 @@ pub fn run(a: ReconstructArgs) -> Result<()> {
     crate::guard::check_file(&a.output, btf_core::fs::EXR)?;
     let tex = reconstruct(&store, view, light, params)?;
     let m = &store.meta().btf;
-    crate::imageio::write_exr(&a.output, m.width, m.height, &tex)?;
+    btf_image::write::write_exr_rgb(&a.output, m.width, m.height, &tex)?;
     if let Some(png) = a.png {
         let peak = tex.iter().copied().fold(0f32, f32::max);
-        crate::imageio::write_png_linear(
+        btf_image::write::write_png_linear(
             &png,
             m.width,
             m.height,

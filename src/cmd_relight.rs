@@ -11,7 +11,7 @@
 
 use crate::relight_report::{self, EigenRow};
 use anyhow::{Context, Result, bail, ensure};
-use btf_render::envlight::EnvMap;
+use btf_image::EnvMap;
 use btf_render::scene::{EigenSets, EnvironmentLight, Light, MAX_LIGHTS};
 use btf_render::{Gpu, RenderOptions, Renderer, Scene};
 use serde::Serialize;
@@ -145,7 +145,7 @@ pub fn run(args: RelightArgs) -> Result<()> {
     bar.finish_and_clear();
     let summary = summarise(&renderer, &scene, &args, summaries)?;
     let text = serde_json::to_string_pretty(&summary)?;
-    crate::imageio::write_text(&args.output.join("summary.json"), &text)?;
+    btf_image::write::write_text(&args.output.join("summary.json"), &text)?;
     crate::guard::outln!(
         "{} frames rendered, {} reused; visibility {:.2} s, weights {:.3} s per environment, {:.1} ms per frame → {}",
         summary.frames_rendered,
@@ -279,7 +279,7 @@ fn prepare_output(args: &RelightArgs, scene: &Scene) -> Result<()> {
         }
         return Ok(());
     }
-    crate::imageio::write_text(&path, &text)
+    Ok(btf_image::write::write_text(&path, &text)?)
 }
 
 fn render_frames(
@@ -305,9 +305,9 @@ fn render_frames(
         frame_ms += t.elapsed().as_secs_f64() * 1e3;
         rotation_ms += rot;
         if args.exr {
-            crate::imageio::write_exr(&png.with_extension("exr"), w, h, &frame.rgb)?;
+            btf_image::write::write_exr_rgb(&png.with_extension("exr"), w, h, &frame.rgb)?;
         }
-        crate::imageio::write_png_linear(png, w, h, &frame.rgb, scene.output.exposure)?;
+        btf_image::write::write_png_linear(png, w, h, &frame.rgb, scene.output.exposure)?;
         s.frames_rendered += 1;
         bar.inc(1);
     }

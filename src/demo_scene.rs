@@ -37,24 +37,6 @@ enum Lighting {
     Environment(f64),
 }
 
-/// `1 / E_h`, where `E_h = ∫_{z>0} L cos θ dω` is the sky's horizontal irradiance (mean of
-/// the channels).
-pub fn unit_irradiance_exposure(env: &datasets::EnvMap) -> f64 {
-    let mut e = 0.0;
-    for row in 0..env.height {
-        let d = env.direction(0, row);
-        if d[2] <= 0.0 {
-            continue;
-        }
-        let w = env.pixel_solid_angle(row) * d[2];
-        for col in 0..env.width {
-            let p = env.pixels[row * env.width + col];
-            e += w * (p[0] + p[1] + p[2]) as f64 / 3.0;
-        }
-    }
-    if e > 0.0 { 1.0 / e } else { 1.0 }
-}
-
 fn scene_toml(width: u32, (lo, hi): ([f64; 3], [f64; 3]), lighting: Lighting) -> String {
     let c = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0, (lo[2] + hi[2]) / 2.0];
     let size = (0..3).map(|k| hi[k] - lo[k]).fold(0f64, f64::max);
@@ -158,13 +140,11 @@ pub fn run(out: &Path, width: u32, stage: &mut StageFn<'_>) -> Result<String> {
         "HDR sky",
         env_path.exists(),
         Box::new(|| {
-            Ok(datasets::write_exr(
-                &datasets::synth_env(EnvKind::Sky, &EnvParams::default(), 512)?,
-                &env_path,
-            )?)
+            Ok(datasets::synth_env(EnvKind::Sky, &EnvParams::default(), 512)?
+                .write_exr(&env_path)?)
         }),
     )?;
-    let env_exposure = unit_irradiance_exposure(&datasets::load_env(&env_path)?);
+    let env_exposure = btf_image::EnvMap::load(&env_path)?.unit_irradiance_exposure();
     let mut md = String::from("## Renders\n\n");
     let gpu = match Gpu::new() {
         Ok(g) => g,
@@ -187,7 +167,7 @@ pub fn run(out: &Path, width: u32, stage: &mut StageFn<'_>) -> Result<String> {
     for (name, stage_name, lighting) in renders {
         let scene_path = out.join(format!("scene-{name}.toml"));
         let png = out.join(format!("render-{name}.png"));
-        crate::imageio::write_text(&scene_path, &scene_toml(width, b, lighting))?;
+        btf_image::write::write_text(&scene_path, &scene_toml(width, b, lighting))?;
         let mut stats = None;
         stage(
             stage_name,

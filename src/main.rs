@@ -12,8 +12,6 @@ mod cmd_relight;
 mod cmd_thin;
 mod demo_scene;
 mod guard;
-mod imageio;
-mod plot;
 mod progress;
 mod registration_sweep;
 mod relight_report;

@@ -14,7 +14,6 @@
 //! resolution).
 
 use crate::guard::outln;
-use crate::{imageio, plot};
 use anyhow::{Context, Result, bail};
 use btf_capture::capture::{CaptureLayout, ProcessOptions, markers::Gray, process, register};
 use datasets::capture::{CaptureSpec, render};
@@ -164,14 +163,19 @@ pub fn run(a: SweepArgs) -> Result<()> {
         outcomes.len(),
         a.max_error_px
     );
-    imageio::write_text(&a.out.join("registration.md"), &(header + &table))?;
-    imageio::write_text(&a.out.join("registration.csv"), &csv(&outcomes))?;
+    btf_image::write::write_text(&a.out.join("registration.md"), &(header + &table))?;
+    btf_image::write::write_text(&a.out.join("registration.csv"), &csv(&outcomes))?;
     let panels: Vec<image::RgbImage> = res
         .iter()
-        .map(|&r| plot::render(&fraction_plot(&outcomes, r, &sigmas, &angles, a.max_error_px)))
+        .map(|&r| {
+            btf_image::plot::render(&fraction_plot(&outcomes, r, &sigmas, &angles, a.max_error_px))
+        })
         .collect();
     let refs: Vec<&image::RgbImage> = panels.iter().collect();
-    imageio::write_png(&a.out.join("registration.png"), &imageio::side_by_side(&refs, 8))?;
+    btf_image::write::write_png(
+        &a.out.join("registration.png"),
+        &btf_image::compose::side_by_side(&refs, 8),
+    )?;
 
     let ok = outcomes.iter().filter(|o| o.error_px.is_some_and(|e| e <= a.max_error_px)).count();
     let wrong = outcomes.iter().filter(|o| o.error_px.is_some_and(|e| e > a.max_error_px)).count();
@@ -382,8 +386,8 @@ fn fraction_plot(
     sigmas: &[f64],
     angles: &[f64],
     tol: f64,
-) -> plot::Plot {
-    plot::Plot {
+) -> btf_image::plot::Plot {
+    btf_image::plot::Plot {
         title: format!("registered fraction, {}x{}", r.0, r.1),
         x_label: "pose error sigma (deg and mm)".into(),
         y_label: "fraction registered".into(),
@@ -391,7 +395,7 @@ fn fraction_plot(
         log_x: false,
         series: angles
             .iter()
-            .map(|&a| plot::Series {
+            .map(|&a| btf_image::plot::Series {
                 name: format!("view {a} deg"),
                 points: sigmas
                     .iter()

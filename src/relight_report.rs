@@ -14,10 +14,11 @@
 //!
 //! The `.md` table is written last: its presence marks the report finished.
 
-use crate::plot::{Plot, Series};
 use anyhow::{Context, Result};
+use btf_image::heatmap::error_heatmap_image;
+use btf_image::plot::{Plot, Series};
+use btf_image::write::{write_png, write_text};
 use btf_render::envlight::eigenweights::relative_error;
-use btf_render::envlight::heatmap::green_red;
 use btf_render::envlight::scene_env::REPORT_COMPONENTS;
 use btf_render::{Gpu, Renderer};
 use serde::Serialize;
@@ -104,19 +105,11 @@ fn heat_maps(
         let frame = renderer.render(gpu)?;
         let diff = reference.rgb.iter().zip(&frame.rgb).map(|(a, b)| ((a - b) as f64).powi(2));
         row.image_rel_rmse = diff.sum::<f64>().sqrt() / ref_norm.max(f64::MIN_POSITIVE);
-        let heat: Vec<u8> = reference
-            .rgb
-            .chunks_exact(3)
-            .zip(frame.rgb.chunks_exact(3))
-            .zip(&garment)
-            .flat_map(|((r, a), &g)| {
-                let d = (0..3).map(|c| (r[c] - a[c]).powi(2)).sum::<f32>().sqrt();
-                if g || a != bg { green_red(d / full_scale) } else { [0, 0, 0] }
-            })
-            .collect();
-        let img =
-            image::RgbImage::from_raw(frame.width, frame.height, heat).context("heat map size")?;
-        crate::imageio::write_png(&dir.join(format!("{stem}-heat-e{}.png", row.e)), &img)?;
+        let shown: Vec<bool> =
+            frame.rgb.chunks_exact(3).zip(&garment).map(|(a, &g)| g || a != bg).collect();
+        let (w, h) = (frame.width as usize, frame.height as usize);
+        let img = error_heatmap_image(w, h, &reference.rgb, &frame.rgb, full_scale, Some(&shown));
+        write_png(&dir.join(format!("{stem}-heat-e{}.png", row.e)), &img)?;
     }
     Ok(())
 }
@@ -130,7 +123,7 @@ fn write_coefficients(stem: &str, dir: &Path, curves: &[Vec<f64>]) -> Result<()>
         curves.iter().for_each(|c| csv += &format!(",{:.6e}", c[d]));
         csv.push('\n');
     }
-    crate::imageio::write_text(&dir.join(format!("{stem}-coefficients.csv")), &csv)?;
+    write_text(&dir.join(format!("{stem}-coefficients.csv")), &csv)?;
     let plot = Plot {
         title: format!("{stem}: eigenweightset coefficients o_k(delta)"),
         x_label: "rotation delta (deg)".into(),
@@ -146,10 +139,8 @@ fn write_coefficients(stem: &str, dir: &Path, curves: &[Vec<f64>]) -> Result<()>
             })
             .collect(),
     };
-    crate::imageio::write_png(
-        &dir.join(format!("{stem}-coefficients.png")),
-        &crate::plot::render(&plot),
-    )
+    write_png(&dir.join(format!("{stem}-coefficients.png")), &btf_image::plot::render(&plot))?;
+    Ok(())
 }
 
 fn write_tables(stem: &str, dir: &Path, a_n: usize, rows: &[EigenRow]) -> Result<()> {
@@ -171,7 +162,7 @@ fn write_tables(stem: &str, dir: &Path, a_n: usize, rows: &[EigenRow]) -> Result
         )?;
     }
     md += &format!("\n![o_k(δ)]({stem}-coefficients.png)\n");
-    crate::imageio::write_text(&dir.join(format!("{stem}-error.csv")), &csv)?;
+    write_text(&dir.join(format!("{stem}-error.csv")), &csv)?;
     let plot = Plot {
         title: format!("{stem}: eigenweightset error"),
         x_label: "eigenweightsets e".into(),
@@ -189,6 +180,6 @@ fn write_tables(stem: &str, dir: &Path, a_n: usize, rows: &[EigenRow]) -> Result
             },
         ],
     };
-    crate::imageio::write_png(&dir.join(format!("{stem}-error.png")), &crate::plot::render(&plot))?;
-    crate::imageio::write_text(&dir.join(format!("{stem}-error.md")), &md)
+    write_png(&dir.join(format!("{stem}-error.png")), &btf_image::plot::render(&plot))?;
+    Ok(write_text(&dir.join(format!("{stem}-error.md")), &md)?)
 }

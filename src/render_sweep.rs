@@ -3,9 +3,10 @@
 //! texture mapping and the read bound), written as CSV, Markdown and plots, plus the eq. 6
 //! on/off comparison of the scene's shadows side by side.
 
-use crate::imageio::{side_by_side, to_srgb, write_png, write_text};
-use crate::plot::{Plot, Series, render};
 use anyhow::{Context, Result};
+use btf_image::compose::side_by_side;
+use btf_image::plot::{Plot, Series, render};
+use btf_image::write::{to_srgb_image as to_srgb, write_png, write_text};
 use btf_render::cost_sweep::{self, READ_BOUND_TARGET, SweepConfig, SweepResult};
 use btf_render::scene::Shadows;
 use btf_render::{Gpu, RenderOptions, Renderer, Scene};
@@ -190,7 +191,7 @@ fn write_plots(r: &SweepResult, out: &Path) -> Result<()> {
         log_x: false,
         series: by_c,
     };
-    write_png(&out.join("cost-vs-components.png"), &render(&cost))
+    Ok(write_png(&out.join("cost-vs-components.png"), &render(&cost))?)
 }
 
 /// Renders the scene's shadows with and without the smooth boundary of eq. 6 and writes them

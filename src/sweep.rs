@@ -5,14 +5,16 @@
 //! Sattler et al. 2003, Fig. 7) and difference heat-maps (as their Fig. 6).
 
 use crate::cmd_compress::compress_with_progress;
-use crate::imageio::{heatmap, side_by_side, to_srgb, upscale, write_png};
-use crate::plot::{Plot, Series, render};
 use anyhow::Result;
 use btf_core::Direction;
 use btf_core::compress::CompressParams;
 use btf_core::eigen::{EigenStore, Quantization};
 use btf_core::reconstruct::{ReconstructParams, reconstruct, reconstruct_sample};
 use btf_core::store::BtfStore;
+use btf_image::compose::{side_by_side, upscale};
+use btf_image::heatmap::error_heatmap_image;
+use btf_image::plot::{Plot, Series, render};
+use btf_image::write::{to_srgb_image as to_srgb, write_png};
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
@@ -60,7 +62,8 @@ pub fn run(input: &BtfStore, cs: &[usize], q: Quantization, dir: &Path) -> Resul
     let peak = original.iter().copied().fold(0f32, f32::max).max(1e-12);
     let mut rows = Vec::new();
     let mut panels = vec![upscale(&to_srgb(w, h, &original, 0.8 / peak), 128)];
-    let mut heat = vec![upscale(&heatmap(w, h, &original, &original, 0.1 * peak), 128)];
+    let mut heat =
+        vec![upscale(&error_heatmap_image(w, h, &original, &original, 0.1 * peak, None), 128)];
     let mut decay: Vec<Series> = Vec::new();
     for &c in cs {
         let out = work.join(format!("c{c}.eig"));
@@ -81,7 +84,7 @@ pub fn run(input: &BtfStore, cs: &[usize], q: Quantization, dir: &Path) -> Resul
         let slot = store.read_slot(slot_j)?;
         let rec = reconstruct_sample(&slot, light_i, r.components);
         panels.push(upscale(&to_srgb(w, h, &rec, 0.8 / peak), 128));
-        heat.push(upscale(&heatmap(w, h, &original, &rec, 0.1 * peak), 128));
+        heat.push(upscale(&error_heatmap_image(w, h, &original, &rec, 0.1 * peak, None), 128));
         if c == *cs.iter().max().unwrap() {
             for (name, th, ph) in [
                 ("theta 0", 0.0, 0.0),
@@ -228,7 +231,7 @@ pub fn run(input: &BtfStore, cs: &[usize], q: Quantization, dir: &Path) -> Resul
         md,
         "Difference heat-maps (length of the RGB error vector; green = 0, red ≥ 10 % of the image's peak):\n\n![heat-maps](heatmaps.png)"
     )?;
-    crate::imageio::write_text(&dir.join("report.md"), &md)?;
+    btf_image::write::write_text(&dir.join("report.md"), &md)?;
     crate::guard::outln!("{}{quant_md}", std::fs::read_to_string(dir.join("sweep.md"))?);
     crate::guard::outln!("report written to {}", dir.join("report.md").display());
     Ok(())
@@ -267,7 +270,7 @@ fn write_tables(dir: &Path, rows: &[SweepRow], input: &BtfStore) -> Result<()> {
         )?;
     }
     writeln!(md, "\nInput store: {:.1} MiB.", input.bytes() as f64 / 1048576.0)?;
-    crate::imageio::write_text(&dir.join("sweep.csv"), &csv)?;
-    crate::imageio::write_text(&dir.join("sweep.md"), &md)?;
+    btf_image::write::write_text(&dir.join("sweep.csv"), &csv)?;
+    btf_image::write::write_text(&dir.join("sweep.md"), &md)?;
     Ok(())
 }

@@ -193,7 +193,7 @@ fn env(a: EnvArgs) -> Result<()> {
     };
     crate::guard::check_file(&a.output, btf_core::fs::EXR)?;
     let map = datasets::synth_env(kind, &params, a.width)?;
-    datasets::write_exr(&map, &a.output)?;
+    map.write_exr(&a.output)?;
     let max = map.pixels.iter().flat_map(|p| p.iter()).fold(0f32, |m, &v| m.max(v));
     eprintln!(
         "{} {}x{} (max {:.3e}) -> {}",

@@ -132,7 +132,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
     };
     let scene = |name: &str, t: Option<f64>| -> Result<Scene> {
         let path = a.out.join(name);
-        crate::imageio::write_text(&path, &scene_toml(a.size, t, env_exposure))?;
+        btf_image::write::write_text(&path, &scene_toml(a.size, t, env_exposure))?;
         Scene::load(&path).with_context(|| format!("loading {}", path.display()))
     };
     let opts = RenderOptions::default;
@@ -166,8 +166,8 @@ pub fn run(a: DemoArgs) -> Result<()> {
         let ctx = OrbitCtx { mask: &mask, dark_thin: &dark_thin, dark_opaque: &dark_opaque };
         let (report, frame) = orbit_frame(&gpu, &mut opaque, &mut thin, k, a.frames, &ctx)?;
         let (w, h) = (frame.width as usize, frame.height as usize);
-        crate::imageio::write_png_linear(&png, w, h, &frame.rgb, PNG_EXPOSURE)?;
-        crate::imageio::write_text(&json, &serde_json::to_string_pretty(&report)?)?;
+        btf_image::write::write_png_linear(&png, w, h, &frame.rgb, PNG_EXPOSURE)?;
+        btf_image::write::write_text(&json, &serde_json::to_string_pretty(&report)?)?;
         frames.push(report);
         pb.inc(1);
     }
@@ -186,7 +186,7 @@ fn make_inputs(a: &DemoArgs) -> Result<f64> {
     let sky_path = a.out.join("sky.exr");
     if !sky_path.exists() {
         let sky = datasets::synth_env(datasets::EnvKind::Sky, &Default::default(), 256)?;
-        datasets::write_exr(&sky, &sky_path)?;
+        sky.write_exr(&sky_path)?;
     }
     let (btf_path, eig_path) = (a.out.join("voile.btf"), a.out.join("voile.eig"));
     let done = EigenStore::open(&eig_path).is_ok();
@@ -212,7 +212,7 @@ fn make_inputs(a: &DemoArgs) -> Result<f64> {
             .with_context(|| format!("cannot remove {}", btf_path.display()))?;
     }
     // The sky's horizontal irradiance → 0.5, so the point light stands out.
-    Ok(0.5 * crate::demo_scene::unit_irradiance_exposure(&datasets::load_env(&sky_path)?))
+    Ok(0.5 * btf_image::EnvMap::load(&sky_path)?.unit_irradiance_exposure())
 }
 
 /// The scene file: the curtain opaque (`tau = None`) or thin, the sky behind and around.
@@ -397,5 +397,5 @@ fn contact_sheet(out: &Path, n: usize) -> Result<()> {
         let (c, r) = (k as u32 % cols, k as u32 / cols);
         image::imageops::replace(&mut sheet, t, (c * (s + gap)) as i64, (r * (s + gap)) as i64);
     }
-    crate::imageio::write_png(&out.join("contact.png"), &sheet)
+    Ok(btf_image::write::write_png(&out.join("contact.png"), &sheet)?)
 }

@@ -51,7 +51,7 @@ pub fn write(
         "frame_time_ratio": ratio, "front": front, "back": back, "alpha": alpha,
         "frames": frames,
     });
-    crate::imageio::write_text(&out.join("report.json"), &serde_json::to_string_pretty(&json)?)?;
+    btf_image::write::write_text(&out.join("report.json"), &serde_json::to_string_pretty(&json)?)?;
     let mut md = String::from("# btf thin demo\n\n");
     writeln!(
         md,
@@ -99,7 +99,7 @@ pub fn write(
         "Alpha through the curtain (point light off, `(R − R_no background)/background` over {} values): mean {:.4}, largest {:.4} (model: ≤ e^{{−τ₁}} = {:.4}); `|α(2τ₁) − α(τ₁)²|` ≤ {:.2e}.",
         alpha.values, alpha.mean_alpha, alpha.max_alpha, alpha.bound, alpha.max_square_error
     )?;
-    crate::imageio::write_text(&out.join("report.md"), &md)?;
+    btf_image::write::write_text(&out.join("report.md"), &md)?;
     crate::guard::outln!("{md}");
     Ok(())
 }

@@ -66,7 +66,7 @@ fn synth_env_and_mesh_write_loadable_files() {
         "-o",
         exr.to_str().unwrap(),
     ]);
-    let map = datasets::load_env(&exr).unwrap();
+    let map = btf_image::EnvMap::load(&exr).unwrap();
     assert_eq!((map.width, map.height), (128, 64));
     let mut g: Vec<f32> = map.pixels.iter().map(|p| p[1]).collect();
     g.sort_by(f32::total_cmp);

@@ -4,13 +4,13 @@
 //! EXR), and the UBO2003 importer's errors.
 
 use btf_capture::bonn::export::{ImageEncoding, export_pvf, export_ubo2003};
-use btf_capture::bonn::srgb::{MAX_ERR_8BIT, MAX_ERR_16BIT};
 use btf_capture::bonn::{ubo2003, ubo2014};
 use btf_core::compress::{CompressParams, compress};
 use btf_core::eigen::{EigenStore, Quantization};
 use btf_core::store::{BtfMeta, BtfStore, BtfWriter};
 use btf_core::zarr::DType;
 use btf_core::{Ring, Sampling};
+use btf_image::color::{MAX_ERR_8BIT, MAX_ERR_16BIT};
 use std::path::Path;
 
 const W: usize = 5;

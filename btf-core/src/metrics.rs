@@ -1,6 +1,6 @@
 //! Error measures between a reference and an approximation: squared error, relative RMSE
-//! `‖a − b‖ / ‖a‖`, PSNR `10 log₁₀(peak² / MSE)`, and the green → red colour ramp of error
-//! heat-maps (as the difference images of Sattler et al. 2003, Fig. 6).
+//! `‖a − b‖ / ‖a‖` and PSNR `10 log₁₀(peak² / MSE)` (the pictures of them, heat maps with
+//! the one colour ramp, are `btf_image::heatmap`).
 
 /// `Σ (a − b)²` in `f64`.
 pub fn sse(reference: &[f32], approx: &[f32]) -> f64 {
@@ -30,15 +30,6 @@ pub fn psnr_db(mse: f64, peak: f64) -> f64 {
     if mse <= 0.0 { f64::INFINITY } else { 10.0 * (peak * peak / mse).log10() }
 }
 
-/// Colour of an error heat-map pixel: `t = 0` green, `t = 1` (and above) red, through
-/// yellow; sRGB 8-bit.
-pub fn heat_color(t: f64) -> [u8; 3] {
-    let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 1.0 };
-    let r = (2.0 * t).min(1.0);
-    let g = (2.0 * (1.0 - t)).min(1.0);
-    [(r * 255.0).round() as u8, (g * 255.0).round() as u8, 0]
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -49,9 +40,5 @@ mod tests {
         assert!((rel_rmse(&[3.0, 4.0], &[3.0, 4.5]) - 0.1).abs() < 1e-12);
         assert!((psnr_db(0.01, 1.0) - 20.0).abs() < 1e-12);
         assert_eq!(psnr_db(0.0, 1.0), f64::INFINITY);
-        assert_eq!(heat_color(0.0), [0, 255, 0]);
-        assert_eq!(heat_color(1.0), [255, 0, 0]);
-        assert_eq!(heat_color(0.5), [255, 255, 0]);
-        assert_eq!(heat_color(f64::NAN), [255, 0, 0]);
     }
 }

@@ -9,9 +9,9 @@
 //! from `+z`, columns `φ` from `+x` towards `+y`) and written into the colour target before
 //! the mesh passes; only without MSAA (a multisampled target cannot be written directly).
 
-use crate::envlight::EnvMap;
 use crate::math::Vec3;
 use crate::renderer::CameraSetup;
+use btf_image::EnvMap;
 use nalgebra::Vector4;
 use std::f32::consts::PI;
 
@@ -84,7 +84,7 @@ mod tests {
 
     #[test]
     fn radiance_reproduces_pixel_centres_and_wraps() {
-        let map = EnvMap::from_fn(16, |d| d.map(|c| 1.0 + c as f32)).unwrap();
+        let map = EnvMap::from_fn(16, |d| d.map(|c| f64::from(1.0 + c as f32))).unwrap();
         // At a pixel centre the look-up returns that pixel.
         let (theta, phi) = (PI * 2.5 / 8.0, 2.0 * PI * 3.5 / 16.0);
         let d = [theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()];

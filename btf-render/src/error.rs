@@ -35,6 +35,9 @@ pub enum Error {
     /// An error from the BTF data layer (eigen store).
     #[error(transparent)]
     Core(#[from] btf_core::Error),
+    /// An error reading or writing an image or environment map.
+    #[error(transparent)]
+    Imaging(#[from] btf_image::Error),
     /// An I/O error with the path it happened on.
     #[error("{path}: {source}")]
     Io {

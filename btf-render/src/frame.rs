@@ -2,7 +2,7 @@
 //! output as linear EXR or as sRGB PNG after exposure (DESIGN.md §3: values stay linear
 //! inside the toolkit; only the PNG is gamma-encoded).
 
-use crate::{Error, Result};
+use crate::Result;
 use serde::Serialize;
 use std::path::Path;
 
@@ -60,17 +60,6 @@ pub struct Frame {
     pub stats: Stats,
 }
 
-/// sRGB transfer function of a linear value in `[0, 1]`.
-pub fn srgb_encode(linear: f32) -> f32 {
-    if linear.is_nan() || linear <= 0.0 {
-        return 0.0;
-    }
-    if linear >= 1.0 {
-        return 1.0;
-    }
-    if linear <= 0.003_130_8 { 12.92 * linear } else { 1.055 * linear.powf(1.0 / 2.4) - 0.055 }
-}
-
 impl Frame {
     /// Pixel `(x, y)` as linear RGB.
     pub fn pixel(&self, x: u32, y: u32) -> [f32; 3] {
@@ -80,36 +69,20 @@ impl Frame {
 
     /// 8-bit sRGB after multiplying by `exposure`.
     pub fn to_srgb8(&self, exposure: f32) -> Vec<u8> {
-        self.rgb.iter().map(|v| (srgb_encode(v * exposure) * 255.0).round() as u8).collect()
+        btf_image::write::to_srgb8(&self.rgb, exposure)
     }
 
-    /// Writes an sRGB PNG (exposure applied, values clipped to `[0, 1]`).
+    /// Writes an sRGB PNG (exposure applied, values clipped to `[0, 1]`); refuses a frame
+    /// with a non-finite value.
     pub fn write_png(&self, path: &Path, exposure: f32) -> Result<()> {
-        let img = image::RgbImage::from_raw(self.width, self.height, self.to_srgb8(exposure))
-            .ok_or_else(|| Error::Image {
-                path: path.into(),
-                what: "buffer size mismatch".into(),
-            })?;
-        let mut png = Vec::new();
-        img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
-            .map_err(|e| Error::Image { path: path.into(), what: e.to_string() })?;
-        Ok(btf_core::fs::write_atomic(path, &png)?)
+        let (w, h) = (self.width as usize, self.height as usize);
+        Ok(btf_image::write::write_png_linear(path, w, h, &self.rgb, exposure)?)
     }
 
-    /// Writes a linear float EXR (no exposure).
+    /// Writes a linear float EXR (no exposure); refuses a frame with a non-finite value.
     pub fn write_exr(&self, path: &Path) -> Result<()> {
-        use exr::prelude::{Image, SpecificChannels, Vec2, WritableImage};
         let (w, h) = (self.width as usize, self.height as usize);
-        let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
-            let v = self.pixel(p.0 as u32, p.1 as u32);
-            (v[0], v[1], v[2])
-        });
-        let mut bytes = std::io::Cursor::new(Vec::new());
-        Image::from_channels((w, h), channels)
-            .write()
-            .to_buffered(&mut bytes)
-            .map_err(|e| Error::Image { path: path.into(), what: e.to_string() })?;
-        Ok(btf_core::fs::write_atomic(path, bytes.get_ref())?)
+        Ok(btf_image::write::write_exr_rgb(path, w, h, &self.rgb)?)
     }
 
     /// True when every value is finite.
@@ -121,15 +94,6 @@ impl Frame {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn srgb_endpoints_and_midpoint() {
-        assert_eq!(srgb_encode(0.0), 0.0);
-        assert!((srgb_encode(1.0) - 1.0).abs() < 1e-6);
-        assert!((srgb_encode(0.2140) - 0.5).abs() < 1e-3);
-        assert_eq!(srgb_encode(7.0), 1.0);
-        assert_eq!(srgb_encode(f32::NAN), 0.0);
-    }
 
     #[test]
     fn exr_round_trip_is_linear() {

@@ -18,8 +18,8 @@
 use crate::btf_pass::{
     BtfPass, BtfPassKey, CornerVertex, DEPTH_FORMAT, FrameRaw, LightRaw, color_format,
 };
+use crate::envlight::SceneEnvironment;
 use crate::envlight::scene_env::{EnvMesh, ViewInput};
-use crate::envlight::{EnvMap, SceneEnvironment};
 use crate::frame::{Frame, PassStat, Stats};
 use crate::material::{MaterialData, MaterialGpu};
 use crate::math::{self, Mat4, Vec3, v3};
@@ -32,6 +32,7 @@ use crate::timer::PassTimer;
 use crate::transmission::{ThinEnv, ThinPass};
 use crate::{Error, Gpu, Result, tangent, terminator};
 use btf_core::InterpMode;
+use btf_image::EnvMap;
 use std::sync::Mutex;
 use std::time::Instant;
 use wgpu::util::DeviceExt;

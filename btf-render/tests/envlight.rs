@@ -6,9 +6,10 @@ mod common;
 
 use btf_core::eigen::{EigenSlot, EigenStore, Quantization};
 use btf_core::{Direction, InterpMode};
+use btf_image::EnvMap;
 use btf_render::envlight::{
-    CoefficientMatrix, EigenWeightSets, EnvCube, EnvMap, GatherInput, Hemicube, HemicubeFrame,
-    LightTable, VisibilityMaps, WeightSet,
+    CoefficientMatrix, EigenWeightSets, EnvCube, GatherInput, Hemicube, HemicubeFrame, LightTable,
+    VisibilityMaps, WeightSet,
 };
 use btf_render::mesh::Mesh;
 use btf_render::tangent::compute_tangents;

@@ -10,11 +10,13 @@ mod common;
 
 use btf_core::InterpMode;
 use btf_core::eigen::Quantization;
+use btf_image::EnvMap;
+use btf_image::plot::{Plot, Series};
 use btf_render::envlight::eigenweights::relative_error;
 use btf_render::envlight::scene_env::{EnvMesh, ViewInput};
 use btf_render::envlight::{
-    CoefficientMatrix, EnvCube, EnvMap, EnvironmentParams, GatherInput, Hemicube, HemicubeFrame,
-    LightTable, SceneEnvironment, VisibilityMaps, WeightSet, heatmap,
+    CoefficientMatrix, EnvCube, EnvironmentParams, GatherInput, Hemicube, HemicubeFrame,
+    LightTable, SceneEnvironment, VisibilityMaps, WeightSet,
 };
 use btf_render::material::MaterialData;
 use btf_render::math::Vec3;
@@ -179,7 +181,7 @@ fn camera_sides() {
         512,
     )
     .unwrap();
-    datasets::env::write_exr(&env, &dir.path().join("sky.exr")).unwrap();
+    env.write_exr(&dir.path().join("sky.exr")).unwrap();
     let (lo, hi) = mesh.bounds();
     let target: [f32; 3] = [0, 1, 2].map(|a| 0.5 * (lo[a] + hi[a]));
     // The front camera of the other measurements, and one below the hem looking up into
@@ -436,6 +438,21 @@ fn error_table(s: &SceneEnvironment) {
         .collect();
     let out =
         std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("eigenweight-coefficients.png");
-    heatmap::write_rgb8(&out, 480, 200, heatmap::line_plot(&curves, 480, 200)).unwrap();
+    let plot = Plot {
+        title: "eigenweightset coefficients o_k(delta)".into(),
+        x_label: "rotation delta (deg)".into(),
+        y_label: "o_k".into(),
+        log_x: false,
+        log_y: false,
+        series: curves
+            .iter()
+            .enumerate()
+            .map(|(k, c)| Series {
+                name: format!("k = {}", k + 1),
+                points: c.iter().enumerate().map(|(d, v)| (d as f64, *v)).collect(),
+            })
+            .collect(),
+    };
+    btf_image::write::write_png(&out, &btf_image::plot::render(&plot)).unwrap();
     eprintln!("o_k(δ) plot: {}", out.display());
 }

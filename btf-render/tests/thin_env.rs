@@ -10,7 +10,7 @@ mod curtain_env;
 
 use btf_core::eigen::Quantization;
 use btf_core::thin_slab::{Phase, Slab, direct_transmittance, reflection_share};
-use btf_render::envlight::EnvMap;
+use btf_image::EnvMap;
 use btf_render::transmission::env::{
     MU_NODES, ROWS_PER_SIDE, SlabParams, TAU_NODES, VEC4_PER_VERTEX, mu_node, tables,
 };
@@ -180,7 +180,7 @@ fn curtain_limits_under_an_environment() {
     let dir = tempfile::tempdir().unwrap();
     write_store(dir.path(), "voile.eigen", Pattern::Checker, 16, 16, 4, Quantization::F16);
     curtain_mesh(dir.path());
-    let map = EnvMap::from_fn(64, sky).unwrap();
+    let map = EnvMap::from_fn(64, |d| sky(d).map(f64::from)).unwrap();
     exr::prelude::write_rgb_file(dir.path().join("sky.exr"), map.width, map.height, |x, y| {
         let p = map.pixels[y * map.width + x];
         (p[0], p[1], p[2])

@@ -200,6 +200,6 @@ fn curtain_and_sky() -> (tempfile::TempDir, datasets::Mesh) {
         datasets::synth_mesh(datasets::MeshKind::Curtain, datasets::Resolution::Low).unwrap();
     datasets::write_obj(&mesh, &dir.path().join("curtain.obj"), "curtain").unwrap();
     let sky = datasets::synth_env(datasets::EnvKind::Sky, &Default::default(), 256).unwrap();
-    datasets::write_exr(&sky, &dir.path().join("sky.exr")).unwrap();
+    sky.write_exr(&dir.path().join("sky.exr")).unwrap();
     (dir, mesh)
 }

@@ -31,6 +31,9 @@ pub enum Error {
     /// An error from the BTF store.
     #[error(transparent)]
     Store(#[from] btf_core::Error),
+    /// An error reading or writing an image or environment map.
+    #[error(transparent)]
+    Imaging(#[from] btf_image::Error),
 }
 
 /// `Result` with this crate's [`Error`].

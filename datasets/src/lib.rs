@@ -3,7 +3,7 @@
 //!
 //! - [`material`]: height-field materials rendered into BTF stores (`btf synth material`);
 //! - [`capture`]: the virtual gonioreflectometer (raw images of the sample on its plate);
-//! - [`env`]: equirectangular HDR environments (sky, studio, interior) and their loader;
+//! - [`env`]: procedural equirectangular HDR environments (sky, studio, interior);
 //! - [`mesh`]: plane, sphere, curtain, simulated drape and garments as OBJ;
 //! - [`noise`], [`vec3`]: deterministic noise and small vector helpers.
 
@@ -15,7 +15,7 @@ pub mod mesh;
 pub mod noise;
 pub mod vec3;
 
-pub use env::{EnvKind, EnvMap, EnvParams, load_env, synth_env, write_exr};
+pub use env::{EnvKind, EnvParams, synth_env};
 pub use error::{Error, Result};
 pub use material::{
     GenerateOptions, GenerateReport, Material, MaterialKind, MaterialParams, MaterialSpec, generate,

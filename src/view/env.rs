@@ -7,7 +7,7 @@
 //! A file that is missing or unreadable is an error shown in the panel, never a crash; the
 //! viewer keeps drawing with the last environment that worked.
 
-use btf_render::envlight::EnvMap;
+use btf_image::EnvMap;
 use btf_render::{Gpu, Renderer};
 use std::path::{Path, PathBuf};
 use std::time::Instant;

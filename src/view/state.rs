@@ -15,7 +15,6 @@
 
 use super::camera::{self, Orbit};
 use super::env::{self, Environments};
-use crate::imageio;
 use anyhow::Result;
 use btf_core::InterpMode;
 use btf_core::eigen::EigenStore;
@@ -378,6 +377,6 @@ impl Viewer {
     pub fn save_frame(&self, path: &Path) -> Result<()> {
         let Some(f) = &self.frame else { anyhow::bail!("no frame rendered yet") };
         let (w, h) = (f.width as usize, f.height as usize);
-        imageio::write_png_linear(path, w, h, &f.rgb, self.exposure)
+        Ok(btf_image::write::write_png_linear(path, w, h, &f.rgb, self.exposure)?)
     }
 }

@@ -12,10 +12,10 @@
 use super::directions::sampling_radians;
 use super::header::{Header, MetaData, signature};
 use super::pvf::{PvfLayout, PvfSlot, PvfWriter};
-use super::srgb;
 use crate::{Error, Result};
 use btf_core::eigen::EigenStore;
 use btf_core::store::BtfStore;
+use btf_image::color::srgb_encode;
 use serde_json::json;
 use std::path::Path;
 
@@ -107,7 +107,7 @@ fn encode_image(
     match enc {
         ImageEncoding::Png8 | ImageEncoding::Jpeg(_) => {
             let raw: Vec<u8> =
-                px.iter().map(|v| (srgb::encode(v / scale) * 255.0).round() as u8).collect();
+                px.iter().map(|v| (srgb_encode(v / scale) * 255.0).round() as u8).collect();
             let img = image::RgbImage::from_raw(w32, h32, raw).expect("size matches");
             let mut bytes = Vec::new();
             if let ImageEncoding::Jpeg(q) = enc {
@@ -121,7 +121,7 @@ fn encode_image(
         }
         ImageEncoding::Png16 => {
             let raw: Vec<u16> =
-                px.iter().map(|v| (srgb::encode(v / scale) * 65535.0).round() as u16).collect();
+                px.iter().map(|v| (srgb_encode(v / scale) * 65535.0).round() as u16).collect();
             let img = image::ImageBuffer::<image::Rgb<u16>, _>::from_raw(w32, h32, raw)
                 .expect("size matches");
             let mut bytes = Vec::new();

@@ -25,7 +25,6 @@ pub mod directions;
 pub mod export;
 pub mod header;
 pub mod pvf;
-pub mod srgb;
 pub mod svd;
 pub mod ubo2003;
 pub mod ubo2014;

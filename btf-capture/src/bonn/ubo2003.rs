@@ -9,10 +9,10 @@
 //! supplies a scale that undoes the normalisation applied on export.
 
 use super::directions::{DirectionMap, map_directions};
-use super::srgb;
 use crate::{Error, Result};
 use btf_core::store::{BtfMeta, BtfWriter};
 use btf_core::zarr::DType;
+use btf_image::color::{srgb_decode, srgb_table8};
 use serde_json::json;
 use std::io::{Cursor, Read};
 use std::path::{Path, PathBuf};
@@ -187,15 +187,12 @@ pub fn decode_image(bytes: &[u8], name: &str) -> Result<(usize, usize, Vec<f32>)
     use image::DynamicImage as D;
     let px: Vec<f32> = match &img {
         D::ImageRgb8(_) | D::ImageLuma8(_) | D::ImageRgba8(_) | D::ImageLumaA8(_) => {
-            let t = srgb::table8();
+            let t = srgb_table8();
             img.to_rgb8().into_raw().into_iter().map(|v| t[v as usize]).collect()
         }
-        D::ImageRgb16(_) | D::ImageLuma16(_) | D::ImageRgba16(_) | D::ImageLumaA16(_) => img
-            .to_rgb16()
-            .into_raw()
-            .into_iter()
-            .map(|v| srgb::decode(v as f32 / 65535.0))
-            .collect(),
+        D::ImageRgb16(_) | D::ImageLuma16(_) | D::ImageRgba16(_) | D::ImageLumaA16(_) => {
+            img.to_rgb16().into_raw().into_iter().map(|v| srgb_decode(v as f32 / 65535.0)).collect()
+        }
         _ => img.to_rgb32f().into_raw(),
     };
     if let Some(i) = px.iter().position(|v| !v.is_finite()) {

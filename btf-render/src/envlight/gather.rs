@@ -9,7 +9,7 @@
 //! twelve scalar ones; the additions happen in the reference's order, so the result is
 //! identical, not merely close.
 
-use super::envmap::EnvCube;
+use super::env_cube::EnvCube;
 use super::visibility::HemicubeFrame;
 #[cfg(doc)]
 use super::weights::hemicube_pixel;

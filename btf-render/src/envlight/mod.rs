@@ -6,18 +6,16 @@
 //! - [`bvh`], [`visibility`], `raster`: per-vertex visibility maps — the answer of one ray
 //!   per hemicube pixel, found by projecting the BVH-culled mesh onto the hemicube and
 //!   confirming each covered pixel with the ray test — cached on disk (§5.2);
-//! - [`envmap`]: equirectangular HDR maps and their area-averaged cube form (`L_env`);
+//! - [`env_cube`]: the environment map (`btf_image::EnvMap`, `L_env`) binned into cube texels;
 //! - [`weights`], `gather`: `g_i` per vertex, `γ*` and the weight vector `U` (eq. 10–12);
 //! - [`eigenweights`]: the PCA over environment rotations and `U(δ)` (eq. 13);
 //! - [`scene_env`]: an environment light of a scene: state, rotation, per-vertex coefficients;
-//! - [`heatmap`]: green → red error images and small line plots written with `image`.
 
 pub mod bvh;
 mod camera_basis;
 pub mod eigenweights;
-pub mod envmap;
+pub mod env_cube;
 mod gather;
-pub mod heatmap;
 pub mod hemicube;
 mod octets;
 mod raster;
@@ -28,7 +26,7 @@ pub mod weights;
 
 pub use camera_basis::shown_frames;
 pub use eigenweights::EigenWeightSets;
-pub use envmap::{EnvCube, EnvMap};
+pub use env_cube::EnvCube;
 pub use hemicube::{Hemicube, LightTable};
 pub use scene_env::{EnvironmentParams, SceneEnvironment};
 pub use visibility::{HemicubeFrame, VisibilityMaps};

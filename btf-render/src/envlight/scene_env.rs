@@ -13,13 +13,14 @@
 use super::camera_basis::CameraCache;
 pub use super::camera_basis::ViewInput;
 use super::eigenweights::EigenWeightSets;
-use super::envmap::{EnvCube, EnvMap};
+use super::env_cube::EnvCube;
 use super::hemicube::{Hemicube, LightTable};
 use super::visibility::{HemicubeFrame, VisibilityMaps};
 use super::weights::{CoefficientMatrix, GatherInput, WeightSet, hemicube_pixel, rotate_z};
 use crate::material::MaterialData;
 use crate::{Error, Result};
 use btf_core::InterpMode;
+use btf_image::EnvMap;
 use std::path::PathBuf;
 use std::sync::{Mutex, OnceLock};
 use std::time::Instant;

@@ -15,7 +15,7 @@
 //! renderer needs only the four slots each vertex looks through ([`WeightSet::gamma_star`]).
 //! The exposure `f` is applied by the caller, so `U` does not change with it.
 
-use super::envmap::EnvCube;
+use super::env_cube::EnvCube;
 use super::hemicube::LightTable;
 use super::visibility::{HemicubeFrame, VisibilityMaps};
 use crate::material::MaterialData;

@@ -6,9 +6,10 @@
 use crate::common::*;
 use btf_core::eigen::Quantization;
 use btf_core::thin_slab::{Phase, Slab};
+use btf_image::EnvMap;
 use btf_render::envlight::scene_env::EnvMesh;
 use btf_render::envlight::weights::hemicube_pixel;
-use btf_render::envlight::{EnvCube, EnvMap, EnvironmentParams, HemicubeFrame, SceneEnvironment};
+use btf_render::envlight::{EnvCube, EnvironmentParams, HemicubeFrame, SceneEnvironment};
 use btf_render::material::MaterialData;
 use btf_render::mesh::Mesh;
 use btf_render::tangent::compute_tangents;
@@ -49,7 +50,7 @@ pub fn curtain_env(dir: &Path) -> CurtainEnv {
     let tangents = compute_tangents(&mesh);
     let store = write_store(dir, "m.eigen", Pattern::Lambert, 2, 2, 2, Quantization::F16);
     let mat = MaterialData::load(&store, None).unwrap();
-    let map = EnvMap::from_fn(64, sky).unwrap();
+    let map = EnvMap::from_fn(64, |d| sky(d).map(f64::from)).unwrap();
     let params = EnvironmentParams {
         rotation_deg: ROT_DEG,
         exposure: EXPOSURE,

@@ -87,6 +87,7 @@ pub fn studio(width: usize) -> Result<EnvMap> {
         }
         l
     })
+    .map_err(Into::into)
 }
 
 const ROOM_MIN: [f64; 3] = [-2.5, -2.0, -1.2];
@@ -164,6 +165,7 @@ pub fn interior(params: &EnvParams, width: usize) -> Result<EnvMap> {
         let tint = if axis == 1 && d[1] > 0.0 { [0.55, 0.62, 0.7] } else { wall };
         std::array::from_fn(|c| tint[c] * e_amb[c] / PI)
     })
+    .map_err(Into::into)
 }
 
 #[cfg(test)]

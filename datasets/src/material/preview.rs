@@ -32,12 +32,6 @@ fn nearest_index(dirs: &[Direction], want: Direction) -> usize {
     best.1
 }
 
-/// The sRGB transfer function of a linear value in `[0, 1]`.
-pub fn srgb_encode(linear: f64) -> f64 {
-    let x = linear.clamp(0.0, 1.0);
-    if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 }
-}
-
 /// Writes `DIR/NAME.png`: the normtextures of [`PREVIEW_PAIRS`] side by side, each tile
 /// enlarged (nearest neighbour) to at least 128 pixels. Returns the file written.
 pub fn write_contact_sheet(store: &BtfStore, dir: &Path, name: &str) -> Result<PathBuf> {
@@ -65,7 +59,7 @@ pub fn write_contact_sheet(store: &BtfStore, dir: &Path, name: &str) -> Result<P
                 let src = ((y / zoom) * w + x / zoom) * 3;
                 let px: [u8; 3] = std::array::from_fn(|c| {
                     let t = 1.0 - (-(tile[src + c] as f64) * exposure).exp();
-                    (srgb_encode(t) * 255.0).round() as u8
+                    btf_image::color::srgb_encode8(t as f32)
                 });
                 img.put_pixel((k * (tw + gap) + x) as u32, y as u32, image::Rgb(px));
             }
@@ -73,9 +67,6 @@ pub fn write_contact_sheet(store: &BtfStore, dir: &Path, name: &str) -> Result<P
     }
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let path = dir.join(format!("{name}.png"));
-    let mut bytes = Vec::new();
-    img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
-        .map_err(|e| Error::Image { path: path.clone(), what: e.to_string() })?;
-    btf_core::fs::write_atomic(&path, &bytes)?;
+    btf_image::write::write_png(&path, &img)?;
     Ok(path)
 }

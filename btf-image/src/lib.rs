@@ -1,0 +1,29 @@
+//! The toolkit's one image layer, shared by every crate that reads or writes pictures.
+//!
+//! - [`envmap`]: [`EnvMap`], the equirectangular environment map (`L_env` of
+//!   `[S03 eq. 9–10]`): its convention, `.hdr`/`.exr` loading, EXR writing, solid angles,
+//!   `∫ L dω` and the irradiance it gives a surface;
+//! - [`color`]: the sRGB transfer function (encode, decode, the 8-bit table) and the one
+//!   green → yellow → red error ramp of every heat map (as the difference images of
+//!   `[S03 Fig. 6, 13]`);
+//! - [`write`]: linear RGB → EXR, linear RGB → sRGB PNG after exposure, 8-bit PNG — all
+//!   through `btf_core::fs::write_atomic` (a file is complete or absent), all refusing
+//!   non-finite values with the file and pixel named;
+//! - [`heatmap`]: per-pixel error heat maps between two linear images;
+//! - [`compose`]: images side by side and enlarged, for reports and contact sheets;
+//! - [`plot`]: line plots drawn straight into images (axes, ticks, legend, log axes) so
+//!   reports need no plotting toolchain or system fonts.
+//!
+//! Values are linear inside the toolkit; only PNG output is sRGB-encoded (DESIGN.md §3).
+//! No GPU code lives here.
+
+pub mod color;
+pub mod compose;
+pub mod envmap;
+pub mod error;
+pub mod heatmap;
+pub mod plot;
+pub mod write;
+
+pub use envmap::EnvMap;
+pub use error::{Error, Result};
