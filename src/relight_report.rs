@@ -2,7 +2,7 @@
 //! written by `btf relight` per environment into `OUTDIR/eigen/`:
 //!
 //! - `STEM-error.{csv,md,png}`: the relative error `‖U_e(δ) − U(δ)‖ / ‖U(δ)‖` (in the `U`
-//!   metric of [`btf_render::envlight::eigenweights`]) of `e = 1…8` eigenweightsets against
+//!   metric of [`btf_light::eigenweights`]) of `e = 1…8` eigenweightsets against
 //!   the exact gather, at the `A` rotations midway between the sampled ones (where the
 //!   periodic interpolation of `o_k(δ)` is least exact), as mean and maximum, plus the
 //!   relative RMS error of the rendered image at the first midpoint;
@@ -18,8 +18,8 @@ use anyhow::{Context, Result};
 use btf_image::heatmap::error_heatmap_image;
 use btf_image::plot::{Plot, Series};
 use btf_image::write::{write_png, write_text};
-use btf_render::envlight::eigenweights::relative_error;
-use btf_render::envlight::scene_env::REPORT_COMPONENTS;
+use btf_light::eigenweights::relative_error;
+use btf_light::environment::REPORT_COMPONENTS;
 use btf_render::{Gpu, Renderer};
 use serde::Serialize;
 use std::fmt::Write as _;

@@ -38,6 +38,9 @@ pub enum Error {
     /// An error reading or writing an image or environment map.
     #[error(transparent)]
     Imaging(#[from] btf_image::Error),
+    /// An error from the CPU lighting (meshes, visibility, environment).
+    #[error(transparent)]
+    Light(#[from] btf_light::Error),
     /// An I/O error with the path it happened on.
     #[error("{path}: {source}")]
     Io {

@@ -179,6 +179,19 @@ impl MaterialData {
         self.weight_group(j, i, self.groups)[0]
     }
 
+    /// The coefficient matrix `P` of `[S03 eq. 10–12]` in this layout's units: per (slot,
+    /// light) the folded bias `b_ij` and the scaled weights, so the environment's `γ*`
+    /// multiplies the layers exactly as the shader reads them.
+    pub fn coefficient_matrix(&self) -> btf_light::CoefficientMatrix {
+        let (n_l, n_v) = (self.light_sampling.len(), self.view_sampling.len());
+        btf_light::CoefficientMatrix::from_rows(n_l, n_v, self.components, |j, i, w| {
+            for (k, wk) in w.iter_mut().enumerate() {
+                *wk = self.weight_group(j, i, k / 4)[k % 4];
+            }
+            self.bias(j, i)
+        })
+    }
+
     /// The weights in the packed `f16` layout (see the module notes), or `None` when a value
     /// is beyond the `f16` range (an HDR store), which keeps the `f32` rows.
     pub fn packed_weights(&self) -> Option<Vec<[u32; 4]>> {

@@ -1,17 +1,11 @@
 //! Small linear-algebra helpers for cameras and lights: look-at views and projections in
 //! wgpu's clip convention (right-handed world, `z_ndc ∈ [0, 1]`), built on nalgebra.
 
-use nalgebra::{Matrix4, Point3, Vector3};
+pub use btf_light::math::{Vec3, any_perpendicular, v3};
+use nalgebra::{Matrix4, Point3};
 
-/// A 3-vector of `f32`.
-pub type Vec3 = Vector3<f32>;
 /// A 4×4 `f32` matrix (column-major, as WGSL expects).
 pub type Mat4 = Matrix4<f32>;
-
-/// Converts `[x, y, z]` to a vector.
-pub fn v3(a: [f32; 3]) -> Vec3 {
-    Vec3::new(a[0], a[1], a[2])
-}
 
 /// View matrix (world → camera, camera looks down `−z`).
 pub fn look_at(eye: Vec3, target: Vec3, up: Vec3) -> Mat4 {
@@ -38,12 +32,6 @@ pub fn orthographic(width: f32, height: f32, near: f32, far: f32) -> Mat4 {
     m[(2, 2)] = 1.0 / (near - far);
     m[(2, 3)] = near / (near - far);
     m
-}
-
-/// Some unit vector perpendicular to `n` (for frames without a preferred direction).
-pub fn any_perpendicular(n: Vec3) -> Vec3 {
-    let a = if n.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() };
-    n.cross(&a).normalize()
 }
 
 /// An `up` vector usable with [`look_at`] for viewing direction `dir` (falls back when

@@ -19,8 +19,8 @@
 
 use crate::material::MaterialData;
 use crate::math::Vec3;
-use crate::tangent;
 use btf_core::{Direction, InterpMode};
+use btf_light::tangent;
 
 /// Unused slot marker.
 pub const NO_SLOT: u32 = u32::MAX;

@@ -18,21 +18,21 @@
 use crate::btf_pass::{
     BtfPass, BtfPassKey, CornerVertex, DEPTH_FORMAT, FrameRaw, LightRaw, color_format,
 };
-use crate::envlight::SceneEnvironment;
-use crate::envlight::scene_env::{EnvMesh, ViewInput};
 use crate::frame::{Frame, PassStat, Stats};
 use crate::material::{MaterialData, MaterialGpu};
 use crate::math::{self, Mat4, Vec3, v3};
-use crate::mesh::Mesh;
 use crate::per_vertex::{self, VertexEvalInput, VertexLight};
 use crate::plain_texture::{Baseline, BaselinePass};
 use crate::scene::{Evaluation, Light, Projection, Scene, Shadows};
 use crate::shadow::{ShadowInputs, Shadowing};
 use crate::timer::PassTimer;
 use crate::transmission::{ThinEnv, ThinPass};
-use crate::{Error, Gpu, Result, tangent, terminator};
+use crate::{Error, Gpu, Result, terminator};
 use btf_core::InterpMode;
 use btf_image::EnvMap;
+use btf_light::mesh::Mesh;
+use btf_light::tangent;
+use btf_light::{EnvCoefficients, EnvMesh, SceneEnvironment, Slots, ViewInput};
 use std::sync::Mutex;
 use std::time::Instant;
 use wgpu::util::DeviceExt;

@@ -5,9 +5,9 @@
 //! irradiance `E` (`L = BTF · E`), a point light has intensity `I` (`L = BTF · I / d²`).
 //! Relative paths are resolved against the scene file's folder. Validation names the key.
 
-use crate::mesh::PlanarUv;
 use crate::{Error, Result};
 use btf_core::InterpMode;
+use btf_light::mesh::PlanarUv;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -233,8 +233,8 @@ fn components_default() -> usize {
 
 impl EnvironmentLight {
     /// The parameters of the run-time environment.
-    pub fn params(&self) -> crate::envlight::EnvironmentParams {
-        crate::envlight::EnvironmentParams {
+    pub fn params(&self) -> btf_light::EnvironmentParams {
+        btf_light::EnvironmentParams {
             rotation_deg: self.rotation_deg,
             exposure: self.exposure,
             visibility_res: self.visibility_res,

@@ -5,13 +5,13 @@
 
 use crate::btf_pass::LightRaw;
 use crate::math::{self, Vec3, v3};
-use crate::mesh::Mesh;
 use crate::renderer::CameraSetup;
 use crate::scene::{Light, Scene, Shadows};
 use crate::shadow_map::{self, ShadowMaps};
 use crate::shadow_volume::{self, ShadowVolumes};
 use crate::timer::PassTimer;
 use crate::{Gpu, Result};
+use btf_light::mesh::Mesh;
 
 /// Vertex layout reading only the position of a [`crate::btf_pass::CornerVertex`].
 pub fn position_only_layout() -> wgpu::VertexBufferLayout<'static> {

@@ -13,10 +13,10 @@
 //! and by the smooth boundary of eq. 6 ("combined by blending").
 
 use crate::math::{self, Mat4, Vec3, v3};
-use crate::mesh::Mesh;
 use crate::scene::Light;
 use crate::timer::PassTimer;
 use crate::{Gpu, Result};
+use btf_light::mesh::Mesh;
 use std::time::Instant;
 use wgpu::util::DeviceExt;
 

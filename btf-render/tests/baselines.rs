@@ -204,12 +204,12 @@ fn packed_weights_hold_every_weight_and_bias() {
 #[test]
 fn separable_per_vertex_layout_times_irradiance_is_the_full_layout() {
     use btf_core::InterpMode;
+    use btf_light::mesh::Mesh;
     use btf_render::math::Vec3;
-    use btf_render::mesh::Mesh;
     use btf_render::per_vertex::{self, VertexEvalInput, VertexLight};
     let dir = tempfile::tempdir().unwrap();
     let mesh = Mesh::parse_obj(&plane_obj(3, false), "plane.obj", None).unwrap();
-    let tangents = btf_render::tangent::compute_tangents(&mesh);
+    let tangents = btf_light::tangent::compute_tangents(&mesh);
     let lights = [
         VertexLight { pos_or_dir: Vec3::new(0.4, 0.3, 0.6), point: true, color: [3e4, 2e4, 1e4] },
         VertexLight { pos_or_dir: Vec3::new(-0.2, 0.5, 0.8), point: false, color: [0.7, 1.1, 0.4] },

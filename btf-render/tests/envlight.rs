@@ -7,12 +7,12 @@ mod common;
 use btf_core::eigen::{EigenSlot, EigenStore, Quantization};
 use btf_core::{Direction, InterpMode};
 use btf_image::EnvMap;
-use btf_render::envlight::{
+use btf_light::mesh::Mesh;
+use btf_light::tangent::compute_tangents;
+use btf_light::{
     CoefficientMatrix, EigenWeightSets, EnvCube, GatherInput, Hemicube, HemicubeFrame, LightTable,
-    VisibilityMaps, WeightSet,
+    Radiances, VisibilityMaps,
 };
-use btf_render::mesh::Mesh;
-use btf_render::tangent::compute_tangents;
 use common::Pattern;
 use std::f64::consts::PI;
 
@@ -42,7 +42,7 @@ fn setup(mesh: &Mesh, res: u32, pattern: Pattern, c: usize) -> (Setup, tempfile:
 }
 
 impl Setup {
-    fn gather(&self, env: &EnvCube, delta: f64) -> WeightSet {
+    fn gather(&self, env: &EnvCube, delta: f64) -> Radiances {
         let input = GatherInput {
             table: &self.table,
             visibility: &self.vis,
@@ -50,11 +50,11 @@ impl Setup {
             dirs: &self.cube.dirs,
             lights: self.p.lights,
         };
-        WeightSet::gather(&input, env, delta)
+        Radiances::gather(&input, env, delta)
     }
 
     /// Radiance of texel 0 of frame `f` seen from tangent-space `view` (eq. 11, f = 1).
-    fn radiance(&self, w: &WeightSet, f: usize, view: Direction) -> [f32; 3] {
+    fn radiance(&self, w: &Radiances, f: usize, view: Direction) -> [f32; 3] {
         let k = self.p.per_slot();
         let mut gs = vec![0f32; 3 * k];
         let mut out = [0f32; 3];
@@ -253,25 +253,22 @@ fn eigenweightsets_reproduce_every_rotation_and_360_is_identity() {
     let (env, _) = sun_env(128, [0.5, 0.3, 0.812]);
     let cube = EnvCube::new(&env, 8);
     let a_n = 30;
-    let sets: Vec<WeightSet> = (0..a_n).map(|a| s.gather(&cube, a as f64 * 12.0)).collect();
+    let sets: Vec<Radiances> = (0..a_n).map(|a| s.gather(&cube, a as f64 * 12.0)).collect();
     let metric = s.p.metric();
     let full = s.gather(&cube, 360.0);
-    assert!(btf_render::envlight::eigenweights::relative_error(&full, &sets[0], &metric) < 1e-6);
+    assert!(btf_light::eigenweights::relative_error(&full, &sets[0], &metric) < 1e-6);
     let ews = EigenWeightSets::build(&sets, &metric, a_n - 1).unwrap();
     for (a, set) in sets.iter().enumerate() {
         let r = ews.reconstruct(a as f64 * 12.0, a_n - 1);
-        let e = btf_render::envlight::eigenweights::relative_error(&r, set, &metric);
+        let e = btf_light::eigenweights::relative_error(&r, set, &metric);
         assert!(e < 1e-6, "U_{a}: relative error {e}");
     }
     // The metric form equals the plain error of U = G·P.
     let (u0, ur) = (sets[3].full_u(&s.p), ews.reconstruct(36.0, 3).full_u(&s.p));
     let num: f64 = u0.iter().zip(&ur).map(|(a, b)| ((a - b) as f64).powi(2)).sum();
     let den: f64 = u0.iter().map(|a| (*a as f64).powi(2)).sum();
-    let via_metric = btf_render::envlight::eigenweights::relative_error(
-        &ews.reconstruct(36.0, 3),
-        &sets[3],
-        &metric,
-    );
+    let via_metric =
+        btf_light::eigenweights::relative_error(&ews.reconstruct(36.0, 3), &sets[3], &metric);
     assert!(
         ((num / den).sqrt() - via_metric).abs() < 1e-4 * via_metric.max(1e-3),
         "{} vs {via_metric}",
@@ -459,8 +456,8 @@ fn fast_gather_reproduces_the_frame_by_frame_sums_bit_for_bit() {
             lights: s.p.lights,
         };
         for delta in [0.0, 37.0] {
-            let fast = WeightSet::gather(&input, &cube_env, delta);
-            let reference = WeightSet::gather_reference(&input, &cube_env, delta);
+            let fast = Radiances::gather(&input, &cube_env, delta);
+            let reference = Radiances::gather_reference(&input, &cube_env, delta);
             assert!(fast.g.iter().any(|&g| g > 0.0));
             assert_eq!(fast, reference, "two-sided {two_sided}, subset {subset}, δ = {delta}");
         }
@@ -473,7 +470,7 @@ fn gamma_basis_equals_gamma_star_of_the_reconstruction() {
     let (s, _d) = setup(&mesh, 8, Pattern::Checker, 4);
     let (env, _) = sun_env(128, [0.5, 0.3, 0.812]);
     let cube = EnvCube::new(&env, 8);
-    let sets: Vec<WeightSet> = (0..12).map(|a| s.gather(&cube, a as f64 * 30.0)).collect();
+    let sets: Vec<Radiances> = (0..12).map(|a| s.gather(&cube, a as f64 * 30.0)).collect();
     let ews = EigenWeightSets::build(&sets, &s.p.metric(), 5).unwrap();
     let picks: Vec<(usize, usize)> = (0..s.frames.len()).map(|f| (f, f % s.p.slots)).collect();
     let basis = ews.gamma_basis(&s.p, &picks, 5).unwrap();
@@ -497,8 +494,9 @@ fn gamma_basis_equals_gamma_star_of_the_reconstruction() {
 
 #[test]
 fn renderer_rotation_through_the_camera_basis_equals_the_direct_path() {
-    use btf_render::envlight::scene_env::{EnvMesh, ViewInput};
-    use btf_render::envlight::{EnvironmentParams, SceneEnvironment};
+    use btf_light::env_coefficients::fill_direct;
+    use btf_light::{EnvCoefficients, EnvironmentParams, SceneEnvironment, Slots};
+    use btf_light::{EnvMesh, ViewInput};
     use btf_render::material::MaterialData;
     use btf_render::math::Vec3;
     use btf_render::per_vertex::{self, VertexCoefficients};
@@ -523,10 +521,17 @@ fn renderer_rotation_through_the_camera_basis_equals_the_direct_path() {
         eigen: Some((12, 5)),
         cache_dir: None,
     };
-    let mut s = SceneEnvironment::new(params, &env, &em, &[&mat]).unwrap();
+    let mut s = SceneEnvironment::new(
+        params,
+        &env,
+        &em,
+        &mat.light_sampling,
+        vec![mat.coefficient_matrix()],
+    )
+    .unwrap();
     let n = mesh.positions.len();
     let stride = per_vertex::stride(mat.groups);
-    let (material_of, mats) = (vec![0usize; n], [&mat]);
+    let (material_of, mats) = (vec![0usize; n], [&mat.view_sampling]);
     let view_from = |eye: Vec3| ViewInput {
         eye,
         ortho_to_camera: None,
@@ -535,7 +540,7 @@ fn renderer_rotation_through_the_camera_basis_equals_the_direct_path() {
         normals: &mesh.normals,
         tangents: &tangents,
         material_of: &material_of,
-        materials: &mats,
+        view_samplings: &mats,
     };
     let blank = || VertexCoefficients {
         slots: vec![[0; 4]; n],
@@ -544,17 +549,16 @@ fn renderer_rotation_through_the_camera_basis_equals_the_direct_path() {
     };
     // The sheet is seen from both sides (the camera below it sees back sides).
     let view = view_from(Vec3::new(0.3, -2.0, -0.4));
-    s.fill(&mut blank(), &view, 0, 1, stride);
-    assert!(!s.fill_used_basis(), "first fill at a camera: the direct path");
+    let at = Slots { l: 0, n_lights: 1, stride };
+    let mut ec = EnvCoefficients::default();
+    ec.fill(&s, &mut blank().coef, &view, at);
+    assert!(!ec.used_basis(), "first fill at a camera: the direct path");
     for delta in [47.0, 200.0, 370.0] {
         s.set_rotation(delta);
         let (mut fast, mut slow) = (blank(), blank());
-        s.fill(&mut fast, &view, 0, 1, stride);
-        assert!(
-            s.fill_used_basis(),
-            "δ {delta}: a rotation under the same camera streams the basis"
-        );
-        s.fill_direct(&mut slow, &view, 0, 1, stride);
+        ec.fill(&s, &mut fast.coef, &view, at);
+        assert!(ec.used_basis(), "δ {delta}: a rotation under the same camera streams the basis");
+        fill_direct(&s, &mut slow.coef, &view, at);
         let scale = slow.coef.iter().flatten().fold(0f32, |m, x| m.max(x.abs()));
         assert!(scale > 0.0);
         for (a, b) in fast.coef.iter().flatten().zip(slow.coef.iter().flatten()) {
@@ -563,9 +567,9 @@ fn renderer_rotation_through_the_camera_basis_equals_the_direct_path() {
         }
     }
     // A camera move and an exact rotation take the direct path again.
-    s.fill(&mut blank(), &view_from(Vec3::new(2.0, 0.5, 1.0)), 0, 1, stride);
-    assert!(!s.fill_used_basis());
+    ec.fill(&s, &mut blank().coef, &view_from(Vec3::new(2.0, 0.5, 1.0)), at);
+    assert!(!ec.used_basis());
     s.set_rotation_exact(30.0);
-    s.fill(&mut blank(), &view, 0, 1, stride);
-    assert!(!s.fill_used_basis());
+    ec.fill(&s, &mut blank().coef, &view, at);
+    assert!(!ec.used_basis());
 }

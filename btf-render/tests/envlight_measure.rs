@@ -12,17 +12,17 @@ use btf_core::InterpMode;
 use btf_core::eigen::Quantization;
 use btf_image::EnvMap;
 use btf_image::plot::{Plot, Series};
-use btf_render::envlight::eigenweights::relative_error;
-use btf_render::envlight::scene_env::{EnvMesh, ViewInput};
-use btf_render::envlight::{
+use btf_light::eigenweights::relative_error;
+use btf_light::mesh::Mesh;
+use btf_light::tangent::compute_tangents;
+use btf_light::{
     CoefficientMatrix, EnvCube, EnvironmentParams, GatherInput, Hemicube, HemicubeFrame,
-    LightTable, SceneEnvironment, VisibilityMaps, WeightSet,
+    LightTable, Radiances, SceneEnvironment, VisibilityMaps,
 };
+use btf_light::{EnvCoefficients, EnvMesh, Slots, ViewInput};
 use btf_render::material::MaterialData;
 use btf_render::math::Vec3;
-use btf_render::mesh::Mesh;
 use btf_render::per_vertex::{self, VertexCoefficients};
-use btf_render::tangent::compute_tangents;
 use datasets::mesh::{MeshKind, Resolution};
 use std::time::Instant;
 
@@ -107,7 +107,14 @@ fn measure_shirts() {
             cache_dir: Some(cache),
         };
         let t = Instant::now();
-        let mut s = SceneEnvironment::new(params, &env, &em, &[&mat]).unwrap();
+        let mut s = SceneEnvironment::new(
+            params,
+            &env,
+            &em,
+            &mat.light_sampling,
+            vec![mat.coefficient_matrix()],
+        )
+        .unwrap();
         let tm = s.timings;
         assert!(tm.visibility_cached);
         eprintln!(
@@ -116,9 +123,9 @@ fn measure_shirts() {
             tm.weights_ms,
             tm.eigen_ms
         );
-        let p = CoefficientMatrix::from_material(&mat);
+        let p = mat.coefficient_matrix();
         let t = Instant::now();
-        let u = s.weights().full_u(&p);
+        let u = s.radiances().full_u(&p);
         eprintln!("{name}: full U = G·P ({} floats, one sgemm) {:.1} ms", u.len(), ms(t));
         rotation(name, &mut s, &p, &mat, &mesh, &frames);
         if res == Resolution::Low {
@@ -280,11 +287,11 @@ fn gather(name: &str, input: &GatherInput, env: &EnvMap) {
     let mut g = None;
     for k in 0..3 {
         let t = Instant::now();
-        g = Some(WeightSet::gather(input, &cube, 10.0 * k as f64));
+        g = Some(Radiances::gather(input, &cube, 10.0 * k as f64));
         fast.push(ms(t));
     }
     let t = Instant::now();
-    let reference = WeightSet::gather_reference(input, &cube, 20.0);
+    let reference = Radiances::gather_reference(input, &cube, 20.0);
     let ref_ms = ms(t);
     assert_eq!(g.as_ref(), Some(&reference));
     let fast_ms = median(fast);
@@ -327,11 +334,11 @@ fn rotation(
         let delta = 7.0 + 13.0 * k as f64;
         let t = Instant::now();
         s.set_rotation(delta);
-        s.weights(); // G of the new rotation (formed on demand)
+        s.radiances(); // G of the new rotation (formed on demand)
         all_g.push(ms(t));
         let t = Instant::now();
         for (n, &(f, j)) in picks.iter().enumerate() {
-            s.weights().gamma_star(p, f, j, &mut out[n * k3..(n + 1) * k3]);
+            s.radiances().gamma_star(p, f, j, &mut out[n * k3..(n + 1) * k3]);
         }
         gammas.push(ms(t));
     }
@@ -367,7 +374,7 @@ fn renderer_rotation(
     let n = mesh.positions.len();
     let tangents = compute_tangents(mesh);
     let stride = per_vertex::stride(mat.groups);
-    let (material_of, mats) = (vec![0usize; n], [mat]);
+    let (material_of, mats) = (vec![0usize; n], [&mat.view_sampling]);
     let view = ViewInput {
         eye: Vec3::new(eye[0], eye[1], eye[2]),
         ortho_to_camera: None,
@@ -376,29 +383,31 @@ fn renderer_rotation(
         normals: &mesh.normals,
         tangents: &tangents,
         material_of: &material_of,
-        materials: &mats,
+        view_samplings: &mats,
     };
     let mut vc = VertexCoefficients {
         slots: vec![[0; 4]; n],
         coef: vec![[0.0; 4]; n * 4 * stride],
         irradiance: Vec::new(),
     };
-    s.fill(&mut vc, &view, 0, 1, stride);
+    let at = Slots { l: 0, n_lights: 1, stride };
+    let mut ec = EnvCoefficients::default();
+    ec.fill(s, &mut vc.coef, &view, at);
     let t = Instant::now();
     s.set_rotation(3.0);
-    s.fill(&mut vc, &view, 0, 1, stride);
+    ec.fill(s, &mut vc.coef, &view, at);
     let first_ms = ms(t);
-    assert!(s.fill_used_basis());
+    assert!(ec.used_basis());
     let (mut basis, mut direct) = (vec![], vec![]);
     for k in 0..7 {
         let t = Instant::now();
         s.set_rotation(11.0 + 17.0 * k as f64);
-        s.fill(&mut vc, &view, 0, 1, stride);
+        ec.fill(s, &mut vc.coef, &view, at);
         basis.push(ms(t));
-        assert!(s.fill_used_basis());
+        assert!(ec.used_basis());
         let t = Instant::now();
         s.set_rotation(5.0 + 17.0 * k as f64);
-        s.fill_direct(&mut vc, &view, 0, 1, stride);
+        btf_light::env_coefficients::fill_direct(s, &mut vc.coef, &view, at);
         direct.push(ms(t));
     }
     eprintln!(
@@ -417,7 +426,7 @@ fn error_table(s: &SceneEnvironment) {
     eprintln!("|---|---|---|");
     let exact_mid: Vec<_> = (0..30).map(|a| s.gather(6.0 + 12.0 * a as f64)).collect();
     let exact_on: Vec<_> = (0..30).map(|a| s.gather(12.0 * a as f64)).collect();
-    let ews = btf_render::envlight::EigenWeightSets::build(&exact_on, &metric, 29).unwrap();
+    let ews = btf_light::EigenWeightSets::build(&exact_on, &metric, 29).unwrap();
     let ev = &ews.eigenvalues;
     let total: f64 = ev.iter().sum();
     let share: Vec<String> = ev[..8].iter().map(|l| format!("{:.3}", l / total)).collect();

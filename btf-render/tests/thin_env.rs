@@ -11,7 +11,7 @@ mod curtain_env;
 use btf_core::eigen::Quantization;
 use btf_core::thin_slab::{Phase, Slab, direct_transmittance, reflection_share};
 use btf_image::EnvMap;
-use btf_render::transmission::env::{
+use btf_light::thin_tables::{
     MU_NODES, ROWS_PER_SIDE, SlabParams, TAU_NODES, VEC4_PER_VERTEX, mu_node, tables,
 };
 use btf_render::{Frame, RenderOptions, Scene, render_scene};

@@ -7,7 +7,7 @@ mod common;
 #[path = "common/curtain_env.rs"]
 mod curtain_env;
 
-use btf_render::transmission::env::{
+use btf_light::thin_tables::{
     MU_NODES, ROWS_PER_SIDE, SlabParams, TAU_NODES, VEC4_PER_VERTEX, interpolate, mu_node, tables,
     tau_node,
 };

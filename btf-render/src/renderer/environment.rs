@@ -9,6 +9,8 @@ use super::*;
 pub(super) struct EnvState {
     pub(super) light: usize,
     pub(super) env: SceneEnvironment,
+    /// The per-vertex fill and the camera's `γ*` bases it keeps.
+    pub(super) fill: Mutex<EnvCoefficients>,
     /// The map itself, kept when the scene draws it as the background.
     pub(super) map: Option<EnvMap>,
 }
@@ -33,14 +35,25 @@ impl Renderer {
         let camera_sides = !(self.options.all_env_sides
             || self.thin.is_some()
             || mesh.positions.len() >= crate::camera_sides::MAX_VERTICES);
-        let two_sided = params.two_sided;
-        let mut camera = || self.camera_frames(gpu, two_sided);
-        let camera: Option<&mut dyn FnMut() -> Result<Vec<bool>>> =
-            if camera_sides { Some(&mut camera) } else { None };
-        let mats: Vec<&MaterialData> = self.materials.iter().map(|m| &m.data).collect();
-        let env = SceneEnvironment::with_frames(params, &map, &env_mesh, &mats, camera)?;
+        let t = Instant::now();
+        let wanted = if camera_sides && !SceneEnvironment::cache_holds_all(&params, &env_mesh)? {
+            Some(self.camera_frames(gpu, params.two_sided)?)
+        } else {
+            None
+        };
+        let sides_ms = if wanted.is_some() { t.elapsed().as_secs_f64() * 1e3 } else { 0.0 };
+        let lights = &self.materials[0].data.light_sampling;
+        if self.materials.iter().any(|m| &m.data.light_sampling != lights) {
+            return Err(Error::Unsupported(
+                "environment lighting with materials of different light samplings".into(),
+            ));
+        }
+        let coefficients = self.materials.iter().map(|m| m.data.coefficient_matrix()).collect();
+        let mut env =
+            SceneEnvironment::with_frames(params, &map, &env_mesh, lights, coefficients, wanted)?;
+        env.timings.sides_ms = sides_ms;
         let map = scene.output.show_environment.then_some(map);
-        Ok(Some(EnvState { light, env, map }))
+        Ok(Some(EnvState { light, env, fill: Mutex::default(), map }))
     }
 
     /// The hemicube frames this camera reads: the shown side of every vertex that some
@@ -64,13 +77,21 @@ impl Renderer {
                 height: self.scene.output.height,
             },
         )?;
-        let mats: Vec<&MaterialData> = self.materials.iter().map(|m| &m.data).collect();
-        let view = self.view_input(&mats);
-        Ok(crate::envlight::shown_frames(&view, two_sided, &seen))
+        let samplings = self.view_samplings();
+        let view = self.view_input(&samplings);
+        Ok(btf_light::shown_frames(&view, two_sided, &seen))
+    }
+
+    /// The view sampling of every material.
+    pub(super) fn view_samplings(&self) -> Vec<&btf_core::Sampling> {
+        self.materials.iter().map(|m| &m.data.view_sampling).collect()
     }
 
     /// The camera and mesh inputs of the environment's per-vertex fill.
-    pub(super) fn view_input<'a>(&'a self, mats: &'a [&'a MaterialData]) -> ViewInput<'a> {
+    pub(super) fn view_input<'a>(
+        &'a self,
+        samplings: &'a [&'a btf_core::Sampling],
+    ) -> ViewInput<'a> {
         ViewInput {
             eye: self.camera.eye,
             ortho_to_camera: self.camera.ortho_to_camera,
@@ -79,7 +100,7 @@ impl Renderer {
             normals: &self.mesh.normals,
             tangents: &self.tangents,
             material_of: &self.vertex_material,
-            materials: mats,
+            view_samplings: samplings,
         }
     }
 }
@@ -215,7 +236,7 @@ impl Renderer {
             .iter()
             .map(|&m| if m == usize::MAX { None } else { thin.slab(m) })
             .collect();
-        let tables = crate::transmission::env::tables(&e.env, &slab_of)?;
+        let tables = btf_light::thin_tables::tables(&e.env, &slab_of)?;
         thin.write_env_tables(gpu, &tables)?;
         timer.cpu("thin-cloth env tables (cpu)", t.elapsed().as_secs_f64() * 1e3);
         *last = Some(key);

@@ -15,7 +15,7 @@ impl Renderer {
     /// Replaces the camera; the next frame uses it and nothing else is recomputed — except,
     /// the first time the camera really moves, the visibility of the vertex sides an
     /// environment light had left out for the old camera (all of them, then the gathers:
-    /// [`SceneEnvironment::complete`](crate::envlight::SceneEnvironment::complete)).
+    /// [`SceneEnvironment::complete`](btf_light::SceneEnvironment::complete)).
     pub fn set_camera(&mut self, camera: &Camera) -> Result<()> {
         self.scene.camera = camera.clone();
         let extra_depth = self.shadowing.as_ref().map_or(0.0, |s| s.extra_camera_depth());
@@ -23,7 +23,7 @@ impl Renderer {
         if setup != self.camera
             && let Some(e) = self.environment.as_mut()
         {
-            let mesh = crate::envlight::scene_env::EnvMesh {
+            let mesh = btf_light::EnvMesh {
                 positions: &self.mesh.positions,
                 normals: &self.mesh.normals,
                 tangents: &self.tangents,

@@ -99,7 +99,7 @@ pub(super) fn thin_pass(
         Some((light, e)) => {
             for (desc, _, name) in &descs {
                 if let Some(d) = desc {
-                    crate::transmission::env::check_supported(d, name, e.two_sided)?;
+                    crate::transmission::desc::check_supported(d, name, e.two_sided)?;
                 }
             }
             let entry = if key.evaluation == Evaluation::PerVertex { light as u32 } else { 0 };
@@ -184,10 +184,12 @@ impl Renderer {
         }
         if let Some(e) = &self.environment {
             let t = Instant::now();
-            let view = self.view_input(&mats);
-            let (l, entries) = if per_vertex { (e.light, lights.len()) } else { (0, 1) };
-            let stride = per_vertex::stride(input.groups_stride);
-            e.env.fill(&mut vc, &view, l, entries, stride);
+            let samplings = self.view_samplings();
+            let view = self.view_input(&samplings);
+            let (l, n_lights) = if per_vertex { (e.light, lights.len()) } else { (0, 1) };
+            let at = Slots { l, n_lights, stride: per_vertex::stride(input.groups_stride) };
+            let mut fill = e.fill.lock().unwrap_or_else(|p| p.into_inner());
+            fill.fill(&e.env, &mut vc.coef, &view, at);
             timer.cpu("env coefficients per vertex (cpu)", t.elapsed().as_secs_f64() * 1e3);
         }
         let mk = |label, bytes: &[u8]| {

@@ -10,6 +10,7 @@
 
 use crate::material::MaterialData;
 use crate::{Error, Result};
+use btf_light::thin_tables::SlabParams;
 use half::f16;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -203,4 +204,56 @@ pub fn image_thickness(path: &std::path::Path) -> Result<(u32, u32, Vec<f16>)> {
         )));
     }
     Ok((grey.width(), grey.height(), grey.iter().map(|&v| f16::from_f32(v)).collect()))
+}
+
+/// The slab parameters of the environment tables (`btf_light::thin_tables`) for a
+/// material's `transmission` table and the largest value of its τ texture (ignored without
+/// one): with a texture, the τ nodes span `tau · max(1, largest texel)`.
+pub fn slab_params(desc: &TransmissionDesc, max_texel: f32) -> SlabParams {
+    let textured = desc.tau_texture.is_some();
+    let scale = if textured { max_texel.max(1.0) as f64 } else { 1.0 };
+    SlabParams {
+        tau: desc.tau as f64 * scale,
+        textured,
+        albedo: desc.albedo.rgb().map(|a| a as f64),
+    }
+}
+
+/// Refuses what the environment terms cannot represent, naming the material and key.
+pub fn check_supported(desc: &TransmissionDesc, material: &str, two_sided: bool) -> Result<()> {
+    let refuse = |what: String| Err(Error::Unsupported(format!("{material}: {what}")));
+    if let PhaseDesc::Hg { hg } = desc.phase {
+        return refuse(format!(
+            "transmission.phase = {{ hg = {hg} }} under an environment light: the environment terms are tabulated in μ for isotropic scattering; use phase = \"isotropic\""
+        ));
+    }
+    if !two_sided {
+        return refuse(
+            "thin cloth under an environment light needs two_sided = true (the back-lit term integrates the far side's visibility)".into(),
+        );
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn node_scale_covers_the_texture() {
+        let desc = |tau_texture| TransmissionDesc {
+            tau: 0.5,
+            tau_texture,
+            albedo: Albedo::Grey(0.8),
+            phase: PhaseDesc::Isotropic,
+        };
+        // A BTF-mean texture (mean 1) reaches above 1: the nodes go up to tau · max.
+        let s = slab_params(&desc(Some(TauTexture::BtfMean)), 2.5);
+        assert_eq!((s.tau, s.textured), (1.25, true));
+        // An image in [0, 1]: the nodes span [0, tau].
+        let s = slab_params(&desc(Some(TauTexture::BtfMean)), 0.7);
+        assert_eq!(s.tau, 0.5);
+        let s = slab_params(&desc(None), 3.0);
+        assert_eq!((s.tau, s.textured), (0.5, false));
+    }
 }

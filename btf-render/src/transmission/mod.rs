@@ -46,7 +46,6 @@
 //! (the paper's eq. 7–8 are local).
 
 pub mod desc;
-pub mod env;
 pub mod pass;
 mod pipeline;
 

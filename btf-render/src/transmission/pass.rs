@@ -9,12 +9,12 @@
 //! per-vertex environment tables of [`super::env`].
 
 use super::desc::{TauTexture, TransmissionDesc, btf_mean_thickness, image_thickness};
-use super::env::{SlabParams, VEC4_PER_VERTEX};
 use super::pipeline::{pipeline, thin_layout};
 use crate::btf_pass::{BtfPass, BtfPassKey, CornerVertex};
 use crate::material::MaterialData;
 use crate::renderer::CameraSetup;
 use crate::{Error, Gpu, Result};
+use btf_light::thin_tables::{SlabParams, VEC4_PER_VERTEX};
 use half::f16;
 use wgpu::util::DeviceExt;
 
@@ -117,7 +117,7 @@ impl ThinPass {
             };
             let texels = tau_texels(d, data)?;
             let max_texel = texels.2.iter().map(|t| t.to_f32()).fold(0.0, f32::max);
-            let slab = SlabParams::of(d, max_texel);
+            let slab = super::desc::slab_params(d, max_texel);
             let bind = ThinBind { layout: &layout, env_tables: &env_tables, env_entry: entry };
             materials.push(Some(ThinMaterial::new(gpu, &bind, d, &slab, texels, name)?));
             slabs.push(Some(slab));
@@ -150,7 +150,7 @@ impl ThinPass {
         self.slabs.get(m).copied().flatten()
     }
 
-    /// Uploads the per-vertex environment tables of [`super::env::tables`].
+    /// Uploads the per-vertex environment tables of [`btf_light::thin_tables::tables`].
     pub fn write_env_tables(&self, gpu: &Gpu, tables: &[[f32; 4]]) -> Result<()> {
         if !self.environment || (tables.len() * 16) as u64 != self.env_tables.size() {
             return Err(Error::Invalid(format!(

@@ -7,12 +7,12 @@ use crate::common::*;
 use btf_core::eigen::Quantization;
 use btf_core::thin_slab::{Phase, Slab};
 use btf_image::EnvMap;
-use btf_render::envlight::scene_env::EnvMesh;
-use btf_render::envlight::weights::hemicube_pixel;
-use btf_render::envlight::{EnvCube, EnvironmentParams, HemicubeFrame, SceneEnvironment};
+use btf_light::EnvMesh;
+use btf_light::hemicube::pixel_of as hemicube_pixel;
+use btf_light::mesh::Mesh;
+use btf_light::tangent::compute_tangents;
+use btf_light::{EnvCube, EnvironmentParams, HemicubeFrame, SceneEnvironment};
 use btf_render::material::MaterialData;
-use btf_render::mesh::Mesh;
-use btf_render::tangent::compute_tangents;
 use std::path::Path;
 
 pub fn curtain_mesh(dir: &Path) -> Mesh {
@@ -65,7 +65,14 @@ pub fn curtain_env(dir: &Path) -> CurtainEnv {
         tangents: &tangents,
         triangles: &mesh.triangles,
     };
-    let env = SceneEnvironment::new(params, &map, &env_mesh, &[&mat]).unwrap();
+    let env = SceneEnvironment::new(
+        params,
+        &map,
+        &env_mesh,
+        &mat.light_sampling,
+        vec![mat.coefficient_matrix()],
+    )
+    .unwrap();
     let frames = HemicubeFrame::of_mesh(&mesh.positions, &mesh.normals, &tangents, true);
     let cube = EnvCube::new(&map, SceneEnvironment::cube_res(VIS_RES));
     CurtainEnv { mesh, env, frames, cube }

@@ -13,6 +13,10 @@
 //! pixel's rectangle, `Ω = Σ± atan(ab / √(1 + a² + b²))` over its corners `(a, b)`, which
 //! sums to 2π to rounding; [`Hemicube::midpoint_solid_angle`] gives the `dA/|p|³` value.
 //!
+//! One face table ([`faces`]) defines the layout for the pixel directions, the rasteriser
+//! of the visibility maps and the inverse map [`pixel_of`]; [`HemicubeFrame`] places a
+//! hemicube at a vertex side in world space.
+//!
 //! The shared table (§5.2, Fig. 11): pixel → the four nearest measured light directions
 //! `d_k` with bilinear weights `h_{d_k}` (DESIGN.md §3 interpolation, including the horizon
 //! fade beyond the last ring), stored premultiplied by the pixel's solid angle so that the
@@ -45,23 +49,114 @@ fn rect_solid_angle(a0: f64, a1: f64, b0: f64, b1: f64) -> f64 {
     corner_term(a1, b1) - corner_term(a0, b1) - corner_term(a1, b0) + corner_term(a0, b0)
 }
 
-/// The face-local rectangle and the map from face coordinates to tangent space.
-struct Face {
-    cols: u32,
-    rows: u32,
-    b_min: f64,
-    to_tangent: fn(f64, f64) -> [f64; 3],
+/// One face of the layout: the major axis with its sign, and the axes of the face
+/// coordinates `u = p_u / (s p_m)` (columns) and `v = p_v / (s p_m)` (rows, from `v_min`).
+/// The one table behind the pixel directions, the rasteriser and [`pixel_of`].
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Face {
+    pub(crate) major: usize,
+    pub(crate) sign: f32,
+    pub(crate) u: usize,
+    pub(crate) v: usize,
+    pub(crate) v_min: f32,
+    /// Pixel rows (`res` on the top face, `res/2` on the sides); every face has `res`
+    /// columns.
+    pub(crate) rows: usize,
+    /// First pixel of the face in the layout.
+    pub(crate) start: usize,
 }
 
-fn faces(res: u32) -> [Face; 5] {
-    let half = res / 2;
+impl Face {
+    /// The tangent-space point with face coordinates `(a, b)` on the face plane.
+    fn point(&self, a: f64, b: f64) -> [f64; 3] {
+        let mut p = [0.0; 3];
+        p[self.major] = self.sign as f64;
+        p[self.u] = a;
+        p[self.v] = b;
+        p
+    }
+}
+
+/// The five faces: top (`+z`), then `+x`, `−x`, `+y`, `−y`.
+pub(crate) fn faces(res: usize) -> [Face; 5] {
+    let (half, top) = (res / 2, res * res);
+    let side = |major, sign, u, k: usize| Face {
+        major,
+        sign,
+        u,
+        v: 2,
+        v_min: 0.0,
+        rows: half,
+        start: top + k * res * half,
+    };
     [
-        Face { cols: res, rows: res, b_min: -1.0, to_tangent: |a, b| [a, b, 1.0] },
-        Face { cols: res, rows: half, b_min: 0.0, to_tangent: |a, b| [1.0, a, b] },
-        Face { cols: res, rows: half, b_min: 0.0, to_tangent: |a, b| [-1.0, a, b] },
-        Face { cols: res, rows: half, b_min: 0.0, to_tangent: |a, b| [a, 1.0, b] },
-        Face { cols: res, rows: half, b_min: 0.0, to_tangent: |a, b| [a, -1.0, b] },
+        Face { major: 2, sign: 1.0, u: 0, v: 1, v_min: -1.0, rows: res, start: 0 },
+        side(0, 1.0, 1, 0),
+        side(0, -1.0, 1, 1),
+        side(1, 1.0, 0, 2),
+        side(1, -1.0, 0, 3),
     ]
+}
+
+/// The pixel containing tangent-space `(x, y, z)`, `z > 0` — the inverse of the layout
+/// (what a source of the environment falls into in the gathers of `[S03 eq. 10]`). Written
+/// out per face rather than through [`faces`]: it runs once per source and frame, and its
+/// operation order is what the fast and the reference gathers share bit for bit.
+pub fn pixel_of(res: usize, x: f32, y: f32, z: f32) -> usize {
+    let cell = |a: f32, n: usize| ((a * n as f32) as usize).min(n - 1);
+    let (half, top) = (res / 2, res * res);
+    let (ax, ay) = (x.abs(), y.abs());
+    if z >= ax && z >= ay {
+        let (u, v) = ((x / z + 1.0) * 0.5, (y / z + 1.0) * 0.5);
+        return cell(v, res) * res + cell(u, res);
+    }
+    let (face, m, a) = if ax >= ay {
+        (if x > 0.0 { 0 } else { 1 }, ax, y)
+    } else {
+        (if y > 0.0 { 2 } else { 3 }, ay, x)
+    };
+    let (u, v) = ((a / m + 1.0) * 0.5, z / m);
+    top + face * res * half + cell(v, half) * res + cell(u, res)
+}
+
+/// The frame of one hemicube: origin and tangent-space axes in world space.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HemicubeFrame {
+    /// Vertex position (world).
+    pub origin: [f32; 3],
+    /// Tangent-space `+x`, `+y`, `+z` (the side's normal) in world space.
+    pub axes: [[f32; 3]; 3],
+}
+
+impl HemicubeFrame {
+    /// World direction of a tangent-space direction.
+    pub fn to_world(&self, d: [f32; 3]) -> [f32; 3] {
+        let [t, b, n] = self.axes;
+        [0, 1, 2].map(|a| d[0] * t[a] + d[1] * b[a] + d[2] * n[a])
+    }
+
+    /// The frames of every vertex: front sides `(T, B, N)` first, then, when `two_sided`,
+    /// the back sides `(T, B, −N)` (the renderer's frame for a vertex seen from behind).
+    pub fn of_mesh(
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+        tangents: &[[f32; 4]],
+        two_sided: bool,
+    ) -> Vec<HemicubeFrame> {
+        let sides: &[f32] = if two_sided { &[1.0, -1.0] } else { &[1.0] };
+        let mut out = Vec::with_capacity(positions.len() * sides.len());
+        for &s in sides {
+            for v in 0..positions.len() {
+                let (t, b, n) = crate::tangent::frame(normals[v], tangents[v]);
+                let n = n * s;
+                out.push(HemicubeFrame {
+                    origin: positions[v],
+                    axes: [t.into(), b.into(), n.into()],
+                });
+            }
+        }
+        out
+    }
 }
 
 impl Hemicube {
@@ -78,12 +173,12 @@ impl Hemicube {
         let mut cube = Hemicube { res, dirs: Vec::with_capacity(n), solid_angle: vec![] };
         cube.solid_angle.reserve(n);
         let step = 2.0 / res as f64;
-        for face in faces(res) {
+        for face in faces(res as usize) {
             for row in 0..face.rows {
-                let b0 = face.b_min + row as f64 * step;
-                for col in 0..face.cols {
+                let b0 = face.v_min as f64 + row as f64 * step;
+                for col in 0..res {
                     let a0 = -1.0 + col as f64 * step;
-                    let p = (face.to_tangent)(a0 + 0.5 * step, b0 + 0.5 * step);
+                    let p = face.point(a0 + 0.5 * step, b0 + 0.5 * step);
                     let len = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
                     cube.dirs.push(p.map(|c| (c / len) as f32));
                     cube.solid_angle.push(rect_solid_angle(a0, a0 + step, b0, b0 + step));
@@ -193,6 +288,21 @@ mod tests {
         }
         assert!(m[0].abs() < 1e-9 && m[1].abs() < 1e-9);
         assert!((m[2] / PI - 1.0).abs() < 2e-3, "{}", m[2]);
+    }
+
+    #[test]
+    fn pixel_of_a_direction_is_the_pixel_whose_centre_it_is() {
+        for res in [2usize, 8, 16] {
+            let cube = Hemicube::new(res as u32).unwrap();
+            for (p, d) in cube.dirs.iter().enumerate() {
+                assert_eq!(pixel_of(res, d[0], d[1], d[2]), p, "res {res}");
+            }
+            // Every face's first pixel is where the table says the face starts.
+            for f in faces(res) {
+                let d = cube.dirs[f.start];
+                assert!(d[f.major] * f.sign > 0.0, "res {res}, face at {}", f.start);
+            }
+        }
     }
 
     #[test]

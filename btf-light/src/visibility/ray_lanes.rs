@@ -15,7 +15,7 @@
 //! code runs as scalar loops.
 
 use super::bvh::{Bvh, Node, Tri, cross, dot, sub};
-use super::visibility::HemicubeFrame;
+use crate::hemicube::HemicubeFrame;
 
 /// Most rays in one packet (the lane masks are a `u64`).
 pub(super) const PACKET: usize = 64;

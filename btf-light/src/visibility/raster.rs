@@ -17,15 +17,12 @@
 //!
 //! A far node over few still-visible pixels is finished instead by casting those pixels'
 //! rays through its subtree as one packet, and near-triangle pixels are tested eight at a
-//! time; both run the same tests lane by lane (see `octets`).
+//! time; both run the same tests lane by lane (see `ray_lanes`).
 
 use super::bvh::{Bvh, Tri, dot, sub};
-use super::hemicube::Hemicube;
-use super::octets::{FrameRays, Packet, RowWord, TriFromOrigin, packet_hits, tri_rows};
-use super::raster_face::{
-    Face, Rect, face_bounds, face_of, faces, ratio_range, span_mask, xy_distance,
-};
-use super::visibility::HemicubeFrame;
+use super::raster_face::{Rect, face_bounds, face_of, ratio_range, span_mask, xy_distance};
+use super::ray_lanes::{FrameRays, Packet, RowWord, TriFromOrigin, packet_hits, tri_rows};
+use crate::hemicube::{Face, Hemicube, HemicubeFrame, faces};
 
 /// Nodes with at most this many still-visible pixels under their projection are finished
 /// by casting those pixels' rays through the node's subtree, as one packet.

@@ -1,5 +1,5 @@
 //! The gather of eq. 10 (Sattler et al. 2003, §5.3) organised for speed: the sums of
-//! [`WeightSet::gather_reference`], bit for bit, for all frames of a mesh.
+//! [`Radiances::gather_reference`], bit for bit, for all frames of a mesh.
 //!
 //! A vertex's front frame `(T, B, N)` and back frame `(T, B, −N)` (two-sided cloth, as
 //! [`HemicubeFrame::of_mesh`] builds them) see every environment source at the same tangent
@@ -9,54 +9,51 @@
 //! twelve scalar ones; the additions happen in the reference's order, so the result is
 //! identical, not merely close.
 
-use super::env_cube::EnvCube;
-use super::visibility::HemicubeFrame;
+use super::{GatherInput, Radiances, rotate_z};
+use crate::env_cube::EnvCube;
+use crate::hemicube::HemicubeFrame;
 #[cfg(doc)]
-use super::weights::hemicube_pixel;
-use super::weights::{GatherInput, WeightSet, rotate_z};
+use crate::hemicube::pixel_of;
 use rayon::prelude::*;
 
-impl WeightSet {
-    /// Gathers `g` for the environment turned by `rotation_deg` about world `+z` (eq. 10).
-    /// The sums of [`WeightSet::gather_reference`], bit for bit (see the module doc).
-    pub fn gather(input: &GatherInput, env: &EnvCube, rotation_deg: f64) -> WeightSet {
-        let n_l = input.lights;
-        let n = input.frames.len();
-        let (sin, cos) = rotation_deg.to_radians().sin_cos();
-        let rot = (cos as f32, sin as f32);
-        let sources = Sources::new(env);
-        let mut g = vec![0f32; n * 3 * n_l];
-        let row = 3 * n_l;
-        if let Some(half) = mirrored_half(input.frames) {
-            let (front, back) = g.split_at_mut(half * row);
-            front.par_chunks_mut(row).zip(back.par_chunks_mut(row)).enumerate().for_each_init(
-                || Scratch::new(n_l, sources.len()),
-                |s, (v, (fo, bo))| {
-                    let bits =
-                        [input.visibility.frame_bits(v), input.visibility.frame_bits(half + v)];
-                    if bits.iter().all(|b| occluded(b)) {
-                        return; // no visible pixel: g stays 0, as every sum would be
-                    }
-                    s.run(input, &sources, &input.frames[v], bits, rot);
-                    s.write(0, fo);
-                    s.write(1, bo);
-                },
-            );
-        } else {
-            g.par_chunks_mut(row).enumerate().for_each_init(
-                || Scratch::new(n_l, sources.len()),
-                |s, (f, out)| {
-                    let bits = input.visibility.frame_bits(f);
-                    if occluded(bits) {
-                        return;
-                    }
-                    s.run(input, &sources, &input.frames[f], [bits, &[]], rot);
-                    s.write(0, out);
-                },
-            );
-        }
-        WeightSet { frames: n, lights: n_l, g }
+/// Gathers `g` for the environment turned by `rotation_deg` about world `+z` (eq. 10): the
+/// sums of [`Radiances::gather_reference`], bit for bit (see the module doc).
+pub(super) fn gather(input: &GatherInput, env: &EnvCube, rotation_deg: f64) -> Radiances {
+    let n_l = input.lights;
+    let n = input.frames.len();
+    let (sin, cos) = rotation_deg.to_radians().sin_cos();
+    let rot = (cos as f32, sin as f32);
+    let sources = Sources::new(env);
+    let mut g = vec![0f32; n * 3 * n_l];
+    let row = 3 * n_l;
+    if let Some(half) = mirrored_half(input.frames) {
+        let (front, back) = g.split_at_mut(half * row);
+        front.par_chunks_mut(row).zip(back.par_chunks_mut(row)).enumerate().for_each_init(
+            || Scratch::new(n_l, sources.len()),
+            |s, (v, (fo, bo))| {
+                let bits = [input.visibility.frame_bits(v), input.visibility.frame_bits(half + v)];
+                if bits.iter().all(|b| occluded(b)) {
+                    return; // no visible pixel: g stays 0, as every sum would be
+                }
+                s.run(input, &sources, &input.frames[v], bits, rot);
+                s.write(0, fo);
+                s.write(1, bo);
+            },
+        );
+    } else {
+        g.par_chunks_mut(row).enumerate().for_each_init(
+            || Scratch::new(n_l, sources.len()),
+            |s, (f, out)| {
+                let bits = input.visibility.frame_bits(f);
+                if occluded(bits) {
+                    return;
+                }
+                s.run(input, &sources, &input.frames[f], [bits, &[]], rot);
+                s.write(0, out);
+            },
+        );
     }
+    Radiances { frames: n, lights: n_l, g }
 }
 
 /// Whether a frame sees nothing: fully occluded, or not computed (a vertex side the
@@ -123,8 +120,8 @@ struct CodeInput<'a> {
     src: &'a Sources,
 }
 
-/// `hemicube_pixel(res, x, y, ±z) · 2 + side` of every source, without branches so that it
-/// vectorises: the same divisions and comparisons as [`hemicube_pixel`], hence the same
+/// `pixel_of(res, x, y, ±z) · 2 + side` of every source, without branches so that it
+/// vectorises: the same divisions and comparisons as [`pixel_of`], hence the same
 /// pixel, with every case computed and the right one selected.
 #[inline(always)]
 fn codes_kernel(c: &CodeInput, out: &mut [u32]) {

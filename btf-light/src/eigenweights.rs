@@ -3,7 +3,7 @@
 //! that the lighting for any rotation `δ` is `U(δ) ≈ Ū + Σ_{k≤e} o_k(δ) W_k` at the cost of
 //! `e` vector additions instead of a new gather.
 //!
-//! `U = G · P` is linear in the gathered radiances `G` ([`WeightSet`]), so the PCA is done
+//! `U = G · P` is linear in the gathered radiances `G` ([`Radiances`]), so the PCA is done
 //! on the `G_a` with the inner product `⟨X, Y⟩ = Σ_rows x M yᵀ`, `M = P Pᵀ`: this is
 //! exactly the PCA of the `U_a` (same Gram matrix, same coefficients) while every stored
 //! vector is `3 · n_lights` per frame instead of `3 · slots · (c+2)`. Snapshot method: the
@@ -13,7 +13,8 @@
 //! Between the sampled rotations `o_k(δ)` is interpolated by a periodic Catmull–Rom
 //! spline, so rotating by 360° is the identity and the samples are reproduced exactly.
 
-use super::weights::{CoefficientMatrix, WeightSet, gamma_star_of, metric_dot};
+use crate::coefficients::{CoefficientMatrix, gamma_star_of, metric_dot};
+use crate::gather::Radiances;
 use crate::{Error, Result};
 use btf_core::gemm::{Mat, dgemm};
 use nalgebra::{DMatrix, SymmetricEigen};
@@ -25,7 +26,7 @@ pub struct EigenWeightSets {
     /// Rotations sampled (`A`), at `δ_a = a · 360° / A`.
     pub rotations: usize,
     /// Mean `Ḡ`.
-    pub mean: WeightSet,
+    pub mean: Radiances,
     /// Eigenweightsets `W_k` (in `G` form), descending eigenvalue.
     pub sets: Vec<Vec<f32>>,
     /// All eigenvalues of the Gram matrix, descending.
@@ -37,7 +38,7 @@ pub struct EigenWeightSets {
 impl EigenWeightSets {
     /// PCA of `sets` (the weight sets of `A` equally spaced rotations) under `metric`,
     /// keeping `e` eigenweightsets (at most the rank `≤ A − 1`).
-    pub fn build(sets: &[WeightSet], metric: &[f64], e: usize) -> Result<EigenWeightSets> {
+    pub fn build(sets: &[Radiances], metric: &[f64], e: usize) -> Result<EigenWeightSets> {
         let a_n = sets.len();
         if a_n < 2 || e == 0 {
             return Err(Error::Invalid(format!(
@@ -82,7 +83,7 @@ impl EigenWeightSets {
         }
         Ok(EigenWeightSets {
             rotations: a_n,
-            mean: WeightSet { frames, lights: n_l, g: mean },
+            mean: Radiances { frames, lights: n_l, g: mean },
             sets: out_sets,
             eigenvalues,
             coefficients,
@@ -116,18 +117,18 @@ impl EigenWeightSets {
     }
 
     /// `G(δ) = Ḡ + Σ_{k<e} o_k(δ) W_k` (then `U(δ) = G(δ) · P`).
-    pub fn reconstruct(&self, delta_deg: f64, e: usize) -> WeightSet {
+    pub fn reconstruct(&self, delta_deg: f64, e: usize) -> Radiances {
         self.reconstruct_from(&self.coefficients_at(delta_deg, e))
     }
 
     /// `G = Ḡ + Σ_k o_k W_k` for coefficients `o` (from [`EigenWeightSets::coefficients_at`]).
-    pub fn reconstruct_from(&self, o: &[f64]) -> WeightSet {
+    pub fn reconstruct_from(&self, o: &[f64]) -> Radiances {
         let mut g = self.mean.g.clone();
         for (ok, w) in o.iter().zip(&self.sets) {
             let ok = *ok as f32;
             g.iter_mut().zip(w).for_each(|(g, &w)| *g += ok * w);
         }
-        WeightSet { g, ..self.mean.clone() }
+        Radiances { g, ..self.mean.clone() }
     }
 }
 
@@ -140,7 +141,7 @@ impl EigenWeightSets {
 pub struct GammaBasis {
     /// Pairs.
     pub picks: usize,
-    /// Floats per pair, `3 (c + 2)` (layout of [`super::WeightSet::gamma_star`]).
+    /// Floats per pair, `3 (c + 2)` (layout of [`super::Radiances::gamma_star`]).
     pub per_pick: usize,
     /// Terms per pair: the mean and `e` eigenweightsets.
     pub terms: usize,
@@ -213,7 +214,7 @@ impl GammaBasis {
 }
 
 /// Relative error `‖U − U_ref‖ / ‖U_ref‖` under `metric`.
-pub fn relative_error(u: &WeightSet, reference: &WeightSet, metric: &[f64]) -> f64 {
+pub fn relative_error(u: &Radiances, reference: &Radiances, metric: &[f64]) -> f64 {
     let d: Vec<f32> = u.g.iter().zip(&reference.g).map(|(a, b)| a - b).collect();
     let r = reference.norm2(metric);
     if r <= 0.0 {
@@ -246,7 +247,7 @@ fn gram_matrix(centred: &[Vec<f32>], n_l: usize, metric: &[f64]) -> Vec<f64> {
 mod tests {
     use super::*;
 
-    fn sets(a_n: usize) -> Vec<WeightSet> {
+    fn sets(a_n: usize) -> Vec<Radiances> {
         // Smooth periodic functions of the rotation plus a fixed part, 5 frames × 4 lights.
         (0..a_n)
             .map(|a| {
@@ -258,7 +259,7 @@ mod tests {
                             + 0.05 * (7.0 * d).sin()) as f32
                     })
                     .collect();
-                WeightSet { frames: 5, lights: 4, g }
+                Radiances { frames: 5, lights: 4, g }
             })
             .collect()
     }

@@ -1,6 +1,6 @@
 //! Environment light on thin cloth: per-vertex tables of the slab's environment terms
-//! (thin-cloth paper eq. 7–8 integrated over the hemispheres, with Sattler et al. 2003's
-//! per-vertex hemicube visibility, eq. 10).
+//! (`[TC eq. 7–8]` integrated over the hemispheres, with the per-vertex hemicube visibility
+//! of `[S03 eq. 10]`).
 //!
 //! For each vertex and each side `s` (front `+N`, back `−N`, the frames of
 //! [`SceneEnvironment`]) the environment's visible sources `(ω₀, ∫L dω)` give, with
@@ -39,8 +39,7 @@
 //! the sources per vertex side and are recomputed when the environment, its rotation or
 //! its exposure changes.
 
-use super::desc::{PhaseDesc, TransmissionDesc};
-use crate::envlight::SceneEnvironment;
+use crate::environment::SceneEnvironment;
 use crate::{Error, Result};
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -82,38 +81,10 @@ pub struct SlabParams {
 }
 
 impl SlabParams {
-    /// From a material's `transmission` table and the largest value of its τ texture
-    /// (ignored without one).
-    pub fn of(desc: &TransmissionDesc, max_texel: f32) -> SlabParams {
-        let textured = desc.tau_texture.is_some();
-        let scale = if textured { max_texel.max(1.0) as f64 } else { 1.0 };
-        SlabParams {
-            tau: desc.tau as f64 * scale,
-            textured,
-            albedo: desc.albedo.rgb().map(|a| a as f64),
-        }
-    }
-
     /// The τ nodes the tables hold (`j` with `τ_j > 0`; the rows of `τ_0 = 0` are fixed).
-    fn nodes(&self) -> std::ops::Range<usize> {
+    pub fn nodes(&self) -> std::ops::Range<usize> {
         if self.textured { 1..TAU_NODES } else { TAU_NODES - 1..TAU_NODES }
     }
-}
-
-/// Refuses what the environment terms cannot represent, naming the material and key.
-pub fn check_supported(desc: &TransmissionDesc, material: &str, two_sided: bool) -> Result<()> {
-    let refuse = |what: String| Err(Error::Unsupported(format!("{material}: {what}")));
-    if let PhaseDesc::Hg { hg } = desc.phase {
-        return refuse(format!(
-            "transmission.phase = {{ hg = {hg} }} under an environment light: the environment terms are tabulated in μ for isotropic scattering; use phase = \"isotropic\""
-        ));
-    }
-    if !two_sided {
-        return refuse(
-            "thin cloth under an environment light needs two_sided = true (the back-lit term integrates the far side's visibility)".into(),
-        );
-    }
-    Ok(())
 }
 
 /// `1/(n+1)!` for `n = 0…8`: the series of `φ₁`.
@@ -361,25 +332,6 @@ mod tests {
                 );
             }
         }
-    }
-
-    #[test]
-    fn node_scale_covers_the_texture() {
-        use super::super::desc::{Albedo, TauTexture};
-        let desc = |tau_texture| TransmissionDesc {
-            tau: 0.5,
-            tau_texture,
-            albedo: Albedo::Grey(0.8),
-            phase: PhaseDesc::Isotropic,
-        };
-        // A BTF-mean texture (mean 1) reaches above 1: the nodes go up to tau · max.
-        let s = SlabParams::of(&desc(Some(TauTexture::BtfMean)), 2.5);
-        assert_eq!((s.tau, s.textured), (1.25, true));
-        // An image in [0, 1]: the nodes span [0, tau].
-        let s = SlabParams::of(&desc(Some(TauTexture::BtfMean)), 0.7);
-        assert_eq!(s.tau, 0.5);
-        let s = SlabParams::of(&desc(None), 3.0);
-        assert_eq!((s.tau, s.textured), (0.5, false));
     }
 
     #[test]

@@ -17,56 +17,20 @@
 //! others stay all-occluded, and such a subset is cached under its own key (maps of all
 //! frames, when cached, serve it too).
 
-use super::bvh::Bvh;
-use super::hemicube::Hemicube;
-use super::raster::FrameRaster;
-use crate::math::Vec3;
+pub mod bvh;
+mod raster;
+mod raster_face;
+mod ray_lanes;
+
+use crate::hemicube::{Hemicube, HemicubeFrame};
 use crate::{Error, Result};
+use bvh::Bvh;
+use raster::FrameRaster;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
 /// File magic and format version of the cache.
 const MAGIC: &[u8; 8] = b"BTFVIS01";
-
-/// The frame of one hemicube: origin and tangent-space axes in world space.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct HemicubeFrame {
-    /// Vertex position (world).
-    pub origin: [f32; 3],
-    /// Tangent-space `+x`, `+y`, `+z` (the side's normal) in world space.
-    pub axes: [[f32; 3]; 3],
-}
-
-impl HemicubeFrame {
-    /// World direction of a tangent-space direction.
-    pub fn to_world(&self, d: [f32; 3]) -> [f32; 3] {
-        let [t, b, n] = self.axes;
-        [0, 1, 2].map(|a| d[0] * t[a] + d[1] * b[a] + d[2] * n[a])
-    }
-
-    /// The frames of every vertex: front sides `(T, B, N)` first, then, when `two_sided`,
-    /// the back sides `(T, B, −N)` (the renderer's frame for a vertex seen from behind).
-    pub fn of_mesh(
-        positions: &[[f32; 3]],
-        normals: &[[f32; 3]],
-        tangents: &[[f32; 4]],
-        two_sided: bool,
-    ) -> Vec<HemicubeFrame> {
-        let sides: &[f32] = if two_sided { &[1.0, -1.0] } else { &[1.0] };
-        let mut out = Vec::with_capacity(positions.len() * sides.len());
-        for &s in sides {
-            for v in 0..positions.len() {
-                let (t, b, n): (Vec3, Vec3, Vec3) = crate::tangent::frame(normals[v], tangents[v]);
-                let n = n * s;
-                out.push(HemicubeFrame {
-                    origin: positions[v],
-                    axes: [t.into(), b.into(), n.into()],
-                });
-            }
-        }
-        out
-    }
-}
 
 /// Visibility bit sets of all frames (bit set = pixel sees the environment).
 #[derive(Debug, Clone, PartialEq)]

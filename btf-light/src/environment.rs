@@ -1,8 +1,7 @@
-//! An environment light of a scene at run time (Sattler et al. 2003, §5.3–5.4): the
-//! visibility maps of the mesh, the gathered weights `g` of the current environment and
-//! rotation, optionally the eigenweightsets, and the per-vertex coefficients the BTF pass
-//! reads — `f · ω_m · γ*_{k j_m}` for the four view slots of each vertex (eq. 11 with the
-//! view blending of eq. 5), in the layout of [`crate::per_vertex`].
+//! An environment light of a scene at run time (`[S03 §5.3–5.4]`): the
+//! visibility maps of the mesh, the gathered radiances `g` of the current environment and
+//! rotation and optionally the eigenweightsets; [`crate::EnvCoefficients`] turns them into
+//! the per-vertex coefficients `f · ω_m · γ*_{k j_m}` a camera needs (eq. 11).
 //!
 //! Visibility is computed once per mesh and resolution (and cached on disk when a cache
 //! folder is given), for every frame or only for those a fixed camera shows
@@ -10,19 +9,17 @@
 //! A new environment costs one gather (eq. 10) and, with eigenweightsets, one PCA over `A`
 //! rotations, after which a rotation costs `e` vector additions (eq. 13). Back sides of two-sided cloth have hemicubes of their own.
 
-use super::camera_basis::CameraCache;
-pub use super::camera_basis::ViewInput;
-use super::eigenweights::EigenWeightSets;
-use super::env_cube::EnvCube;
-use super::hemicube::{Hemicube, LightTable};
-use super::visibility::{HemicubeFrame, VisibilityMaps};
-use super::weights::{CoefficientMatrix, GatherInput, WeightSet, hemicube_pixel, rotate_z};
-use crate::material::MaterialData;
+use crate::coefficients::CoefficientMatrix;
+use crate::eigenweights::EigenWeightSets;
+use crate::env_cube::EnvCube;
+use crate::gather::{GatherInput, Radiances, rotate_z};
+use crate::hemicube::{Hemicube, HemicubeFrame, LightTable, pixel_of};
+use crate::visibility::{self, VisibilityMaps};
 use crate::{Error, Result};
-use btf_core::InterpMode;
+use btf_core::{InterpMode, Sampling};
 use btf_image::EnvMap;
 use std::path::PathBuf;
-use std::sync::{Mutex, OnceLock};
+use std::sync::OnceLock;
 use std::time::Instant;
 
 /// Eigenweightsets kept at least (when on and the rank allows), so that error reports for
@@ -78,75 +75,82 @@ pub struct EnvTimings {
 
 /// Runtime state of one environment light.
 pub struct SceneEnvironment {
-    pub(super) params: EnvironmentParams,
+    params: EnvironmentParams,
     cube: Hemicube,
     table: LightTable,
     frames: Vec<HemicubeFrame>,
-    pub(super) vertices: usize,
+    vertices: usize,
     lights: usize,
     vis: VisibilityMaps,
     /// The frames whose visibility was computed (`None`: all); the others are zero.
     wanted: Option<Vec<bool>>,
-    pub(super) coefficients: Vec<CoefficientMatrix>,
+    coefficients: Vec<CoefficientMatrix>,
     env: EnvCube,
     /// `G` of the current rotation (formed on first use after an eigenweightset rotation).
-    weights: OnceLock<WeightSet>,
+    radiances: OnceLock<Radiances>,
     /// `o_k(δ)` of the current rotation when it came from the eigenweightsets.
     eigen_o: Option<Vec<f64>>,
     eigen: Option<EigenWeightSets>,
     /// Counts [`SceneEnvironment::set_environment`] calls (caches keyed on the map).
     revision: u64,
-    /// The camera bases of [`SceneEnvironment::fill`].
-    pub(super) camera: Mutex<CameraCache>,
     /// Timings of the preparation.
     pub timings: EnvTimings,
 }
 
 impl SceneEnvironment {
-    /// Computes (or loads) the visibility maps and gathers the weights of `env`.
+    /// Computes (or loads) the visibility maps and gathers the radiances of `env` for
+    /// materials of the light sampling `lights` with the coefficient matrices
+    /// `coefficients` (one per material, [`CoefficientMatrix`]).
     pub fn new(
         params: EnvironmentParams,
         env: &EnvMap,
         mesh: &EnvMesh,
-        materials: &[&MaterialData],
+        lights: &Sampling,
+        coefficients: Vec<CoefficientMatrix>,
     ) -> Result<Self> {
-        Self::with_frames(params, env, mesh, materials, None)
+        Self::with_frames(params, env, mesh, lights, coefficients, None)
     }
 
-    /// [`SceneEnvironment::new`] with visibility only for the frames `wanted()` flags (front
-    /// sides `0..V`, back sides `V..2V`): the vertex sides a fixed camera shows. `wanted` is
-    /// not called when the cache already holds every frame (then all are taken); its time
-    /// is [`EnvTimings::sides_ms`]. Every other frame is left all-occluded, so its weights
-    /// are zero; [`SceneEnvironment::complete`] computes them when another camera needs them.
+    /// Whether the visibility cache of `params` already holds every frame of `mesh` — then
+    /// [`SceneEnvironment::with_frames`] takes them all and the frames a camera shows need
+    /// not be found.
+    pub fn cache_holds_all(params: &EnvironmentParams, mesh: &EnvMesh) -> Result<bool> {
+        let Some(dir) = &params.cache_dir else { return Ok(false) };
+        let cube = Hemicube::new(params.visibility_res)?;
+        let frames =
+            HemicubeFrame::of_mesh(mesh.positions, mesh.normals, mesh.tangents, params.two_sided);
+        let key = visibility::cache_key(cube.res, &frames, mesh.triangles);
+        Ok(visibility::cache_path(dir, key).is_file())
+    }
+
+    /// [`SceneEnvironment::new`] with visibility only for the frames `wanted` flags (front
+    /// sides `0..V`, back sides `V..2V`): the vertex sides a fixed camera shows (finding
+    /// them is the caller's, and its time goes to [`EnvTimings::sides_ms`]; when the cache
+    /// holds every frame, [`SceneEnvironment::cache_holds_all`], all are taken anyway).
+    /// Every other frame is left all-occluded, so its radiances are zero;
+    /// [`SceneEnvironment::complete`] computes them when another camera needs them.
     pub fn with_frames(
         params: EnvironmentParams,
         env: &EnvMap,
         mesh: &EnvMesh,
-        materials: &[&MaterialData],
-        wanted: Option<&mut dyn FnMut() -> Result<Vec<bool>>>,
+        lights: &Sampling,
+        coefficients: Vec<CoefficientMatrix>,
+        wanted: Option<Vec<bool>>,
     ) -> Result<Self> {
-        let first = materials
-            .first()
-            .ok_or_else(|| Error::Invalid("environment light without materials".into()))?;
-        if materials.iter().any(|m| m.light_sampling != first.light_sampling) {
-            return Err(Error::Unsupported(
-                "environment lighting with materials of different light samplings".into(),
-            ));
+        if coefficients.is_empty() {
+            return Err(Error::Invalid("environment light without materials".into()));
+        }
+        if let Some(c) = coefficients.iter().find(|c| c.lights != lights.len()) {
+            return Err(Error::Invalid(format!(
+                "a coefficient matrix of {} lights for a sampling of {}",
+                c.lights,
+                lights.len()
+            )));
         }
         let cube = Hemicube::new(params.visibility_res)?;
-        let table = LightTable::new(&cube, &first.light_sampling, InterpMode::Four)?;
+        let table = LightTable::new(&cube, lights, InterpMode::Four)?;
         let frames =
             HemicubeFrame::of_mesh(mesh.positions, mesh.normals, mesh.tangents, params.two_sided);
-        let t = Instant::now();
-        let all_cached = params.cache_dir.as_ref().is_some_and(|dir| {
-            let key = super::visibility::cache_key(cube.res, &frames, mesh.triangles);
-            super::visibility::cache_path(dir, key).is_file()
-        });
-        let wanted = match wanted {
-            Some(f) if !all_cached => Some(f()?),
-            _ => None,
-        };
-        let sides_ms = if wanted.is_some() { ms(t) } else { 0.0 };
         if let Some(w) = &wanted
             && w.len() != frames.len()
         {
@@ -171,13 +175,8 @@ impl SceneEnvironment {
         if all {
             wanted = None; // the cache held every frame
         }
-        let timings = EnvTimings {
-            sides_ms,
-            visibility_ms: ms(t),
-            visibility_cached: cached,
-            ..Default::default()
-        };
-        let coefficients = materials.iter().map(|m| CoefficientMatrix::from_material(m)).collect();
+        let timings =
+            EnvTimings { visibility_ms: ms(t), visibility_cached: cached, ..Default::default() };
         let env_cube = EnvCube { res: 1, dirs: vec![], power: vec![] };
         let mut s = SceneEnvironment {
             params,
@@ -185,16 +184,15 @@ impl SceneEnvironment {
             table,
             frames,
             vertices: mesh.positions.len(),
-            lights: first.light_sampling.len(),
+            lights: lights.len(),
             vis,
             wanted,
             coefficients,
             env: env_cube,
-            weights: OnceLock::new(),
+            radiances: OnceLock::new(),
             eigen_o: None,
             eigen: None,
             revision: 0,
-            camera: Mutex::new(CameraCache::default()),
             timings,
         };
         s.set_environment(env)?;
@@ -208,9 +206,9 @@ impl SceneEnvironment {
         (res as usize).max(1)
     }
 
-    /// The exact weights for rotation `delta_deg` (a full gather, eq. 10), whatever the
+    /// The exact radiances for rotation `delta_deg` (a full gather, eq. 10), whatever the
     /// eigenweightset setting.
-    pub fn gather(&self, delta_deg: f64) -> WeightSet {
+    pub fn gather(&self, delta_deg: f64) -> Radiances {
         let input = GatherInput {
             table: &self.table,
             visibility: &self.vis,
@@ -218,7 +216,7 @@ impl SceneEnvironment {
             dirs: &self.cube.dirs,
             lights: self.lights,
         };
-        WeightSet::gather(&input, &self.env, delta_deg)
+        Radiances::gather(&input, &self.env, delta_deg)
     }
 
     /// Switches to a new environment map (keeps rotation and exposure).
@@ -260,8 +258,8 @@ impl SceneEnvironment {
         );
         self.vis.merge_from(&more, &rest);
         if let Some(dir) = &self.params.cache_dir {
-            let key = super::visibility::cache_key(self.vis.res, &self.frames, mesh.triangles);
-            self.vis.write(&super::visibility::cache_path(dir, key))?;
+            let key = visibility::cache_key(self.vis.res, &self.frames, mesh.triangles);
+            self.vis.write(&visibility::cache_path(dir, key))?;
         }
         self.timings.visibility_ms += ms(t);
         self.prepare_weights(Instant::now())?;
@@ -274,10 +272,9 @@ impl SceneEnvironment {
         self.set_weights(self.gather(self.params.rotation_deg));
         self.timings.weights_ms = ms(t);
         self.eigen = None;
-        self.camera.get_mut().unwrap_or_else(|e| e.into_inner()).clear();
         if let Some((a_n, e)) = self.params.eigen {
             let t = Instant::now();
-            let sets: Vec<WeightSet> =
+            let sets: Vec<Radiances> =
                 (0..a_n).map(|a| self.gather(a as f64 * 360.0 / a_n as f64)).collect();
             let metric = self.coefficients[0].metric();
             // Keep up to REPORT_COMPONENTS so error tables for e = 1…8 need no second PCA.
@@ -308,9 +305,9 @@ impl SceneEnvironment {
         self.timings.rotation_ms = ms(t);
     }
 
-    /// Exact weights `g` for the current rotation.
-    fn set_weights(&mut self, g: WeightSet) {
-        self.weights = OnceLock::from(g);
+    /// Exact radiances `g` for the current rotation.
+    fn set_weights(&mut self, g: Radiances) {
+        self.radiances = OnceLock::from(g);
         self.eigen_o = None;
     }
 
@@ -318,11 +315,11 @@ impl SceneEnvironment {
     fn set_eigen_rotation(&mut self, delta_deg: f64, e: usize) {
         self.params.rotation_deg = delta_deg;
         self.eigen_o = self.eigen.as_ref().map(|ews| ews.coefficients_at(delta_deg, e));
-        self.weights = OnceLock::new();
+        self.radiances = OnceLock::new();
     }
 
     /// `o_k(δ)` of the current rotation, when it came from the eigenweightsets.
-    pub(super) fn eigen_coefficients(&self) -> Option<&[f64]> {
+    pub fn eigen_coefficients(&self) -> Option<&[f64]> {
         self.eigen_o.as_deref()
     }
 
@@ -342,7 +339,7 @@ impl SceneEnvironment {
 
     /// Turns the environment to `delta_deg` about world `+z`: with eigenweightsets the
     /// coefficients `o_k(δ)` (`G` and `γ*` follow on demand, see
-    /// [`SceneEnvironment::fill`]), else a new gather.
+    /// [`crate::EnvCoefficients::fill`]), else a new gather.
     pub fn set_rotation(&mut self, delta_deg: f64) {
         let t = Instant::now();
         match (&self.eigen, self.params.eigen) {
@@ -396,20 +393,25 @@ impl SceneEnvironment {
                 continue;
             }
             let (x, y) = (dot(d, t), dot(d, b));
-            let p = hemicube_pixel(res, x, y, z);
+            let p = pixel_of(res, x, y, z);
             if bits[p / 64] >> (p % 64) & 1 == 1 {
                 visit([x, y, z], *pw);
             }
         }
     }
 
-    /// The current weights `g` (after an eigenweightset rotation `Ḡ + Σ o_k W_k`, formed
-    /// on the first call).
-    pub fn weights(&self) -> &WeightSet {
-        self.weights.get_or_init(|| match (&self.eigen, &self.eigen_o) {
+    /// The current radiances `g` (after an eigenweightset rotation `Ḡ + Σ o_k W_k`,
+    /// formed on the first call).
+    pub fn radiances(&self) -> &Radiances {
+        self.radiances.get_or_init(|| match (&self.eigen, &self.eigen_o) {
             (Some(ews), Some(o)) => ews.reconstruct_from(o),
-            _ => WeightSet { frames: self.frames.len(), lights: self.lights, g: vec![] },
+            _ => Radiances { frames: self.frames.len(), lights: self.lights, g: vec![] },
         })
+    }
+
+    /// The coefficient matrices `P` of the materials (eq. 10–12), in the order given.
+    pub fn coefficients(&self) -> &[CoefficientMatrix] {
+        &self.coefficients
     }
 
     /// The visibility maps.

@@ -3,44 +3,11 @@
 //! of a triangle clipped to a pyramid (Sutherland–Hodgman against the planes through the
 //! origin), of a box (`q / m` ranges), and the pixel masks of a rectangle of pixels.
 //!
-//! Face coordinates follow [`super::hemicube`]: the face with major axis `m` and sign `s`
+//! Face coordinates follow [`crate::hemicube`]: the face with major axis `m` and sign `s`
 //! maps a direction `p` to `u = p_u / (s p_m)`, `v = p_v / (s p_m)`.
 
 use super::bvh::dot;
-
-/// One hemicube face: the major axis (with its sign) and the axes of the face coordinates.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct Face {
-    pub(super) major: usize,
-    pub(super) sign: f32,
-    pub(super) u: usize,
-    pub(super) v: usize,
-    pub(super) v_min: f32,
-    pub(super) rows: usize,
-    /// First pixel of the face in the hemicube layout.
-    pub(super) start: usize,
-}
-
-/// The five faces in the layout of [`super::hemicube`].
-pub(super) fn faces(res: usize) -> [Face; 5] {
-    let (half, top) = (res / 2, res * res);
-    let side = |major, sign, u, k: usize| Face {
-        major,
-        sign,
-        u,
-        v: 2,
-        v_min: 0.0,
-        rows: half,
-        start: top + k * res * half,
-    };
-    [
-        Face { major: 2, sign: 1.0, u: 0, v: 1, v_min: -1.0, rows: res, start: 0 },
-        side(0, 1.0, 1, 0),
-        side(0, -1.0, 1, 1),
-        side(1, 1.0, 0, 2),
-        side(1, -1.0, 0, 3),
-    ]
-}
+use crate::hemicube::Face;
 
 /// Inclusive pixel rectangle on one face.
 #[derive(Debug, Clone, Copy)]
