@@ -1,28 +1,21 @@
 //! The `btf` command-line tool: parses arguments into validated configurations and calls
-//! the libraries (`btf-core`, `datasets`, `btf-capture`, `btf-render`). No numerics live here.
+//! the libraries (`btf-core`, `btf-image`, `btf-light`, `datasets`, `btf-capture`,
+//! `btf-render`). Glue only: one file per command in [`cmd`], shared arguments in
+//! [`args`], report writers in [`report`], the two demos in [`demo`], the viewer in
+//! [`view`].
 
-mod cmd_capture;
-mod cmd_compress;
-mod cmd_demo;
-mod cmd_export;
-mod cmd_import;
-mod cmd_inspect;
-mod cmd_reconstruct;
-mod cmd_relight;
-mod cmd_thin;
-mod demo_scene;
+mod args;
+mod cmd;
+mod demo;
 mod guard;
 mod progress;
-mod registration_sweep;
-mod relight_report;
-mod render_cmd;
-mod render_sweep;
-mod sweep;
-mod synth_cmd;
-mod thin_demo;
-mod thin_demo_material;
-mod thin_demo_report;
+mod report;
 mod view;
+
+use cmd::{
+    capture, compress, demo as demo_cmd, export, import, inspect, reconstruct, relight, render,
+    render_sweep, synth, thin,
+};
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -38,33 +31,33 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Run the whole pipeline on embedded defaults: synthesise, compress, render, report.
-    Demo(cmd_demo::DemoArgs),
+    Demo(demo_cmd::DemoArgs),
     /// Synthesise materials, environments, meshes and raw captures with known ground truth.
     #[command(subcommand)]
-    Synth(synth_cmd::SynthCmd),
+    Synth(synth::SynthCmd),
     /// Print what a BTF or eigen store holds.
-    Inspect(cmd_inspect::InspectArgs),
+    Inspect(inspect::InspectArgs),
     /// Compress a BTF store by per-view-slot PCA (or sweep the number of components).
-    Compress(cmd_compress::CompressArgs),
+    Compress(compress::CompressArgs),
     /// Reconstruct the texture for one view and one light direction on the CPU.
-    Reconstruct(cmd_reconstruct::ReconstructArgs),
+    Reconstruct(reconstruct::ReconstructArgs),
     /// Process raw captures into normtextures and score them against ground truth.
     #[command(subcommand)]
-    Capture(cmd_capture::CaptureCmd),
+    Capture(capture::CaptureCmd),
     /// Import Bonn-database BTFs (UBO2003 image folders, UBO2014 `.btf` files).
     #[command(subcommand)]
-    Import(cmd_import::ImportCmd),
+    Import(import::ImportCmd),
     /// Export data for other tools.
-    Export(cmd_export::ExportArgs),
+    Export(export::ExportArgs),
     /// Render a scene (TOML) on the GPU.
-    Render(render_cmd::RenderArgs),
+    Render(render::RenderArgs),
     /// Time the renderer against plain texturing and its read bound over components × modes.
     RenderSweep(render_sweep::RenderSweepArgs),
     /// Render a scene under several environment maps and rotations (batch relighting).
-    Relight(cmd_relight::RelightArgs),
+    Relight(relight::RelightArgs),
     /// Thin semi-transparent cloth: check the slab model against Monte Carlo.
     #[command(subcommand)]
-    Thin(cmd_thin::ThinCmd),
+    Thin(thin::ThinCmd),
     /// Inspect a garment interactively (window), or export a turntable (headless).
     View(view::ViewArgs),
 }
@@ -72,18 +65,18 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Demo(a) => cmd_demo::run(a),
-        Command::Inspect(a) => cmd_inspect::run(a),
-        Command::Compress(a) => cmd_compress::run(a),
-        Command::Reconstruct(a) => cmd_reconstruct::run(a),
-        Command::Capture(c) => cmd_capture::run(c),
-        Command::Import(c) => cmd_import::run(c),
-        Command::Export(a) => cmd_export::run(a),
-        Command::Synth(c) => synth_cmd::run(c),
-        Command::Render(a) => render_cmd::run(a),
+        Command::Demo(a) => demo_cmd::run(a),
+        Command::Inspect(a) => inspect::run(a),
+        Command::Compress(a) => compress::run(a),
+        Command::Reconstruct(a) => reconstruct::run(a),
+        Command::Capture(c) => capture::run(c),
+        Command::Import(c) => import::run(c),
+        Command::Export(a) => export::run(a),
+        Command::Synth(c) => synth::run(c),
+        Command::Render(a) => render::run(a),
         Command::RenderSweep(a) => render_sweep::run(a),
-        Command::Relight(a) => cmd_relight::run(a),
-        Command::Thin(c) => cmd_thin::run(c),
+        Command::Relight(a) => relight::run(a),
+        Command::Thin(c) => thin::run(c),
         Command::View(a) => view::run(a),
     };
     match result {

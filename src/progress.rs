@@ -1,7 +1,11 @@
 //! Progress bars for long work (hidden when standard error is not a terminal or when
 //! `BTF_NO_PROGRESS` is set, so logs and tests stay clean).
 
+use anyhow::{Context, Result};
+use btf_core::compress::{CompressParams, CompressReport, compress};
+use btf_core::store::BtfStore;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::path::Path;
 
 /// A bar of `len` steps labelled `what`.
 pub fn bar(len: u64, what: &str) -> ProgressBar {
@@ -22,4 +26,18 @@ pub fn bar(len: u64, what: &str) -> ProgressBar {
 pub fn enabled() -> bool {
     std::env::var_os("BTF_NO_PROGRESS").is_none()
         && std::io::IsTerminal::is_terminal(&std::io::stderr())
+}
+
+/// Compresses with a progress bar.
+pub fn compress_with_progress(
+    input: &BtfStore,
+    output: &Path,
+    params: CompressParams,
+) -> Result<CompressReport> {
+    let pb = bar(input.meta().n_views() as u64, "compress");
+    let r = compress(input, output, params, &|| pb.inc(1)).with_context(|| {
+        format!("compressing {} into {}", input.path().display(), output.display())
+    })?;
+    pb.finish_and_clear();
+    Ok(r)
 }

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 
 /// Everything that can go wrong while reading or writing captures and Bonn formats.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum Error {
     /// Malformed bytes or names: truncated data, wrong signature, inconsistent sizes.
     #[error("{file}: field '{field}': {what}")]

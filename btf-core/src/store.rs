@@ -102,6 +102,15 @@ pub fn read_meta(path: &Path) -> Result<BtfMeta> {
 pub struct StoreTxn {
     final_path: PathBuf,
     partial: PathBuf,
+    job: Value,
+}
+
+/// Where a committing writer keeps its job while the partial holds the final attributes:
+/// beside the partial (`NAME.partial.job`), so that nothing of it travels into the store.
+fn job_sidecar(partial: &Path) -> PathBuf {
+    let mut name = partial.file_name().unwrap_or_default().to_os_string();
+    name.push(".job");
+    partial.with_file_name(name)
 }
 
 impl StoreTxn {
@@ -115,14 +124,25 @@ impl StoreTxn {
             .ok_or_else(|| Error::Invalid(format!("{}: not a file name", path.display())))?;
         crate::fs::check_replaceable(path, crate::fs::OutputKind::Store)?;
         let partial = path.with_file_name(format!("{}.partial", name.to_string_lossy()));
+        let sidecar = job_sidecar(&partial);
+        if sidecar.exists() && !partial.exists() {
+            // Left by a writer killed just after its commit's rename: the store is whole.
+            fs::remove_file(&sidecar).map_err(|e| Error::io(&sidecar, e))?;
+        }
         if partial.exists() && resume && !partial.join("zarr.json").exists() {
             // Killed between creating the folder and recording the job: nothing was
             // written yet (the record comes before any chunk), so start afresh.
             fs::remove_dir_all(&partial).map_err(|e| Error::io(&partial, e))?;
         }
         if partial.exists() && resume {
-            let recorded =
-                zarr::read_group(&partial).ok().and_then(|a| a.get("partial_job").cloned());
+            // A writer killed inside its commit left the final attributes in the partial and
+            // its job in the sidecar; it resumes (and commits) like any other.
+            let sidecar_job =
+                || fs::read(&sidecar).ok().and_then(|b| serde_json::from_slice::<Value>(&b).ok());
+            let recorded = zarr::read_group(&partial)
+                .ok()
+                .and_then(|a| a.get("partial_job").cloned())
+                .or_else(sidecar_job);
             match recorded {
                 Some(r) if &r == job => {}
                 Some(r) => {
@@ -152,12 +172,15 @@ impl StoreTxn {
                 )));
             }
             fs::remove_dir_all(&partial).map_err(|e| Error::io(&partial, e))?;
+            if sidecar.exists() {
+                fs::remove_file(&sidecar).map_err(|e| Error::io(&sidecar, e))?;
+            }
         }
         fs::create_dir_all(&partial).map_err(|e| Error::io(&partial, e))?;
         if !partial.join("zarr.json").exists() {
             zarr::write_group(&partial, &json!({ "partial_job": job }))?;
         }
-        Ok(StoreTxn { final_path: path.to_owned(), partial })
+        Ok(StoreTxn { final_path: path.to_owned(), partial, job: job.clone() })
     }
 
     /// The folder being written.
@@ -171,6 +194,10 @@ impl StoreTxn {
         attrs["complete"] = json!(true);
         // A killed writer's temporary files must not travel into the finished store.
         crate::fs::sweep_temps(&self.partial)?;
+        // The final attributes replace the job record: keep the job beside the partial until
+        // the store is in place, so a writer killed in between can still be resumed.
+        let sidecar = job_sidecar(&self.partial);
+        crate::fs::write_atomic(&sidecar, self.job.to_string().as_bytes())?;
         zarr::write_group(&self.partial, &attrs)?;
         if self.final_path.exists() && exchange(&self.partial, &self.final_path).is_ok() {
             // One atomic step swapped the new store in; the old one now sits at `partial`.
@@ -192,6 +219,7 @@ impl StoreTxn {
             fs::rename(&self.partial, &self.final_path)
                 .map_err(|e| Error::io(&self.final_path, e))?;
         }
+        fs::remove_file(&sidecar).map_err(|e| Error::io(&sidecar, e))?;
         Ok(())
     }
 }
@@ -717,6 +745,38 @@ mod tests {
         let err = w.finish().unwrap_err().to_string();
         assert!(err.contains("never written"), "{err}");
         assert_eq!(BtfStore::open(&p).unwrap().read_image(0, 0).unwrap()[1], 1.0);
+    }
+
+    #[test]
+    fn a_writer_killed_inside_its_commit_resumes() {
+        // The commit writes the final attributes into the partial, then renames it: killed
+        // in between, the partial holds no `partial_job`. The job waits in the sidecar, so a
+        // resume of the same job finishes it and another job's is refused (both used to be
+        // refused as "records no job"); the sidecar never enters the store.
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("m.btf");
+        let job = json!({ "what": "a", "n": 1 });
+        let txn = StoreTxn::begin(&p, false, &job).unwrap();
+        let partial = txn.dir().to_owned();
+        crate::fs::write_atomic(&job_sidecar(&partial), job.to_string().as_bytes()).unwrap();
+        zarr::write_group(&partial, &json!({ "complete": true })).unwrap();
+        drop(txn);
+        let other = json!({ "what": "a", "n": 2 });
+        let e = StoreTxn::begin(&p, true, &other).unwrap_err().to_string();
+        assert!(e.contains("different job") && e.contains("n"), "{e}");
+        let txn = StoreTxn::begin(&p, true, &job).unwrap();
+        txn.commit(json!({ "btf": {} })).unwrap();
+        let attrs = zarr::read_group(&p).unwrap();
+        assert_eq!(attrs, json!({ "btf": {}, "complete": true }));
+        let names: Vec<String> = fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(names, ["m.btf"]);
+        // Killed just after the rename: the stray sidecar goes with the next writer.
+        fs::write(job_sidecar(&partial), "{}").unwrap();
+        StoreTxn::begin(&p, false, &job).unwrap().commit(json!({})).unwrap();
+        assert!(!job_sidecar(&partial).exists());
     }
 
     #[test]

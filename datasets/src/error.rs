@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 /// Everything that can go wrong while synthesising or loading data.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum Error {
     /// A parameter or an input file that does not make sense.
     #[error("invalid input: {0}")]

@@ -209,10 +209,15 @@ pub fn export_ubo2003(store: &BtfStore, dir: &Path, name: &str, enc: ImageEncodi
     Ok(scale)
 }
 
-/// True when `dir` holds nothing but the `tv…_pv…` view folders an export writes.
+/// True when `dir` holds nothing but the `tv…_pv…` view folders an export writes and the
+/// temporary files of its atomic writes (a writer killed before its sidecar).
 fn only_view_folders(dir: &Path) -> bool {
     std::fs::read_dir(dir).is_ok_and(|d| {
-        d.flatten().all(|e| e.file_name().to_str().is_some_and(|n| n.starts_with("tv")))
+        d.flatten().all(|e| {
+            e.file_name()
+                .to_str()
+                .is_some_and(|n| n.starts_with("tv") || btf_core::fs::is_temp_name(n))
+        })
     })
 }
 

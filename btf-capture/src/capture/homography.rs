@@ -5,7 +5,6 @@
 //! refinement of the geometric error (H&Z eq. 4.8) over point residuals plus point-on-line
 //! residuals for samples of the border lines.
 
-use super::layout::apply;
 use nalgebra::{DMatrix, DVector, Matrix3, SMatrix, Vector3};
 
 /// A point correspondence: plate mm ↔ image pixels.
@@ -41,6 +40,12 @@ fn collinear(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> bool {
     let (u, v) = ([b[0] - a[0], b[1] - a[1]], [c[0] - a[0], c[1] - a[1]]);
     let cross = (u[0] * v[1] - u[1] * v[0]).abs();
     cross <= 1e-3 * u[0].hypot(u[1]) * v[0].hypot(v[1])
+}
+
+/// Applies a homography to a point.
+pub fn apply(h: &Matrix3<f64>, p: [f64; 2]) -> [f64; 2] {
+    let q = h * Vector3::new(p[0], p[1], 1.0);
+    [q.x / q.z, q.y / q.z]
 }
 
 /// Whether some four of `pts` have no three on a line — what a plane homography needs to

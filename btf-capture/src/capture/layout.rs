@@ -410,12 +410,6 @@ fn check_plate(c: &Checker, p: &PlateToml, cam: &CameraToml) -> Result<()> {
     Ok(())
 }
 
-/// Applies a homography to a point.
-pub fn apply(h: &Matrix3<f64>, p: [f64; 2]) -> [f64; 2] {
-    let q = h * Vector3::new(p[0], p[1], 1.0);
-    [q.x / q.z, q.y / q.z]
-}
-
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;

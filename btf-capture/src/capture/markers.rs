@@ -15,8 +15,8 @@
 //! is the background-subtracted centroid of a bilinear profile along the image normal of
 //! the projected line.
 
+use super::homography::apply;
 use super::homography::{LineMatch, PointMatch};
-use super::layout::apply;
 use nalgebra::{Matrix3, Vector3};
 
 /// A luminance image (row-major, top-left origin).

@@ -15,7 +15,8 @@
 //! prior holds the rest at nominal. The result is a prediction to search around, never a
 //! registration: the homography the store records is always fitted to ≥ 4 agreeing markers.
 
-use super::layout::{CaptureLayout, apply};
+use super::homography::apply;
+use super::layout::CaptureLayout;
 use nalgebra::{Matrix3, Rotation3, SMatrix, SVector, Vector3};
 
 /// A plate pose away from nominal: `[ω_x, ω_y, ω_z]` (rad), `[t_x, t_y, t_z]` (mm).

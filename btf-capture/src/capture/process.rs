@@ -148,10 +148,10 @@ pub fn auto_inset_mm(layout: &CaptureLayout) -> f64 {
         let hm = layout.nominal_homography(view);
         for c in [[-h, -h], [h, -h], [h, h], [-h, h]] {
             let e = 1e-3;
-            let p = super::layout::apply(&hm, c);
+            let p = super::homography::apply(&hm, c);
             let (px, py) = (
-                super::layout::apply(&hm, [c[0] + e, c[1]]),
-                super::layout::apply(&hm, [c[0], c[1] + e]),
+                super::homography::apply(&hm, [c[0] + e, c[1]]),
+                super::homography::apply(&hm, [c[0], c[1] + e]),
             );
             let j =
                 nalgebra::Matrix2::new(px[0] - p[0], py[0] - p[0], px[1] - p[1], py[1] - p[1]) / e;

@@ -16,7 +16,7 @@
 //! built once per slot as a sparse matrix of `(pixel, weight)` taps ([`Plan`]), with the
 //! radiometric gain and flat field folded in, and applied to each light image.
 
-use super::layout::apply;
+use super::homography::apply;
 use super::raw::RawImage;
 use nalgebra::Matrix3;
 

@@ -24,8 +24,9 @@
 //! per image and scoring the result against the truth.
 
 use super::blend;
+use super::homography::apply;
 use super::incidence::light_cosine_gains;
-use super::layout::{CaptureLayout, apply};
+use super::layout::CaptureLayout;
 use super::process::{normtexture, radiometric_gain};
 use super::raw;
 use super::rectify::{Filter, Grid, Plan};

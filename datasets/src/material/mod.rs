@@ -18,6 +18,7 @@ pub mod knit;
 pub mod patterns;
 pub mod preview;
 pub mod surface;
+pub mod weave_lambert;
 
 pub use generate::{GenerateOptions, GenerateReport, generate};
 

@@ -1,0 +1,90 @@
+//! `btf compress`: per-view-slot PCA of a BTF store into an eigen store, or a sweep over the
+//! number of components with a report of what accuracy costs.
+
+use crate::guard::{self, outln};
+use crate::progress;
+use crate::report::compress_sweep as sweep;
+use anyhow::{Context, Result, bail};
+use btf_core::compress::CompressParams;
+use btf_core::eigen::Quantization;
+use btf_core::store::BtfStore;
+use std::path::PathBuf;
+
+/// Arguments of `btf compress`.
+#[derive(clap::Args)]
+pub struct CompressArgs {
+    /// Input BTF store.
+    input: PathBuf,
+    /// Components per view slot.
+    #[arg(short = 'c', long, default_value_t = 16)]
+    components: usize,
+    /// Output eigen store.
+    #[arg(short = 'o', long)]
+    output: Option<PathBuf>,
+    /// Storage of the eigentextures: f16 or u8.
+    #[arg(long, default_value = "f16")]
+    quantize: String,
+    /// Print one JSON object.
+    #[arg(long)]
+    json: bool,
+    /// Continue an interrupted run, keeping the slots it finished.
+    #[arg(long)]
+    resume: bool,
+    /// Sweep these component counts (comma separated) instead of one compression.
+    #[arg(long, value_delimiter = ',')]
+    sweep: Option<Vec<usize>>,
+    /// Folder for the sweep's tables and images.
+    #[arg(long)]
+    report: Option<PathBuf>,
+}
+
+/// Runs `btf compress`.
+pub fn run(a: CompressArgs) -> Result<()> {
+    let quantization: Quantization = a.quantize.parse()?;
+    let input =
+        BtfStore::open(&a.input).with_context(|| format!("cannot open {}", a.input.display()))?;
+    if let Some(cs) = a.sweep {
+        let Some(dir) = a.report else { bail!("--sweep needs --report DIR") };
+        if cs.is_empty() || cs.contains(&0) {
+            bail!("--sweep needs component counts ≥ 1, e.g. --sweep 1,2,4,8,16");
+        }
+        guard::refuse_overlap(&[("--report", &dir)], &[("input", &a.input)])?;
+        return sweep::run(&input, &cs, quantization, &dir);
+    }
+    let Some(output) = a.output else { bail!("give -o OUT.eig (or --sweep LIST --report DIR)") };
+    guard::refuse_overlap(&[("-o", &output)], &[("input", &a.input)])?;
+    let params = CompressParams { components: a.components, quantization, resume: a.resume };
+    let r =
+        guard::resumable(&output, || progress::compress_with_progress(&input, &output, params))?;
+    for w in &r.warnings {
+        eprintln!("warning: {w}");
+    }
+    if a.json {
+        outln!("{}", serde_json::to_string_pretty(&r)?);
+    } else {
+        outln!(
+            "compressed {} slots × {} lights to {} components ({}) in {:.2} s",
+            r.slots.len(),
+            input.meta().n_lights(),
+            r.components,
+            r.quantization.name(),
+            r.seconds
+        );
+        outln!(
+            "  relative RMSE {:.3e} (exact PCA {:.3e}), PSNR {:.1} dB",
+            r.rel_rmse,
+            r.rel_rmse_exact,
+            r.psnr_db
+        );
+        outln!(
+            "  {:.1} MiB → {:.1} MiB (ratio {:.1}:1)",
+            r.input_bytes as f64 / 1048576.0,
+            r.output_bytes as f64 / 1048576.0,
+            r.input_bytes as f64 / r.output_bytes.max(1) as f64
+        );
+        if r.resumed_slots > 0 {
+            outln!("  resumed {} slots from an interrupted run", r.resumed_slots);
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,15 @@
+//! One module per subcommand of `btf`: its arguments (clap) and its `run`.
+
+pub mod capture;
+pub mod compress;
+pub mod demo;
+pub mod export;
+pub mod import;
+pub mod inspect;
+pub mod reconstruct;
+pub mod registration_sweep;
+pub mod relight;
+pub mod render;
+pub mod render_sweep;
+pub mod synth;
+pub mod thin;

@@ -1,0 +1,232 @@
+//! End-to-end tests of `btf inspect`, `compress`, `reconstruct` and `export` on tiny stores.
+
+use crate::common;
+use common::*;
+use serde_json::Value;
+
+#[test]
+fn inspect_reports_the_contract_keys() {
+    let d = Dir::new();
+    write_test_btf(&d.path("m.btf"), 4);
+    let v: Value = serde_json::from_str(&d.ok(&["inspect", "m.btf", "--json"])).unwrap();
+    assert_eq!(v["kind"], "btf");
+    assert_eq!(v["sampling"], "custom");
+    assert_eq!((v["n_views"].as_u64(), v["n_lights"].as_u64()), (Some(7), Some(7)));
+    assert_eq!((v["width"].as_u64(), v["height"].as_u64()), (Some(4), Some(4)));
+    assert_eq!(v["dtype"], "f32");
+    // 49 chunks of 4·4·3 floats plus a 4-byte checksum each.
+    assert_eq!(v["bytes"].as_u64(), Some(49 * (48 * 4 + 4)));
+    d.ok(&["compress", "m.btf", "-c", "3", "-o", "m.eig"]);
+    let e: Value = serde_json::from_str(&d.ok(&["inspect", "m.eig", "--json"])).unwrap();
+    assert_eq!(e["kind"], "eigen");
+    assert_eq!(e["components"].as_u64(), Some(3));
+    assert_eq!(e["dtype"], "f16");
+}
+
+#[test]
+fn compress_json_satisfies_eckart_young_per_slot() {
+    let d = Dir::new();
+    write_test_btf(&d.path("m.btf"), 6);
+    let v: Value =
+        serde_json::from_str(&d.ok(&["compress", "m.btf", "-c", "2", "-o", "m.eig", "--json"]))
+            .unwrap();
+    for key in
+        ["components", "rel_rmse", "psnr_db", "seconds", "input_bytes", "output_bytes", "slots"]
+    {
+        assert!(v.get(key).is_some(), "missing key {key}");
+    }
+    assert_eq!(v["components"].as_u64(), Some(2));
+    let slots = v["slots"].as_array().unwrap();
+    assert_eq!(slots.len(), 7);
+    for s in slots {
+        let (sse, disc) = (s["sse"].as_f64().unwrap(), s["discarded_eigen_sum"].as_f64().unwrap());
+        assert!(disc > 0.0);
+        assert!((sse - disc).abs() <= 1e-6 * disc, "slot {}: sse {sse} vs {disc}", s["view"]);
+    }
+    let rel = v["rel_rmse"].as_f64().unwrap();
+    assert!(rel > 0.0 && rel < 0.2, "{rel}");
+}
+
+#[test]
+fn too_many_components_are_clamped_with_a_warning() {
+    let d = Dir::new();
+    write_test_btf(&d.path("m.btf"), 4);
+    let o = d.btf(&["compress", "m.btf", "-c", "16", "-o", "m.eig", "--json"]);
+    assert!(o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("at most 6"), "{err}");
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["components"].as_u64(), Some(6));
+    // All 6 components of 7 images: lossless up to f16 storage.
+    assert!(v["rel_rmse"].as_f64().unwrap() < 1e-3);
+}
+
+#[test]
+fn reconstruct_at_a_sample_direction_gives_the_normtexture() {
+    let d = Dir::new();
+    write_test_btf(&d.path("m.btf"), 5);
+    d.ok(&["compress", "m.btf", "-c", "6", "-o", "m.eig"]);
+    // View slot 3 = (40°, 120°); light 5 = (40°, 240°).
+    d.ok(&[
+        "reconstruct",
+        "m.eig",
+        "--view",
+        "40,120",
+        "--light",
+        "40,240",
+        "-o",
+        "t.exr",
+        "--png",
+        "t.png",
+    ]);
+    let (w, h, px) = read_exr(&d.path("t.exr"));
+    assert_eq!((w, h), (5, 5));
+    let expect: Vec<f32> = (0..75).map(|t| value(3, 5, t)).collect();
+    let rel = btf_core::metrics::rel_rmse(&expect, &px);
+    assert!(rel < 1e-3, "relative RMSE {rel}");
+    assert!(d.path("t.png").exists());
+    // Halfway between two lights of the ring: the mean of the two images.
+    d.ok(&["reconstruct", "m.eig", "--view", "40,120", "--light", "40,270", "-o", "u.exr"]);
+    let (_, _, mid) = read_exr(&d.path("u.exr"));
+    let expect: Vec<f32> = (0..75).map(|t| 0.5 * (value(3, 5, t) + value(3, 6, t))).collect();
+    assert!(btf_core::metrics::rel_rmse(&expect, &mid) < 1e-3);
+    // Below the horizon a light contributes nothing.
+    d.ok(&["reconstruct", "m.eig", "--view", "0,0", "--light", "95,0", "-o", "z.exr"]);
+    assert!(read_exr(&d.path("z.exr")).2.iter().all(|&v| v == 0.0));
+}
+
+#[test]
+fn export_npy_matches_the_store() {
+    let d = Dir::new();
+    write_test_btf(&d.path("m.btf"), 4);
+    d.ok(&["export", "m.btf", "--slot", "2", "--format", "npy", "-o", "s.npy"]);
+    let bytes = std::fs::read(d.path("s.npy")).unwrap();
+    assert_eq!(&bytes[..8], b"\x93NUMPY\x01\x00");
+    let hlen = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+    let header = std::str::from_utf8(&bytes[10..10 + hlen]).unwrap();
+    assert!(header.contains("'shape': (7, 48)") && header.contains("'<f4'"), "{header}");
+    assert_eq!((10 + hlen) % 64, 0);
+    let data: Vec<f32> = bytes[10 + hlen..]
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+        .collect();
+    assert_eq!(data.len(), 7 * 48);
+    assert_eq!(data[4 * 48 + 10], value(2, 4, 10));
+    let err = d.fails(&["export", "m.btf", "--slot", "7", "-o", "x.npy"]);
+    assert!(err.contains("out of range"), "{err}");
+}
+
+#[test]
+fn corrupt_input_is_named_and_leaves_no_output() {
+    let d = Dir::new();
+    write_test_btf(&d.path("m.btf"), 4);
+    let chunk = d.path("m.btf/normtextures/c/4/2/0/0/0");
+    let mut b = std::fs::read(&chunk).unwrap();
+    b[17] ^= 0x40;
+    std::fs::write(&chunk, &b).unwrap();
+    let err = d.fails(&["compress", "m.btf", "-c", "2", "-o", "m.eig"]);
+    assert!(
+        err.contains("view slot 4, light 2")
+            && err.contains("checksum")
+            && err.contains("c/4/2/0/0/0"),
+        "{err}"
+    );
+    assert!(!d.path("m.eig").exists());
+    // A NaN with a valid checksum: refused, slot and light named.
+    let mut raw = vec![0u8; 48 * 4];
+    raw[..4].copy_from_slice(&f32::NAN.to_le_bytes());
+    let mut with_crc = raw.clone();
+    with_crc.extend_from_slice(&crc32c::crc32c(&raw).to_le_bytes());
+    std::fs::write(&chunk, &with_crc).unwrap();
+    let err = d.fails(&["compress", "m.btf", "-c", "2", "-o", "m.eig"]);
+    assert!(err.contains("view slot 4, light 2") && err.contains("non-finite"), "{err}");
+    assert!(!d.path("m.eig").exists());
+}
+
+#[test]
+fn interrupted_compression_resumes_and_keeps_previous_output() {
+    let d = Dir::new();
+    write_test_btf(&d.path("m.btf"), 4);
+    d.ok(&["compress", "m.btf", "-c", "2", "-o", "m.eig"]);
+    let before = std::fs::read(d.path("m.eig/eigentextures/c/0/0/0/0/0")).unwrap();
+    // Simulate an interruption: a second run to the same output whose partial store has
+    // only some slots (copy the finished store's arrays, drop slots 3..7). A partial
+    // records the job that began it from the first instant, as a killed run leaves it.
+    let partial = d.path("m.eig.partial");
+    copy_dir(&d.path("m.eig"), &partial);
+    // The record `compress -c 2` writes: the eigen store's metadata and the input's identity.
+    let btf = btf_core::store::BtfStore::open(&d.path("m.btf")).unwrap().meta().clone();
+    let meta = btf_core::eigen::EigenMeta {
+        btf,
+        components: 2,
+        quantization: btf_core::eigen::Quantization::F16,
+    };
+    let input = btf_core::fs::input_identity(&d.path("m.btf"));
+    let record = serde_json::json!({ "store": "eigen", "meta": meta, "job": { "input": input } });
+    btf_core::zarr::write_group(&partial, &serde_json::json!({ "partial_job": record })).unwrap();
+    for v in 3..7 {
+        std::fs::remove_file(partial.join(format!("eigenvalues/c/{v}/0"))).unwrap();
+    }
+    assert!(!std::fs::read_to_string(d.path("m.eig/zarr.json")).unwrap().is_empty());
+    let v: Value = serde_json::from_str(
+        &d.ok(&["compress", "m.btf", "-c", "2", "-o", "m.eig", "--resume", "--json"]),
+    )
+    .unwrap();
+    assert_eq!(v["resumed_slots"].as_u64(), Some(3));
+    assert!(!partial.exists());
+    assert_eq!(std::fs::read(d.path("m.eig/eigentextures/c/0/0/0/0/0")).unwrap(), before);
+}
+
+fn copy_dir(from: &std::path::Path, to: &std::path::Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        let t = to.join(e.file_name());
+        if e.file_type().unwrap().is_dir() {
+            copy_dir(&e.path(), &t);
+        } else {
+            std::fs::copy(e.path(), t).unwrap();
+        }
+    }
+}
+
+#[test]
+fn sweep_writes_tables_and_pictures_with_falling_error() {
+    let d = Dir::new();
+    write_test_btf(&d.path("m.btf"), 6);
+    d.ok(&["compress", "m.btf", "--sweep", "1,2,4,6", "--report", "rep"]);
+    for f in [
+        "report.md",
+        "sweep.csv",
+        "sweep.md",
+        "error.png",
+        "accuracy_vs_time.png",
+        "size_time.png",
+        "eigenvalues.png",
+        "heatmaps.png",
+        "reconstructions.png",
+    ] {
+        assert!(d.path("rep").join(f).exists(), "missing {f}");
+    }
+    let csv = std::fs::read_to_string(d.path("rep/sweep.csv")).unwrap();
+    let errs: Vec<f64> =
+        csv.lines().skip(1).map(|l| l.split(',').nth(2).unwrap().parse().unwrap()).collect();
+    assert_eq!(errs.len(), 4);
+    assert!(errs.windows(2).all(|w| w[1] < w[0]), "{errs:?}");
+    assert!(errs[3] < 1e-3);
+    let img = image::open(d.path("rep/heatmaps.png")).unwrap().to_rgb8();
+    // The first panel compares the original with itself: pure green.
+    assert_eq!(img.get_pixel(2, 2).0, [0, 255, 0]);
+}
+
+#[test]
+fn missing_and_wrong_kind_inputs_give_clear_errors() {
+    let d = Dir::new();
+    let err = d.fails(&["inspect", "nope.btf"]);
+    assert!(err.contains("nope.btf"), "{err}");
+    write_test_btf(&d.path("m.btf"), 4);
+    let err = d.fails(&["reconstruct", "m.btf", "--view", "0,0", "--light", "0,0", "-o", "x.exr"]);
+    assert!(err.contains("not an eigen store"), "{err}");
+    let err = d.fails(&["compress", "m.btf", "-o", "x.eig", "--quantize", "f8"]);
+    assert!(err.contains("f8"), "{err}");
+}

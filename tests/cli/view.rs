@@ -1,0 +1,416 @@
+//! End-to-end tests of `btf view` as a person uses it: the real binary in a window on a
+//! virtual X server (Xvfb) rendering on lavapipe, driven by real synthetic X input (xdotool
+//! through XTEST), its screenshot key writing PNGs that are measured, and a window-manager
+//! close (`WM_DELETE_WINDOW`). Also the headless turntable export and latency benchmark.
+//!
+//! Without Xvfb, xdotool or a GPU adapter the tests skip, unless `BTF_REQUIRE_GPU=1` (CI),
+//! where they fail.
+
+use crate::common;
+
+use common::Dir;
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc::{Receiver, channel};
+use std::time::{Duration, Instant};
+
+fn required() -> bool {
+    std::env::var("BTF_REQUIRE_GPU").as_deref() == Ok("1")
+}
+
+/// Skips (or fails under `BTF_REQUIRE_GPU=1`) with `why`.
+fn skip(test: &str, why: &str) {
+    assert!(!required(), "{test}: BTF_REQUIRE_GPU=1 but {why}");
+    eprintln!("{test}: skipped, {why}");
+}
+
+fn have(tool: &str) -> bool {
+    Command::new("sh")
+        .args(["-c", &format!("command -v {tool}")])
+        .output()
+        .is_ok_and(|o| o.status.success())
+}
+
+/// A shirt in a small synthetic corduroy, under a point light, 320×240, on a purple
+/// background (sRGB (108, 0, 108) at exposure 1.5, a colour the beige fabric never takes);
+/// two environments and one missing file (listed first, so start-up meets it).
+fn garment_scene(d: &Dir) -> PathBuf {
+    d.ok(&["synth", "material", "--kind", "corduroy", "--size", "8", "-o", "m.btf"]);
+    d.ok(&["compress", "m.btf", "-c", "4", "-o", "m.eig"]);
+    d.ok(&["synth", "mesh", "--kind", "shirt", "-o", "shirt.obj"]);
+    d.ok(&["synth", "env", "--kind", "sky", "--width", "64", "-o", "sky.exr"]);
+    d.ok(&["synth", "env", "--kind", "studio", "--width", "64", "-o", "studio.exr"]);
+    let scene = r#"
+[output]
+width = 320
+height = 240
+exposure = 1.5
+background = [0.1, 0.0, 0.1]
+
+[[meshes]]
+path = "shirt.obj"
+
+[[materials]]
+store = "m.eig"
+uv_scale = 6.0
+
+[camera]
+eye = [0.3, -1.5, 0.5]
+target = [0.0, 0.0, 0.36]
+up = [0.0, 0.0, 1.0]
+fov_y_deg = 38.0
+
+[[lights]]
+kind = "point"
+position = [-0.9, -1.6, 1.5]
+intensity = [12.0, 12.0, 12.0]
+
+[[lights]]
+kind = "environment"
+path = "studio.exr"
+exposure = 0.5
+visibility_res = 8
+eigenweightsets = { rotations = 12, components = 4 }
+cache_dir = "cache"
+"#;
+    let path = d.path("scene.toml");
+    std::fs::write(&path, scene).unwrap();
+    path
+}
+
+/// sRGB level of the background's red and blue: linear 0.1 × exposure 1.5.
+const BACKGROUND_SRGB: u8 = 108;
+
+/// An 8-bit RGB image.
+struct Shot {
+    w: usize,
+    h: usize,
+    rgb: Vec<u8>,
+}
+
+impl Shot {
+    fn load(path: &Path) -> Shot {
+        let img = image::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgb8();
+        Shot { w: img.width() as usize, h: img.height() as usize, rgb: img.into_raw() }
+    }
+    /// Pixels of the garment: not the background colour (±2 levels).
+    fn mask(&self) -> Vec<bool> {
+        let bg = [BACKGROUND_SRGB, 0, BACKGROUND_SRGB];
+        self.rgb.chunks_exact(3).map(|p| (0..3).any(|k| p[k].abs_diff(bg[k]) > 2)).collect()
+    }
+    fn coverage(&self) -> f64 {
+        let m = self.mask();
+        m.iter().filter(|&&b| b).count() as f64 / m.len() as f64
+    }
+    /// Fraction of pixels whose largest channel difference exceeds `tol`.
+    fn changed(&self, other: &Shot, tol: u8) -> f64 {
+        let n = self.w * self.h;
+        let c = (0..n)
+            .filter(|&i| (0..3).any(|k| self.rgb[3 * i + k].abs_diff(other.rgb[3 * i + k]) > tol))
+            .count();
+        c as f64 / n as f64
+    }
+    /// Fraction of pixels inside one silhouette and outside the other.
+    fn silhouette_xor(&self, other: &Shot) -> f64 {
+        let (a, b) = (self.mask(), other.mask());
+        a.iter().zip(&b).filter(|(x, y)| x != y).count() as f64 / a.len() as f64
+    }
+    /// Mean absolute difference (0–255) over pixels of the garment in both images.
+    fn shading_difference(&self, other: &Shot) -> f64 {
+        let (a, b) = (self.mask(), other.mask());
+        let (mut sum, mut n) = (0u64, 0u64);
+        for i in 0..a.len() {
+            if a[i] && b[i] {
+                sum += (0..3)
+                    .map(|k| self.rgb[3 * i + k].abs_diff(other.rgb[3 * i + k]) as u64)
+                    .sum::<u64>();
+                n += 3;
+            }
+        }
+        sum as f64 / n.max(1) as f64
+    }
+}
+
+/// A virtual X server on a free display, stopped on drop.
+struct Xvfb {
+    child: Child,
+    display: String,
+}
+
+impl Xvfb {
+    fn start() -> Xvfb {
+        let n = (90..190)
+            .find(|n| {
+                !Path::new(&format!("/tmp/.X11-unix/X{n}")).exists()
+                    && !Path::new(&format!("/tmp/.X{n}-lock")).exists()
+            })
+            .expect("a free X display number");
+        let display = format!(":{n}");
+        let child = Command::new("Xvfb")
+            .args([&display, "-screen", "0", "800x600x24", "-nolisten", "tcp"])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("Xvfb starts");
+        let t = Instant::now();
+        while !Path::new(&format!("/tmp/.X11-unix/X{n}")).exists() {
+            assert!(t.elapsed() < Duration::from_secs(10), "Xvfb {display} did not come up");
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        Xvfb { child, display }
+    }
+}
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// The viewer process and its stdout lines.
+struct Viewer {
+    child: Child,
+    lines: Receiver<String>,
+    display: String,
+}
+
+impl Viewer {
+    fn start(d: &Dir, display: &str, scene: &Path) -> Viewer {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_btf"))
+            .args(["view", scene.to_str().unwrap(), "--log", "--shots", "shots"])
+            .args(["--env", "missing.exr", "--env", "sky.exr", "--env", "studio.exr"])
+            .current_dir(d.tmp.path())
+            .env("DISPLAY", display)
+            .env("BTF_NO_PROGRESS", "1")
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .expect("btf view starts");
+        let out = child.stdout.take().unwrap();
+        let (tx, lines) = channel();
+        std::thread::spawn(move || {
+            for line in BufReader::new(out).lines().map_while(Result::ok) {
+                eprintln!("viewer: {line}");
+                if tx.send(line).is_err() {
+                    break;
+                }
+            }
+        });
+        Viewer { child, lines, display: display.to_string() }
+    }
+
+    /// The next line containing `pat` (panics after `secs`).
+    fn wait_for(&self, pat: &str, secs: u64) -> String {
+        let deadline = Instant::now() + Duration::from_secs(secs);
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            match self.lines.recv_timeout(left) {
+                Ok(l) if l.contains(pat) => return l,
+                Ok(_) => {}
+                Err(e) => panic!("no line with {pat:?} within {secs} s ({e})"),
+            }
+        }
+    }
+
+    fn xdotool(&self, args: &[&str]) {
+        let o = Command::new("xdotool").args(args).env("DISPLAY", &self.display).output().unwrap();
+        assert!(o.status.success(), "xdotool {args:?}: {}", String::from_utf8_lossy(&o.stderr));
+    }
+
+    /// Presses the screenshot key and loads the PNG it reports.
+    fn shot(&self, d: &Dir) -> Shot {
+        self.xdotool(&["key", "p"]);
+        let line = self.wait_for("screenshot ", 20);
+        Shot::load(&d.tmp.path().join(line.trim_start_matches("screenshot ")))
+    }
+
+    /// A real drag with `button` from `(x, y)` by `(dx, 0)` in 12 steps (window pixels).
+    fn drag(&self, window: &str, button: &str, (x, y): (i32, i32), dx: i32) {
+        let mut args: Vec<String> =
+            ["mousemove", "--window", window, &x.to_string(), &y.to_string()]
+                .map(String::from)
+                .to_vec();
+        args.extend(["mousedown".into(), button.into()]);
+        for k in 1..=12 {
+            let xk = x + dx * k / 12;
+            args.extend(["sleep", "0.03", "mousemove", "--window", window].map(String::from));
+            args.extend([xk.to_string(), y.to_string()]);
+        }
+        args.extend(["mouseup".into(), button.into()]);
+        self.xdotool(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    }
+}
+
+/// Sends `WM_DELETE_WINDOW`, as a window manager's close button does.
+fn close_window(display: &str, window: u32) {
+    use x11rb::protocol::xproto::{ClientMessageEvent, ConnectionExt, EventMask};
+    let (conn, _) = x11rb::connect(Some(display)).expect("X connection");
+    let atom = |name: &[u8]| conn.intern_atom(false, name).unwrap().reply().unwrap().atom;
+    let (protocols, delete) = (atom(b"WM_PROTOCOLS"), atom(b"WM_DELETE_WINDOW"));
+    let ev = ClientMessageEvent::new(32, window, protocols, [delete, 0, 0, 0, 0]);
+    conn.send_event(false, window, EventMask::NO_EVENT, ev).unwrap().check().unwrap();
+    // A round trip, so the server has handled the request before the connection closes.
+    conn.get_input_focus().unwrap().reply().unwrap();
+}
+
+#[test]
+fn window_draws_turns_lights_and_closes() {
+    let test = "window_draws_turns_lights_and_closes";
+    for tool in ["Xvfb", "xdotool"] {
+        if !have(tool) {
+            return skip(test, &format!("{tool} is not installed (apt-get install xvfb xdotool)"));
+        }
+    }
+    let t0 = Instant::now();
+    let d = Dir::new();
+    let scene = garment_scene(&d);
+    let x = Xvfb::start();
+    let mut v = Viewer::start(&d, &x.display, &scene);
+    let (mut window, mut first, mut layout) = (String::new(), String::new(), String::new());
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while window.is_empty() || first.is_empty() || layout.is_empty() {
+        match v.lines.recv_timeout(deadline.saturating_duration_since(Instant::now())) {
+            Ok(l) if l.starts_with("window ") => window = l.split(' ').nth(1).unwrap().into(),
+            Ok(l) if l.starts_with("frame ") && first.is_empty() => first = l,
+            Ok(l) if l.starts_with("layout ") => layout = l,
+            Ok(_) => {}
+            Err(_) => {
+                let status = v.child.try_wait().unwrap();
+                return skip(test, &format!("the viewer showed no frame (exit {status:?})"));
+            }
+        }
+    }
+    // The missing environment (first in the list) is an error in the panel, not a crash.
+    assert!(first.contains("env_error=Some(") && first.contains("missing.exr"), "{first}");
+    // The frame's rectangle in the window (right of the panel): drags start at its centre.
+    let r: Vec<f32> = layout.split(' ').skip(1).map(|t| t.parse().unwrap()).collect();
+    let centre = ((r[0] + r[2] / 2.0) as i32, (r[1] + r[3] / 2.0) as i32);
+    let (cx, cy) = (centre.0.to_string(), centre.1.to_string());
+    v.xdotool(&["mousemove", "--window", &window, &cx, &cy]);
+    v.xdotool(&["windowfocus", "--sync", &window]);
+
+    let start = v.shot(&d);
+    assert_eq!((start.w, start.h), (320, 240));
+    let coverage = start.coverage();
+    eprintln!("garment coverage {coverage:.3}");
+    assert!(coverage > 0.12, "garment covers {coverage:.3} of the frame");
+
+    // A left drag of 150 px turns the garment by 60°.
+    v.drag(&window, "1", centre, 150);
+    let turned = v.shot(&d);
+    let (changed, xor) = (turned.changed(&start, 8), turned.silhouette_xor(&start));
+    eprintln!("drag: changed {changed:.3}, silhouette xor {xor:.3}");
+    assert!(changed > 0.08 && xor > 0.03, "drag changed {changed:.3}, silhouette {xor:.3}");
+
+    // A right drag moves the light: shading changes, the silhouette does not.
+    v.drag(&window, "3", centre, -120);
+    let relit = v.shot(&d);
+    let (xor, shading) = (relit.silhouette_xor(&turned), relit.shading_difference(&turned));
+    eprintln!("light drag: silhouette xor {xor:.4}, shading {shading:.2}/255");
+    assert!(xor == 0.0 && shading > 2.0, "light drag: xor {xor:.4}, shading {shading:.2}");
+
+    // Next environment (the sky) loads; rotating it by 60°.
+    v.xdotool(&["key", "e"]);
+    let line = v.wait_for("change=EnvSwap", 20);
+    assert!(line.contains("env=Some(1)") && line.contains("env_error=None"), "{line}");
+    assert!(line.contains("env_lighting=true"), "swap did not reach the environment light: {line}");
+    let before = v.shot(&d);
+    for _ in 0..4 {
+        v.xdotool(&["key", "bracketright"]);
+    }
+    let line = v.wait_for("env_rotation_deg=60", 20);
+    let rotated = v.shot(&d);
+    let shading = rotated.shading_difference(&before);
+    eprintln!("environment rotation 60°: shading {shading:.2}/255 ({line})");
+    // The scene has an environment light, so the viewer must light the garment with it and
+    // the rotation (through the eigenweightsets) must change the shading.
+    assert!(line.contains("env_lighting=true"), "environment light not in use: {line}");
+    assert!(shading > 1.0, "environment rotation changed the shading by {shading:.2}/255");
+
+    let id: u32 = window.parse().expect("numeric window id");
+    close_window(&v.display, id);
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let status = loop {
+        if let Some(s) = v.child.try_wait().unwrap() {
+            break s;
+        }
+        assert!(Instant::now() < deadline, "the viewer did not exit within 10 s of the close");
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    assert!(status.success(), "exit status {status:?}");
+    eprintln!("{test}: {:.1} s", t0.elapsed().as_secs_f64());
+}
+
+/// Runs a headless `btf view`; `None` (skipped) without an adapter.
+fn headless(d: &Dir, test: &str, args: &[&str]) -> Option<String> {
+    let o = d.btf(args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    if !o.status.success() && err.contains("no GPU adapter") {
+        skip(test, &err);
+        return None;
+    }
+    assert!(o.status.success(), "btf {args:?}: {err}");
+    Some(String::from_utf8(o.stdout).unwrap())
+}
+
+#[test]
+fn turntable_writes_a_full_turn() {
+    let d = Dir::new();
+    let scene = garment_scene(&d);
+    let s = scene.to_str().unwrap();
+    let Some(_) = headless(&d, "turntable", &["view", s, "--turntable", "4", "-o", "tt"]) else {
+        return;
+    };
+    let frames: Vec<Shot> =
+        (0..4).map(|i| Shot::load(&d.path(&format!("tt/turntable-{i:04}.png")))).collect();
+    for (i, f) in frames.iter().enumerate() {
+        assert!(f.coverage() > 0.05, "frame {i} covers {:.3}", f.coverage());
+    }
+    // Every frame differs from the first; at 90° and 270° the silhouette does (at 180° the
+    // back's outline is nearly the front's mirror image).
+    for i in 1..4 {
+        let (changed, xor) =
+            (frames[i].changed(&frames[0], 8), frames[i].silhouette_xor(&frames[0]));
+        eprintln!("turntable frame {i} vs 0: changed {changed:.3}, silhouette xor {xor:.3}");
+        assert!(changed > 0.05, "frame {i} vs 0: changed {changed:.3}");
+        assert!(i == 2 || xor > 0.03, "frame {i} vs 0: silhouette xor {xor:.3}");
+    }
+    // No temporary files are left; `--resume` redoes only the missing frame.
+    let names: Vec<String> = std::fs::read_dir(d.path("tt"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n != ".btf-output.json") // the marker that lets a rerun replace the folder
+        .collect();
+    assert_eq!(names.len(), 4, "{names:?}");
+    let kept = std::fs::metadata(d.path("tt/turntable-0000.png")).unwrap().modified().unwrap();
+    std::fs::remove_file(d.path("tt/turntable-0002.png")).unwrap();
+    headless(&d, "turntable", &["view", s, "--turntable", "4", "-o", "tt", "--resume"]).unwrap();
+    let again = Shot::load(&d.path("tt/turntable-0002.png"));
+    assert_eq!(again.changed(&frames[2], 0), 0.0, "re-rendered frame is identical");
+    let now = std::fs::metadata(d.path("tt/turntable-0000.png")).unwrap().modified().unwrap();
+    assert_eq!(kept, now, "an existing frame was rewritten");
+    // Without -o the export is refused with a message that says what is missing.
+    let err = d.fails(&["view", s, "--turntable", "4"]);
+    assert!(err.contains("-o DIR"), "{err}");
+}
+
+#[test]
+fn bench_reports_latency_per_interaction() {
+    let d = Dir::new();
+    let scene = garment_scene(&d);
+    let args = ["view", scene.to_str().unwrap(), "--bench", "2", "--env", "sky.exr"];
+    let Some(out) = headless(&d, "bench", &args) else { return };
+    let json = out.lines().last().unwrap();
+    let rows: Vec<serde_json::Value> = serde_json::from_str(json).unwrap();
+    let names: Vec<&str> = rows.iter().map(|r| r["change"].as_str().unwrap()).collect();
+    assert_eq!(names, ["camera move", "light move", "environment rotation", "environment swap"]);
+    for r in &rows {
+        let total = r["total_ms"].as_f64().unwrap();
+        let sum = r["update_ms"].as_f64().unwrap() + r["render_ms"].as_f64().unwrap();
+        assert!(total > 0.0 && (total - sum).abs() < 1e-2 + 1e-3 * total, "{r}");
+    }
+    // (With two samples the medians are means, so total = update + render exactly.)
+    assert!((rows[0]["ratio_to_camera"].as_f64().unwrap() - 1.0).abs() < 1e-9);
+}
