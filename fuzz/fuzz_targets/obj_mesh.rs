@@ -3,7 +3,7 @@
 //! scene), the rest is the OBJ text.
 #![no_main]
 
-use btf_render::mesh::{Mesh, PlanarUv};
+use btf_light::mesh::{Mesh, PlanarUv};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
