@@ -1,7 +1,9 @@
 //! Yarn and knit foundation (issue 18, DESIGN §0 of `shared/knit/DESIGN.md`).
 #![forbid(unsafe_code)]
 
+pub mod curve;
 pub mod error;
+pub mod frame;
 pub mod hash;
 pub mod params;
 pub mod quad;

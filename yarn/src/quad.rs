@@ -93,12 +93,17 @@ pub fn gl16() -> &'static GaussLegendre {
     R.get_or_init(|| GaussLegendre::new(16))
 }
 
+/// Most panels one [`adaptive`] call may split (a noisy or discontinuous integrand stops
+/// here instead of recursing to the bottom everywhere).
+pub const ADAPTIVE_BUDGET: usize = 20_000;
+
 /// `∫_a^b f` to an absolute tolerance `tol` by adaptive bisection with the 7-point rule
-/// (at most `2^max_depth` panels; a smooth integrand needs a handful).
+/// (depth ≤ 30, at most [`ADAPTIVE_BUDGET`] splits; a smooth integrand needs a handful).
 pub fn adaptive(a: f64, b: f64, tol: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
     let rule = gl7();
     let whole = rule.integrate(a, b, &mut f);
-    adaptive_rec(rule, a, b, whole, tol.max(f64::MIN_POSITIVE), 40, &mut f)
+    let mut budget = ADAPTIVE_BUDGET;
+    adaptive_rec(rule, a, b, whole, tol.max(f64::MIN_POSITIVE), 30, &mut budget, &mut f)
 }
 
 fn adaptive_rec(
@@ -108,17 +113,22 @@ fn adaptive_rec(
     whole: f64,
     tol: f64,
     depth: u32,
+    budget: &mut usize,
     f: &mut impl FnMut(f64) -> f64,
 ) -> f64 {
     let m = 0.5 * (a + b);
     let left = rule.integrate(a, m, &mut *f);
     let right = rule.integrate(m, b, &mut *f);
     let sum = left + right;
-    if depth == 0 || (sum - whole).abs() <= tol || m <= a || m >= b {
+    // Never ask for more than rounding allows: the halved tolerance is floored at a few
+    // ulps of the panel's value, so an unreachable request cannot recurse to the bottom.
+    let floor = 8.0 * f64::EPSILON * (left.abs() + right.abs());
+    if depth == 0 || *budget == 0 || (sum - whole).abs() <= tol.max(floor) || m <= a || m >= b {
         return sum;
     }
-    adaptive_rec(rule, a, m, left, 0.5 * tol, depth - 1, f)
-        + adaptive_rec(rule, m, b, right, 0.5 * tol, depth - 1, f)
+    *budget -= 1;
+    adaptive_rec(rule, a, m, left, 0.5 * tol, depth - 1, budget, f)
+        + adaptive_rec(rule, m, b, right, 0.5 * tol, depth - 1, budget, f)
 }
 
 #[cfg(test)]

@@ -120,8 +120,8 @@ mod tests {
             let a = k as f64 * 0.4;
             let w = rotate(v, axis, a);
             let back = signed_angle(v, w, axis);
-            let wrapped = (a + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
-                - std::f64::consts::PI;
+            let wrapped =
+                (a + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
             assert!((back - wrapped).abs() < 1e-12, "{a}: {back} vs {wrapped}");
             assert!((length(w) - 1.0).abs() < 1e-15);
         }

@@ -121,7 +121,10 @@ pub fn import_zhao_config(
             .split_whitespace()
             .map(|t| {
                 t.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| {
-                    Error::Invalid(format!("{source}:{}: {key}: '{t}' is not a finite number", i + 1))
+                    Error::Invalid(format!(
+                        "{source}:{}: {key}: '{t}' is not a finite number",
+                        i + 1
+                    ))
                 })
             })
             .collect();
@@ -142,10 +145,13 @@ pub fn import_zhao_config(
     };
     let need = |key: &str| -> Result<f64> {
         get(key, 1)?.map(|v| v[0]).ok_or_else(|| {
-            Error::Invalid(format!("{source}: missing key '{key}' (a Zhao config_step2.txt has it)"))
+            Error::Invalid(format!(
+                "{source}: missing key '{key}' (a Zhao config_step2.txt has it)"
+            ))
         })
     };
-    let opt = |key: &str, default: f64| -> Result<f64> { Ok(get(key, 1)?.map_or(default, |v| v[0])) };
+    let opt =
+        |key: &str, default: f64| -> Result<f64> { Ok(get(key, 1)?.map_or(default, |v| v[0])) };
     let gauss = |key: &str, m: f64| -> Result<Gaussian> {
         Ok(get(key, 2)?.map_or(Gaussian::new(0.0, 0.0), |v| Gaussian::new(v[0] * m, v[1] * m)))
     };
@@ -265,8 +271,9 @@ flyaway_loop_r1: 0.04 0.008
 
     #[test]
     fn import_converts_units_and_handedness_and_refuses_to_guess() {
-        let imp = import_zhao_config(FIXTURE, "yarn9/config_step2.txt", LengthUnit::Millimetre, None)
-            .unwrap();
+        let imp =
+            import_zhao_config(FIXTURE, "yarn9/config_step2.txt", LengthUnit::Millimetre, None)
+                .unwrap();
         let p = &imp.params;
         assert_eq!((p.ply_count, p.fibers_per_ply), (2, 40));
         assert!((p.ply_center_distance - 0.02e-3).abs() < 1e-18);
