@@ -3,6 +3,7 @@
 
 pub mod curve;
 pub mod error;
+pub mod fiber;
 pub mod frame;
 pub mod hash;
 pub mod params;
