@@ -2,6 +2,7 @@
 #![forbid(unsafe_code)]
 
 pub mod curve;
+pub mod density;
 pub mod error;
 pub mod fiber;
 pub mod frame;
