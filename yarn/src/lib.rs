@@ -1,6 +1,7 @@
 //! Yarn and knit foundation (issue 18, DESIGN §0 of `shared/knit/DESIGN.md`).
 #![forbid(unsafe_code)]
 
+pub mod bcsdf;
 pub mod curve;
 pub mod density;
 pub mod error;

@@ -137,6 +137,44 @@ fn acklam(p: f64) -> f64 {
     }
 }
 
+/// Solves `f(x) = 0` for an increasing `f` on `[lo, hi]` (`f(lo) ≤ 0 ≤ f(hi)`) by Newton
+/// steps from `x0`, safeguarded by bisection of the bracket; `df` is `f'`.
+pub fn solve_increasing(
+    f: impl Fn(f64) -> f64,
+    df: impl Fn(f64) -> f64,
+    mut lo: f64,
+    mut hi: f64,
+    x0: f64,
+) -> f64 {
+    let mut x = x0.clamp(lo, hi);
+    for _ in 0..200 {
+        let e = f(x);
+        if e == 0.0 {
+            return x;
+        }
+        if e > 0.0 {
+            hi = x
+        } else {
+            lo = x
+        }
+        if hi - lo <= 4.0 * f64::EPSILON * hi.abs().max(lo.abs()).max(1e-300) {
+            return 0.5 * (lo + hi);
+        }
+        let d = df(x);
+        let step = if d > 0.0 { e / d } else { f64::NAN };
+        let nx = x - step;
+        if nx > lo && nx < hi {
+            if step.abs() <= 2.0 * f64::EPSILON * nx.abs().max(1e-300) {
+                return nx;
+            }
+            x = nx;
+        } else {
+            x = 0.5 * (lo + hi);
+        }
+    }
+    x
+}
+
 /// `ln Γ(x)` for `x > 0` (Lanczos, g = 7, 9 terms).
 pub fn ln_gamma(x: f64) -> f64 {
     const G: [f64; 9] = [
