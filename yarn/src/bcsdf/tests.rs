@@ -169,6 +169,7 @@ fn ambient_tables_match_brute_force_quadrature() {
             ambient::w19_eq10(gamma)
         );
         assert!((numeric - 1.0).abs() < 1e-12);
-        assert!((ambient::w19_eq10(gamma) - 1.0).abs() > 0.05);
     }
+    // The printed form swings from 0.02 to 1.04 over the fitted range of γ_TT.
+    assert!((ambient::w19_eq10(20f64.to_radians()) - 0.02).abs() < 1e-3);
 }
