@@ -8,6 +8,7 @@ pub mod error;
 pub mod fiber;
 pub mod frame;
 pub mod hash;
+pub mod io;
 pub mod params;
 pub mod quad;
 pub mod special;
