@@ -639,6 +639,28 @@ def ubo2014_seeds():
     put("ubo2014", "raw-fmf-meta-v1.bin", b"\x07" + legacy_meta)
 
 
+def bcc(curves, up=2, info=b"seed"):
+    """BCC (yarn::io::bcc): 64-byte header, then per curve an i32 count (negative: closed)
+    and little-endian f32 xyz."""
+    total = sum(len(pts) for pts, _ in curves)
+    head = b"BCC" + bytes([0x44]) + b"C0" + bytes([3, up])
+    head += struct.pack("<QQ", len(curves), total) + info.ljust(40, b"\0")[:40]
+    body = b""
+    for pts, closed in curves:
+        body += struct.pack("<i", -len(pts) if closed else len(pts))
+        for p in pts:
+            body += struct.pack("<3f", *p)
+    return head + body
+
+
+def bcc_seeds():
+    line = [(0.001 * i, 0.0002 * (i % 3), 0.0) for i in range(6)]
+    ring = [(0.0, 0.0, 0.0), (0.002, 0.0, 0.001), (0.001, 0.002, 0.0)]
+    put("bcc", "open-and-closed.bcc", bcc([(line, False), (ring, True)]))
+    put("bcc", "y-up.bcc", bcc([(ring, True)], up=1))
+    put("bcc", "two-points.bcc", bcc([(line[:2], False)]))
+
+
 def main():
     if os.path.isdir(OUT):
         shutil.rmtree(OUT)
@@ -653,6 +675,7 @@ def main():
     eigen_store_seeds()
     pvf_seeds()
     ubo2014_seeds()
+    bcc_seeds()
     total = 0
     for t in sorted(os.listdir(OUT)):
         files = os.listdir(os.path.join(OUT, t))

@@ -2,7 +2,7 @@
 # Runs every fuzz target, one after the other, for RUNS executions each (default 10^6)
 # under a 1 GiB memory limit, at low priority, and writes a table of the figures.
 #
-#   bash fuzz/run_all.sh                      # all 12 targets, 10^6 executions each
+#   bash fuzz/run_all.sh                      # all 13 targets, 10^6 executions each
 #   RUNS=100000 bash fuzz/run_all.sh pvf obj_mesh
 #   SANITIZER=none bash fuzz/run_all.sh       # if AddressSanitizer builds fail
 #
@@ -22,7 +22,7 @@ SANITIZER=${SANITIZER:-address}
 NICE=${NICE:-15}
 TRIPLE=x86_64-unknown-linux-gnu
 ALL=(envmap scene_toml obj_mesh capture_toml zarr_array btf_store
-     eigen_store ubo2014 pvf raw_image ubo2003_image)
+     eigen_store ubo2014 pvf raw_image ubo2003_image bcc)
 targets=("$@")
 [ ${#targets[@]} -eq 0 ] && targets=("${ALL[@]}")
 
