@@ -1,5 +1,5 @@
 //! The eigen store: per view slot `j`, the mean texture `μ_j`, `c` eigentextures `B_kj`, the
-//! per-light weights `p_ikj` and all eigenvalues (Sattler et al. 2003, eq. 1), in a Zarr v3
+//! per-light weights `p_ikj` and all eigenvalues ([S03 eq. 1]), in a Zarr v3
 //! group chunked per view slot.
 //!
 //! Eigentextures are stored quantised, `f16` (default) or `u8`, each component with its own

@@ -1,8 +1,8 @@
 //! `btf thin demo`: the thin-cloth paper's flag scene on embedded defaults — the datasets
 //! curtain in a synthetic woven material, in front of a synthetic sky that lights it
 //! (environment light, Sattler et al. 2003 §5) and shows through it (alpha `e^{−τ₁/μ}`,
-//! thin-cloth paper eq. 9), with a point light circling it so that the frames go from
-//! front-lit (reflection, eq. 7) to back-lit (transmission, eq. 8) and back.
+//! [TC eq. 9]), with a point light circling it so that the frames go from
+//! front-lit (reflection, [TC eq. 7]) to back-lit (transmission, [TC eq. 8]) and back.
 //!
 //! Per frame the same scene is rendered with the curtain opaque and with `transmission`,
 //! back to back (frame time ratio), and the thin one again without the background, which

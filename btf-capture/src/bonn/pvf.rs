@@ -1,4 +1,4 @@
-//! PVF payloads: per-view PCA, the representation of Sattler et al. 2003 (eq. 1–2), read
+//! PVF payloads: per-view PCA, the representation of Sattler et al. 2003 ([S03 eq. 1–2]), read
 //! slot by slot so that a large file never has to fit in memory, and written from our
 //! eigen stores (no public tool writes PVF).
 //!
