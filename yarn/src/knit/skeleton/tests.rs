@@ -1,3 +1,6 @@
+//! Skeleton checks: C¹ across cells, exact periodicity, the minimum centre-line distance
+//! between courses (reported per chart), frame continuity along the courses.
+
 use super::*;
 use crate::knit::chart::Chart;
 

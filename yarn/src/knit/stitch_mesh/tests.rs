@@ -1,3 +1,6 @@
+//! Stitch-mesh checks: flat periodicity, exact affine maps, inverse UV lookup on a
+//! cylinder with a seam, and the named error for a cell without a preimage.
+
 use super::*;
 use std::f64::consts::TAU;
 
