@@ -74,7 +74,7 @@ pub struct YarnParams {
     pub fiber_pitch: f64,
     /// ε of p(R), in `[0, 0.5]`.
     pub density_epsilon: f64,
-    /// β of p(R), ≥ 0.
+    /// β of p(R), in `[0, 100]`.
     pub density_beta: f64,
     /// R_max of p(R) (normalised radius; 1 in all of [Z16]'s fits), > 0.
     pub r_max: f64,
@@ -177,6 +177,9 @@ impl YarnParams {
             if !v.is_finite() {
                 return bad(field, v, "must be finite");
             }
+        }
+        if self.density_beta > 100.0 {
+            return bad("density_beta", self.density_beta, "at most 100 (fits are below 1)");
         }
         if !(0.0..=0.5).contains(&self.density_epsilon) {
             return bad("density_epsilon", self.density_epsilon, "must lie in [0, 0.5]");
