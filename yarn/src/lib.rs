@@ -9,6 +9,7 @@ pub mod fiber;
 pub mod frame;
 pub mod hash;
 pub mod io;
+pub mod knit;
 pub mod params;
 pub mod quad;
 pub mod special;

@@ -82,7 +82,7 @@ impl YarnCurve {
             shift,
             length_wrap: 0.0,
         };
-        c.validate(0).map_err(|e| strip_index(e))?;
+        c.validate(0).map_err(strip_index)?;
         c.set_rest_length_coords();
         Ok(c)
     }
@@ -242,6 +242,17 @@ impl YarnCurve {
     pub fn second_derivative(&self, u: f64) -> V3 {
         let (s, t) = self.locate(u);
         combine(&self.window(s), basis_d2(t))
+    }
+
+    /// The point of segment `seg` (virtual index on closed curves) at local `t ∈ [0, 1]`
+    /// (so the two segments meeting at a control point can both be asked there).
+    pub fn segment_point(&self, seg: isize, t: f64) -> V3 {
+        combine(&self.window(seg), basis(t))
+    }
+
+    /// `dC/du` of segment `seg` at local `t`.
+    pub fn segment_derivative(&self, seg: isize, t: f64) -> V3 {
+        combine(&self.window(seg), basis_d1(t))
     }
 
     /// The length coordinate z(u) (Catmull–Rom of the per-point values).

@@ -280,7 +280,8 @@ mod tests {
         p.rho_min = p.rho_max;
         p.migration_rate = 0.0;
         p.validate().unwrap();
-        let cases: [(&str, fn(&mut YarnParams)); 6] = [
+        type Edit = fn(&mut YarnParams);
+        let cases: [(&str, Edit); 6] = [
             ("fiber_radius", |p| p.fiber_radius = -1e-6),
             ("ply_count", |p| p.ply_count = 0),
             ("ply_ellipse_n", |p| p.ply_ellipse_n = f64::NAN),
