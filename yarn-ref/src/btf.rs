@@ -1,0 +1,1 @@
+//! The yarn BTF (in progress).

@@ -1,0 +1,1 @@
+//! Volumetric ray marcher (in progress).
