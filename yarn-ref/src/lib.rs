@@ -34,4 +34,4 @@ pub use geometry::{FiberScene, Period, SceneOptions};
 pub use integrator::{Background, PathSettings, Scene};
 pub use light::{EnvLight, Light};
 pub use material::Shading;
-pub use render::{Image, PixelSampler, RenderSettings, RenderStats, render};
+pub use render::{Image, PixelSampler, RenderSettings, RenderStats, render, render_with};

@@ -127,6 +127,35 @@ pub const MAX_PIXELS: usize = 1 << 26;
 
 /// Renders `scene` through `camera`.
 pub fn render(scene: &Scene, camera: &Camera, s: &RenderSettings) -> Result<(Image, RenderStats)> {
+    render_with(scene, camera, s, &|| {})
+}
+
+/// [`render`], calling `on_row` after each finished row (for a progress bar).
+pub fn render_with(
+    scene: &Scene,
+    camera: &Camera,
+    s: &RenderSettings,
+    on_row: &(dyn Fn() + Sync),
+) -> Result<(Image, RenderStats)> {
+    if s.path.max_bounces == 0 {
+        return Err(Error::Invalid("max_bounces must be ≥ 1".into()));
+    }
+    let top = scene.fibers.z_range()[1];
+    render_pixels(camera, s, top, on_row, |o, d, rng| {
+        let r = trace_path(scene, o, d, rng, &s.path);
+        (r.radiance, r.first, r.rays)
+    })
+}
+
+/// The pixel loop shared by the path tracer and the volume marcher: `radiance(o, d, rng)`
+/// returns one sample's radiance, what the camera ray hit first, and the rays it traced.
+pub fn render_pixels(
+    camera: &Camera,
+    s: &RenderSettings,
+    top: f64,
+    on_row: &(dyn Fn() + Sync),
+    radiance: impl Fn([f64; 3], [f64; 3], &mut Rng) -> ([f64; 3], FirstHit, u64) + Sync,
+) -> Result<(Image, RenderStats)> {
     let (w, h) = (s.width, s.height);
     if w == 0 || h == 0 || w.saturating_mul(h) > MAX_PIXELS || s.spp == 0 {
         return Err(Error::Invalid(format!(
@@ -134,11 +163,7 @@ pub fn render(scene: &Scene, camera: &Camera, s: &RenderSettings) -> Result<(Ima
             s.spp
         )));
     }
-    if s.path.max_bounces == 0 {
-        return Err(Error::Invalid("max_bounces must be ≥ 1".into()));
-    }
     let t0 = Instant::now();
-    let top = scene.fibers.z_range()[1];
     let (kx, ky) = strata(s.spp);
     let rows: Vec<(Vec<f32>, Vec<f32>, Vec<f32>, Vec<f32>, u64)> = (0..h)
         .into_par_iter()
@@ -163,18 +188,18 @@ pub fn render(scene: &Scene, camera: &Camera, s: &RenderSettings) -> Result<(Ima
                         PixelSampler::Random => (u, v),
                     };
                     let (o, d) = camera.ray(x as f64 + fx, y as f64 + fy, w, h, top);
-                    let r = trace_path(scene, o, d, &mut rng, &s.path);
-                    rays += r.rays;
-                    match r.first {
+                    let (l, first, r) = radiance(o, d, &mut rng);
+                    rays += r;
+                    match first {
                         FirstHit::Fiber => hits += 1,
                         FirstHit::Backing => backs += 1,
                         FirstHit::Escaped => {}
                     }
                     let n = (k + 1) as f64;
                     for c in 0..3 {
-                        let delta = r.radiance[c] - mean[c];
+                        let delta = l[c] - mean[c];
                         mean[c] += delta / n;
-                        m2[c] += delta * (r.radiance[c] - mean[c]);
+                        m2[c] += delta * (l[c] - mean[c]);
                     }
                 }
                 let n = s.spp as f64;
@@ -185,6 +210,7 @@ pub fn render(scene: &Scene, camera: &Camera, s: &RenderSettings) -> Result<(Ima
                 cov[x] = hits as f32 / s.spp as f32;
                 back[x] = backs as f32 / s.spp as f32;
             }
+            on_row();
             (rgb, var, cov, back, rays)
         })
         .collect();
