@@ -142,9 +142,19 @@ impl SlabRay {
             t0 = t0.max(a.min(b));
             t1 = t1.min(a.max(b));
         }
-        // Pad: the box was rounded outwards, the ray origin to f32 (relative 6e-8).
-        let pad = 1e-5 * t1.abs().max(t0.abs()) + 1e-30;
-        (t0 <= t1 + pad).then_some(t0)
+        // Pad: the box was rounded outwards, the ray origin to f32 (relative 6e-8); an
+        // infinite bound (a parallel ray outside a slab, an unbounded query) is no reason
+        // to pad.
+        if t0 > t1 {
+            if !(t0.is_finite() && t1.is_finite()) {
+                return None;
+            }
+            let pad = 1e-5 * t0.abs().max(t1.abs()) + 1e-30;
+            if t0 > t1 + pad {
+                return None;
+            }
+        }
+        Some(t0)
     }
 }
 

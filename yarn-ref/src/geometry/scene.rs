@@ -34,7 +34,7 @@ use yarn::fiber::Fibers;
 use yarn::vec3::{self, V3};
 
 /// Walls a ray may cross inside the slab before it is taken to escape.
-pub const MAX_TILES: usize = 1 << 14;
+pub const MAX_TILES: usize = 1 << 12;
 
 /// One capsule (32 bytes).
 #[derive(Debug, Clone, Copy, PartialEq)]
