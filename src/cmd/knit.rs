@@ -105,6 +105,9 @@ pub struct RefArgs {
     /// No black backing plane under a chart patch.
     #[arg(long)]
     pub no_backing: bool,
+    /// Seed of the pixel samples (the fibers use --seed).
+    #[arg(long, default_value_t = 1)]
+    pub render_seed: u64,
     /// Print a JSON summary on stdout.
     #[arg(long)]
     pub json: bool,
@@ -359,7 +362,7 @@ fn ref_cmd(a: RefArgs) -> Result<()> {
     let shading = shading(&a.shading, color)?;
     let sc = yarn_ref::Scene { fibers: &scene, lights: &lights, shading: &shading };
     let mut s = yarn_ref::RenderSettings::new(w, h, a.spp);
-    s.seed = a.patch.seed;
+    s.seed = a.render_seed;
     s.path.max_bounces = a.bounces;
     let bar = crate::progress::bar(h as u64, "rows");
     let (img, stats) = yarn_ref::render_with(&sc, &camera, &s, &|| bar.inc(1))?;
