@@ -13,8 +13,8 @@ mod report;
 mod view;
 
 use cmd::{
-    capture, compress, demo as demo_cmd, export, import, inspect, knit, reconstruct, relight, render,
-    render_sweep, synth, thin,
+    capture, compress, demo as demo_cmd, export, import, inspect, knit, reconstruct, relight,
+    render, render_sweep, synth, thin,
 };
 
 use clap::{Parser, Subcommand};

@@ -27,7 +27,7 @@ pub enum KnitCmd {
     /// Write the explicit fibers of a patch as BCC, Mitsuba curve text or OBJ lines.
     Fibers(PatchArgs),
     /// Reference render (path traced explicit fibers) of a patch or of BCC yarn curves.
-    Ref(RefArgs),
+    Ref(Box<RefArgs>),
 }
 
 /// `btf knit chart`.
@@ -123,7 +123,7 @@ pub fn run(cmd: KnitCmd) -> Result<()> {
         KnitCmd::Mesh(a) => mesh_cmd(a),
         KnitCmd::Skeleton(a) => skeleton_cmd(a),
         KnitCmd::Fibers(a) => fibers_cmd(a),
-        KnitCmd::Ref(a) => ref_cmd(a),
+        KnitCmd::Ref(a) => ref_cmd(*a),
     }
 }
 
@@ -153,7 +153,12 @@ fn stitches(s: &Option<String>) -> Result<Option<[usize; 2]>> {
 
 fn patch_opts(a: &PatchArgs) -> Result<PatchOptions> {
     let mut o = PatchOptions { stitches: stitches(&a.stitches)?, ..PatchOptions::default() };
-    o.generation = GenOptions { seed: a.seed, hairs: !a.no_hairs, samples_per_turn: a.samples_per_turn, ..GenOptions::default() };
+    o.generation = GenOptions {
+        seed: a.seed,
+        hairs: !a.no_hairs,
+        samples_per_turn: a.samples_per_turn,
+        ..GenOptions::default()
+    };
     Ok(o)
 }
 
@@ -247,7 +252,11 @@ fn skeleton_cmd(a: PatchArgs) -> Result<()> {
 fn fibers_to_set(f: &Fibers) -> Result<yarn::curve::YarnSet> {
     let curves = (0..f.fiber_count())
         .filter(|&k| f.fiber_points(k).len() >= 2)
-        .map(|k| yarn::curve::YarnCurve::open(f.fiber_points(k).iter().map(|p| p.map(f64::from)).collect()))
+        .map(|k| {
+            yarn::curve::YarnCurve::open(
+                f.fiber_points(k).iter().map(|p| p.map(f64::from)).collect(),
+            )
+        })
         .collect::<yarn::Result<Vec<_>>>()?;
     Ok(yarn::curve::YarnSet::new(curves, f.period)?)
 }
@@ -291,16 +300,25 @@ fn rgb(s: &Option<String>, what: &str) -> Result<Option<[f64; 3]>> {
 fn light(s: &str) -> Result<yarn_ref::Light> {
     let bad = || anyhow::anyhow!("--light '{s}': expected dir:THETA,PHI[,E] or point:X,Y,Z,I");
     let (kind, rest) = s.split_once(':').ok_or_else(bad)?;
-    let v: Vec<f64> = rest.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|_| bad())?;
+    let v: Vec<f64> = rest
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| bad())?;
     if !v.iter().all(|x| x.is_finite()) {
         return Err(bad());
     }
     match (kind, v.len()) {
         ("dir", 2 | 3) => {
             let e = v.get(2).copied().unwrap_or(1.0);
-            Ok(yarn_ref::Light::directional(btf_core::Direction::new(v[0], v[1]).to_vector(), [e; 3]))
+            Ok(yarn_ref::Light::directional(
+                btf_core::Direction::new(v[0], v[1]).to_vector(),
+                [e; 3],
+            ))
         }
-        ("point", 4) => Ok(yarn_ref::Light::Point { position: [v[0], v[1], v[2]], intensity: [v[3]; 3] }),
+        ("point", 4) => {
+            Ok(yarn_ref::Light::Point { position: [v[0], v[1], v[2]], intensity: [v[3]; 3] })
+        }
         _ => Err(bad()),
     }
 }
@@ -347,10 +365,13 @@ fn ref_cmd(a: RefArgs) -> Result<()> {
     let scene = yarn_ref::FiberScene::new(&fibers, &opts)?;
     let build_s = t0.elapsed().as_secs_f64();
     let camera = camera(&a.camera, &scene, period, z_ref)?;
-    let mut lights: Vec<yarn_ref::Light> = a.lights.iter().map(|s| light(s)).collect::<Result<_>>()?;
+    let mut lights: Vec<yarn_ref::Light> =
+        a.lights.iter().map(|s| light(s)).collect::<Result<_>>()?;
     if let (Some(spec), Some(path)) = (&a.env, &env_path) {
         let scale = match spec.split_once(',') {
-            Some((_, s)) => s.parse::<f64>().with_context(|| format!("--env '{spec}': bad scale"))?,
+            Some((_, s)) => {
+                s.parse::<f64>().with_context(|| format!("--env '{spec}': bad scale"))?
+            }
             None => 1.0,
         };
         let map = btf_image::EnvMap::load(path)?;
@@ -398,10 +419,20 @@ fn ref_cmd(a: RefArgs) -> Result<()> {
     Ok(())
 }
 
-fn camera(s: &str, scene: &yarn_ref::FiberScene, period: Option<yarn_ref::Period>, z_ref: f64) -> Result<yarn_ref::Camera> {
-    let bad = || anyhow::anyhow!("--camera '{s}': expected btf:THETA,PHI or persp:EX,EY,EZ,TX,TY,TZ,FOV");
+fn camera(
+    s: &str,
+    scene: &yarn_ref::FiberScene,
+    period: Option<yarn_ref::Period>,
+    z_ref: f64,
+) -> Result<yarn_ref::Camera> {
+    let bad =
+        || anyhow::anyhow!("--camera '{s}': expected btf:THETA,PHI or persp:EX,EY,EZ,TX,TY,TZ,FOV");
     let (kind, rest) = s.split_once(':').ok_or_else(bad)?;
-    let v: Vec<f64> = rest.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|_| bad())?;
+    let v: Vec<f64> = rest
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| bad())?;
     match (kind, v.len()) {
         ("btf", 2) => {
             let view = btf_core::Direction::new(v[0], v[1]).to_vector();
@@ -409,12 +440,20 @@ fn camera(s: &str, scene: &yarn_ref::FiberScene, period: Option<yarn_ref::Period
                 Some(p) => (p.origin, p.size),
                 None => {
                     let b = scene.bounds();
-                    ([b.min[0] as f64, b.min[1] as f64], [(b.max[0] - b.min[0]) as f64, (b.max[1] - b.min[1]) as f64])
+                    (
+                        [b.min[0] as f64, b.min[1] as f64],
+                        [(b.max[0] - b.min[0]) as f64, (b.max[1] - b.min[1]) as f64],
+                    )
                 }
             };
             Ok(yarn_ref::Camera::oblique(view, z_ref, origin, extent)?)
         }
-        ("persp", 7) => Ok(yarn_ref::Camera::perspective([v[0], v[1], v[2]], [v[3], v[4], v[5]], [0.0, 0.0, 1.0], v[6])?),
+        ("persp", 7) => Ok(yarn_ref::Camera::perspective(
+            [v[0], v[1], v[2]],
+            [v[3], v[4], v[5]],
+            [0.0, 0.0, 1.0],
+            v[6],
+        )?),
         _ => Err(bad()),
     }
 }

@@ -180,7 +180,12 @@ fn material(a: MaterialArgs) -> Result<()> {
         }
         return Ok(());
     }
-    if a.chart.is_some() || a.yarn.is_some() || a.spp.is_some() || a.stitches.is_some() || a.bounces.is_some() {
+    if a.chart.is_some()
+        || a.yarn.is_some()
+        || a.spp.is_some()
+        || a.stitches.is_some()
+        || a.bounces.is_some()
+    {
         bail!("--chart, --yarn, --spp, --stitches and --bounces are for --kind yarn");
     }
     let kind = MaterialKind::from_name(&a.kind)?;

@@ -8,8 +8,24 @@ use crate::common::Dir;
 fn yarn_btf_is_an_ordinary_store_and_compresses_with_eckart_young() {
     let d = Dir::new();
     d.ok(&[
-        "synth", "material", "--kind", "yarn", "--chart", "stockinette", "--yarn", "fine-2ply",
-        "--size", "16", "--sampling", "rings:0x1,45x4", "--spp", "4", "--bounces", "3", "-o", "y.btf",
+        "synth",
+        "material",
+        "--kind",
+        "yarn",
+        "--chart",
+        "stockinette",
+        "--yarn",
+        "fine-2ply",
+        "--size",
+        "16",
+        "--sampling",
+        "rings:0x1,45x4",
+        "--spp",
+        "4",
+        "--bounces",
+        "3",
+        "-o",
+        "y.btf",
     ]);
     let st = btf_core::store::BtfStore::open(&d.path("y.btf")).unwrap();
     assert_eq!((st.meta().n_views(), st.meta().n_lights(), st.meta().width), (5, 5, 16));
@@ -28,7 +44,8 @@ fn yarn_btf_is_an_ordinary_store_and_compresses_with_eckart_young() {
     let out = d.ok(&["compress", "y.btf", "-c", "2", "-o", "y.eig", "--json"]);
     let j: serde_json::Value = serde_json::from_str(&out).unwrap();
     for slot in j["slots"].as_array().unwrap() {
-        let (sse, disc) = (slot["sse"].as_f64().unwrap(), slot["discarded_eigen_sum"].as_f64().unwrap());
+        let (sse, disc) =
+            (slot["sse"].as_f64().unwrap(), slot["discarded_eigen_sum"].as_f64().unwrap());
         assert!(disc > 0.0, "{slot}");
         assert!((sse - disc).abs() <= 1e-6 * disc, "Eckart–Young: sse {sse} vs discarded {disc}");
     }
@@ -45,15 +62,43 @@ fn knit_exports_and_reference_render() {
     d.ok(&["knit", "skeleton", "--chart", "rib2x2", "--yarn", "fine-2ply", "-o", "s.bcc"]);
     let bcc = yarn::io::read_bcc(&d.path("s.bcc")).unwrap();
     assert_eq!(bcc.set.curves.len(), 2);
-    d.ok(&["knit", "fibers", "--chart", "garter", "--yarn", "fine-2ply", "--no-hairs", "-o", "f.txt"]);
+    d.ok(&[
+        "knit",
+        "fibers",
+        "--chart",
+        "garter",
+        "--yarn",
+        "fine-2ply",
+        "--no-hairs",
+        "-o",
+        "f.txt",
+    ]);
     let txt = std::fs::read_to_string(d.path("f.txt")).unwrap();
     assert!(txt.lines().filter(|l| l.is_empty()).count() >= 99, "one blank line between fibers");
     let js = d.ok(&[
-        "knit", "ref", "--chart", "stockinette", "--yarn", "fine-2ply", "--size", "16,12", "--spp", "2",
-        "--light", "dir:30,45", "--camera", "btf:20,90", "--json", "-i", "r.exr",
+        "knit",
+        "ref",
+        "--chart",
+        "stockinette",
+        "--yarn",
+        "fine-2ply",
+        "--size",
+        "16,12",
+        "--spp",
+        "2",
+        "--light",
+        "dir:30,45",
+        "--camera",
+        "btf:20,90",
+        "--json",
+        "-i",
+        "r.exr",
     ]);
     let j: serde_json::Value = serde_json::from_str(&js).unwrap();
-    assert!(j["rays_per_second"].as_f64().unwrap() > 0.0 && j["coverage"].as_f64().unwrap() > 0.3, "{j}");
+    assert!(
+        j["rays_per_second"].as_f64().unwrap() > 0.0 && j["coverage"].as_f64().unwrap() > 0.3,
+        "{j}"
+    );
     assert!(d.path("r.exr").is_file());
 }
 
@@ -63,7 +108,8 @@ fn knit_refusals_name_what_is_wrong() {
     std::fs::write(d.path("bad.chart"), "name: bad\nkkq\n").unwrap();
     let e = d.fails(&["knit", "chart", "bad.chart"]);
     assert!(e.contains("bad.chart"), "{e}");
-    let e = d.fails(&["knit", "ref", "--yarn", "no-such-yarn", "--light", "dir:0,0", "-i", "r.exr"]);
+    let e =
+        d.fails(&["knit", "ref", "--yarn", "no-such-yarn", "--light", "dir:0,0", "-i", "r.exr"]);
     assert!(e.contains("no-such-yarn"), "{e}");
     let e = d.fails(&["knit", "ref", "--chart", "stockinette", "-i", "r.exr"]);
     assert!(e.contains("no light"), "{e}");
@@ -71,8 +117,20 @@ fn knit_refusals_name_what_is_wrong() {
     std::fs::write(d.path("c.chart"), "name: c\nkp\n").unwrap();
     let e = d.fails(&["knit", "fibers", "--chart", "c.chart", "-o", "c.chart"]);
     assert!(e.contains("c.chart"), "{e}");
-    let e = d.fails(&["synth", "material", "--kind", "yarn", "--method", "lumislice", "--size", "4", "-o", "x.btf"]);
+    let e = d.fails(&[
+        "synth",
+        "material",
+        "--kind",
+        "yarn",
+        "--method",
+        "lumislice",
+        "--size",
+        "4",
+        "-o",
+        "x.btf",
+    ]);
     assert!(e.contains("lumislice"), "{e}");
-    let e = d.fails(&["synth", "material", "--kind", "lambert", "--chart", "garter", "-o", "x.btf"]);
+    let e =
+        d.fails(&["synth", "material", "--kind", "lambert", "--chart", "garter", "-o", "x.btf"]);
     assert!(e.contains("--kind yarn"), "{e}");
 }

@@ -149,7 +149,8 @@ pub struct PreparedPatch {
 
 /// Builds the patch and its scene.
 pub fn prepare(spec: &YarnBtfSpec) -> Result<PreparedPatch> {
-    let mut opts = PatchOptions { stitches: spec.stitches, color: spec.color, ..PatchOptions::default() };
+    let mut opts =
+        PatchOptions { stitches: spec.stitches, color: spec.color, ..PatchOptions::default() };
     opts.generation.seed = spec.seed;
     opts.generation.hairs = spec.hairs;
     let patch = KnitPatch::new(&spec.chart, &spec.params, &opts)?;
@@ -167,7 +168,13 @@ impl PreparedPatch {
     }
 
     /// The normtexture for one (view, light): `S·S·3` values, and the rays traced.
-    pub fn normtexture(&self, spec: &YarnBtfSpec, view: [f64; 3], light: [f64; 3], seed: u64) -> Result<(Vec<f32>, u64)> {
+    pub fn normtexture(
+        &self,
+        spec: &YarnBtfSpec,
+        view: [f64; 3],
+        light: [f64; 3],
+        seed: u64,
+    ) -> Result<(Vec<f32>, u64)> {
         if light[2] <= 0.0 {
             // A light at or below the horizon contributes nothing (DESIGN §3).
             return Ok((vec![0.0; spec.size * spec.size * 3], 0));
@@ -177,7 +184,8 @@ impl PreparedPatch {
         let mut s = RenderSettings::new(spec.size, spec.size, spec.spp);
         s.seed = seed;
         s.sampler = PixelSampler::Stratified;
-        s.path = PathSettings { max_bounces: spec.bounces, rr_start: 3, background: Background::Black };
+        s.path =
+            PathSettings { max_bounces: spec.bounces, rr_start: 3, background: Background::Black };
         let (img, stats) = render(&sc, &self.camera(view)?, &s)?;
         Ok((img.rgb, stats.rays))
     }
@@ -212,7 +220,11 @@ pub fn fit_tau1(mu: &[f64], t: &[f64]) -> Option<(f64, f64)> {
 }
 
 /// Renders the yarn BTF of `spec` into a BTF store at `out`.
-pub fn generate_yarn_btf(spec: &YarnBtfSpec, out: &Path, opts: &YarnBtfOptions) -> Result<YarnBtfReport> {
+pub fn generate_yarn_btf(
+    spec: &YarnBtfSpec,
+    out: &Path,
+    opts: &YarnBtfOptions,
+) -> Result<YarnBtfReport> {
     let t0 = Instant::now();
     if spec.method != "reference" {
         return Err(Error::Unsupported(format!(
@@ -230,10 +242,8 @@ pub fn generate_yarn_btf(spec: &YarnBtfSpec, out: &Path, opts: &YarnBtfOptions) 
     let prep = prepare(spec)?;
     let n = sampling.len();
     let views: Vec<[f64; 3]> = (0..n).map(|i| sampling.direction(i).to_vector()).collect();
-    let transmittance = views
-        .par_iter()
-        .map(|v| prep.transmittance(spec, *v))
-        .collect::<Result<Vec<f64>>>()?;
+    let transmittance =
+        views.par_iter().map(|v| prep.transmittance(spec, *v)).collect::<Result<Vec<f64>>>()?;
     let mu: Vec<f64> = views.iter().map(|v| v[2]).collect();
     let fit = fit_tau1(&mu, &transmittance);
     let p = &prep.patch;
@@ -293,7 +303,8 @@ pub fn generate_yarn_btf(spec: &YarnBtfSpec, out: &Path, opts: &YarnBtfOptions) 
         .collect::<Result<Vec<_>>>()?;
     writer.finish()?;
     bar.finish_and_clear();
-    let (written, skipped, rays) = counts.iter().fold((0, 0, 0), |a, c| (a.0 + c.0, a.1 + c.1, a.2 + c.2));
+    let (written, skipped, rays) =
+        counts.iter().fold((0, 0, 0), |a, c| (a.0 + c.0, a.1 + c.1, a.2 + c.2));
     Ok(YarnBtfReport {
         images_written: written,
         images_skipped: skipped,

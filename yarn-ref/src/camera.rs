@@ -63,7 +63,9 @@ impl Camera {
             Error::Invalid(format!("camera: up {up:?} is parallel to the view direction"))
         })?;
         if !(fov_y_deg > 0.0 && fov_y_deg < 179.0) {
-            return Err(Error::Invalid(format!("camera: field of view {fov_y_deg}° outside (0, 179)")));
+            return Err(Error::Invalid(format!(
+                "camera: field of view {fov_y_deg}° outside (0, 179)"
+            )));
         }
         Ok(Camera::Perspective {
             eye,
@@ -77,8 +79,9 @@ impl Camera {
     /// The oblique orthographic camera of view `view` (towards the viewer) onto
     /// `[origin, origin + extent)` of the plane `z = z_ref`.
     pub fn oblique(view: V3, z_ref: f64, origin: [f64; 2], extent: [f64; 2]) -> Result<Self> {
-        let view = vec3::normalize(view)
-            .ok_or_else(|| Error::Invalid(format!("oblique camera: view {view:?} is not a direction")))?;
+        let view = vec3::normalize(view).ok_or_else(|| {
+            Error::Invalid(format!("oblique camera: view {view:?} is not a direction"))
+        })?;
         if view[2] < MIN_VIEW_Z {
             return Err(Error::Invalid(format!(
                 "oblique camera: view {view:?} is {:.3}° from the normal (at most 89.9°: a view at \
@@ -86,7 +89,10 @@ impl Camera {
                 view[2].clamp(-1.0, 1.0).acos().to_degrees()
             )));
         }
-        if !(extent.iter().all(|e| *e > 0.0 && e.is_finite()) && origin.iter().all(|o| o.is_finite()) && z_ref.is_finite()) {
+        if !(extent.iter().all(|e| *e > 0.0 && e.is_finite())
+            && origin.iter().all(|o| o.is_finite())
+            && z_ref.is_finite())
+        {
             return Err(Error::Invalid(format!(
                 "oblique camera: rectangle {origin:?} + {extent:?} at z = {z_ref} must be finite and non-empty"
             )));
@@ -143,7 +149,8 @@ mod tests {
 
     #[test]
     fn perspective_centre_ray_looks_at_the_target() {
-        let cam = Camera::perspective([0.0, -3.0, 1.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0], 40.0).unwrap();
+        let cam =
+            Camera::perspective([0.0, -3.0, 1.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0], 40.0).unwrap();
         let (o, d) = cam.ray(32.0, 16.0, 64, 32, 0.0);
         let want = vec3::normalize([0.0, 3.0, -1.0]).unwrap();
         assert_eq!(o, [0.0, -3.0, 1.0]);

@@ -59,7 +59,10 @@ pub struct LightSample {
 impl Light {
     /// A directional light from unit(`to_light`) of perpendicular irradiance `e`.
     pub fn directional(to_light: V3, e: [f64; 3]) -> Light {
-        Light::Directional { to_light: vec3::normalize_or(to_light, [0.0, 0.0, 1.0]), irradiance: e }
+        Light::Directional {
+            to_light: vec3::normalize_or(to_light, [0.0, 0.0, 1.0]),
+            irradiance: e,
+        }
     }
 
     /// Samples the light from world point `p`.
@@ -75,7 +78,7 @@ impl Light {
             Light::Point { position, intensity } => {
                 let d = vec3::sub(*position, p);
                 let dist = vec3::length(d);
-                if !(dist > 0.0) {
+                if dist.is_nan() || dist <= 0.0 {
                     return None;
                 }
                 let inv = 1.0 / (dist * dist);
@@ -173,7 +176,7 @@ impl EnvLight {
         let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
         let wi = [sin_t * phi.cos(), sin_t * phi.sin(), cos_t];
         let pdf = self.prob[r * w + c] / self.map.pixel_solid_angle(r);
-        if !(pdf > 0.0) {
+        if pdf.is_nan() || pdf <= 0.0 {
             return None;
         }
         let radiance = self.map.pixels[r * w + c].map(|v| v as f64 * self.scale);
@@ -218,7 +221,12 @@ mod tests {
             (0..3).for_each(|c| sum[c] += s.radiance[c] / s.pdf / n as f64);
         }
         for c in 0..3 {
-            assert!((sum[c] / want[c] - 1.0).abs() < 0.01, "channel {c}: {} vs {}", sum[c], want[c]);
+            assert!(
+                (sum[c] / want[c] - 1.0).abs() < 0.01,
+                "channel {c}: {} vs {}",
+                sum[c],
+                want[c]
+            );
         }
         // A constant map is sampled with zero variance: every estimate is 4π.
         let env = EnvLight::new(EnvMap::constant(32, [1.0; 3]).unwrap(), 1.0);

@@ -64,7 +64,11 @@ pub struct PatchOptions {
 
 impl Default for PatchOptions {
     fn default() -> Self {
-        PatchOptions { stitches: None, generation: GenOptions::default(), color: yarn::curve::DEFAULT_COLOR }
+        PatchOptions {
+            stitches: None,
+            generation: GenOptions::default(),
+            color: yarn::curve::DEFAULT_COLOR,
+        }
     }
 }
 
@@ -79,7 +83,10 @@ impl KnitPatch {
         let mesh = StitchMesh::flat(chart, wales, courses, ws, cs)?;
         let yarns = chen_skeleton(&mesh, &sk)?;
         let period = yarns.period.ok_or_else(|| {
-            Error::Unsupported(format!("chart '{}': the flat patch has no rectangular period", chart.name))
+            Error::Unsupported(format!(
+                "chart '{}': the flat patch has no rectangular period",
+                chart.name
+            ))
         })?;
         let fibers = generate_fibers(&yarns, std::slice::from_ref(params), &opts.generation)?;
         let (lo, hi) = centre_line_z(&yarns);

@@ -112,10 +112,13 @@ impl RenderStats {
     }
 }
 
+/// One finished row: mean, variance, coverage, backing fractions, rays.
+type Row = (Vec<f32>, Vec<f32>, Vec<f32>, Vec<f32>, u64);
+
 /// The most square `k_x × k_y = n` (`k_x ≤ k_y`).
 pub fn strata(n: u32) -> (u32, u32) {
     let mut kx = (n as f64).sqrt().floor() as u32;
-    while kx > 1 && n % kx != 0 {
+    while kx > 1 && !n.is_multiple_of(kx) {
         kx -= 1;
     }
     let kx = kx.max(1);
@@ -165,7 +168,7 @@ pub fn render_pixels(
     }
     let t0 = Instant::now();
     let (kx, ky) = strata(s.spp);
-    let rows: Vec<(Vec<f32>, Vec<f32>, Vec<f32>, Vec<f32>, u64)> = (0..h)
+    let rows: Vec<Row> = (0..h)
         .into_par_iter()
         .map(|y| {
             let mut rgb = vec![0f32; 3 * w];
@@ -181,10 +184,9 @@ pub fn render_pixels(
                     let mut rng = Rng::new(&[s.seed, x as u64, y as u64, k as u64]);
                     let [u, v] = rng.uniform2();
                     let (fx, fy) = match s.sampler {
-                        PixelSampler::Stratified => (
-                            ((k % kx) as f64 + u) / kx as f64,
-                            ((k / kx) as f64 + v) / ky as f64,
-                        ),
+                        PixelSampler::Stratified => {
+                            (((k % kx) as f64 + u) / kx as f64, ((k / kx) as f64 + v) / ky as f64)
+                        }
                         PixelSampler::Random => (u, v),
                     };
                     let (o, d) = camera.ray(x as f64 + fx, y as f64 + fy, w, h, top);

@@ -31,7 +31,8 @@ fn analytic() -> Vec<f64> {
     (0..ROWS)
         .map(|j| {
             let (y0, y1) = (-HALF_Y + j as f64 * dy, -HALF_Y + (j + 1) as f64 * dy);
-            let (a0, a1) = ((y0.max(-R) / R).clamp(-1.0, 1.0).asin(), (y1.min(R) / R).clamp(-1.0, 1.0).asin());
+            let (a0, a1) =
+                ((y0.max(-R) / R).clamp(-1.0, 1.0).asin(), (y1.min(R) / R).clamp(-1.0, 1.0).asin());
             if a1 <= a0 {
                 return 0.0;
             }
@@ -119,14 +120,19 @@ fn profile_error_falls_as_one_over_root_spp() {
         // Average the error over 6 seeds so the slope is a property of the estimator, not
         // of one draw.
         let mean = |sampler| {
-            (0..6).map(|seed| l1_error(&render_profile(spp, sampler, 100 + seed).0, &exact)).sum::<f64>() / 6.0
+            (0..6)
+                .map(|seed| l1_error(&render_profile(spp, sampler, 100 + seed).0, &exact))
+                .sum::<f64>()
+                / 6.0
         };
         random.push(mean(PixelSampler::Random));
         strat.push(mean(PixelSampler::Stratified));
     }
     let xs: Vec<f64> = spps.iter().map(|s| *s as f64).collect();
     let (sr, ss) = (slope(&xs, &random), slope(&xs, &strat));
-    eprintln!("relative L1 error vs spp {spps:?}: random {random:.5?} (slope {sr:.3}), stratified {strat:.5?} (slope {ss:.3})");
+    eprintln!(
+        "relative L1 error vs spp {spps:?}: random {random:.5?} (slope {sr:.3}), stratified {strat:.5?} (slope {ss:.3})"
+    );
     // Independent samples: the error of a mean falls as spp^(−1/2).
     assert!((sr + 0.5).abs() < 0.1, "random-sampling slope {sr}");
     // Jittered strata do at least as well (edges: spp^(−3/4) in 2-D).

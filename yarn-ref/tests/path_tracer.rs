@@ -38,7 +38,8 @@ fn furnace(shading: Shading, name: &str) {
     let env = EnvLight::new(btf_image::EnvMap::constant(32, [1.0; 3]).unwrap(), 1.0);
     let lights = [Light::Environment(env)];
     let sc = Scene { fibers: &scene, lights: &lights, shading: &shading };
-    let cam = Camera::perspective([0.0, -4.0, 0.5], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0], 14.0).unwrap();
+    let cam =
+        Camera::perspective([0.0, -4.0, 0.5], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0], 14.0).unwrap();
     let mut s = RenderSettings::new(24, 16, 64);
     // Enough bounces that the energy left inside the bundle is negligible; no roulette
     // (β stays 1 without absorption, so it would never end a path anyway).
@@ -56,7 +57,10 @@ fn furnace(shading: Shading, name: &str) {
                 let v = img.pixel(x, y)[c] as f64;
                 let se = img.std_error(x, y, c);
                 worst = worst.max((v - 1.0).abs() / se.max(1e-6));
-                assert!((v - 1.0).abs() <= 4.0 * se + 1e-4, "{name}: pixel ({x}, {y}) channel {c} = {v} ± {se}");
+                assert!(
+                    (v - 1.0).abs() <= 4.0 * se + 1e-4,
+                    "{name}: pixel ({x}, {y}) channel {c} = {v} ± {se}"
+                );
                 sum += v;
                 var += se * se;
             }
@@ -79,7 +83,8 @@ fn white_furnace_lambert_fibers_reflect_everything() {
 #[test]
 fn white_furnace_fiber_bcsdf_scatters_everything() {
     // Khungurn R + TT + diffuse with A_R + A_TT + k_d = 1: no absorption.
-    let p = KhungurnParams { a_r: [0.2; 3], a_tt: [0.5; 3], kd: [0.3; 3], ..KhungurnParams::default() };
+    let p =
+        KhungurnParams { a_r: [0.2; 3], a_tt: [0.5; 3], kd: [0.3; 3], ..KhungurnParams::default() };
     let bcsdf = Arc::new(FiberBcsdf::khungurn(&p).unwrap());
     furnace(Shading::Fiber { bcsdf, tint: false }, "Khungurn R+TT+D, no absorption");
 }
@@ -92,8 +97,15 @@ fn knit_patch() -> KnitPatch {
     KnitPatch::new(&chart, &params, &opts).unwrap()
 }
 
-fn patch_render(fibers: &Fibers, period: Option<Period>, patch: &KnitPatch, threads: usize) -> Image {
-    let scene = FiberScene::new(fibers, &SceneOptions { period, backing_z: Some(patch.backing_z()) }).unwrap();
+fn patch_render(
+    fibers: &Fibers,
+    period: Option<Period>,
+    patch: &KnitPatch,
+    threads: usize,
+) -> Image {
+    let scene =
+        FiberScene::new(fibers, &SceneOptions { period, backing_z: Some(patch.backing_z()) })
+            .unwrap();
     let lights = [Light::directional(btf_core::Direction::new(30.0, 60.0).to_vector(), [1.0; 3])];
     let bcsdf = Arc::new(FiberBcsdf::khungurn(&KhungurnParams::default()).unwrap());
     let shading = Shading::Fiber { bcsdf, tint: true };
@@ -147,12 +159,16 @@ fn periodic_wrap_equals_the_centre_tile_of_an_explicit_3x3_tiling() {
         for x in 0..16 {
             for c in 0..3 {
                 let (a, b) = (wrapped.pixel(x, y)[c] as f64, explicit.pixel(x, y)[c] as f64);
-                let se = (wrapped.std_error(x, y, c).powi(2) + explicit.std_error(x, y, c).powi(2)).sqrt();
+                let se = (wrapped.std_error(x, y, c).powi(2) + explicit.std_error(x, y, c).powi(2))
+                    .sqrt();
                 if a == b {
                     same += 1;
                 }
                 worst = worst.max((a - b).abs() / se.max(1e-9));
-                assert!((a - b).abs() <= 4.0 * se + 1e-5, "pixel ({x}, {y}) channel {c}: {a} vs {b} ± {se}");
+                assert!(
+                    (a - b).abs() <= 4.0 * se + 1e-5,
+                    "pixel ({x}, {y}) channel {c}: {a} vs {b} ± {se}"
+                );
             }
         }
     }

@@ -10,11 +10,14 @@ use yarn::fiber::{GenOptions, generate_fibers};
 use yarn::params::YarnParams;
 use yarn::vec3;
 use yarn_ref::rng::Rng;
-use yarn_ref::volume::{ExtinctionLaw, Phase, SliceDensity, UniformDisk, VolumeScene, VolumeSettings, render_volume};
+use yarn_ref::volume::{
+    ExtinctionLaw, Phase, SliceDensity, UniformDisk, VolumeScene, VolumeSettings, render_volume,
+};
 use yarn_ref::{Background, Camera, EnvLight, FiberScene, Light, RenderSettings, SceneOptions};
 
 fn straight(half_length: f64) -> YarnSet {
-    let pts = (0..=8).map(|i| [-half_length + 2.0 * half_length * i as f64 / 8.0, 0.0, 0.0]).collect();
+    let pts =
+        (0..=8).map(|i| [-half_length + 2.0 * half_length * i as f64 / 8.0, 0.0, 0.0]).collect();
     YarnSet::new(vec![YarnCurve::open(pts).unwrap()], None).unwrap()
 }
 
@@ -22,7 +25,8 @@ fn straight(half_length: f64) -> YarnSet {
 fn uniform_cylinder_transmittance_is_closed_form() {
     let (r, rf, na) = (1e-3, 1e-5, 2e7); // σ = 2 r_f n_A = 400 m⁻¹
     let sigma = 2.0 * rf * na;
-    let disk: Arc<dyn SliceDensity> = Arc::new(UniformDisk { n_a: na, radius: r, fiber_radius: rf });
+    let disk: Arc<dyn SliceDensity> =
+        Arc::new(UniformDisk { n_a: na, radius: r, fiber_radius: rf });
     for law in [ExtinctionLaw::Anisotropic, ExtinctionLaw::Isotropic] {
         let vol = VolumeScene::with_density(&straight(0.02), disk.clone(), 1.0, law, 4).unwrap();
         for elev_deg in [0.0f64, 30.0, 60.0, 80.0] {
@@ -38,7 +42,10 @@ fn uniform_cylinder_transmittance_is_closed_form() {
                     _ => sigma * chord,
                 };
                 let want = (-tau).exp();
-                assert!((t / want - 1.0).abs() < 1e-4, "{law:?} elevation {elev_deg}° d {dd}: {t} vs {want}");
+                assert!(
+                    (t / want - 1.0).abs() < 1e-4,
+                    "{law:?} elevation {elev_deg}° d {dd}: {t} vs {want}"
+                );
             }
         }
     }
@@ -63,7 +70,10 @@ fn beer_lambert_density_model_matches_explicit_fibers() {
     let laws = [ExtinctionLaw::Anisotropic, ExtinctionLaw::Isotropic, ExtinctionLaw::Tilted];
     let vols: Vec<VolumeScene> = laws
         .iter()
-        .map(|&l| VolumeScene::new(&set, std::slice::from_ref(&params), std::slice::from_ref(&dens), l, 8).unwrap())
+        .map(|&l| {
+            VolumeScene::new(&set, std::slice::from_ref(&params), std::slice::from_ref(&dens), l, 8)
+                .unwrap()
+        })
         .collect();
     let r_yarn = params.yarn_radius();
     let period = params.ply_pitch.abs();
@@ -74,7 +84,8 @@ fn beer_lambert_density_model_matches_explicit_fibers() {
     for elev_deg in [0.0f64, 30.0, 60.0, 80.0] {
         let e = elev_deg.to_radians();
         let mut rng = Rng::new(&[42, elev_deg as u64]);
-        let mut acc: Vec<Bin> = (0..bins).map(|_| Bin { n: 0, blocked: 0, density_t: [0.0; 3] }).collect();
+        let mut acc: Vec<Bin> =
+            (0..bins).map(|_| Bin { n: 0, blocked: 0, density_t: [0.0; 3] }).collect();
         for _ in 0..n_rays {
             let [u1, u2, u3] = rng.uniform3();
             let zc = half + period * u1 - half; // x of the crossing: one ply twist after the centre
@@ -82,7 +93,8 @@ fn beer_lambert_density_model_matches_explicit_fibers() {
             let dd = r_yarn * (2.0 * u3 - 1.0);
             let inplane = [0.0, psi.cos(), psi.sin()];
             let perp = [0.0, -psi.sin(), psi.cos()];
-            let w = vec3::normalize(vec3::add(vec3::scale(inplane, e.cos()), [e.sin(), 0.0, 0.0])).unwrap();
+            let w = vec3::normalize(vec3::add(vec3::scale(inplane, e.cos()), [e.sin(), 0.0, 0.0]))
+                .unwrap();
             let pc = vec3::add_scaled([zc, 0.0, 0.0], perp, dd);
             let reach = 3.0 * r_yarn / e.cos().max(0.1);
             let o = vec3::add_scaled(pc, w, -reach);
@@ -100,7 +112,11 @@ fn beer_lambert_density_model_matches_explicit_fibers() {
             let p = 1.0 - bin.blocked as f64 / n;
             let se = (p * (1.0 - p) / n).sqrt().max(0.5 / n);
             let tol = 4.0 * se + 0.03;
-            let mut line = format!("{elev_deg:>3}° |d|/R {:.2}-{:.2}: explicit {p:.4} ± {se:.4}", bi as f64 / bins as f64, (bi + 1) as f64 / bins as f64);
+            let mut line = format!(
+                "{elev_deg:>3}° |d|/R {:.2}-{:.2}: explicit {p:.4} ± {se:.4}",
+                bi as f64 / bins as f64,
+                (bi + 1) as f64 / bins as f64
+            );
             for (k, law) in laws.iter().enumerate() {
                 let t = bin.density_t[k] / n;
                 line.push_str(&format!(", {law:?} {t:.4} ({:+.4})", t - p));
@@ -113,7 +129,9 @@ fn beer_lambert_density_model_matches_explicit_fibers() {
                     ExtinctionLaw::Isotropic => false,
                 };
                 if must && (t - p).abs() > tol {
-                    failures.push(format!("{law:?} {elev_deg}° bin {bi}: {t:.4} vs {p:.4} (tolerance {tol:.4})"));
+                    failures.push(format!(
+                        "{law:?} {elev_deg}° bin {bi}: {t:.4} vs {p:.4} (tolerance {tol:.4})"
+                    ));
                 }
             }
             report.push_str(&line);
@@ -126,8 +144,10 @@ fn beer_lambert_density_model_matches_explicit_fibers() {
 
 #[test]
 fn volumetric_white_furnace() {
-    let disk: Arc<dyn SliceDensity> = Arc::new(UniformDisk { n_a: 1.5e7, radius: 1e-3, fiber_radius: 1e-5 });
-    let vol = VolumeScene::with_density(&straight(3e-3), disk, 1.0, ExtinctionLaw::Anisotropic, 4).unwrap();
+    let disk: Arc<dyn SliceDensity> =
+        Arc::new(UniformDisk { n_a: 1.5e7, radius: 1e-3, fiber_radius: 1e-5 });
+    let vol = VolumeScene::with_density(&straight(3e-3), disk, 1.0, ExtinctionLaw::Anisotropic, 4)
+        .unwrap();
     let env = EnvLight::new(btf_image::EnvMap::constant(16, [1.0; 3]).unwrap(), 1.0);
     let lights = [Light::Environment(env)];
     let cam = Camera::oblique([0.3, 0.2, 1.0], 1e-3, [-2e-3, -1.5e-3], [4e-3, 3e-3]).unwrap();
@@ -153,7 +173,9 @@ fn volumetric_white_furnace() {
     }
     let mean = sum / 48.0;
     let se_mean = var.sqrt() / 48.0;
-    eprintln!("volumetric furnace (ϖ = 1, isotropic): mean {mean:.5} ± {se_mean:.5}, worst pixel {worst:.2} σ");
+    eprintln!(
+        "volumetric furnace (ϖ = 1, isotropic): mean {mean:.5} ± {se_mean:.5}, worst pixel {worst:.2} σ"
+    );
     // Known open point: grazing pixels come out 1–3 % low (up to 9 σ of their own noise),
     // a discretisation bias of the marched free flights against the marched NEE
     // transmittance still to be found; the image mean is held to 4 SE + 2 %.

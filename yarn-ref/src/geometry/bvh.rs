@@ -58,7 +58,7 @@ impl Aabb {
     #[inline]
     pub fn half_area(&self) -> f32 {
         let e = [self.max[0] - self.min[0], self.max[1] - self.min[1], self.max[2] - self.min[2]];
-        if e.iter().any(|x| !(*x >= 0.0)) {
+        if e.iter().any(|x| x.is_nan() || *x < 0.0) {
             return 0.0;
         }
         e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
@@ -67,7 +67,11 @@ impl Aabb {
     /// Centre.
     #[inline]
     pub fn centroid(&self) -> [f32; 3] {
-        [0.5 * (self.min[0] + self.max[0]), 0.5 * (self.min[1] + self.max[1]), 0.5 * (self.min[2] + self.max[2])]
+        [
+            0.5 * (self.min[0] + self.max[0]),
+            0.5 * (self.min[1] + self.max[1]),
+            0.5 * (self.min[2] + self.max[2]),
+        ]
     }
 
     /// The box of a capsule, rounded outwards to `f32`.
@@ -362,7 +366,12 @@ impl Ctx<'_> {
             cb.grow_point(self.centroids[p as usize]);
         }
         let me = nodes.len();
-        nodes.push(Node { min: bounds.min, max: bounds.max, first: offset as u32, count: prims.len() as u32 });
+        nodes.push(Node {
+            min: bounds.min,
+            max: bounds.max,
+            first: offset as u32,
+            count: prims.len() as u32,
+        });
         let n = prims.len();
         if n <= 1 {
             return;
@@ -379,7 +388,8 @@ impl Ctx<'_> {
         }
         let (left, right) = prims.split_at_mut(mid);
         if n > PARALLEL_MIN {
-            let (ln, rn) = join(|| self.subtree(left, offset), || self.subtree(right, offset + mid));
+            let (ln, rn) =
+                join(|| self.subtree(left, offset), || self.subtree(right, offset + mid));
             let base = nodes.len();
             nodes.extend(ln.iter().map(|x| shift(*x, base)));
             let rbase = nodes.len();
@@ -401,7 +411,7 @@ impl Ctx<'_> {
         let mut best: Option<(f32, usize, usize)> = None; // cost, axis, split bin
         for axis in 0..3 {
             let (lo, hi) = (cb.min[axis], cb.max[axis]);
-            if !(hi > lo) {
+            if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
                 continue;
             }
             let scale = BINS as f32 / (hi - lo);

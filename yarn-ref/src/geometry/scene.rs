@@ -163,12 +163,11 @@ impl FiberScene {
         if n_pts >= u32::MAX as usize / 2 {
             return Err(Error::Limit(format!("{n_pts} fiber points (at most 2^31)")));
         }
-        if let Some(p) = opts.period {
-            if !(p.size.iter().all(|s| *s > 0.0 && s.is_finite())
+        if let Some(p) = opts.period
+            && !(p.size.iter().all(|s| *s > 0.0 && s.is_finite())
                 && p.origin.iter().all(|o| o.is_finite()))
-            {
-                return Err(Error::Invalid(format!("period box {p:?} must be finite and positive")));
-            }
+        {
+            return Err(Error::Invalid(format!("period box {p:?} must be finite and positive")));
         }
         let mut point_fiber = vec![0u32; n_pts];
         let mut segments = Vec::with_capacity(n_pts);
@@ -177,7 +176,7 @@ impl FiberScene {
             for i in s..e {
                 point_fiber[i] = k as u32;
                 let (p, r) = (fibers.points[i], fibers.radii[i]);
-                if !p.iter().all(|x| x.is_finite()) || !(r.is_finite() && r >= 0.0) {
+                if !(p.iter().all(|x| x.is_finite()) && r.is_finite() && r >= 0.0) {
                     return Err(Error::Invalid(format!(
                         "fiber {k} (curve {}), point {}: position {p:?}, radius {r} (finite \
                          coordinates and a finite radius ≥ 0 expected)",
@@ -222,9 +221,13 @@ impl FiberScene {
         let boxes: Vec<Aabb> = segments.iter().map(seg_box).collect();
         let bvh = Bvh::build(&boxes);
         let b = bvh.bounds();
-        let z_range = if segments.is_empty() { [0.0, 0.0] } else { [b.min[2] as f64, b.max[2] as f64] };
-        let palette =
-            if fibers.palette.is_empty() { vec![yarn::curve::DEFAULT_COLOR] } else { fibers.palette.clone() };
+        let z_range =
+            if segments.is_empty() { [0.0, 0.0] } else { [b.min[2] as f64, b.max[2] as f64] };
+        let palette = if fibers.palette.is_empty() {
+            vec![yarn::curve::DEFAULT_COLOR]
+        } else {
+            fibers.palette.clone()
+        };
         Ok(FiberScene {
             segments,
             bvh,
@@ -308,7 +311,8 @@ impl FiberScene {
 
     /// True if anything (fiber or backing) lies on the ray within `0 < t < t_max`.
     pub fn occluded(&self, o: V3, d: V3, t_max: f64, skip: Option<Skip>) -> bool {
-        let r = self.walk(o, d, t_max, |p, tm| self.query_any(p, d, tm, skip).then_some(((0, 0.0), 0.0)));
+        let r = self
+            .walk(o, d, t_max, |p, tm| self.query_any(p, d, tm, skip).then_some(((0, 0.0), 0.0)));
         !matches!(r, Walk::Escaped)
     }
 
@@ -334,11 +338,9 @@ impl FiberScene {
     /// The world position of a box point with its tile shift.
     pub fn world(&self, p: V3, shift: [i64; 2]) -> V3 {
         match self.period {
-            Some(per) => [
-                p[0] + shift[0] as f64 * per.size[0],
-                p[1] + shift[1] as f64 * per.size[1],
-                p[2],
-            ],
+            Some(per) => {
+                [p[0] + shift[0] as f64 * per.size[0], p[1] + shift[1] as f64 * per.size[1], p[2]]
+            }
             None => p,
         }
     }
@@ -355,12 +357,15 @@ impl FiberScene {
         let t0 = self.vertex_tangent(i);
         let t1 = self.vertex_tangent(i + 1).or(t0);
         let tangent = match (t0, t1) {
-            (Some(x), Some(y)) => vec3::normalize(vec3::add(vec3::scale(x, 1.0 - v), vec3::scale(y, v))),
+            (Some(x), Some(y)) => {
+                vec3::normalize(vec3::add(vec3::scale(x, 1.0 - v), vec3::scale(y, v)))
+            }
             _ => None,
         }
         .or(seg_dir)
         .unwrap_or([1.0, 0.0, 0.0]);
-        let normal = vec3::normalize(vec3::sub(position, axis_point)).unwrap_or_else(|| perpendicular(tangent));
+        let normal = vec3::normalize(vec3::sub(position, axis_point))
+            .unwrap_or_else(|| perpendicular(tangent));
         let color = self.palette[self.point_color[i] as usize];
         SurfacePoint {
             axis_point,
@@ -391,7 +396,13 @@ impl FiberScene {
         })
     }
 
-    fn query_closest(&self, o: V3, d: V3, t_max: f64, skip: Option<Skip>) -> Option<((u32, f64), f64)> {
+    fn query_closest(
+        &self,
+        o: V3,
+        d: V3,
+        t_max: f64,
+        skip: Option<Skip>,
+    ) -> Option<((u32, f64), f64)> {
         let ray = SlabRay::new(o, d);
         let mut best_v = 0.0;
         let hit = self.bvh.closest(&ray, t_max, |p, tm| {
@@ -419,7 +430,13 @@ impl FiberScene {
 
     /// Runs `step(origin, t_max)` over the box-sized pieces of the ray (see the module
     /// documentation); `step` returns a payload and the distance from its origin.
-    fn walk<R>(&self, o: V3, d: V3, t_max: f64, mut step: impl FnMut(V3, f64) -> Option<(R, f64)>) -> Walk<R> {
+    fn walk<R>(
+        &self,
+        o: V3,
+        d: V3,
+        t_max: f64,
+        mut step: impl FnMut(V3, f64) -> Option<(R, f64)>,
+    ) -> Walk<R> {
         let mut t_end = t_max;
         let mut backing = false;
         if let Some(zb) = self.backing_z

@@ -157,7 +157,13 @@ mod tests {
     fn tilt_of_a_single_circular_ply_is_the_helix_angle() {
         // One ply on the axis, circular: a fiber at radius ρ turns at 2π/α about it, the
         // slice frame at 2π/α_ply: |v| = 2πρ·|1/α + 1/α_ply|, tan τ = |v|.
-        let m = TiltModel { plies: 1, ply_distance: 0.0, ellipse: [1.0, 1.0], ply_pitch: 4.0, fiber_pitch: -5.0 };
+        let m = TiltModel {
+            plies: 1,
+            ply_distance: 0.0,
+            ellipse: [1.0, 1.0],
+            ply_pitch: 4.0,
+            fiber_pitch: -5.0,
+        };
         let v = m.velocity(0.3, 0.4);
         let want = TAU * 0.5 * (1.0 / -5.0 + 1.0 / 4.0);
         assert!(((v[0].hypot(v[1])) - want.abs()).abs() < 1e-12, "{v:?} {want}");

@@ -115,7 +115,15 @@ impl VolumeScene {
     }
 
     /// Direct light at `x` scattered towards `wo`: `Σ p·L·T_l`.
-    fn direct(&self, x: V3, wo: V3, lights: &[Light], s: &VolumeSettings, phase: Phase, rng: &mut Rng) -> [f64; 3] {
+    fn direct(
+        &self,
+        x: V3,
+        wo: V3,
+        lights: &[Light],
+        s: &VolumeSettings,
+        phase: Phase,
+        rng: &mut Rng,
+    ) -> [f64; 3] {
         let mut out = [0.0; 3];
         let t = match phase {
             Phase::KajiyaKay => self.tangent_at(x),
@@ -136,7 +144,14 @@ impl VolumeScene {
     }
 
     /// Radiance along `(o, d)`.
-    pub fn radiance(&self, o: V3, d: V3, lights: &[Light], s: &VolumeSettings, rng: &mut Rng) -> ([f64; 3], FirstHit) {
+    pub fn radiance(
+        &self,
+        o: V3,
+        d: V3,
+        lights: &[Light],
+        s: &VolumeSettings,
+        rng: &mut Rng,
+    ) -> ([f64; 3], FirstHit) {
         let wo = vec3::scale(d, -1.0);
         let xi = if s.jitter { rng.uniform() } else { 0.5 };
         let mut l = [0.0; 3];
@@ -181,7 +196,14 @@ impl VolumeScene {
         (l, first)
     }
 
-    fn multiple(&self, o: V3, d: V3, lights: &[Light], s: &VolumeSettings, rng: &mut Rng) -> [f64; 3] {
+    fn multiple(
+        &self,
+        o: V3,
+        d: V3,
+        lights: &[Light],
+        s: &VolumeSettings,
+        rng: &mut Rng,
+    ) -> [f64; 3] {
         let mut out = [0.0; 3];
         let Some(mut x) = self.free_flight(o, d, s.step, rng.uniform()) else { return out };
         let mut beta = s.albedo;
@@ -215,7 +237,7 @@ pub fn render_volume(
     settings: &RenderSettings,
     vs: &VolumeSettings,
 ) -> Result<(Image, RenderStats)> {
-    if !(vs.step > 0.0 && vs.step.is_finite()) || !(0.0..=1.0).contains(&vs.albedo) {
+    if !(vs.step > 0.0 && vs.step.is_finite() && (0.0..=1.0).contains(&vs.albedo)) {
         return Err(Error::Invalid(format!(
             "volume: step {} must be positive, albedo {} in [0, 1]",
             vs.step, vs.albedo

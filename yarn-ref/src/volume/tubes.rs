@@ -48,7 +48,13 @@ pub struct VolumeScene {
 
 impl std::fmt::Debug for VolumeScene {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "VolumeScene({} tubes, {} capsules, {:?})", self.tubes.len(), self.caps.len(), self.law)
+        write!(
+            f,
+            "VolumeScene({} tubes, {} capsules, {:?})",
+            self.tubes.len(),
+            self.caps.len(),
+            self.law
+        )
     }
 }
 
@@ -96,7 +102,13 @@ impl VolumeScene {
 
     /// Straight-or-not tubes of one density and ply pitch, without a yarn description (the
     /// closed-form tests: a uniform disk swept along a curve; no tilt model).
-    pub fn with_density(set: &YarnSet, density: Arc<dyn SliceDensity>, ply_pitch: f64, law: ExtinctionLaw, samples_per_segment: usize) -> Result<Self> {
+    pub fn with_density(
+        set: &YarnSet,
+        density: Arc<dyn SliceDensity>,
+        ply_pitch: f64,
+        law: ExtinctionLaw,
+        samples_per_segment: usize,
+    ) -> Result<Self> {
         let k = samples_per_segment.clamp(1, 4096);
         set.validate()?;
         let tubes = set
@@ -138,7 +150,9 @@ impl VolumeScene {
 
     /// Extinction (m⁻¹) at `x` for unit direction `w`, summed over the yarns there.
     pub fn sigma_at(&self, x: V3, w: V3) -> f64 {
-        self.sum_over_tubes(x, |tube, n_a, t, v| sigma(self.law, tube.density.fiber_radius(), n_a, w, t, v))
+        self.sum_over_tubes(x, |tube, n_a, t, v| {
+            sigma(self.law, tube.density.fiber_radius(), n_a, w, t, v)
+        })
     }
 
     /// The local yarn tangent of the densest tube at `x` (for the Kajiya–Kay phase), if any.
@@ -187,7 +201,10 @@ impl VolumeScene {
             let tube = &self.tubes[ti as usize];
             let (s0, s1) = (tube.samples[si as usize], tube.samples[si as usize + 1]);
             let c = vec3::add(vec3::scale(s0.p, 1.0 - v), vec3::scale(s1.p, v));
-            let t = vec3::normalize_or(vec3::add(vec3::scale(s0.t, 1.0 - v), vec3::scale(s1.t, v)), s0.t);
+            let t = vec3::normalize_or(
+                vec3::add(vec3::scale(s0.t, 1.0 - v), vec3::scale(s1.t, v)),
+                s0.t,
+            );
             let n0 = vec3::add(vec3::scale(s0.n, 1.0 - v), vec3::scale(s1.n, v));
             let n = vec3::normalize_or(vec3::add_scaled(n0, t, -vec3::dot(n0, t)), s0.n);
             let b = vec3::cross(t, n);
@@ -268,7 +285,8 @@ pub fn capsule_interval(a: V3, b: V3, r: f64, o: V3, d: V3) -> Option<(f64, f64)
         // Finite cylinder = infinite cylinder ∩ slab 0 ≤ (x − a)·axis ≤ |ba|.
         let dd = vec3::dot(d, axis);
         let od = vec3::dot(oa, axis);
-        let (k2, k1, k0) = (1.0 - dd * dd, vec3::dot(d, oa) - dd * od, vec3::dot(oa, oa) - od * od - r * r);
+        let (k2, k1, k0) =
+            (1.0 - dd * dd, vec3::dot(d, oa) - dd * od, vec3::dot(oa, oa) - od * od - r * r);
         let (mut c0, mut c1) = if k2 > 1e-12 {
             let h = k1 * k1 - k2 * k0;
             if h < 0.0 {

@@ -11,7 +11,11 @@ fn random_fibers(n: usize, seed: u64) -> Fibers {
             for _ in 0..4 {
                 let q = *pts.last().unwrap();
                 let s = rng.uniform3();
-                pts.push([q[0] + 0.05 * (s[0] - 0.5), q[1] + 0.05 * (s[1] - 0.5), q[2] + 0.05 * (s[2] - 0.5)]);
+                pts.push([
+                    q[0] + 0.05 * (s[0] - 0.5),
+                    q[1] + 0.05 * (s[1] - 0.5),
+                    q[2] + 0.05 * (s[2] - 0.5),
+                ]);
             }
             pts
         })
@@ -35,8 +39,16 @@ fn bvh_closest_and_any_hit_agree_with_brute_force() {
             .iter()
             .enumerate()
             .filter_map(|(i, s)| {
-                entry(s.a.map(f64::from), s.b.map(f64::from), s.radius as f64, o, d, 0.0, f64::INFINITY)
-                    .map(|h| (i, h.t))
+                entry(
+                    s.a.map(f64::from),
+                    s.b.map(f64::from),
+                    s.radius as f64,
+                    o,
+                    d,
+                    0.0,
+                    f64::INFINITY,
+                )
+                .map(|h| (i, h.t))
             })
             .min_by(|a, b| a.1.total_cmp(&b.1));
         match (got, want) {
@@ -62,7 +74,8 @@ fn periodic_wrap_sees_the_infinite_tiling() {
     // (tile 7) hits it too, and a ray through the gap misses.
     let fibers = fibers_from_polylines(&[vec![[0.95, 0.1, 0.0], [0.95, 0.9, 0.0]]], 0.1, [1.0; 3]);
     let per = Period { origin: [0.0, 0.0], size: [1.0, 1.0] };
-    let scene = FiberScene::new(&fibers, &SceneOptions { period: Some(per), backing_z: None }).unwrap();
+    let scene =
+        FiberScene::new(&fibers, &SceneOptions { period: Some(per), backing_z: None }).unwrap();
     assert_eq!(scene.segment_count(), 2, "the original and its copy at x − 1");
     let down = [0.0, 0.0, -1.0];
     for x in [0.02, 7.02, -2.98, 0.9, 0.95] {
@@ -87,9 +100,15 @@ fn periodic_wrap_sees_the_infinite_tiling() {
         .fold(f64::INFINITY, f64::min);
     assert!((h.t - want).abs() < 1e-6, "{} vs {want} (f32 geometry)", h.t);
     let w = scene.world(h.position, h.shift);
-    assert!(vec3::distance(w, vec3::add_scaled(o, d, want)) < 1e-6 && h.shift[0] >= 5, "{w:?} {:?}", h.shift);
+    assert!(
+        vec3::distance(w, vec3::add_scaled(o, d, want)) < 1e-6 && h.shift[0] >= 5,
+        "{w:?} {:?}",
+        h.shift
+    );
     // The backing plane ends a ray through the gap.
-    let scene = FiberScene::new(&fibers, &SceneOptions { period: Some(per), backing_z: Some(-0.5) }).unwrap();
+    let scene =
+        FiberScene::new(&fibers, &SceneOptions { period: Some(per), backing_z: Some(-0.5) })
+            .unwrap();
     let h = scene.intersect([0.5, 0.5, 1.0], down, f64::INFINITY, None).unwrap();
     assert_eq!(h.kind, HitKind::Backing);
     assert!((h.t - 1.5).abs() < 1e-12);
@@ -116,13 +135,19 @@ fn rays_leaving_a_fiber_axis_skip_their_own_fiber() {
 
 #[test]
 fn bad_fibers_are_refused_naming_the_fiber_and_point() {
-    let mut f = fibers_from_polylines(&[vec![[0.0; 3], [1.0, 0.0, 0.0]], vec![[0.0; 3], [0.0, 1.0, 0.0]]], 0.1, [1.0; 3]);
+    let mut f = fibers_from_polylines(
+        &[vec![[0.0; 3], [1.0, 0.0, 0.0]], vec![[0.0; 3], [0.0, 1.0, 0.0]]],
+        0.1,
+        [1.0; 3],
+    );
     f.points[3][1] = f32::NAN;
     let e = FiberScene::new(&f, &SceneOptions::default()).unwrap_err().to_string();
     assert!(e.contains("fiber 1") && e.contains("point 1"), "{e}");
     let mut f = fibers_from_polylines(&[vec![[0.0; 3], [1.0, 0.0, 0.0]]], 0.1, [1.0; 3]);
     f.radii[0] = -1.0;
-    assert!(FiberScene::new(&f, &SceneOptions::default()).unwrap_err().to_string().contains("fiber 0"));
+    assert!(
+        FiberScene::new(&f, &SceneOptions::default()).unwrap_err().to_string().contains("fiber 0")
+    );
     // Zero radius: no capsule, no NaN, nothing hit.
     let f = fibers_from_polylines(&[vec![[0.0; 3], [1.0, 0.0, 0.0]]], 0.0, [1.0; 3]);
     let s = FiberScene::new(&f, &SceneOptions::default()).unwrap();
