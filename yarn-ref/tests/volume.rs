@@ -151,33 +151,34 @@ fn volumetric_white_furnace() {
     let env = EnvLight::new(btf_image::EnvMap::constant(16, [1.0; 3]).unwrap(), 1.0);
     let lights = [Light::Environment(env)];
     let cam = Camera::oblique([0.3, 0.2, 1.0], 1e-3, [-2e-3, -1.5e-3], [4e-3, 3e-3]).unwrap();
-    let mut s = RenderSettings::new(8, 6, 64);
-    s.seed = 3;
     let mut vs = VolumeSettings::new(1e-3 / 16.0);
     vs.albedo = 1.0;
     vs.phase = Phase::Isotropic;
     vs.multiple = true;
     vs.max_order = 64;
     vs.background = Background::Environment;
-    let (img, _) = render_volume(&vol, &lights, &cam, &s, &vs).unwrap();
-    let mut worst = 0.0f64;
-    let (mut sum, mut var) = (0.0, 0.0);
-    for y in 0..6 {
-        for x in 0..8 {
-            let v = img.pixel(x, y)[0] as f64;
-            let se = img.std_error(x, y, 0);
-            worst = worst.max((v - 1.0).abs() / se.max(1e-9));
-            sum += v;
-            var += se * se;
+    // The multiple-scattering estimator is right-skewed (rare long paths carry much of the
+    // mean), so a pixel's standard error from 64 of its own samples is unreliable: one
+    // seed gave a central pixel 0.922 ± 0.010 where two others gave 1.035 ± 0.041 and
+    // 1.010 ± 0.034, and the same ray with 40 000 samples gives 0.998 ± 0.0016. The test
+    // therefore pools: three seeds, the image mean against 4 pooled SE.
+    let (mut sum, mut var, mut n) = (0.0, 0.0, 0.0);
+    for seed in [3, 4, 5] {
+        let mut s = RenderSettings::new(8, 6, 64);
+        s.seed = seed;
+        let (img, _) = render_volume(&vol, &lights, &cam, &s, &vs).unwrap();
+        for y in 0..6 {
+            for x in 0..8 {
+                sum += img.pixel(x, y)[0] as f64;
+                var += img.std_error(x, y, 0).powi(2);
+                n += 1.0;
+            }
         }
     }
-    let mean = sum / 48.0;
-    let se_mean = var.sqrt() / 48.0;
+    let mean = sum / n;
+    let se_mean = var.sqrt() / n;
     eprintln!(
-        "volumetric furnace (ϖ = 1, isotropic): mean {mean:.5} ± {se_mean:.5}, worst pixel {worst:.2} σ"
+        "volumetric furnace (ϖ = 1, isotropic, 3 seeds × 48 pixels × 64 spp): {mean:.5} ± {se_mean:.5}"
     );
-    // Known open point: grazing pixels come out 1–3 % low (up to 9 σ of their own noise),
-    // a discretisation bias of the marched free flights against the marched NEE
-    // transmittance still to be found; the image mean is held to 4 SE + 2 %.
-    assert!((mean - 1.0).abs() <= 4.0 * se_mean + 0.02, "mean {mean} ± {se_mean}");
+    assert!((mean - 1.0).abs() <= 4.0 * se_mean + 2e-3, "mean {mean} ± {se_mean}");
 }
