@@ -25,9 +25,28 @@ pub enum SynthCmd {
 /// `btf synth material`.
 #[derive(Args)]
 pub struct MaterialArgs {
-    /// lambert, corduroy, knit, woven, wallpaper or stone.
+    /// lambert, corduroy, knit, woven, wallpaper, stone, or yarn (a knit patch of explicit
+    /// fibers, path traced: see `--chart`, `--yarn`).
     #[arg(long)]
     pub kind: String,
+    /// yarn: built-in chart name or chart file.
+    #[arg(long)]
+    pub chart: Option<String>,
+    /// yarn: yarn preset name or yarn TOML file.
+    #[arg(long)]
+    pub yarn: Option<String>,
+    /// yarn: how the BTF is rendered (reference).
+    #[arg(long, default_value = "reference")]
+    pub method: String,
+    /// yarn: jittered samples per texel (default 16).
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// yarn: stitches W,C of the periodic patch (default one chart repeat).
+    #[arg(long)]
+    pub stitches: Option<String>,
+    /// yarn: lit vertices per path (default 8; 1 = direct lighting).
+    #[arg(long)]
+    pub bounces: Option<u32>,
     /// Texels per side.
     #[arg(long, default_value_t = 64)]
     pub size: usize,
@@ -153,6 +172,22 @@ fn parse_rgb(s: &str) -> Result<[f64; 3]> {
 }
 
 fn material(a: MaterialArgs) -> Result<()> {
+    if a.kind == "yarn" {
+        crate::cmd::knit::synth_yarn_material(&a, show_progress())?;
+        if let Some(dir) = a.preview {
+            let store = btf_core::store::BtfStore::open(&a.output)?;
+            eprintln!("preview -> {}", write_contact_sheet(&store, &dir, "yarn")?.display());
+        }
+        return Ok(());
+    }
+    if a.chart.is_some()
+        || a.yarn.is_some()
+        || a.spp.is_some()
+        || a.stitches.is_some()
+        || a.bounces.is_some()
+    {
+        bail!("--chart, --yarn, --spp, --stitches and --bounces are for --kind yarn");
+    }
     let kind = MaterialKind::from_name(&a.kind)?;
     let mut spec = MaterialSpec::new(kind, a.size);
     spec.sampling = datasets::capture::parse_sampling(&a.sampling)?;

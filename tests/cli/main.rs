@@ -11,6 +11,7 @@ mod commands;
 mod demo;
 mod hostile;
 mod import_export;
+mod knit;
 mod relight;
 mod render;
 mod synth;
