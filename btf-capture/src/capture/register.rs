@@ -239,7 +239,8 @@ pub fn register(
     let marker_rms = rms(pts.iter().map(|m| homography::point_error(&h, m)).collect());
     let half = plate.sample_mm / 2.0;
     let uncertainty = grid_uncertainty_px(&h, &pts, marker_rms.max(NOISE_FLOOR_PX), half);
-    if !(uncertainty <= opt.max_uncertainty_px) {
+    // NaN (a degenerate fit) is refused too.
+    if uncertainty.is_nan() || uncertainty > opt.max_uncertainty_px {
         let used: Vec<String> = pts.iter().map(|m| format!("{:?}", m.plate_mm)).collect();
         return Err(format!(
             "the {} markers that agree ({} mm; residual {marker_rms:.2} px) fix the sample's \
@@ -273,12 +274,7 @@ const NOISE_FLOOR_PX: f64 = 0.1;
 /// eight free entries of `h` (`h₃₃` fixed), propagated to each grid point by its own
 /// Jacobian (first order, numerical derivatives with steps relative to each entry).
 /// Infinite when the markers do not determine `h`.
-pub fn grid_uncertainty_px(
-    h: &Matrix3<f64>,
-    pts: &[PointMatch],
-    sigma_px: f64,
-    half: f64,
-) -> f64 {
+pub fn grid_uncertainty_px(h: &Matrix3<f64>, pts: &[PointMatch], sigma_px: f64, half: f64) -> f64 {
     let h = h / h[(2, 2)];
     let scale = h.norm();
     let jacobian = |p: [f64; 2]| -> nalgebra::SMatrix<f64, 2, 8> {
@@ -539,8 +535,15 @@ mod tests {
         // plate surround the ±40 mm sample, the 5 towards its +x corner do not.
         let h = Matrix3::new(3.0, 0.2, 640.0, -0.1, 2.4, 480.0, 1e-4, 8e-4, 1.0);
         let marks = [
-            [-60.0, -60.0], [0.0, -60.0], [60.0, -60.0], [60.0, 0.0], [60.0, 60.0],
-            [0.0, 60.0], [-60.0, 60.0], [-60.0, 0.0], [30.0, 60.0],
+            [-60.0, -60.0],
+            [0.0, -60.0],
+            [60.0, -60.0],
+            [60.0, 0.0],
+            [60.0, 60.0],
+            [0.0, 60.0],
+            [-60.0, 60.0],
+            [-60.0, 0.0],
+            [30.0, 60.0],
         ];
         let pts: Vec<PointMatch> =
             marks.iter().map(|&m| PointMatch { plate_mm: m, image_px: apply(&h, m) }).collect();
