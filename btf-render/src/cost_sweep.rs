@@ -11,9 +11,10 @@
 //! per-pixel evaluation no more reads than per-vertex blending. Shadows are turned off and
 //! the background set to black for the sweep (the error is over the shaded pixels only).
 
-use crate::plain_texture::{Baseline, ReadForm};
+use crate::passes::baselines::{Baseline, ReadForm};
+use crate::renderer::{RenderOptions, Renderer};
 use crate::scene::{Evaluation, Scene, Shadows};
-use crate::{Error, Frame, Gpu, RenderOptions, Renderer, Result};
+use crate::{Error, Frame, Gpu, Result};
 use btf_core::InterpMode;
 use serde::Serialize;
 

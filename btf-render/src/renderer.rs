@@ -15,19 +15,21 @@
 //! environment can be turned or swapped without recomputing visibility
 //! ([`Renderer::set_environment_rotation`], [`Renderer::set_environment`]).
 
-use crate::btf_pass::{
-    BtfPass, BtfPassKey, CornerVertex, DEPTH_FORMAT, FrameRaw, LightRaw, color_format,
-};
+use crate::camera::CameraSetup;
 use crate::frame::{Frame, PassStat, Stats};
-use crate::material::{MaterialData, MaterialGpu};
-use crate::math::{self, Mat4, Vec3, v3};
+use crate::material::{MaterialData, MaterialGpu, SamplingsRaw};
+
+use crate::passes::baselines::{self, Baseline, BaselinePass};
+use crate::passes::btf::{BtfPass, BtfPassKey};
+use crate::passes::mesh::{CornerVertex, DEPTH_FORMAT, cleared_depth, color_format};
+use crate::passes::shadow::{ShadowInputs, Shadowing};
+use crate::passes::smooth_boundary;
+use crate::passes::thin::{ThinEnv, ThinPass};
 use crate::per_vertex::{self, VertexEvalInput, VertexLight};
-use crate::plain_texture::{Baseline, BaselinePass};
-use crate::scene::{Evaluation, Light, Projection, Scene, Shadows};
-use crate::shadow::{ShadowInputs, Shadowing};
+use crate::scene::{Evaluation, Scene, Shadows};
 use crate::timer::PassTimer;
-use crate::transmission::{ThinEnv, ThinPass};
-use crate::{Error, Gpu, Result, terminator};
+use crate::uniforms::FrameRaw;
+use crate::{Error, Gpu, Result};
 use btf_core::InterpMode;
 use btf_image::EnvMap;
 use btf_light::mesh::Mesh;
@@ -42,7 +44,7 @@ mod live;
 mod setup;
 
 use environment::EnvState;
-use setup::{camera_setup, frame_bind_group, load_meshes, thin_pass};
+use setup::{frame_bind_group, load_meshes, thin_pass};
 
 /// Extra knobs for tests and measurements.
 #[derive(Debug, Clone, Copy, Default)]
@@ -70,17 +72,6 @@ struct Draw {
     material: usize,
     first: u32,
     count: u32,
-}
-
-/// Camera matrices and the quantities shaders need.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct CameraSetup {
-    /// World → clip.
-    pub view_proj: Mat4,
-    /// Eye position.
-    pub eye: Vec3,
-    /// Direction towards the camera for orthographic projections.
-    pub ortho_to_camera: Option<Vec3>,
 }
 
 /// A scene ready to render.
@@ -154,11 +145,7 @@ impl Renderer {
             msaa: fx.msaa,
             count_reads: options.count_reads,
             environment: scene.environment().is_some(),
-            shadows: match (scene.wants_shadow_pass(), fx.shadows) {
-                (false, _) | (_, Shadows::None) => 0,
-                (true, Shadows::Volume) => 1,
-                (true, Shadows::Map) => 2,
-            },
+            shadows: if scene.wants_shadow_pass() { fx.shadows } else { Shadows::None },
             smooth_boundary: scene.wants_shadow_pass() && fx.smooth_boundary,
             lights: scene.lights.len() as u32,
             groups,
@@ -190,7 +177,7 @@ impl Renderer {
             material_bytes += gpu_mat.bytes;
             let samplings = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("samplings"),
-                contents: bytemuck::bytes_of(&data.samplings_raw(desc.uv_scale)),
+                contents: bytemuck::bytes_of(&SamplingsRaw::of_material(&data, desc.uv_scale)),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
             let bind_group = btf.material_bind_group(gpu, &gpu_mat, &samplings, &sampler);
@@ -242,17 +229,17 @@ impl Renderer {
         });
         let baseline = match options.baseline {
             None => None,
-            Some(Baseline::Plain) => Some(crate::plain_texture::build(gpu, &btf)?),
+            Some(Baseline::Plain) => Some(baselines::plain(gpu, &btf)?),
             Some(Baseline::ReadBound { reads_per_pixel, form }) => {
                 let m = &materials[0].data;
                 let views = m.view_sampling.len();
-                Some(crate::read_bound::build(gpu, &btf, reads_per_pixel, m.groups, views, form)?)
+                Some(baselines::read_bound(gpu, &btf, reads_per_pixel, m.groups, views, form)?)
             }
         };
         let shadowing =
             if scene.wants_shadow_pass() { Some(Shadowing::new(gpu, scene, &mesh)?) } else { None };
         let extra_depth = shadowing.as_ref().map_or(0.0, |s| s.extra_camera_depth());
-        let camera = camera_setup(scene, &mesh, extra_depth);
+        let camera = CameraSetup::new(scene, &mesh, extra_depth);
         let frame_uniform = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame"),
             size: std::mem::size_of::<FrameRaw>() as u64,
@@ -268,13 +255,13 @@ impl Renderer {
             mapped_at_creation: false,
         });
         let inputs = match &shadowing {
-            Some(s) => s.inputs(gpu, scene.output.width, scene.output.height),
+            Some(s) => s.inputs(gpu),
             None => ShadowInputs::dummy(gpu),
         };
         let boundary = if shadowing.is_some() {
-            terminator::texture(gpu, fx.terminator_blur)
+            smooth_boundary::texture(gpu, fx.terminator_blur)
         } else {
-            terminator::texture(gpu, 0) // 1 KiB placeholder; never sampled without a shadowing light
+            smooth_boundary::texture(gpu, 0) // 1 KiB placeholder; never sampled without a shadowing light
         };
         let frame_group =
             frame_bind_group(gpu, &btf, &frame_uniform, &boundary, &inputs, &counters);
@@ -326,8 +313,7 @@ impl Renderer {
     fn frame_raw(&self) -> FrameRaw {
         let fx = &self.scene.effects;
         let mut raw = FrameRaw {
-            view_proj: math::to_cols(&self.camera.view_proj),
-            eye: [self.camera.eye.x, self.camera.eye.y, self.camera.eye.z, 1.0],
+            camera: self.camera.to_raw(),
             info: [
                 self.scene.lights.len() as u32,
                 (self.shadowing.is_some() && fx.smooth_boundary) as u32,
@@ -337,62 +323,18 @@ impl Renderer {
             terminator: [fx.terminator_deg.to_radians(), 0.0, 0.0, 0.0],
             ..Default::default()
         };
-        if let Some(d) = self.camera.ortho_to_camera {
-            raw.eye[3] = 0.0;
-            raw.to_camera = [d.x, d.y, d.z, 0.0];
-        }
         for (l, light) in self.scene.lights.iter().enumerate() {
-            let shadow_kind = match (&self.shadowing, light.casts_shadows(), fx.shadows) {
-                (Some(_), true, Shadows::Volume) => 1.0,
-                (Some(_), true, Shadows::Map) => 2.0,
-                _ => 0.0,
+            let lr = light.to_raw();
+            raw.lights[l] = match &self.shadowing {
+                Some(s) => s.light_raw(l, lr),
+                None => lr,
             };
-            let mut lr = match light {
-                Light::Directional { direction, irradiance, .. } => {
-                    let d = v3(*direction).normalize();
-                    LightRaw {
-                        pos: [d.x, d.y, d.z, 0.0],
-                        color: [irradiance[0], irradiance[1], irradiance[2], shadow_kind],
-                        ..Default::default()
-                    }
-                }
-                Light::Point { position, intensity, .. } => LightRaw {
-                    pos: [position[0], position[1], position[2], 1.0],
-                    color: [intensity[0], intensity[1], intensity[2], shadow_kind],
-                    ..Default::default()
-                },
-                // Zero power per pixel; its light comes from the per-vertex coefficients.
-                Light::Environment(_) => {
-                    LightRaw { pos: [0.0, 0.0, 1.0, 0.0], ..Default::default() }
-                }
-            };
-            if let Some(s) = &self.shadowing {
-                s.fill_light_raw(l, &mut lr);
-            }
-            raw.lights[l] = lr;
         }
         raw
     }
 
     fn vertex_lights(&self) -> Vec<VertexLight> {
-        self.scene
-            .lights
-            .iter()
-            .map(|l| match l {
-                Light::Directional { direction, irradiance, .. } => VertexLight {
-                    pos_or_dir: v3(*direction).normalize(),
-                    point: false,
-                    color: *irradiance,
-                },
-                Light::Point { position, intensity, .. } => {
-                    VertexLight { pos_or_dir: v3(*position), point: true, color: *intensity }
-                }
-                // Filled by the environment's own coefficients (zero power skips the fold).
-                Light::Environment(_) => {
-                    VertexLight { pos_or_dir: Vec3::z(), point: false, color: [0.0; 3] }
-                }
-            })
-            .collect()
+        self.scene.lights.iter().map(VertexLight::from_light).collect()
     }
 
     /// Lights per vertex in the per-vertex layout: all lights in per-vertex mode, the
@@ -477,10 +419,7 @@ impl Renderer {
                             store: wgpu::StoreOp::Store,
                         },
                     })],
-                    depth_stencil_attachment: Some(crate::btf_pass::cleared_depth(
-                        &depth_view,
-                        false,
-                    )),
+                    depth_stencil_attachment: Some(cleared_depth(&depth_view, false)),
                     timestamp_writes: ts,
                     occlusion_query_set: None,
                     multiview_mask: None,

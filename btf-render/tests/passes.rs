@@ -5,7 +5,7 @@
 mod common;
 
 use btf_core::eigen::Quantization;
-use btf_render::btf_pass::BtfPassKey;
+use btf_render::passes::btf::BtfPassKey;
 use btf_render::{RenderOptions, Renderer, Scene, render_scene};
 use common::*;
 

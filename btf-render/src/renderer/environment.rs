@@ -34,7 +34,7 @@ impl Renderer {
         let params = desc.params();
         let camera_sides = !(self.options.all_env_sides
             || self.thin.is_some()
-            || mesh.positions.len() >= crate::camera_sides::MAX_VERTICES);
+            || mesh.positions.len() >= crate::passes::corner_ids::MAX_VERTICES);
         let t = Instant::now();
         let wanted = if camera_sides && !SceneEnvironment::cache_holds_all(&params, &env_mesh)? {
             Some(self.camera_frames(gpu, params.two_sided)?)
@@ -65,9 +65,9 @@ impl Renderer {
             .iter()
             .map(|d| (&self.materials[d.material].bind_group, d.first, d.count))
             .collect();
-        let seen = crate::camera_sides::seen_vertices(
+        let seen = crate::passes::corner_ids::seen_vertices(
             gpu,
-            &crate::camera_sides::CornerDraws {
+            &crate::passes::corner_ids::CornerDraws {
                 btf: &self.btf,
                 corners: &self.corners,
                 frame_group: &self.frame_group,
@@ -190,7 +190,8 @@ impl Renderer {
         let t = Instant::now();
         let (w, h) = (self.scene.output.width, self.scene.output.height);
         let rot = e.env.rotation_deg();
-        let img = crate::env_background::image(map, &self.camera, (w, h), rot, e.env.exposure());
+        let img =
+            crate::passes::background::image(map, &self.camera, (w, h), rot, e.env.exposure());
         gpu.queue.write_texture(
             color.as_image_copy(),
             bytemuck::cast_slice(&img),
@@ -211,7 +212,7 @@ impl Renderer {
         let e = self.environment.as_ref()?;
         let map = e.map.as_ref()?;
         let size = (self.scene.output.width, self.scene.output.height);
-        let img = crate::env_background::image(
+        let img = crate::passes::background::image(
             map,
             &self.camera,
             size,

@@ -6,10 +6,12 @@
 //! material data (evaluation mode, blending, components, shadow technique) need
 //! [`Renderer::new`].
 
-use super::{Renderer, camera_setup, frame_bind_group};
+use super::{Renderer, frame_bind_group};
+use crate::camera::CameraSetup;
+use crate::passes::shadow::{ShadowInputs, Shadowing};
+use crate::passes::smooth_boundary;
 use crate::scene::{Camera, Light, MAX_LIGHTS};
-use crate::shadow::{ShadowInputs, Shadowing};
-use crate::{Error, Gpu, Result, terminator};
+use crate::{Error, Gpu, Result};
 
 impl Renderer {
     /// Replaces the camera; the next frame uses it and nothing else is recomputed — except,
@@ -19,7 +21,7 @@ impl Renderer {
     pub fn set_camera(&mut self, camera: &Camera) -> Result<()> {
         self.scene.camera = camera.clone();
         let extra_depth = self.shadowing.as_ref().map_or(0.0, |s| s.extra_camera_depth());
-        let setup = camera_setup(&self.scene, &self.mesh, extra_depth);
+        let setup = CameraSetup::new(&self.scene, &self.mesh, extra_depth);
         if setup != self.camera
             && let Some(e) = self.environment.as_mut()
         {
@@ -57,9 +59,8 @@ impl Renderer {
         self.scene.lights = lights.to_vec();
         if self.shadowing.is_some() {
             let shadowing = Shadowing::new(gpu, &self.scene, &self.mesh)?;
-            let (w, h) = (self.scene.output.width, self.scene.output.height);
-            let inputs: ShadowInputs = shadowing.inputs(gpu, w, h);
-            let boundary = terminator::texture(gpu, self.scene.effects.terminator_blur);
+            let inputs: ShadowInputs = shadowing.inputs(gpu);
+            let boundary = smooth_boundary::texture(gpu, self.scene.effects.terminator_blur);
             self.frame_group = frame_bind_group(
                 gpu,
                 &self.btf,

@@ -41,34 +41,6 @@ pub(super) fn load_meshes(scene: &Scene) -> Result<(Mesh, Vec<usize>)> {
     Ok((mesh, tri_desc))
 }
 
-pub(super) fn camera_setup(scene: &Scene, mesh: &Mesh, extra_depth: f32) -> CameraSetup {
-    let c = &scene.camera;
-    let (lo, hi) = mesh.bounds();
-    let center = (v3(lo) + v3(hi)) * 0.5;
-    let radius = ((v3(hi) - v3(lo)).norm() * 0.5).max(1e-6);
-    let (eye, target) = (v3(c.eye), v3(c.target));
-    let dir = target - eye;
-    let view = math::look_at(eye, target, math::safe_up(dir, v3(c.up)));
-    let aspect = scene.output.width as f32 / scene.output.height as f32;
-    let dist = (center - eye).norm();
-    let far = dist + radius * 1.05 + extra_depth;
-    match c.projection {
-        Projection::Perspective => {
-            let near = (dist - radius * 1.05).max(far * 1e-4);
-            CameraSetup {
-                view_proj: math::perspective(c.fov_y_deg, aspect, near, far) * view,
-                eye,
-                ortho_to_camera: None,
-            }
-        }
-        Projection::Orthographic => {
-            let near = dist - radius * 1.05 - extra_depth;
-            let proj = math::orthographic(c.ortho_height * aspect, c.ortho_height, near, far);
-            CameraSetup { view_proj: proj * view, eye, ortho_to_camera: Some(-dir.normalize()) }
-        }
-    }
-}
-
 /// The thin-cloth pass, when some material used has a `transmission` effect.
 pub(super) fn thin_pass(
     gpu: &Gpu,
@@ -99,7 +71,7 @@ pub(super) fn thin_pass(
         Some((light, e)) => {
             for (desc, _, name) in &descs {
                 if let Some(d) = desc {
-                    crate::transmission::desc::check_supported(d, name, e.two_sided)?;
+                    d.check_environment(name, e.two_sided)?;
                 }
             }
             let entry = if key.evaluation == Evaluation::PerVertex { light as u32 } else { 0 };
@@ -125,31 +97,21 @@ pub(super) fn frame_bind_group(
         ..Default::default()
     });
     let boundary_view = boundary.create_view(&Default::default());
-    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("btf frame"),
-        layout: &btf.frame_layout,
-        entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: frame.as_entire_binding() },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: wgpu::BindingResource::TextureView(&boundary_view),
-            },
-            wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&clamp) },
-            wgpu::BindGroupEntry {
-                binding: 3,
-                resource: wgpu::BindingResource::TextureView(&shadow.masks),
-            },
-            wgpu::BindGroupEntry {
-                binding: 4,
-                resource: wgpu::BindingResource::TextureView(&shadow.maps),
-            },
-            wgpu::BindGroupEntry {
-                binding: 5,
-                resource: wgpu::BindingResource::Sampler(&shadow.compare),
-            },
-            wgpu::BindGroupEntry { binding: 6, resource: counters.as_entire_binding() },
+    use wgpu::BindingResource::{Sampler, TextureView};
+    crate::bind::group(
+        &gpu.device,
+        "btf frame",
+        &btf.frame_layout,
+        &[
+            frame.as_entire_binding(),
+            TextureView(&boundary_view),
+            Sampler(&clamp),
+            TextureView(&shadow.masks),
+            TextureView(&shadow.maps),
+            Sampler(&shadow.compare),
+            counters.as_entire_binding(),
         ],
-    })
+    )
 }
 
 impl Renderer {
@@ -217,15 +179,9 @@ impl Renderer {
             .vertex_layout
             .as_ref()
             .ok_or_else(|| Error::Gpu("per-vertex layout missing".into()))?;
-        let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("per-vertex"),
-            layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: coef.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: slots.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: irradiance.as_entire_binding() },
-            ],
-        });
+        let resources =
+            [coef.as_entire_binding(), slots.as_entire_binding(), irradiance.as_entire_binding()];
+        let group = crate::bind::group(&gpu.device, "per-vertex", layout, &resources);
         Ok((coef, slots, group))
     }
 }

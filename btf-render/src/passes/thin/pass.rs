@@ -1,31 +1,25 @@
 //! The thin-cloth pass: draws the triangles of transmissive materials after the opaque
 //! BTF geometry, sorted back to front every frame, with `L = L_dst · e^{−τ₁/μ} + L_src`
-//! (thin-cloth paper eq. 9; the shading is in `transmission.wgsl`).
+//! (`[TC eq. 9]`; the shading, `[TC eq. 7–8]`, is in `transmission.wgsl`).
 //!
 //! Depth is tested against the opaque geometry but not written, so layers behind a thin
 //! sheet stay visible. Bind groups 0 and 1 are the BTF pass's (frame, material); group 2,
 //! with an environment light, its per-vertex coefficients (the BTF's environment term);
 //! group 3 holds the slab parameters and the τ texture of one material and the
-//! per-vertex environment tables of [`super::env`].
+//! per-vertex environment tables of `btf_light::thin_tables`.
 
-use super::desc::{TauTexture, TransmissionDesc, btf_mean_thickness, image_thickness};
 use super::pipeline::{pipeline, thin_layout};
-use crate::btf_pass::{BtfPass, BtfPassKey, CornerVertex};
+use super::thickness::{slab_params, tau_texels};
+use crate::bind;
+use crate::camera::CameraSetup;
 use crate::material::MaterialData;
-use crate::renderer::CameraSetup;
+use crate::passes::btf::{BtfPass, BtfPassKey};
+use crate::passes::mesh::CornerVertex;
+use crate::scene::TransmissionDesc;
 use crate::{Error, Gpu, Result};
 use btf_light::thin_tables::{SlabParams, VEC4_PER_VERTEX};
 use half::f16;
 use wgpu::util::DeviceExt;
-
-/// WGSL of the pass: the BTF pass's source (per-vertex part included: the environment term
-/// is per vertex) with the thin-cloth fragment shaders appended.
-pub const SOURCE: &str = concat!(
-    include_str!("../interp.wgsl"),
-    include_str!("../btf_pass.wgsl"),
-    include_str!("../btf_vertex.wgsl"),
-    include_str!("transmission.wgsl")
-);
 
 /// GPU mirror of `ThinRaw`.
 #[repr(C)]
@@ -117,7 +111,7 @@ impl ThinPass {
             };
             let texels = tau_texels(d, data)?;
             let max_texel = texels.2.iter().map(|t| t.to_f32()).fold(0.0, f32::max);
-            let slab = super::desc::slab_params(d, max_texel);
+            let slab = slab_params(d, max_texel);
             let bind = ThinBind { layout: &layout, env_tables: &env_tables, env_entry: entry };
             materials.push(Some(ThinMaterial::new(gpu, &bind, d, &slab, texels, name)?));
             slabs.push(Some(slab));
@@ -239,15 +233,6 @@ pub fn back_to_front(triangles: &[(usize, [CornerVertex; 3])], camera: &CameraSe
     order
 }
 
-/// The τ texture of a material (1×1 of ones without `tau_texture`): width, height, texels.
-fn tau_texels(desc: &TransmissionDesc, data: &MaterialData) -> Result<(u32, u32, Vec<f16>)> {
-    Ok(match &desc.tau_texture {
-        None => (1, 1, vec![f16::ONE]),
-        Some(TauTexture::BtfMean) => btf_mean_thickness(data),
-        Some(TauTexture::Image(p)) => image_thickness(p)?,
-    })
-}
-
 /// What every material's bind group shares.
 struct ThinBind<'a> {
     layout: &'a wgpu::BindGroupLayout,
@@ -297,18 +282,16 @@ impl ThinMaterial {
                 bytemuck::cast_slice(&texels),
             );
             let view = tau.create_view(&Default::default());
-            let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("thin material"),
+            let group = bind::group(
+                &gpu.device,
+                "thin material",
                 layout,
-                entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::TextureView(&view),
-                    },
-                    wgpu::BindGroupEntry { binding: 2, resource: env_tables.as_entire_binding() },
+                &[
+                    uniform.as_entire_binding(),
+                    wgpu::BindingResource::TextureView(&view),
+                    env_tables.as_entire_binding(),
                 ],
-            });
+            );
             ThinMaterial { group, _uniform: uniform, _tau: tau }
         })
     }
@@ -317,8 +300,7 @@ impl ThinMaterial {
 #[cfg(test)]
 mod tests {
     #[test]
-    fn wgsl_validates() {
-        crate::gpu::validate_wgsl("transmission.wgsl", super::SOURCE).unwrap();
+    fn thin_raw_matches_the_wgsl_struct() {
         assert_eq!(std::mem::size_of::<super::ThinRaw>(), 32);
     }
 }

@@ -1,21 +1,31 @@
-//! Which vertices a fixed camera's frames read, found by rasterising the mesh as the BTF
-//! pass does — so that an environment light computes visibility maps (Sattler et al. 2003,
-//! §5.2) and gathers `g` (eq. 10) only for the vertex sides the camera shows.
+//! The corner-id pass (was `camera_sides.rs`): which vertices a fixed camera's frames read,
+//! found by rasterising the mesh as the BTF pass does — so that an environment light
+//! computes visibility maps (`[S03 §5.2]`) and gathers `g` (`[S03 eq. 10]`) only for the
+//! vertex sides the camera shows.
 //!
 //! A fragment's colour under an environment light blends the per-vertex reconstructions of
-//! its triangle's three vertices (eq. 11 per vertex, blended barycentrically as in §4.2),
-//! and each vertex contributes the side facing the camera (the frame
-//! [`crate::envlight::camera_basis`] picks). So a frame of this camera reads exactly the
+//! its triangle's three vertices (`[S03 eq. 11]` per vertex, blended barycentrically as in
+//! `[S03 §4.2]`), and each vertex contributes the side facing the camera (the frame
+//! `btf_light::env_coefficients` picks). So a frame of this camera reads exactly the
 //! vertices of the triangles that win the depth test at some sample. The corner-id pass
-//! ([`crate::btf_pass::BtfPass::corner_ids_pipeline`]) draws the same corners with the same
-//! vertex stage, depth test and sample count as the BTF pass and writes, per sample, the
-//! front triangle's three vertex indices; a compute pass marks them. Every vertex that
+//! draws the same corners with the BTF pass's shader module, vertex stage, constants,
+//! layout, depth test and sample count, and writes, per sample, the front triangle's three
+//! vertex indices (`fs_corner_ids`); a compute pass (`mark.wgsl`) marks them. Every vertex that
 //! reaches a sample is marked; a vertex hidden at every sample is not, and its weights are
 //! never read.
 
-use crate::btf_pass::{BtfPass, CORNER_ID_FORMAT, DEPTH_FORMAT};
+use crate::bind::{self, storage};
+use crate::passes::btf::BtfPass;
+use crate::passes::mesh::{DEPTH_FORMAT, MeshPipeline, cleared_depth};
 use crate::{Error, Gpu, Result};
 use wgpu::util::DeviceExt;
+
+/// WGSL of the marking pass.
+pub const MARK_SOURCE: &str = include_str!("mark.wgsl");
+
+/// Format of the corner-id targets: vertex indices as `f32` (exact below 2²⁴), a format
+/// every adapter can multisample.
+pub const CORNER_ID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 
 /// Vertex indices the `f32` targets hold exactly.
 pub const MAX_VERTICES: usize = 1 << 24;
@@ -48,7 +58,7 @@ pub fn seen_vertices(gpu: &Gpu, d: &CornerDraws) -> Result<Vec<bool>> {
     }
     let samples = d.btf.key.msaa;
     let dev = &gpu.device;
-    let pipeline = d.btf.corner_ids_pipeline(gpu)?;
+    let pipeline = corner_ids_pipeline(gpu, d.btf)?;
     let target =
         |format, usage| gpu.target("corner ids", (d.width, d.height), samples, format, usage);
     let att = wgpu::TextureUsages::RENDER_ATTACHMENT;
@@ -70,15 +80,9 @@ pub fn seen_vertices(gpu: &Gpu, d: &CornerDraws) -> Result<Vec<bool>> {
     };
     let (coef, slots) = (zeros("corner-id coef", 16), zeros("corner-id slots", 16 * d.vertices));
     let vertex_group = layout.map(|layout| {
-        dev.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("corner-id per-vertex"),
-            layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: coef.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: slots.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: coef.as_entire_binding() },
-            ],
-        })
+        let resources =
+            [coef.as_entire_binding(), slots.as_entire_binding(), coef.as_entire_binding()];
+        bind::group(dev, "corner-id per-vertex", layout, &resources)
     });
     let seen_bytes = 4 * d.vertices.max(1) as u64;
     let seen = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -114,7 +118,7 @@ pub fn seen_vertices(gpu: &Gpu, d: &CornerDraws) -> Result<Vec<bool>> {
             let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("corner ids"),
                 color_attachments: &color,
-                depth_stencil_attachment: Some(crate::btf_pass::cleared_depth(&depth_view, false)),
+                depth_stencil_attachment: Some(cleared_depth(&depth_view, false)),
                 timestamp_writes: None,
                 occlusion_query_set: None,
                 multiview_mask: None,
@@ -144,6 +148,25 @@ pub fn seen_vertices(gpu: &Gpu, d: &CornerDraws) -> Result<Vec<bool>> {
     Ok(flags[..d.vertices].iter().map(|&f| f != 0).collect())
 }
 
+/// A pipeline that rasterises exactly as the BTF pass does — the same module, vertex entry
+/// point, constants, layout, depth test and sample count — but writes, per sample, the three
+/// vertex indices of the triangle in front (as `f32`, one [`CORNER_ID_FORMAT`] target each).
+fn corner_ids_pipeline(gpu: &Gpu, btf: &BtfPass) -> Result<wgpu::RenderPipeline> {
+    let target = Some(wgpu::ColorTargetState::from(CORNER_ID_FORMAT));
+    MeshPipeline {
+        label: "corner ids",
+        layout: &btf.layout,
+        module: &btf.module,
+        vertex: btf.key.vertex_entry(),
+        fragment: "fs_corner_ids",
+        constants: &btf.key.constants(),
+        targets: &[target.clone(), target.clone(), target],
+        depth_write: true,
+        msaa: btf.key.msaa,
+    }
+    .build(gpu)
+}
+
 /// The compute pass that marks every vertex index found in the three id targets.
 fn mark_pass(
     gpu: &Gpu,
@@ -151,108 +174,52 @@ fn mark_pass(
     views: &[wgpu::TextureView],
     seen: &wgpu::Buffer,
 ) -> Result<(wgpu::ComputePipeline, wgpu::BindGroup)> {
-    let source = mark_source(samples);
     let dev = &gpu.device;
     gpu.scoped("building the vertex-marking pass", || {
         let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("mark seen vertices"),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
+            label: Some("mark.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(MARK_SOURCE.into()),
         });
-        let tex = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: samples > 1,
-            },
-            count: None,
+        let ids = wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: samples > 1,
         };
-        let bind_layout = dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("mark seen vertices"),
-            entries: &[
-                tex(0),
-                tex(1),
-                tex(2),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 3,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: crate::btf_pass::storage(false),
-                    count: None,
-                },
-            ],
-        });
+        let bind_layout = bind::layout_seen_by(
+            dev,
+            "mark seen vertices",
+            wgpu::ShaderStages::COMPUTE,
+            &[ids, ids, ids, storage(false)],
+        );
         let layout = dev.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("mark seen vertices"),
             bind_group_layouts: &[Some(&bind_layout)],
             immediate_size: 0,
         });
+        let constants = [("SAMPLES", samples as f64)];
         let pipeline = dev.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some("mark seen vertices"),
             layout: Some(&layout),
             module: &module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
+            entry_point: Some(if samples > 1 { "mark_multisampled" } else { "mark" }),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants: if samples > 1 { &constants } else { &[] },
+                zero_initialize_workgroup_memory: true,
+            },
             cache: None,
         });
-        let mut entries: Vec<wgpu::BindGroupEntry> = views
-            .iter()
-            .enumerate()
-            .map(|(i, v)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource: wgpu::BindingResource::TextureView(v),
-            })
-            .collect();
-        entries.push(wgpu::BindGroupEntry { binding: 3, resource: seen.as_entire_binding() });
-        let group = dev.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("mark seen vertices"),
-            layout: &bind_layout,
-            entries: &entries,
-        });
+        let mut resources: Vec<wgpu::BindingResource> =
+            views.iter().map(wgpu::BindingResource::TextureView).collect();
+        resources.push(seen.as_entire_binding());
+        let group = bind::group(dev, "mark seen vertices", &bind_layout, &resources);
         (pipeline, group)
     })
-}
-
-/// WGSL of the marking pass for `samples` samples per pixel.
-fn mark_source(samples: u32) -> String {
-    let (ty, load) = if samples > 1 {
-        ("texture_multisampled_2d<f32>", "i32(s)")
-    } else {
-        ("texture_2d<f32>", "0")
-    };
-    format!(
-        r#"
-@group(0) @binding(0) var ids_a: {ty};
-@group(0) @binding(1) var ids_b: {ty};
-@group(0) @binding(2) var ids_c: {ty};
-@group(0) @binding(3) var<storage, read_write> seen: array<atomic<u32>>;
-
-@compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) g: vec3<u32>) {{
-    let size = textureDimensions(ids_a);
-    if (g.x >= size.x || g.y >= size.y) {{
-        return;
-    }}
-    let p = vec2<i32>(g.xy);
-    for (var s = 0u; s < {samples}u; s = s + 1u) {{
-        let a = textureLoad(ids_a, p, {load}).x;
-        if (a >= 0.0) {{
-            atomicStore(&seen[u32(a)], 1u);
-            atomicStore(&seen[u32(textureLoad(ids_b, p, {load}).x)], 1u);
-            atomicStore(&seen[u32(textureLoad(ids_c, p, {load}).x)], 1u);
-        }}
-    }}
-}}
-"#
-    )
 }
 
 #[cfg(test)]
 mod tests {
     #[test]
     fn wgsl_validates() {
-        for samples in [1, 4] {
-            crate::gpu::validate_wgsl("mark seen vertices", &super::mark_source(samples)).unwrap();
-        }
+        crate::gpu::validate_wgsl("mark.wgsl", super::MARK_SOURCE).unwrap();
     }
 }

@@ -1,6 +1,7 @@
 //! Baseline 2 of the cost sweep (issue #5): the read bound — a shader making the same
-//! number and kind of texture reads per pixel as the BTF pass (eq. 2–5: one mean read and
-//! `3⌈c/4⌉` packed eigentexture reads per view slot, `material.rs`) and merely summing them.
+//! number and kind of texture reads per pixel as the BTF pass (`[S03 eq. 2–5]`: one mean
+//! read and `3⌈c/4⌉` packed eigentexture reads per view slot, `material/pack.rs`) and
+//! merely summing them.
 //! The target is the BTF pass within 1.5× of it: everything the reconstruction does beyond
 //! its own reads (interpolation weights, the weight buffer, lighting) must be cheap.
 //!
@@ -12,15 +13,16 @@
 //! sides of every branch, so an earlier form (one read per iteration, mean or eigentexture
 //! by an `if`) executed two samples per read and timed 1.25–2× its reads.
 
-use crate::btf_pass::BtfPass;
-use crate::plain_texture::{BaselinePass, ReadForm, pipeline};
+use super::{BaselinePass, ReadForm, pipeline};
+use crate::bind::{self, uniform};
+use crate::passes::btf::BtfPass;
 use crate::{Error, Gpu, Result};
 use wgpu::util::DeviceExt;
 
 /// WGSL of the read bound (shares the plain baseline's vertex stage).
 pub const SOURCE: &str = concat!(
-    include_str!("interp.wgsl"),
-    include_str!("plain_texture.wgsl"),
+    include_str!("../shaders/interp.wgsl"),
+    include_str!("plain.wgsl"),
     include_str!("read_bound.wgsl")
 );
 
@@ -49,7 +51,7 @@ pub fn build(
         )));
     }
     let layout =
-        crate::gpu::uniform_layout(&gpu.device, "read bound", wgpu::ShaderStages::FRAGMENT);
+        bind::layout_seen_by(&gpu.device, "read bound", wgpu::ShaderStages::FRAGMENT, &[uniform()]);
     let per_slot = 1 + 3 * groups as u32;
     let slots = reads_per_pixel / f64::from(per_slot);
     let floor = slots.floor();
@@ -62,11 +64,7 @@ pub fn build(
         contents: bytemuck::bytes_of(&raw),
         usage: wgpu::BufferUsages::UNIFORM,
     });
-    let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("read bound"),
-        layout: &layout,
-        entries: &[wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() }],
-    });
+    let group = bind::group(&gpu.device, "read bound", &layout, &[buffer.as_entire_binding()]);
     Ok(BaselinePass {
         pipeline: pipeline(
             gpu,

@@ -1,5 +1,5 @@
-//! Stencil shadow volumes (Crow 1977), the macroscopic shadows of Sattler et al. 2003 §4.3,
-//! robust on open cloth meshes.
+//! Stencil shadow volumes (Crow 1977), the macroscopic shadows of `[S03 §4.3]`, robust on
+//! open cloth meshes.
 //!
 //! Silhouette-edge volumes need closed, consistently oriented meshes; cloth has boundary
 //! edges and may be non-manifold. Here every triangle casts its own closed prism: the
@@ -10,18 +10,21 @@
 //! the scene's diameter, and the camera's far plane is moved back by `D` so back caps are
 //! never clipped. Per light: a stencil pass, then a full-screen pass that writes 0 into the
 //! light's mask where the stencil is not 0; the BTF pass multiplies the light by the mask
-//! and by the smooth boundary of eq. 6 ("combined by blending").
+//! and by the smooth boundary of `[S03 eq. 6]` ("combined by blending"). The prisms depend
+//! on the lights and the mesh only, so they are built once with the pass (and again only
+//! when the lights move), not per frame.
 
+use crate::bind::{self, uniform};
 use crate::math::{self, Mat4, Vec3, v3};
+use crate::passes::mesh::position_only_layout;
 use crate::scene::Light;
 use crate::timer::PassTimer;
 use crate::{Gpu, Result};
 use btf_light::mesh::Mesh;
-use std::time::Instant;
 use wgpu::util::DeviceExt;
 
 /// WGSL of the passes.
-pub const SOURCE: &str = include_str!("shadow_volume.wgsl");
+pub const SOURCE: &str = include_str!("volume.wgsl");
 /// Depth-stencil format of the prepass and the stencil counting.
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth24PlusStencil8;
 
@@ -81,8 +84,9 @@ pub struct ShadowVolumes {
     depth_pipe: wgpu::RenderPipeline,
     volume_pipe: wgpu::RenderPipeline,
     mask_pipe: wgpu::RenderPipeline,
-    lights: Vec<Light>,
-    radius: f32,
+    /// Per shadowing light: its prisms (`vec4` positions) and their vertex count.
+    prisms: Vec<(wgpu::Buffer, u32)>,
+    extrusion: f32,
 }
 
 fn stencil_face(depth_fail_op: wgpu::StencilOperation) -> wgpu::StencilFaceState {
@@ -95,10 +99,12 @@ fn stencil_face(depth_fail_op: wgpu::StencilOperation) -> wgpu::StencilFaceState
 }
 
 impl ShadowVolumes {
-    /// Builds the pipelines and targets for a `width × height` frame.
+    /// Builds the pipelines, the prisms of `mesh` for each of `lights` and the targets for a
+    /// `width × height` frame.
     pub fn new(
         gpu: &Gpu,
         lights: &[&Light],
+        mesh: &Mesh,
         radius: f32,
         width: u32,
         height: u32,
@@ -131,12 +137,9 @@ impl ShadowVolumes {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let layout = crate::gpu::uniform_layout(dev, "volume camera", wgpu::ShaderStages::VERTEX);
-        let group = dev.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("volume camera"),
-            layout: &layout,
-            entries: &[wgpu::BindGroupEntry { binding: 0, resource: camera.as_entire_binding() }],
-        });
+        let layout =
+            bind::layout_seen_by(dev, "volume camera", wgpu::ShaderStages::VERTEX, &[uniform()]);
+        let group = bind::group(dev, "volume camera", &layout, &[camera.as_entire_binding()]);
         let pl = dev.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("shadow volume"),
             bind_group_layouts: &[Some(&layout)],
@@ -189,7 +192,7 @@ impl ShadowVolumes {
         let depth_pipe = pipe(
             "volume depth prepass",
             "vs_depth",
-            &[Some(crate::shadow::position_only_layout())],
+            &[Some(position_only_layout())],
             ds(true, C::Less, Default::default()),
             false,
         );
@@ -224,17 +227,32 @@ impl ShadowVolumes {
             depth_pipe,
             volume_pipe,
             mask_pipe,
-            lights: lights.iter().map(|l| (*l).clone()).collect(),
-            radius,
+            prisms: lights
+                .iter()
+                .map(|l| {
+                    let geometry = prisms(mesh, l, radius);
+                    let buffer = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some("shadow volume"),
+                        contents: bytemuck::cast_slice(&geometry),
+                        usage: wgpu::BufferUsages::VERTEX,
+                    });
+                    (buffer, geometry.len() as u32)
+                })
+                .collect(),
+            extrusion: extrusion(radius),
         }
     }
 
-    /// Encodes the prepass, then per light the geometry (CPU), stencil counting and mask.
+    /// How far the prisms reach (the camera's far plane moves back by it).
+    pub fn extrusion(&self) -> f32 {
+        self.extrusion
+    }
+
+    /// Encodes the prepass, then per light the stencil counting and mask.
     pub fn encode(
         &self,
         gpu: &Gpu,
         timer: &mut PassTimer,
-        mesh: &Mesh,
         corners: &wgpu::Buffer,
         n_corners: u32,
         view_proj: &Mat4,
@@ -265,18 +283,7 @@ impl ShadowVolumes {
             pass.set_vertex_buffer(0, corners.slice(..));
             pass.draw(0..n_corners, 0..1);
         })?;
-        for (l, light) in self.lights.iter().enumerate() {
-            let t = Instant::now();
-            let geometry = prisms(mesh, light, self.radius);
-            let buf = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("shadow volume"),
-                contents: bytemuck::cast_slice(&geometry),
-                usage: wgpu::BufferUsages::VERTEX,
-            });
-            timer.cpu(
-                &format!("shadow volume L{l} geometry (cpu)"),
-                t.elapsed().as_secs_f64() * 1e3,
-            );
+        for (l, (buf, vertices)) in self.prisms.iter().enumerate() {
             let mask_view = self.masks.create_view(&wgpu::TextureViewDescriptor {
                 dimension: Some(wgpu::TextureViewDimension::D2),
                 base_array_layer: l as u32,
@@ -295,7 +302,7 @@ impl ShadowVolumes {
                 pass.set_pipeline(&self.volume_pipe);
                 pass.set_bind_group(0, &self.group, &[]);
                 pass.set_vertex_buffer(0, buf.slice(..));
-                pass.draw(0..geometry.len() as u32, 0..1);
+                pass.draw(0..*vertices, 0..1);
             })?;
             timer.pass(&format!("shadow volume L{l} mask"), |enc, ts| {
                 let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {

@@ -1,27 +1,23 @@
-//! Macroscopic shadows of point and directional lights (Sattler et al. 2003 §4.3): chooses
-//! shadow volumes or shadow maps, assigns each shadowing light a mask/map layer and hands
-//! the BTF pass its inputs. Built only when the scene has a shadowing light and asks for
-//! shadows; the smooth boundary of eq. 6 is applied in the BTF pass (`terminator`).
+//! Macroscopic shadows of point and directional lights (`[S03 §4.3]`): chooses shadow
+//! volumes (`volume.rs`) or shadow maps (`map.rs`, with cube maps for point lights inside
+//! the scene, `cube.rs`), assigns each shadowing light a mask/map layer and hands the BTF
+//! pass its inputs. Built only when the scene has a shadowing light and asks for shadows;
+//! the smooth boundary of `[S03 eq. 6]` is applied in the BTF pass
+//! (`super::smooth_boundary`).
 
-use crate::btf_pass::LightRaw;
+pub mod cube;
+pub mod map;
+pub mod volume;
+
+use crate::camera::CameraSetup;
 use crate::math::{self, Vec3, v3};
-use crate::renderer::CameraSetup;
 use crate::scene::{Light, Scene, Shadows};
-use crate::shadow_map::{self, ShadowMaps};
-use crate::shadow_volume::{self, ShadowVolumes};
 use crate::timer::PassTimer;
+use crate::uniforms::{LightRaw, LightShadow};
 use crate::{Gpu, Result};
 use btf_light::mesh::Mesh;
-
-/// Vertex layout reading only the position of a [`crate::btf_pass::CornerVertex`].
-pub fn position_only_layout() -> wgpu::VertexBufferLayout<'static> {
-    const ATTRS: [wgpu::VertexAttribute; 1] = wgpu::vertex_attr_array![0 => Float32x3];
-    wgpu::VertexBufferLayout {
-        array_stride: std::mem::size_of::<crate::btf_pass::CornerVertex>() as u64,
-        step_mode: wgpu::VertexStepMode::Vertex,
-        attributes: &ATTRS,
-    }
-}
+use map::ShadowMaps;
+use volume::ShadowVolumes;
 
 /// What the BTF pass binds for shadows.
 pub struct ShadowInputs {
@@ -67,7 +63,7 @@ impl ShadowInputs {
         };
         ShadowInputs {
             masks: array_view(&tex(wgpu::TextureFormat::R8Unorm)),
-            maps: array_view(&tex(shadow_map::FORMAT)),
+            maps: array_view(&tex(map::FORMAT)),
             compare: compare_sampler(gpu),
         }
     }
@@ -75,20 +71,19 @@ impl ShadowInputs {
 
 /// The shadow technique of a scene with its per-light layers.
 pub struct Shadowing {
-    kind: Shadowing_,
+    technique: Technique,
     /// Layer of each scene light (`None` = does not cast shadows).
     layer_of: Vec<Option<usize>>,
-    mesh: Mesh,
 }
 
-#[allow(non_camel_case_types)]
-enum Shadowing_ {
+enum Technique {
     Map(ShadowMaps),
-    Volume(ShadowVolumes, f32),
+    Volume(ShadowVolumes),
 }
 
 impl Shadowing {
-    /// Builds the shadow passes for the scene's shadowing lights.
+    /// Builds the shadow passes for the scene's shadowing lights (shadow volumes: their
+    /// prisms too, which depend on the lights and the mesh, not on the camera).
     pub fn new(gpu: &Gpu, scene: &Scene, mesh: &Mesh) -> Result<Shadowing> {
         let (lo, hi) = mesh.bounds();
         let center: Vec3 = (v3(lo) + v3(hi)) * 0.5;
@@ -101,52 +96,56 @@ impl Shadowing {
                 casting.push(l);
             }
         }
-        let kind = gpu.scoped("building shadow passes", || match scene.effects.shadows {
-            Shadows::Map => Shadowing_::Map(ShadowMaps::new(
+        let (w, h) = (scene.output.width, scene.output.height);
+        let technique = gpu.scoped("building shadow passes", || match scene.effects.shadows {
+            Shadows::Map => Technique::Map(ShadowMaps::new(
                 gpu,
                 &casting,
                 center,
                 radius,
                 scene.effects.shadow_map_size,
             )),
-            _ => Shadowing_::Volume(
-                ShadowVolumes::new(gpu, &casting, radius, scene.output.width, scene.output.height),
-                shadow_volume::extrusion(radius),
-            ),
+            _ => Technique::Volume(ShadowVolumes::new(gpu, &casting, mesh, radius, w, h)),
         })?;
-        Ok(Shadowing { kind, layer_of, mesh: mesh.clone() })
+        Ok(Shadowing { technique, layer_of })
     }
 
     /// How far the camera's far plane must move back (shadow-volume back caps).
     pub fn extra_camera_depth(&self) -> f32 {
-        match &self.kind {
-            Shadowing_::Volume(_, d) => *d,
-            Shadowing_::Map(_) => 0.0,
+        match &self.technique {
+            Technique::Volume(v) => v.extrusion(),
+            Technique::Map(_) => 0.0,
         }
     }
 
     /// Texture views and sampler for the BTF pass.
-    pub fn inputs(&self, gpu: &Gpu, _width: u32, _height: u32) -> ShadowInputs {
+    pub fn inputs(&self, gpu: &Gpu) -> ShadowInputs {
         let dummy = ShadowInputs::dummy(gpu);
-        match &self.kind {
-            Shadowing_::Map(m) => ShadowInputs { maps: array_view(&m.texture), ..dummy },
-            Shadowing_::Volume(v, _) => ShadowInputs { masks: array_view(&v.masks), ..dummy },
+        match &self.technique {
+            Technique::Map(m) => ShadowInputs { maps: array_view(&m.texture), ..dummy },
+            Technique::Volume(v) => ShadowInputs { masks: array_view(&v.masks), ..dummy },
         }
     }
 
-    /// Sets the layer, texel size, bias and light matrix of scene light `l`.
-    pub fn fill_light_raw(&self, l: usize, raw: &mut LightRaw) {
-        let Some(layer) = self.layer_of.get(l).copied().flatten() else { return };
-        raw.shadow[0] = layer as f32;
-        if let Shadowing_::Map(m) = &self.kind {
-            let ml = &m.lights[layer];
-            raw.shadow[0] = ml.base_layer as f32;
-            raw.shadow[1] = m.texel();
-            raw.shadow[2] = shadow_map::DEPTH_BIAS;
-            raw.view_proj = math::to_cols(&ml.matrix);
-            if ml.cube {
-                raw.color[3] = 3.0; // cube map: six layers from base_layer
-                raw.shadow[2] = crate::shadow_cube::relative_bias(m.size());
+    /// Scene light `l`'s record with its shadow look-up: the technique's code, layer, texel
+    /// size, bias and light matrix (unchanged for a light that casts no shadow).
+    pub fn light_raw(&self, l: usize, raw: LightRaw) -> LightRaw {
+        let Some(layer) = self.layer_of.get(l).copied().flatten() else { return raw };
+        match &self.technique {
+            Technique::Volume(_) => raw.with_shadow(
+                LightShadow::VolumeMask,
+                [layer as f32, 0.0, 0.0, 0.0],
+                [[0.0; 4]; 4],
+            ),
+            Technique::Map(m) => {
+                let ml = &m.lights[layer];
+                let (kind, bias) = if ml.cube {
+                    (LightShadow::CubeMap, cube::relative_bias(m.size()))
+                } else {
+                    (LightShadow::Map, map::DEPTH_BIAS)
+                };
+                let shadow = [ml.base_layer as f32, m.texel(), bias, 0.0];
+                raw.with_shadow(kind, shadow, math::to_cols(&ml.matrix))
             }
         }
     }
@@ -160,11 +159,9 @@ impl Shadowing {
         n_corners: u32,
         camera: &CameraSetup,
     ) -> Result<()> {
-        gpu.scoped("shadow passes", || match &self.kind {
-            Shadowing_::Map(m) => m.encode(timer, corners, n_corners),
-            Shadowing_::Volume(v, _) => {
-                v.encode(gpu, timer, &self.mesh, corners, n_corners, &camera.view_proj)
-            }
+        gpu.scoped("shadow passes", || match &self.technique {
+            Technique::Map(m) => m.encode(timer, corners, n_corners),
+            Technique::Volume(v) => v.encode(gpu, timer, corners, n_corners, &camera.view_proj),
         })?
     }
 }

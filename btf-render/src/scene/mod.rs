@@ -5,14 +5,19 @@
 //! irradiance `E` (`L = BTF · E`), a point light has intensity `I` (`L = BTF · I / d²`).
 //! Relative paths are resolved against the scene file's folder. Validation names the key.
 
+mod effects;
+mod light;
+mod transmission;
+
+pub use crate::uniforms::MAX_LIGHTS;
+pub use effects::{Effects, Evaluation, Shadows};
+pub use light::{EigenSets, EnvironmentLight, Light};
+pub use transmission::{Albedo, MAX_TAU, PhaseDesc, TauTexture, TransmissionDesc};
+
 use crate::{Error, Result};
-use btf_core::InterpMode;
 use btf_light::mesh::PlanarUv;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
-
-/// Most lights one scene may have (the shader's fixed light array).
-pub const MAX_LIGHTS: usize = 4;
 
 /// A whole scene.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -90,7 +95,7 @@ pub struct MaterialDesc {
     pub uv_scale: f32,
     /// Thin semi-transparent cloth (`transmission = { tau = …, albedo = …, phase = … }`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub transmission: Option<crate::transmission::TransmissionDesc>,
+    pub transmission: Option<TransmissionDesc>,
 }
 
 fn one() -> f32 {
@@ -137,212 +142,6 @@ fn fov_default() -> f32 {
     40.0
 }
 
-/// A light source.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, tag = "kind", rename_all = "lowercase")]
-pub enum Light {
-    /// Light from direction `direction` (pointing *towards* the light) with perpendicular
-    /// irradiance `irradiance` (linear RGB).
-    Directional {
-        /// Direction to the light (world; need not be unit length).
-        direction: [f32; 3],
-        /// Perpendicular irradiance, linear RGB.
-        irradiance: [f32; 3],
-        /// Whether the light casts shadows (when the scene's shadows are on).
-        #[serde(default = "yes")]
-        shadows: bool,
-    },
-    /// An isotropic point light of intensity `intensity` (linear RGB).
-    Point {
-        /// Position (world).
-        position: [f32; 3],
-        /// Radiant intensity, linear RGB.
-        intensity: [f32; 3],
-        /// Whether the light casts shadows (when the scene's shadows are on).
-        #[serde(default = "yes")]
-        shadows: bool,
-    },
-    /// An equirectangular HDR environment with per-vertex visibility (Sattler et al. 2003,
-    /// §5); always evaluated per vertex, added to the other lights.
-    Environment(EnvironmentLight),
-}
-
-fn yes() -> bool {
-    true
-}
-
-impl Light {
-    /// Whether this light asks for shadows (environment lights have their visibility maps
-    /// instead).
-    pub fn casts_shadows(&self) -> bool {
-        match self {
-            Light::Directional { shadows, .. } | Light::Point { shadows, .. } => *shadows,
-            Light::Environment(_) => false,
-        }
-    }
-}
-
-/// An environment light: `L(v) = f · ∫ L_env(R_δ ω) V(ω) BTF(v, ω) dω` (DESIGN.md §3).
-#[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct EnvironmentLight {
-    /// Equirectangular linear HDR map (`.hdr` or `.exr`, world `+z` up).
-    pub path: PathBuf,
-    /// Rotation of the environment about world `+z`, degrees.
-    #[serde(default)]
-    pub rotation_deg: f64,
-    /// Exposure factor `f` (eq. 11).
-    #[serde(default = "one")]
-    pub exposure: f32,
-    /// Hemicube resolution: pixels across the top face of each vertex's visibility map.
-    #[serde(default = "visibility_res_default")]
-    pub visibility_res: u32,
-    /// Separate visibility maps for the back sides of the cloth.
-    #[serde(default = "yes")]
-    pub two_sided: bool,
-    /// Eigenweightsets (eq. 13) for fast rotation; absent = exact gather per rotation.
-    #[serde(default)]
-    pub eigenweightsets: Option<EigenSets>,
-    /// Folder for the visibility-map cache (absent: no cache).
-    #[serde(default)]
-    pub cache_dir: Option<PathBuf>,
-}
-
-fn visibility_res_default() -> u32 {
-    16
-}
-
-/// Eigenweightset parameters (eq. 13).
-#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct EigenSets {
-    /// Rotations `A` of the environment the PCA is built from (equal steps of 360°/A).
-    #[serde(default = "rotations_default")]
-    pub rotations: usize,
-    /// Components `e` kept.
-    #[serde(default = "components_default")]
-    pub components: usize,
-}
-
-fn rotations_default() -> usize {
-    30
-}
-fn components_default() -> usize {
-    5
-}
-
-impl EnvironmentLight {
-    /// The parameters of the run-time environment.
-    pub fn params(&self) -> btf_light::EnvironmentParams {
-        btf_light::EnvironmentParams {
-            rotation_deg: self.rotation_deg,
-            exposure: self.exposure,
-            visibility_res: self.visibility_res,
-            two_sided: self.two_sided,
-            eigen: self.eigenweightsets.map(|e| (e.rotations, e.components)),
-            cache_dir: self.cache_dir.clone(),
-        }
-    }
-
-    fn validate(&self, key: &str) -> std::result::Result<(), (String, String)> {
-        let bad = |k: &str, what: &str| Err((format!("{key}.{k}"), what.to_string()));
-        if !self.rotation_deg.is_finite() {
-            return bad("rotation_deg", "must be finite");
-        }
-        if !(self.exposure.is_finite()
-            && self.exposure >= 0.0
-            && self.exposure <= btf_core::MAX_RADIANCE)
-        {
-            return bad("exposure", "must be a number in [0, 1e12]");
-        }
-        if !(2..=256).contains(&self.visibility_res) {
-            return bad("visibility_res", "must be in 2..=256 pixels");
-        }
-        if let Some(e) = self.eigenweightsets {
-            if !(2..=720).contains(&e.rotations) {
-                return bad("eigenweightsets.rotations", "must be in 2..=720");
-            }
-            if e.components == 0 || e.components >= e.rotations {
-                return bad("eigenweightsets.components", "must be in 1..rotations");
-            }
-        }
-        Ok(())
-    }
-}
-
-/// Where the BTF is evaluated.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
-#[serde(rename_all = "kebab-case")]
-pub enum Evaluation {
-    /// As the paper: slots, ω and γ per vertex, blended across each triangle.
-    PerVertex,
-    /// Directions, slots and weights per fragment.
-    #[default]
-    PerPixel,
-}
-
-/// Macroscopic shadow technique.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum Shadows {
-    /// No shadows, no smooth shadow boundary.
-    #[default]
-    None,
-    /// Stencil shadow volumes (the paper's choice) with the eq. 6 boundary.
-    Volume,
-    /// Shadow maps with the eq. 6 boundary.
-    Map,
-}
-
-/// The effects a scene asks for; only the corresponding passes are built.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct Effects {
-    /// Light interpolation (eq. 3): nearest or four nearest.
-    pub light_interp: InterpMode,
-    /// View blending (eq. 5): nearest or four nearest slots.
-    pub view_blend: InterpMode,
-    /// Per-vertex (paper) or per-pixel evaluation.
-    pub evaluation: Evaluation,
-    /// Components used (`None` = all stored).
-    pub components: Option<usize>,
-    /// Shadow technique.
-    pub shadows: Shadows,
-    /// Offset `α` of the smooth shadow boundary (eq. 6), degrees.
-    pub terminator_deg: f32,
-    /// Blur radius of the 1-D boundary texture, in texels of 1024 (0 = hard).
-    pub terminator_blur: u32,
-    /// Shadow-map resolution (texels per side).
-    pub shadow_map_size: u32,
-    /// Samples per pixel (1 or 4).
-    pub msaa: u32,
-    /// The smooth shadow boundary of eq. 6 (off: shadow volume / map alone, for comparison).
-    pub smooth_boundary: bool,
-    /// Mip-mapped eigentextures and means, trilinear + anisotropic (off: base level only).
-    pub mipmaps: bool,
-    /// Anisotropic filtering with mipmaps, most samples (1 = trilinear, up to 16).
-    pub anisotropy: u16,
-}
-
-impl Default for Effects {
-    fn default() -> Self {
-        Effects {
-            light_interp: InterpMode::Four,
-            view_blend: InterpMode::Four,
-            evaluation: Evaluation::PerPixel,
-            components: None,
-            shadows: Shadows::None,
-            terminator_deg: 15.0,
-            terminator_blur: 0,
-            shadow_map_size: 1024,
-            msaa: 1,
-            smooth_boundary: true,
-            mipmaps: true,
-            anisotropy: 1,
-        }
-    }
-}
-
 impl Scene {
     /// Reads and validates a scene file; relative paths become relative to its folder.
     pub fn load(path: &Path) -> Result<Scene> {
@@ -386,7 +185,7 @@ impl Scene {
         for (i, m) in self.materials.iter().enumerate() {
             out.push((format!("[[materials]] {i} store"), m.store.clone()));
             if let Some(t) = &m.transmission
-                && let Some(crate::transmission::TauTexture::Image(p)) = &t.tau_texture
+                && let Some(TauTexture::Image(p)) = &t.tau_texture
             {
                 out.push((format!("[[materials]] {i} transmission.tau_texture"), p.clone()));
             }

@@ -1,8 +1,8 @@
-//! Cube shadow maps for point lights inside the scene (Sattler et al. 2003 §4.3 name shadow
-//! maps as the alternative to shadow volumes; a single frustum cannot see all around a light
+//! Cube shadow maps for point lights inside the scene (`[S03 §4.3]` name shadow maps as the
+//! alternative to shadow volumes; a single frustum cannot see all around a light
 //! that sits among the cloth). Six 90° faces, each a layer of the shadow-map array, looked
 //! up in the BTF pass by the major axis of `world − light` (`cube_map_visibility` in
-//! `btf_pass.wgsl`, which mirrors [`face_of`] and [`face_view`]).
+//! `btf/btf_pass.wgsl`, which mirrors [`face_of`] and [`face_view`]).
 //!
 //! Depth bias: the receiver is moved towards the light by a fraction of its distance
 //! ([`relative_bias`]), so the bias scales with the perspective depth spacing instead of

@@ -1,4 +1,5 @@
-//! The smooth shadow boundary of Sattler et al. 2003, eq. 6.
+//! The smooth shadow boundary of `[S03 eq. 6]` (was `terminator.rs`): the 1-D step texture
+//! the BTF pass looks the boundary up in.
 //!
 //! Per vertex and light, `u_V = (1 + cos(α + ∠(n_V, l_V))) / 2` is a 1-D texture
 //! coordinate; interpolated across a triangle it indexes a 1024-texel texture that is black
@@ -6,7 +7,7 @@
 //! crosses `90° − α`, i.e. on the smooth surface the vertex normals describe rather than
 //! along the zig-zag of silhouette edges. `α` (default 15°) pulls the boundary onto the lit
 //! side, ahead of the shadow volume's silhouette; a blur makes the edge soft. The vertex
-//! shader computes `u` for both sides of a two-sided sheet (`btf_pass.wgsl`).
+//! shader computes `u` for both sides of a two-sided sheet (`btf/btf_pass.wgsl`).
 
 use crate::Gpu;
 use wgpu::util::DeviceExt;
@@ -33,7 +34,7 @@ pub fn texels(blur: u32) -> Vec<f32> {
     t
 }
 
-/// `u` of eq. 6 for the angle between normal and light (radians) and offset `α`.
+/// `u` of `[S03 eq. 6]` for the angle between normal and light (radians) and offset `α`.
 pub fn u_coordinate(angle_rad: f32, alpha_rad: f32) -> f32 {
     0.5 * (1.0 + (alpha_rad + angle_rad).cos())
 }

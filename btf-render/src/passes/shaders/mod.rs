@@ -1,6 +1,7 @@
-//! The GPU side of the interpolation weights (eq. 3 and 5): `interp.wgsl` implements the
-//! algorithm of `btf_core::interp` in WGSL; this module checks on the device that both give
-//! the same weights, via the `interp_probe.wgsl` compute shader.
+//! WGSL shared by several passes: `interp.wgsl`, the GPU side of the interpolation weights
+//! of `[S03 eq. 3, 5]` (the algorithm of `btf_core::interp` in WGSL), prepended to the BTF,
+//! thin and baseline shaders. This module checks on the device that both give the same
+//! weights, via the `interp_probe.wgsl` compute shader (was `interp.rs`).
 
 /// The probe shader (interpolation functions + compute entry point).
 pub const PROBE_SOURCE: &str =
@@ -10,7 +11,8 @@ pub const PROBE_SOURCE: &str =
 mod tests {
     use super::*;
     use crate::Gpu;
-    use crate::material::{MAX_RINGS, SamplingsRaw};
+    use crate::bind;
+    use crate::material::SamplingsRaw;
     use btf_core::{Direction, InterpMode, Sampling, Weights};
     use wgpu::util::DeviceExt;
 
@@ -19,27 +21,11 @@ mod tests {
         crate::gpu::validate_wgsl("interp_probe.wgsl", PROBE_SOURCE).unwrap();
     }
 
-    fn samplings_raw(s: &Sampling) -> SamplingsRaw {
-        let mut raw: SamplingsRaw = bytemuck::Zeroable::zeroed();
-        for which in 0..2 {
-            for (r, ring) in s.rings.iter().enumerate() {
-                raw.rings[which * MAX_RINGS + r] = [
-                    ring.theta_deg as f32,
-                    ring.count as f32,
-                    ring.phi_offset_deg as f32,
-                    s.ring_start(r) as f32,
-                ];
-            }
-            raw.n_rings[which] = s.rings.len() as u32;
-        }
-        raw
-    }
-
     fn run_probe(gpu: &Gpu, s: &Sampling, dirs: &[[f32; 4]]) -> Vec<[f32; 4]> {
         let dev = &gpu.device;
         let uni = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: None,
-            contents: bytemuck::bytes_of(&samplings_raw(s)),
+            contents: bytemuck::bytes_of(&SamplingsRaw::of_samplings(s, s)),
             usage: wgpu::BufferUsages::UNIFORM,
         });
         let din = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -72,15 +58,8 @@ mod tests {
             compilation_options: Default::default(),
             cache: None,
         });
-        let bg = dev.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: None,
-            layout: &pipe.get_bind_group_layout(0),
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: uni.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: din.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: out.as_entire_binding() },
-            ],
-        });
+        let resources = [uni.as_entire_binding(), din.as_entire_binding(), out.as_entire_binding()];
+        let bg = bind::group(dev, "interp probe", &pipe.get_bind_group_layout(0), &resources);
         let mut enc = dev.create_command_encoder(&Default::default());
         {
             let mut pass = enc.begin_compute_pass(&Default::default());

@@ -1,18 +1,22 @@
-//! Shadow maps, the alternative to shadow volumes (Williams 1978; Sattler et al. 2003 §4.3
-//! discuss their aliasing): one depth layer per shadowing light, rendered from the light —
+//! Shadow maps, the alternative to shadow volumes (Williams 1978; `[S03 §4.3]` discuss
+//! their aliasing): one depth layer per shadowing light, rendered from the light —
 //! orthographic around the scene's bounding sphere for a directional light, a perspective
 //! frustum just enclosing the sphere for a point light. Cloth is two-sided, so nothing is
 //! culled. The BTF pass compares with a small depth bias and 3×3 PCF; the smooth boundary
-//! of eq. 6 hides the acne at grazing angles as it hides the volume's zig-zag. A point light
-//! inside the scene's bounding sphere gets a cube map instead (`shadow_cube.rs`, six layers).
+//! of `[S03 eq. 6]` hides the acne at grazing angles as it hides the volume's zig-zag. A point light
+//! inside the scene's bounding sphere gets a cube map instead (`cube.rs`, six layers).
 
+use super::cube;
+use crate::bind::{self, uniform};
 use crate::math::{self, Mat4, Vec3};
+use crate::passes::mesh::{cleared_depth, position_only_layout};
 use crate::scene::Light;
-use crate::{Gpu, shadow_cube};
+use crate::timer::PassTimer;
+use crate::{Gpu, Result};
 use wgpu::util::DeviceExt;
 
 /// WGSL of the pass.
-pub const SOURCE: &str = include_str!("shadow_map.wgsl");
+pub const SOURCE: &str = include_str!("map.wgsl");
 /// Depth format of the maps.
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// Bias subtracted from the receiver's depth (normalised depth units).
@@ -90,9 +94,9 @@ fn layer_matrices(lights: &[&Light], center: Vec3, radius: f32) -> (Vec<Mat4>, V
         let base_layer = matrices.len() as u32;
         if let (true, Light::Point { position, .. }) = (needs_cube(l, center, radius), l) {
             let q = math::v3(*position);
-            let (near, far) = shadow_cube::near_far((q - center).norm(), radius);
-            let proj = shadow_cube::projection(near, far);
-            matrices.extend((0..shadow_cube::FACES).map(|f| proj * shadow_cube::face_view(q, f)));
+            let (near, far) = cube::near_far((q - center).norm(), radius);
+            let proj = cube::projection(near, far);
+            matrices.extend((0..cube::FACES).map(|f| proj * cube::face_view(q, f)));
             out.push(MapLight { base_layer, matrix: proj, cube: true });
         } else {
             let m = light_matrix(l, center, radius);
@@ -123,7 +127,8 @@ impl ShadowMaps {
             label: Some("shadow_map.wgsl"),
             source: wgpu::ShaderSource::Wgsl(SOURCE.into()),
         });
-        let layout = crate::gpu::uniform_layout(dev, "shadow map", wgpu::ShaderStages::VERTEX);
+        let layout =
+            bind::layout_seen_by(dev, "shadow map", wgpu::ShaderStages::VERTEX, &[uniform()]);
         let pl = dev.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("shadow map"),
             bind_group_layouts: &[Some(&layout)],
@@ -136,7 +141,7 @@ impl ShadowMaps {
                 module: &module,
                 entry_point: Some("vs_light"),
                 compilation_options: Default::default(),
-                buffers: &[Some(crate::shadow::position_only_layout())],
+                buffers: &[Some(position_only_layout())],
             },
             primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
             depth_stencil: Some(wgpu::DepthStencilState {
@@ -159,14 +164,7 @@ impl ShadowMaps {
                     contents: bytemuck::bytes_of(&math::to_cols(m)),
                     usage: wgpu::BufferUsages::UNIFORM,
                 });
-                dev.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("light camera"),
-                    layout: &layout,
-                    entries: &[wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: buf.as_entire_binding(),
-                    }],
-                })
+                bind::group(dev, "light camera", &layout, &[buf.as_entire_binding()])
             })
             .collect();
         ShadowMaps { texture, matrices, lights: map_lights, size, pipeline, groups }
@@ -185,10 +183,10 @@ impl ShadowMaps {
     /// Renders every layer.
     pub fn encode(
         &self,
-        timer: &mut crate::timer::PassTimer,
+        timer: &mut PassTimer,
         corners: &wgpu::Buffer,
         n_corners: u32,
-    ) -> crate::Result<()> {
+    ) -> Result<()> {
         for (layer, group) in self.groups.iter().enumerate() {
             let view = self.texture.create_view(&wgpu::TextureViewDescriptor {
                 dimension: Some(wgpu::TextureViewDimension::D2),
@@ -200,7 +198,7 @@ impl ShadowMaps {
                 let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some("shadow map"),
                     color_attachments: &[],
-                    depth_stencil_attachment: Some(crate::btf_pass::cleared_depth(&view, true)),
+                    depth_stencil_attachment: Some(cleared_depth(&view, true)),
                     timestamp_writes: ts,
                     occlusion_query_set: None,
                     multiview_mask: None,

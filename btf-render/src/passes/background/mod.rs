@@ -9,8 +9,8 @@
 //! from `+z`, columns `φ` from `+x` towards `+y`) and written into the colour target before
 //! the mesh passes; only without MSAA (a multisampled target cannot be written directly).
 
+use crate::camera::CameraSetup;
 use crate::math::Vec3;
-use crate::renderer::CameraSetup;
 use btf_image::EnvMap;
 use nalgebra::Vector4;
 use std::f32::consts::PI;
