@@ -62,7 +62,8 @@ fn camera_sides_render_the_frame_of_all_sides_bit_for_bit() {
     setup(dir.path());
     for msaa in [1, 4] {
         let s = scene(dir.path(), FRONT, msaa);
-        let (some, all) = (build(&gpu, &s, false), build(&gpu, &s, true));
+        let (mut some, mut all) = (build(&gpu, &s, false), build(&gpu, &s, true));
+        let (a, b) = (some.render(&gpu).unwrap(), all.render(&gpu).unwrap());
         let (e_some, e_all) = (some.environment().unwrap(), all.environment().unwrap());
         let (computed, frames) = (e_some.computed_frames(), e_some.frames());
         let backs = (frames / 2..frames).filter(|&f| e_some.has_frame(f)).count();
@@ -72,7 +73,6 @@ fn camera_sides_render_the_frame_of_all_sides_bit_for_bit() {
         // hidden behind its front.
         assert!(computed * 10 <= frames * 4, "{computed} of {frames}");
         assert!(backs > 0, "the camera sees some inside through the neck");
-        let (a, b) = (some.render(&gpu).unwrap(), all.render(&gpu).unwrap());
         let lit = a.rgb.iter().filter(|&&v| v > 0.0).count();
         assert!(lit > a.rgb.len() / 10, "the shirt fills part of the frame ({lit} values lit)");
         assert_eq!(identical(&a, &b), 0, "msaa {msaa}: frames differ");
@@ -95,7 +95,7 @@ fn a_camera_move_computes_the_other_sides() {
     moved.set_camera(&back.camera).unwrap();
     let env = moved.environment().unwrap();
     assert_eq!(env.computed_frames(), env.frames(), "{before} frames before the move");
-    let fresh = build(&gpu, &back, true);
+    let mut fresh = build(&gpu, &back, true);
     let (a, b) = (moved.render(&gpu).unwrap(), fresh.render(&gpu).unwrap());
     assert_eq!(identical(&a, &b), 0, "the moved renderer differs from a fresh one");
 }
@@ -107,7 +107,7 @@ fn cached_maps_of_every_side_serve_a_camera() {
     setup(dir.path());
     let s = scene_with(dir.path(), FRONT, 1, "cache_dir = \"cache\"\n");
     // A camera's subset first: cached under its own key, and again from there.
-    let some = build(&gpu, &s, false);
+    let mut some = build(&gpu, &s, false);
     let e = some.environment().unwrap();
     assert!(!e.timings.visibility_cached && e.computed_frames() < e.frames());
     let again = build(&gpu, &s, false);
@@ -118,7 +118,7 @@ fn cached_maps_of_every_side_serve_a_camera() {
     // without a corner-id pass.
     let all = build(&gpu, &s, true);
     assert!(!all.environment().unwrap().timings.visibility_cached);
-    let served = build(&gpu, &s, false);
+    let mut served = build(&gpu, &s, false);
     let e = served.environment().unwrap();
     assert!(e.timings.visibility_cached && e.computed_frames() == e.frames());
     assert_eq!(e.timings.sides_ms, 0.0);

@@ -209,7 +209,7 @@ fn camera_sides() {
         for round in 0..2 {
             for all in [true, false] {
                 let opts = btf_render::RenderOptions { all_env_sides: all, ..Default::default() };
-                let r = btf_render::Renderer::new(&gpu, &scene, opts).unwrap();
+                let mut r = btf_render::Renderer::new(&gpu, &scene, opts).unwrap();
                 let e = r.environment().unwrap();
                 let t = e.timings;
                 let prep = t.sides_ms + t.visibility_ms;

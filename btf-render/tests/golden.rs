@@ -139,7 +139,7 @@ fn separable_and_full_per_vertex_layouts_render_the_same() {
         let scene = Scene::load(&write(dir.path(), "scene.toml", text)).unwrap();
         let frame = |full_vertex_layout| {
             let options = RenderOptions { full_vertex_layout, ..Default::default() };
-            let r = btf_render::Renderer::new(&gpu, &scene, options).unwrap();
+            let mut r = btf_render::Renderer::new(&gpu, &scene, options).unwrap();
             assert_eq!(r.pass_key().separable(), !full_vertex_layout);
             r.render(&gpu).unwrap()
         };

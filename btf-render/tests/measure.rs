@@ -45,7 +45,7 @@ fn frame_time_ratios() {
             "#
         );
         let scene = Scene::load(&write(dir.path(), "scene.toml", &text)).unwrap();
-        let r = Renderer::new(&gpu, &scene, RenderOptions::default()).unwrap();
+        let mut r = Renderer::new(&gpu, &scene, RenderOptions::default()).unwrap();
         r.render(&gpu).unwrap();
         let mut best = f64::MAX;
         let mut passes = Vec::new();

@@ -10,7 +10,7 @@ use btf_core::eigen::Quantization;
 use btf_render::{RenderOptions, Renderer, Scene};
 use common::*;
 
-fn best_ms(r: &Renderer, gpu: &btf_render::Gpu, repeats: usize) -> (f64, btf_render::Frame) {
+fn best_ms(r: &mut Renderer, gpu: &btf_render::Gpu, repeats: usize) -> (f64, btf_render::Frame) {
     let mut best = (f64::MAX, r.render(gpu).unwrap());
     for _ in 0..repeats {
         let f = r.render(gpu).unwrap();
@@ -55,15 +55,15 @@ fn transmission_cost_and_orbit() {
             );
             Scene::load(&write(dir.path(), "scene.toml", &text)).unwrap()
         };
-        let opaque = Renderer::new(&gpu, &scene(""), RenderOptions::default()).unwrap();
-        let thin = Renderer::new(
+        let mut opaque = Renderer::new(&gpu, &scene(""), RenderOptions::default()).unwrap();
+        let mut thin = Renderer::new(
             &gpu,
             &scene("transmission = { tau = 2.0, tau_texture = \"btf-mean\", albedo = 1.0 }"),
             RenderOptions::default(),
         )
         .unwrap();
-        let (t_opaque, _) = best_ms(&opaque, &gpu, 3);
-        let (t_thin, frame) = best_ms(&thin, &gpu, 3);
+        let (t_opaque, _) = best_ms(&mut opaque, &gpu, 3);
+        let (t_thin, frame) = best_ms(&mut thin, &gpu, 3);
         let sort = frame.stats.ms_of("thin-cloth sort");
         frame.write_png(&out.join(format!("orbit-{k:02}.png")), 3.0).unwrap();
         eprintln!(
@@ -177,7 +177,7 @@ fn environment_table_cost_scalar_vs_tau_texture() {
         .iter()
         .enumerate()
         {
-            let r = Renderer::new(&gpu, &scene(t), RenderOptions::default()).unwrap();
+            let mut r = Renderer::new(&gpu, &scene(t), RenderOptions::default()).unwrap();
             ms[i] = ms[i].min(r.render(&gpu).unwrap().stats.ms_of("thin-cloth env tables"));
             eprintln!("{t}: {:.1} ms", ms[i]);
         }

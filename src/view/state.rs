@@ -337,7 +337,7 @@ impl Viewer {
     pub fn update(&mut self, gpu: &Gpu) -> Option<Latency> {
         let change = self.pending.take()?;
         let (_, update_ms) = env::timed(|| self.apply(gpu, change));
-        let r = self.renderer.as_ref()?;
+        let r = self.renderer.as_mut()?;
         let (frame, render_ms) = env::timed(|| r.render(gpu));
         match frame {
             Ok(f) => {
