@@ -236,7 +236,7 @@ fn curtain_limits_under_an_environment() {
 }
 
 #[test]
-fn show_environment_needs_an_environment_light_and_no_msaa() {
+fn show_environment_needs_an_environment_light_and_takes_msaa() {
     let dir = tempfile::tempdir().unwrap();
     let load = |lights: &str, msaa: u32| {
         let text = format!(
@@ -250,6 +250,6 @@ fn show_environment_needs_an_environment_light_and_no_msaa() {
     assert!(load(env, 1).is_ok());
     let e = load("", 1).unwrap_err();
     assert!(e.contains("output.show_environment") && e.contains("environment light"), "{e}");
-    let e = load(env, 4).unwrap_err();
-    assert!(e.contains("output.show_environment") && e.contains("msaa"), "{e}");
+    // the background is a GPU pass that draws into the multisampled target too
+    assert!(load(env, 4).is_ok());
 }

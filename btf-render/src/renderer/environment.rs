@@ -8,6 +8,7 @@ use super::geometry::SceneGeometry;
 use super::materials::Materials;
 use crate::camera::CameraSetup;
 use crate::frame::PassStat;
+use crate::passes::background::BackgroundPass;
 use crate::passes::btf::BtfPass;
 use crate::passes::corner_ids::{self, CornerDraws};
 use crate::scene::Scene;
@@ -40,8 +41,10 @@ pub(crate) struct EnvState {
     env: SceneEnvironment,
     /// The per-vertex fill and the camera's `γ*` bases it keeps.
     fill: EnvCoefficients,
-    /// The map itself, kept when the scene draws it as the background.
-    map: Option<EnvMap>,
+    /// The background pass, when the scene draws the map behind it.
+    background: Option<BackgroundPass>,
+    /// A map set since the background last uploaded one.
+    pending_map: Option<EnvMap>,
     /// `(rotation, exposure, revision)` the thin-cloth tables were computed for.
     thin_key: Option<(f64, f32, u64)>,
 }
@@ -77,8 +80,18 @@ impl EnvState {
         let mut env =
             SceneEnvironment::with_frames(params, &map, &env_mesh, lights, coefficients, wanted)?;
         env.timings.sides_ms = sides_ms;
-        let map = scene.output.show_environment.then_some(map);
-        Ok(Some(EnvState { light, env, fill: EnvCoefficients::default(), map, thin_key: None }))
+        let background = match scene.output.show_environment {
+            true => Some(BackgroundPass::new(gpu, &map, scene.effects.msaa)?),
+            false => None,
+        };
+        Ok(Some(EnvState {
+            light,
+            env,
+            fill: EnvCoefficients::default(),
+            background,
+            pending_map: None,
+            thin_key: None,
+        }))
     }
 
     /// The light's index in the scene's lights.
@@ -96,18 +109,27 @@ impl EnvState {
         &mut self.env
     }
 
-    /// Replaces the map (one gather over the kept visibility, and the eigenweightsets).
+    /// Replaces the map (one gather over the kept visibility, and the eigenweightsets; the
+    /// background takes it at its next frame).
     pub fn set_map(&mut self, map: &EnvMap) -> Result<()> {
         self.env.set_environment(map)?;
-        if self.map.is_some() {
-            self.map = Some(map.clone());
+        if self.background.is_some() {
+            self.pending_map = Some(map.clone());
         }
         Ok(())
     }
 
-    /// The map, when the scene draws it as the background.
-    pub fn background_map(&self) -> Option<&EnvMap> {
-        self.map.as_ref()
+    /// Whether the scene was built to draw the map behind it.
+    pub fn has_background(&self) -> bool {
+        self.background.is_some()
+    }
+
+    /// The background pass with the current map, when the scene draws one.
+    pub fn background(&mut self, gpu: &Gpu) -> Result<Option<&BackgroundPass>> {
+        if let (Some(bg), Some(map)) = (self.background.as_mut(), self.pending_map.take()) {
+            bg.set_map(gpu, &map)?;
+        }
+        Ok(self.background.as_ref())
     }
 
     /// Writes `f · ω_m · γ*` (`[S03 eq. 11]`) of every vertex for this camera into `coef`.

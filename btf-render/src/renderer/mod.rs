@@ -34,7 +34,8 @@ mod targets;
 mod vertex_buffers;
 
 use crate::camera::CameraSetup;
-use crate::frame::{Frame, PassStat, Stats};
+use crate::frame::{Frame, PassStat, Stats, push_linear_rgb};
+use crate::passes::background::BackgroundView;
 use crate::passes::baselines::Baseline;
 use crate::passes::btf::{BtfPass, BtfPassKey, MeshDraws};
 use crate::passes::mesh::{cleared_depth, color_format};
@@ -276,18 +277,7 @@ impl Renderer {
         let mut timer = PassTimer::new(gpu, &mut encoder, clock);
         self.encode_frame(gpu, &mut timer, &view)?;
         let record = timer.finish(timestamps.as_ref().map(|(_, r, read)| (r, read)));
-        encoder.copy_texture_to_buffer(
-            texture.as_image_copy(),
-            wgpu::TexelCopyBufferInfo {
-                buffer: &readback,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(padded_row),
-                    rows_per_image: Some(h),
-                },
-            },
-            wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
-        );
+        copy_to_readback(&mut encoder, &texture, &readback, padded_row);
         let commands = gpu.scoped("encoding the frame", || encoder.finish())?;
         gpu.scoped("submitting the frame", || gpu.queue.submit([commands]))?;
         if timestamps.is_none() {
@@ -319,10 +309,14 @@ impl Renderer {
         timer: &mut PassTimer,
         target: &wgpu::TextureView,
     ) -> Result<()> {
+        let key = self.passes.btf.key;
+        let size = self.size();
+        let targets = FrameTargets::ensure(&mut self.targets, gpu, size, key.msaa);
+        let (color_ms, depth) = (targets.color_ms.clone(), targets.depth.clone());
+        let counters_read = targets.counters_read.clone();
         let raw = self.frame_raw();
         gpu.queue.write_buffer(&self.frame.uniform, 0, bytemuck::bytes_of(&raw));
         gpu.queue.write_buffer(&self.frame.counters, 0, &[0u8; 16]);
-        let key = self.passes.btf.key;
         let vertex_coefficients = key.uses_vertex_coefficients() && self.passes.baseline.is_none();
         if vertex_coefficients {
             self.write_vertex_coefficients(gpu, timer);
@@ -331,7 +325,8 @@ impl Renderer {
             let (corners, n) = (&self.geometry.corner_buffer, self.geometry.corner_count());
             s.encode(gpu, timer, corners, n, &self.camera)?;
         }
-        let background = self.write_background(gpu, target, timer);
+        // the background into the colour target the BTF pass then loads (and resolves)
+        let background = self.encode_background(gpu, timer, color_ms.as_ref().unwrap_or(target))?;
         self.update_thin_env_tables(gpu, timer)?;
         let thin_draws = self.passes.thin.as_ref().map(|t| {
             let t0 = Instant::now();
@@ -339,13 +334,10 @@ impl Renderer {
             timer.cpu("thin-cloth sort (cpu)", t0.elapsed().as_secs_f64() * 1e3);
             draws
         });
-        let size = self.size();
-        let targets = FrameTargets::ensure(&mut self.targets, gpu, size, key.msaa);
-        let bg = self.scene.output.background;
         let load = if background {
             wgpu::LoadOp::Load
         } else {
-            let [r, g, b] = bg.map(f64::from);
+            let [r, g, b] = self.scene.output.background.map(f64::from);
             wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a: 1.0 })
         };
         let vertex_group = if vertex_coefficients {
@@ -368,7 +360,7 @@ impl Renderer {
         let name = passes.main_name().to_string();
         gpu.scoped("BTF pass", || {
             timer.pass(&name, |enc, ts| {
-                let ms = targets.color_ms.as_ref();
+                let ms = color_ms.as_ref();
                 let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some(&name),
                     color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -377,7 +369,7 @@ impl Renderer {
                         resolve_target: ms.map(|_| target),
                         ops: wgpu::Operations { load, store: wgpu::StoreOp::Store },
                     })],
-                    depth_stencil_attachment: Some(cleared_depth(&targets.depth, false)),
+                    depth_stencil_attachment: Some(cleared_depth(&depth, false)),
                     timestamp_writes: ts,
                     occlusion_query_set: None,
                     multiview_mask: None,
@@ -391,15 +383,29 @@ impl Renderer {
             })
         })??;
         if self.options.count_reads {
-            timer.encoder().copy_buffer_to_buffer(
-                &self.frame.counters,
-                0,
-                &targets.counters_read,
-                0,
-                16,
-            );
+            timer.encoder().copy_buffer_to_buffer(&self.frame.counters, 0, &counters_read, 0, 16);
         }
         Ok(())
+    }
+
+    /// Encodes the environment background into `target` when the scene shows it; returns
+    /// whether it did.
+    fn encode_background(
+        &mut self,
+        gpu: &Gpu,
+        timer: &mut PassTimer,
+        target: &wgpu::TextureView,
+    ) -> Result<bool> {
+        let Some(e) = self.environment.as_mut().filter(|_| self.scene.output.show_environment)
+        else {
+            return Ok(false);
+        };
+        let (rotation_deg, exposure) = (e.env().rotation_deg(), e.env().exposure());
+        let Some(bg) = e.background(gpu)? else { return Ok(false) };
+        let size = (self.scene.output.width, self.scene.output.height);
+        let view = BackgroundView { camera: &self.camera, size, rotation_deg, exposure };
+        bg.encode(gpu, timer, target, &view)?;
+        Ok(true)
     }
 
     /// The frame uniform: camera, lights with their shadow look-ups, `α`.
@@ -495,59 +501,46 @@ impl Renderer {
         VertexBuffers::write(&mut self.vertex, gpu, layout, contents);
     }
 
-    /// Writes the environment background into `target` when the scene shows it; returns
-    /// whether it did.
-    fn write_background(
-        &self,
-        gpu: &Gpu,
-        target: &wgpu::TextureView,
-        timer: &mut PassTimer,
-    ) -> bool {
-        let Some((e, map)) = self.environment.as_ref().and_then(|e| Some((e, e.background_map()?)))
-        else {
-            return false;
-        };
-        if !self.scene.output.show_environment {
-            return false;
+    /// The environment background alone for the current camera, rotation and exposure
+    /// (linear RGB, row-major from the top, as the frame shows it behind the scene), when
+    /// the scene was built to show it.
+    pub fn environment_background(&mut self, gpu: &Gpu) -> Result<Option<Vec<f32>>> {
+        if !self.environment.as_ref().is_some_and(EnvState::has_background) {
+            return Ok(None);
         }
-        let t = Instant::now();
         let (w, h) = self.size();
-        let env = e.env();
-        let img = crate::passes::background::image(
-            map,
-            &self.camera,
-            (w, h),
-            env.rotation_deg(),
-            env.exposure(),
-        );
-        gpu.queue.write_texture(
-            target.texture().as_image_copy(),
-            bytemuck::cast_slice(&img),
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(w * 16),
-                rows_per_image: Some(h),
-            },
-            wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
-        );
-        timer.cpu("environment background (cpu)", t.elapsed().as_secs_f64() * 1e3);
-        true
-    }
-
-    /// The environment background of the current camera, rotation and exposure (linear
-    /// RGB, row-major from the top), when the scene shows it.
-    pub fn environment_background(&self) -> Option<Vec<f32>> {
-        let e = self.environment.as_ref()?;
-        let map = e.background_map()?;
-        let env = e.env();
-        let img = crate::passes::background::image(
-            map,
-            &self.camera,
-            self.size(),
-            env.rotation_deg(),
-            env.exposure(),
-        );
-        Some(img.iter().flat_map(|p| [p[0], p[1], p[2]]).collect())
+        let targets = FrameTargets::ensure(&mut self.targets, gpu, (w, h), self.scene.effects.msaa);
+        let color_ms = targets.color_ms.clone();
+        let own = targets.own(gpu);
+        let (texture, view, readback, padded_row) =
+            (own.texture.clone(), own.view.clone(), own.readback.clone(), own.padded_row);
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        let mut timer = PassTimer::new(gpu, &mut encoder, Clock::Untimed);
+        let shown = self.scene.output.show_environment;
+        self.scene.output.show_environment = true;
+        let drawn = self.encode_background(gpu, &mut timer, color_ms.as_ref().unwrap_or(&view));
+        self.scene.output.show_environment = shown;
+        drawn?;
+        if let Some(ms) = &color_ms {
+            // resolve the multisampled background into the frame's own target
+            encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("resolve background"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: ms,
+                    depth_slice: None,
+                    resolve_target: Some(&view),
+                    ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+        }
+        copy_to_readback(&mut encoder, &texture, &readback, padded_row);
+        let commands = gpu.scoped("encoding the background", || encoder.finish())?;
+        gpu.scoped("submitting the background", || gpu.queue.submit([commands]))?;
+        Ok(Some(read_rgb(gpu, &readback, (w, h), padded_row, self.target_format())?))
     }
 
     /// Recomputes and uploads the thin-cloth environment tables when the environment, its
@@ -670,7 +663,7 @@ impl Renderer {
     /// Switches between the environment background and `output.background` (only for a
     /// scene built with `output.show_environment = true`, which keeps the map).
     pub fn set_show_environment(&mut self, on: bool) -> Result<()> {
-        if self.environment.as_ref().is_none_or(|e| e.background_map().is_none()) {
+        if !self.environment.as_ref().is_some_and(EnvState::has_background) {
             return Err(Error::Invalid(
                 "set_show_environment: the scene was built without output.show_environment".into(),
             ));
@@ -678,6 +671,27 @@ impl Renderer {
         self.scene.output.show_environment = on;
         Ok(())
     }
+}
+
+/// Copies a frame's colour `texture` into `readback` (rows of `padded_row` bytes).
+fn copy_to_readback(
+    encoder: &mut wgpu::CommandEncoder,
+    texture: &wgpu::Texture,
+    readback: &wgpu::Buffer,
+    padded_row: u32,
+) {
+    encoder.copy_texture_to_buffer(
+        texture.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: readback,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded_row),
+                rows_per_image: Some(texture.height()),
+            },
+        },
+        texture.size(),
+    );
 }
 
 /// Linear RGB of a frame read back into `buffer` (rows of `padded_row` bytes, texels of
@@ -693,16 +707,8 @@ fn read_rgb(
     let texel = format.block_copy_size(None).expect("a colour format") as usize;
     let mut rgb = Vec::with_capacity((w * h * 3) as usize);
     for row in raw.chunks_exact(padded_row as usize).take(h as usize) {
-        let row = &row[..w as usize * texel];
-        if texel == 8 {
-            let halves: &[half::f16] = bytemuck::cast_slice(row);
-            rgb.extend(
-                halves.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]].map(half::f16::to_f32)),
-            );
-        } else {
-            let f: &[f32] = bytemuck::cast_slice(row);
-            rgb.extend(f.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]));
-        }
+        let linear = push_linear_rgb(&mut rgb, &row[..w as usize * texel], format);
+        assert!(linear, "the renderer draws linear RGBA");
     }
     Ok(rgb)
 }

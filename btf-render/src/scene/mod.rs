@@ -53,7 +53,7 @@ pub struct Output {
     /// Linear background radiance.
     pub background: [f32; 3],
     /// Draw the environment light's map (rotated, times its exposure) behind the scene
-    /// instead of `background` (needs an environment light and `effects.msaa = 1`).
+    /// instead of `background` (needs an environment light).
     pub show_environment: bool,
 }
 
@@ -297,9 +297,6 @@ impl Scene {
         }
         if o.show_environment && self.environment().is_none() {
             return bad("output.show_environment".into(), "needs an environment light");
-        }
-        if o.show_environment && e.msaa != 1 {
-            return bad("output.show_environment".into(), "needs effects.msaa = 1");
         }
         Ok(())
     }

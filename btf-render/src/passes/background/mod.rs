@@ -1,97 +1,206 @@
 //! The environment map drawn behind the scene (`[output] show_environment = true`): per
 //! pixel, the radiance `f · L_env(R_{−δ} ω)` of the camera ray's world direction `ω`, with
 //! the environment light's rotation `δ` about `+z` and exposure `f` — the same map, turned
-//! the same way, that lights the scene (DESIGN.md §3, Sattler et al. 2003 eq. 11's `f`).
-//! Thin cloth (thin-cloth paper eq. 9) then shows it through with its view-dependent
-//! alpha, as the paper's flag shows the sky.
+//! the same way, that lights the scene (DESIGN.md §3; `f` is `[S03 eq. 11]`'s). Thin cloth
+//! (`[TC eq. 9]`) then shows it through with its view-dependent alpha, as the paper's flag
+//! shows the sky.
 //!
-//! Computed on the CPU (a bilinear look-up in the equirectangular map per pixel, rows `θ`
-//! from `+z`, columns `φ` from `+x` towards `+y`) and written into the colour target before
-//! the mesh passes; only without MSAA (a multisampled target cannot be written directly).
+//! A full-screen pass (as wgpu's skybox example draws the sky) into the frame's colour
+//! target — the multisampled one with MSAA, which the BTF pass then loads and resolves —
+//! before the mesh passes; `background.wgsl` filters the equirectangular map bilinearly
+//! itself (rows `θ` from `+z`, columns `φ` from `+x` towards `+y`, wrapping in `φ`).
 
+use crate::bind::{self, texture, uniform};
 use crate::camera::CameraSetup;
-use crate::math::Vec3;
+use crate::math::{self, Mat4};
+use crate::passes::mesh::color_format;
+use crate::timer::PassTimer;
+use crate::{Error, Gpu, Result};
 use btf_image::EnvMap;
-use nalgebra::Vector4;
-use std::f32::consts::PI;
+use wgpu::util::DeviceExt;
 
-/// World direction of the camera ray through the centre of pixel `(x, y)` (row 0 at the
-/// top), from the inverse of the camera's world → clip matrix.
-fn ray_dir(inv: &crate::math::Mat4, w: u32, h: u32, x: u32, y: u32) -> Vec3 {
-    let nx = (x as f32 + 0.5) / w as f32 * 2.0 - 1.0;
-    let ny = 1.0 - (y as f32 + 0.5) / h as f32 * 2.0;
-    let at = |z: f32| {
-        let p = inv * Vector4::new(nx, ny, z, 1.0);
-        Vec3::new(p.x / p.w, p.y / p.w, p.z / p.w)
-    };
-    (at(0.75) - at(0.25)).try_normalize(0.0).unwrap_or(Vec3::z())
+/// WGSL of the pass.
+pub const SOURCE: &str = include_str!("background.wgsl");
+
+/// GPU mirror of `Background` in `background.wgsl`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct BackgroundRaw {
+    inv_view_proj: [[f32; 4]; 4],
+    frame: [f32; 4],
+    rotation: [f32; 4],
 }
 
-/// Bilinear radiance of `map` in world direction `d` (unit), wrapping in `φ`.
-pub fn radiance(map: &EnvMap, d: [f32; 3]) -> [f32; 3] {
-    let theta = d[2].clamp(-1.0, 1.0).acos();
-    let phi = d[1].atan2(d[0]).rem_euclid(2.0 * PI);
-    let (w, h) = (map.width, map.height);
-    let u = phi / (2.0 * PI) * w as f32 - 0.5;
-    let v = (theta / PI * h as f32 - 0.5).clamp(0.0, (h - 1) as f32);
-    let (c0, r0) = (u.floor(), v.floor());
-    let (fu, fv) = (u - c0, v - r0);
-    let col = |c: f32| (c as i64).rem_euclid(w as i64) as usize;
-    let row = |r: f32| (r as usize).min(h - 1);
-    let px = |c: f32, r: f32| map.pixels[row(r) * w + col(c)];
-    let mut out = [0f32; 3];
-    for (dc, dr, wgt) in [
-        (0.0, 0.0, (1.0 - fu) * (1.0 - fv)),
-        (1.0, 0.0, fu * (1.0 - fv)),
-        (0.0, 1.0, (1.0 - fu) * fv),
-        (1.0, 1.0, fu * fv),
-    ] {
-        let p = px(c0 + dc, r0 + dr);
-        for k in 0..3 {
-            out[k] += wgt * p[k];
-        }
-    }
-    out
+/// The pipeline, the map as a texture and the uniform of the view.
+pub struct BackgroundPass {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    uniform: wgpu::Buffer,
+    group: wgpu::BindGroup,
+    _map: wgpu::Texture,
 }
 
-/// The background image, RGBA (alpha 1), row-major from the top row.
-pub fn image(
-    map: &EnvMap,
-    camera: &CameraSetup,
-    (w, h): (u32, u32),
-    rotation_deg: f64,
-    exposure: f32,
-) -> Vec<[f32; 4]> {
-    let inv = camera.view_proj.try_inverse().unwrap_or_else(crate::math::Mat4::identity);
-    let (sin, cos) = rotation_deg.to_radians().sin_cos();
-    let (sin, cos) = (sin as f32, cos as f32);
-    let mut out = Vec::with_capacity((w * h) as usize);
-    for y in 0..h {
-        for x in 0..w {
-            let d = ray_dir(&inv, w, h, x, y);
-            // The environment turned by δ: world direction ω sees the map at R_{−δ} ω.
-            let e = [cos * d.x + sin * d.y, -sin * d.x + cos * d.y, d.z];
-            let l = radiance(map, e);
-            out.push([exposure * l[0], exposure * l[1], exposure * l[2], 1.0]);
-        }
+/// What one frame's background is drawn for.
+pub struct BackgroundView<'a> {
+    /// The camera.
+    pub camera: &'a CameraSetup,
+    /// Frame size in pixels.
+    pub size: (u32, u32),
+    /// The environment's rotation `δ` about `+z`, degrees.
+    pub rotation_deg: f64,
+    /// Its exposure `f`.
+    pub exposure: f32,
+}
+
+impl BackgroundPass {
+    /// Builds the pass for frames of `msaa` samples and uploads `map`.
+    pub fn new(gpu: &Gpu, map: &EnvMap, msaa: u32) -> Result<BackgroundPass> {
+        let dev = &gpu.device;
+        let layout = bind::layout_seen_by(
+            dev,
+            "background",
+            wgpu::ShaderStages::FRAGMENT,
+            &[
+                uniform(),
+                texture(
+                    wgpu::TextureSampleType::Float { filterable: false },
+                    wgpu::TextureViewDimension::D2,
+                ),
+            ],
+        );
+        let pipeline = gpu.scoped("building the background pass", || {
+            let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("background.wgsl"),
+                source: wgpu::ShaderSource::Wgsl(SOURCE.into()),
+            });
+            let pl = dev.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("background"),
+                bind_group_layouts: &[Some(&layout)],
+                immediate_size: 0,
+            });
+            dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("background"),
+                layout: Some(&pl),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_fullscreen"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: Default::default(),
+                depth_stencil: None,
+                multisample: wgpu::MultisampleState { count: msaa, ..Default::default() },
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_background"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(color_format(msaa).into())],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        })?;
+        let uniform = dev.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("background"),
+            size: std::mem::size_of::<BackgroundRaw>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let (map_texture, group) = Self::upload(gpu, &layout, &uniform, map)?;
+        Ok(BackgroundPass { pipeline, layout, uniform, group, _map: map_texture })
     }
-    out
+
+    fn upload(
+        gpu: &Gpu,
+        layout: &wgpu::BindGroupLayout,
+        uniform: &wgpu::Buffer,
+        map: &EnvMap,
+    ) -> Result<(wgpu::Texture, wgpu::BindGroup)> {
+        let side = gpu.device.limits().max_texture_dimension_2d;
+        let (w, h) = (map.width as u32, map.height as u32);
+        if w > side || h > side {
+            return Err(Error::Limit(format!(
+                "a {w} × {h} environment map exceeds this adapter's max_texture_dimension_2d \
+                 ({side}) for the background; use a smaller map"
+            )));
+        }
+        let rgba: Vec<[f32; 4]> = map.pixels.iter().map(|p| [p[0], p[1], p[2], 1.0]).collect();
+        let texture = gpu.device.create_texture_with_data(
+            &gpu.queue,
+            &wgpu::TextureDescriptor {
+                label: Some("environment map"),
+                size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba32Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            bytemuck::cast_slice(&rgba),
+        );
+        let view = texture.create_view(&Default::default());
+        let resources = [uniform.as_entire_binding(), wgpu::BindingResource::TextureView(&view)];
+        let group = bind::group(&gpu.device, "background", layout, &resources);
+        Ok((texture, group))
+    }
+
+    /// Replaces the map.
+    pub fn set_map(&mut self, gpu: &Gpu, map: &EnvMap) -> Result<()> {
+        let (texture, group) = Self::upload(gpu, &self.layout, &self.uniform, map)?;
+        (self._map, self.group) = (texture, group);
+        Ok(())
+    }
+
+    /// Encodes the pass into `target` (the multisampled colour target with MSAA), writing
+    /// the view's uniform first.
+    pub fn encode(
+        &self,
+        gpu: &Gpu,
+        timer: &mut PassTimer,
+        target: &wgpu::TextureView,
+        view: &BackgroundView,
+    ) -> Result<()> {
+        let inv = view.camera.view_proj.try_inverse().unwrap_or_else(Mat4::identity);
+        let (sin, cos) = view.rotation_deg.to_radians().sin_cos();
+        let raw = BackgroundRaw {
+            inv_view_proj: math::to_cols(&inv),
+            frame: [view.size.0 as f32, view.size.1 as f32, view.exposure, 0.0],
+            rotation: [cos as f32, sin as f32, 0.0, 0.0],
+        };
+        gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&raw));
+        gpu.scoped("environment background", || {
+            timer.pass("environment background", |enc, ts| {
+                let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("environment background"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: target,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: None,
+                    timestamp_writes: ts,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                pass.set_pipeline(&self.pipeline);
+                pass.set_bind_group(0, &self.group, &[]);
+                pass.draw(0..3, 0..1);
+            })
+        })?
+    }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
     #[test]
-    fn radiance_reproduces_pixel_centres_and_wraps() {
-        let map = EnvMap::from_fn(16, |d| d.map(|c| f64::from(1.0 + c as f32))).unwrap();
-        // At a pixel centre the look-up returns that pixel.
-        let (theta, phi) = (PI * 2.5 / 8.0, 2.0 * PI * 3.5 / 16.0);
-        let d = [theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()];
-        let l = radiance(&map, d);
-        assert!((0..3).all(|k| (l[k] - 1.0 - d[k]).abs() < 1e-5), "{l:?} vs {d:?}");
-        // Across φ = 0 the two neighbouring columns are blended, not the far end.
-        let l = radiance(&map, [1.0, 0.0, 0.0]);
-        assert!((l[1] - 1.0).abs() < 1e-5 && l[0] > 1.9, "{l:?}");
+    fn wgsl_validates() {
+        crate::gpu::validate_wgsl("background.wgsl", super::SOURCE).unwrap();
+        assert_eq!(std::mem::size_of::<super::BackgroundRaw>(), 96);
     }
 }
