@@ -37,5 +37,6 @@ pub use error::{Error, Result};
 pub use frame::{Frame, PassStat, Stats};
 pub use gpu::Gpu;
 pub use passes::baselines::{Baseline, ReadForm};
+pub use passes::btf::BtfPassKey;
 pub use renderer::{RenderOptions, Renderer, render_scene};
 pub use scene::Scene;

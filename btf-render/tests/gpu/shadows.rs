@@ -1,12 +1,11 @@
 //! Shadows with known geometry: an occluder's shadow on a plane against its analytic
 //! projection (IoU), darkness inside and agreement outside, and the smooth shadow boundary
-//! (eq. 6) on a coarse sphere against where eq. 6 puts it.
+//! (`[S03 eq. 6]`) on a coarse sphere against where eq. 6 puts it.
 
-mod common;
-
+use crate::common::*;
 use btf_core::eigen::Quantization;
+use btf_render::scene::Shadows;
 use btf_render::{Frame, RenderOptions, Scene, render_scene};
-use common::*;
 
 const GROUND_AND_OCCLUDER: &str = "\
 v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n\
@@ -32,10 +31,13 @@ fn predicted_x(y: f32, alpha_deg: f32) -> f32 {
     0.5 * (lo + hi)
 }
 
-fn occluder_scene(dir: &std::path::Path, shadows: &str, size: u32) -> Scene {
-    let rest =
-        format!("{}[effects]\nshadows = \"{shadows}\"\nshadow_map_size = 2048\n", directional(L));
-    ortho_scene(dir, size, OVER_PLANE, "scene.obj", "store = \"u.eigen\"", &rest)
+fn occluder_scene(dir: &std::path::Path, shadows: Shadows, size: u32) -> Scene {
+    SceneBuilder::new(dir, size)
+        .mesh("scene.obj")
+        .material("u.eigen")
+        .light(directional(L))
+        .effects(|e| (e.shadows, e.shadow_map_size) = (shadows, 2048))
+        .build()
 }
 
 fn lum(f: &Frame, x: u32, y: u32) -> f32 {
@@ -50,11 +52,11 @@ fn occluder_shadow_matches_its_projection() {
     write(dir.path(), "scene.obj", GROUND_AND_OCCLUDER);
     let size = 96u32;
     let reference =
-        render_scene(&gpu, &occluder_scene(dir.path(), "none", size), RenderOptions::default())
+        render_scene(&gpu, &occluder_scene(dir.path(), Shadows::None, size), Default::default())
             .unwrap();
     // Shadow of the square [0.35,0.55]×[0.4,0.6] at height 0.3 along −L onto z = 0.
     let (dx, dy) = (-L[0] / L[2] * 0.3, -L[1] / L[2] * 0.3);
-    for shadows in ["volume", "map"] {
+    for shadows in [Shadows::Volume, Shadows::Map] {
         let f = render_scene(
             &gpu,
             &occluder_scene(dir.path(), shadows, size),
@@ -95,16 +97,16 @@ fn occluder_shadow_matches_its_projection() {
         let iou = inter as f64 / union as f64;
         let lit_err = lit_err / lit_n as f64;
         eprintln!(
-            "{shadows}: IoU {iou:.4}, darkest/lit inside {max_dark:.2e}, mean |rel. diff| outside {lit_err:.2e}"
+            "{shadows:?}: IoU {iou:.4}, darkest/lit inside {max_dark:.2e}, mean |rel. diff| outside {lit_err:.2e}"
         );
         if iou <= 0.95 {
-            save_comparison(&format!("occluder-{shadows}"), size, size, &reference.rgb, &f.rgb);
+            save_comparison(&format!("occluder-{shadows:?}"), size, size, &reference.rgb, &f.rgb);
         }
-        assert!(iou > 0.95, "{shadows}: IoU {iou}");
-        assert!(max_dark < 1e-3, "{shadows}: shadow core not black ({max_dark})");
+        assert!(iou > 0.95, "{shadows:?}: IoU {iou}");
+        assert!(max_dark < 1e-3, "{shadows:?}: shadow core not black ({max_dark})");
         assert!(
             lit_err < 1e-3,
-            "{shadows}: lit region differs from the unshadowed render ({lit_err})"
+            "{shadows:?}: lit region differs from the unshadowed render ({lit_err})"
         );
     }
 }
@@ -119,13 +121,16 @@ fn smooth_boundary_sits_where_eq6_puts_it_without_zigzag() {
     write_store(dir.path(), "u.eigen", Pattern::Lambert, 4, 4, 2, Quantization::F16);
     write(dir.path(), "sphere.obj", &sphere_obj(1.0, [0.0, 0.0, 0.0], 16));
     let size = 128u32;
-    for (shadows, alpha) in [("volume", 15.0f32), ("volume", 30.0), ("map", 15.0)] {
-        let rest = format!(
-            "{}[effects]\nshadows = \"{shadows}\"\nterminator_deg = {alpha}\n",
-            directional(LS)
-        );
-        let cam = OVER_SPHERE.with_height(2.4);
-        let scene = ortho_scene(dir.path(), size, cam, "sphere.obj", "store = \"u.eigen\"", &rest);
+    for (shadows, alpha) in
+        [(Shadows::Volume, 15.0f32), (Shadows::Volume, 30.0), (Shadows::Map, 15.0)]
+    {
+        let scene = SceneBuilder::new(dir.path(), size)
+            .mesh("sphere.obj")
+            .material("u.eigen")
+            .ortho(OVER_SPHERE.with_height(2.4))
+            .light(directional(LS))
+            .effects(|e| (e.shadows, e.terminator_deg) = (shadows, alpha))
+            .build();
         let f = render_scene(&gpu, &scene, RenderOptions::default()).unwrap();
         assert!(f.all_finite());
         let px_per_unit = size as f32 / 2.4;
@@ -149,7 +154,7 @@ fn smooth_boundary_sits_where_eq6_puts_it_without_zigzag() {
             .map(|i| (devs[i] - devs[i - 4..=i + 4].iter().sum::<f32>() / 9.0).abs())
             .fold(0f32, f32::max);
         eprintln!(
-            "{shadows} α={alpha}: boundary offset mean {mean:+.2} px, RMS {rms:.2} px, max zig-zag {rough:.2} px (sphere radius {px_per_unit:.0} px, 16 segments)"
+            "{shadows:?} α={alpha}: boundary offset mean {mean:+.2} px, RMS {rms:.2} px, max zig-zag {rough:.2} px (sphere radius {px_per_unit:.0} px, 16 segments)"
         );
         assert!(rms < 2.0, "boundary is {rms} px away from eq. 6");
         assert!(rough < 1.5, "boundary zig-zags by {rough} px");

@@ -1,14 +1,13 @@
-//! Thin semi-transparent cloth (transmission effect): the rendered sheet against the slab
-//! formulas of `btf_core::thin_slab` (back-lit, front-lit, layers), the limits τ₁ → 0
-//! (what is behind shows through unchanged) and τ₁ → ∞ (the opaque BTF render), and the
-//! paper's Fig. 2 contrast between a back-lit and a front-lit curtain.
+//! Thin semi-transparent cloth (the transmission effect, `[TC eq. 7–9]`): the rendered
+//! sheet against the slab formulas of `btf_core::thin_slab` (back-lit, front-lit, layers),
+//! the limits τ₁ → 0 (what is behind shows through unchanged) and τ₁ → ∞ (the opaque BTF
+//! render), and the paper's Fig. 2 contrast between a back-lit and a front-lit curtain.
 
-mod common;
-
+use crate::common::*;
 use btf_core::eigen::Quantization;
 use btf_core::thin_slab::{direct_transmittance, reflection_share, transmission_factor};
+use btf_render::scene::{Albedo, Evaluation, Light, PhaseDesc, TauTexture, TransmissionDesc};
 use btf_render::{Frame, RenderOptions, Scene, render_scene};
-use common::*;
 use std::f64::consts::PI;
 use std::path::Path;
 
@@ -27,23 +26,37 @@ fn sheet_obj(n: usize, z: f32, mtl: &str) -> String {
     s
 }
 
-const TOP_CAMERA: &str = r#"
-[camera]
-projection = "orthographic"
-eye = [0.5, 0.5, 2.0]
-target = [0.5, 0.5, 0.0]
-up = [0.0, 1.0, 0.0]
-ortho_height = 0.8
-"#;
+const TOP_CAMERA: Ortho = Ortho { eye: [0.5, 0.5, 2.0], target: [0.5, 0.5, 0.0], height: 0.8 };
 
 const BG: [f32; 3] = [0.2, 0.3, 0.4];
 
-fn top_scene(dir: &Path, meshes: &[&str], materials: &str, lights: &str) -> Scene {
-    let meshes: String = meshes.iter().map(|m| format!("[[meshes]]\npath = \"{m}\"\n")).collect();
-    let text = format!(
-        "[output]\nwidth = 24\nheight = 24\nbackground = {BG:?}\n{meshes}{materials}{TOP_CAMERA}{lights}"
-    );
-    Scene::load(&write(dir, "scene.toml", &text)).unwrap()
+/// A named material of the store `m.eigen`, thin (`Some`) or opaque.
+type Mat = (&'static str, Option<TransmissionDesc>);
+
+/// The sheets `meshes` seen from above under `lights`, with `materials`.
+fn top_scene(
+    dir: &Path,
+    meshes: &[&str],
+    materials: &[Mat],
+    lights: &[Light],
+    evaluation: Evaluation,
+) -> Scene {
+    let mut b = SceneBuilder::new(dir, 24).output(|o| o.background = BG).ortho(TOP_CAMERA);
+    for m in meshes {
+        b = b.mesh(m);
+    }
+    for (name, t) in materials {
+        b = b.material_with(Some(name), "m.eigen", 1.0, t.clone());
+    }
+    for l in lights {
+        b = b.light(l.clone());
+    }
+    b.effects(|e| e.evaluation = evaluation).build()
+}
+
+/// A thin material: optical thickness `tau`, albedo `albedo`, isotropic.
+fn slab(tau: f64, albedo: f64) -> Option<TransmissionDesc> {
+    Some(TransmissionDesc { albedo: Albedo::Grey(albedo as f32), ..thin(tau as f32) })
 }
 
 fn render(gpu: &btf_render::Gpu, scene: &Scene) -> Frame {
@@ -52,17 +65,8 @@ fn render(gpu: &btf_render::Gpu, scene: &Scene) -> Frame {
     f
 }
 
-fn directional(d: [f32; 3], e: f32) -> String {
-    format!("[[lights]]\nkind = \"directional\"\ndirection = {d:?}\nirradiance = [{e}, {e}, {e}]\n")
-}
-
-fn material(name: &str, store: &str, transmission: &str) -> String {
-    let t = if transmission.is_empty() {
-        String::new()
-    } else {
-        format!("transmission = {transmission}\n")
-    };
-    format!("[[materials]]\nname = \"{name}\"\nstore = \"{store}\"\n{t}")
+fn sun(direction: [f32; 3], e: f32) -> Light {
+    Light::Directional { direction, irradiance: [e; 3], shadows: true }
 }
 
 fn assert_pixels(name: &str, f: &Frame, expected: impl Fn(usize) -> f64, tol: f64) {
@@ -85,10 +89,11 @@ fn back_lit_sheet_is_direct_transmission_plus_single_scattering() {
     write(dir.path(), "sheet.obj", &sheet_obj(2, 0.0, "voile"));
     let (tau, albedo, e) = (0.3, 0.8, 2.0);
     let mu0 = 1.0 / 1.09f64.sqrt();
-    let mat = material("voile", "m.eigen", &format!("{{ tau = {tau}, albedo = {albedo} }}"));
+    let light = [sun([0.3, 0.0, -1.0], e)];
+    let pp = Evaluation::PerPixel;
     let f = render(
         &gpu,
-        &top_scene(dir.path(), &["sheet.obj"], &mat, &directional([0.3, 0.0, -1.0], e)),
+        &top_scene(dir.path(), &["sheet.obj"], &[("voile", slab(tau, albedo))], &light, pp),
     );
     // μ = 1 (orthographic, straight down); light from below at μ₀ on the far face.
     let t = direct_transmittance(tau, 1.0);
@@ -97,22 +102,19 @@ fn back_lit_sheet_is_direct_transmission_plus_single_scattering() {
     // Henyey–Greenstein: the same times p(cos Θ), cos Θ = −l·v = μ₀ (forward).
     let g = 0.4f64;
     let p = (1.0 - g * g) / (1.0 + g * g - 2.0 * g * mu0).powf(1.5);
-    let mat = material(
-        "voile",
-        "m.eigen",
-        &format!("{{ tau = {tau}, albedo = {albedo}, phase = {{ hg = {g} }} }}"),
-    );
-    let f = render(
-        &gpu,
-        &top_scene(dir.path(), &["sheet.obj"], &mat, &directional([0.3, 0.0, -1.0], e)),
-    );
+    let hg = Some(TransmissionDesc {
+        phase: PhaseDesc::Hg { hg: g as f32 },
+        ..slab(tau, albedo).unwrap()
+    });
+    let f =
+        render(&gpu, &top_scene(dir.path(), &["sheet.obj"], &[("voile", hg.clone())], &light, pp));
     assert_pixels("back-lit HG", &f, |i| BG[i % 3] as f64 * t + sheet * p, 1e-4);
     // In a per-vertex scene the thin material is still evaluated per pixel, with an
     // opaque per-vertex material bound beside it.
     write(dir.path(), "floor.obj", &sheet_obj(2, -0.5, "floor"));
-    let mats = mat + &material("floor", "m.eigen", "");
-    let light = directional([0.3, 0.0, -1.0], e) + "[effects]\nevaluation = \"per-vertex\"\n";
-    let f = render(&gpu, &top_scene(dir.path(), &["floor.obj", "sheet.obj"], &mats, &light));
+    let mats = [("voile", hg), ("floor", None)];
+    let pv = Evaluation::PerVertex;
+    let f = render(&gpu, &top_scene(dir.path(), &["floor.obj", "sheet.obj"], &mats, &light, pv));
     // The floor below is lit from below too: black, so only the sheet's own light shows.
     assert_pixels("per-vertex scene", &f, |_| sheet * p, 1e-4);
 }
@@ -123,14 +125,12 @@ fn front_lit_sheet_reflects_its_share_of_the_btf() {
     let dir = tempfile::tempdir().unwrap();
     write_store(dir.path(), "m.eigen", Pattern::Checker, 8, 8, 4, Quantization::F16);
     write(dir.path(), "sheet.obj", &sheet_obj(2, 0.0, "voile"));
-    let light = directional([0.3, 0.0, 1.0], 2.0);
-    let opaque = render(
-        &gpu,
-        &top_scene(dir.path(), &["sheet.obj"], &material("voile", "m.eigen", ""), &light),
-    );
+    let (light, pp) = ([sun([0.3, 0.0, 1.0], 2.0)], Evaluation::PerPixel);
+    let opaque =
+        render(&gpu, &top_scene(dir.path(), &["sheet.obj"], &[("voile", None)], &light, pp));
     let tau = 0.25;
-    let mat = material("voile", "m.eigen", &format!("{{ tau = {tau}, albedo = 0.7 }}"));
-    let thin = render(&gpu, &top_scene(dir.path(), &["sheet.obj"], &mat, &light));
+    let mat = [("voile", slab(tau, 0.7))];
+    let thin = render(&gpu, &top_scene(dir.path(), &["sheet.obj"], &mat, &light, pp));
     let mu0 = 1.0 / 1.09f64.sqrt();
     let (t, share) = (direct_transmittance(tau, 1.0), reflection_share(tau, 1.0, mu0));
     let expected: Vec<f32> = opaque
@@ -151,9 +151,8 @@ fn layers_composite_back_to_front_whatever_the_mesh_order() {
     write(dir.path(), "low.obj", &sheet_obj(2, 0.0, "shirt"));
     write(dir.path(), "high.obj", &sheet_obj(2, 0.3, "scarf"));
     let (tau_a, alb_a, tau_b, alb_b, e) = (0.5, 0.9, 0.15, 0.4, 3.0);
-    let mats = material("shirt", "m.eigen", &format!("{{ tau = {tau_a}, albedo = {alb_a} }}"))
-        + &material("scarf", "m.eigen", &format!("{{ tau = {tau_b}, albedo = {alb_b} }}"));
-    let light = directional([0.0, 0.4, -1.0], e);
+    let mats = [("shirt", slab(tau_a, alb_a)), ("scarf", slab(tau_b, alb_b))];
+    let light = [sun([0.0, 0.4, -1.0], e)];
     let mu0 = 1.0 / 1.16f64.sqrt();
     let sheet =
         |tau: f64, alb: f64| alb / (4.0 * PI) * transmission_factor(tau, 1.0, mu0) * mu0 * e as f64;
@@ -162,7 +161,7 @@ fn layers_composite_back_to_front_whatever_the_mesh_order() {
     let expected =
         |i: usize| (BG[i % 3] as f64 * ta + sheet(tau_a, alb_a)) * tb + sheet(tau_b, alb_b);
     for order in [["low.obj", "high.obj"], ["high.obj", "low.obj"]] {
-        let f = render(&gpu, &top_scene(dir.path(), &order, &mats, &light));
+        let f = render(&gpu, &top_scene(dir.path(), &order, &mats, &light, Evaluation::PerPixel));
         assert_pixels(&format!("layers {order:?}"), &f, expected, 1e-4);
     }
     // The wrong order would differ by far more than the tolerance.
@@ -179,18 +178,21 @@ fn thickness_texture_from_an_image_and_from_the_btf_mean() {
     image::GrayImage::from_pixel(4, 4, image::Luma([128u8]))
         .save(dir.path().join("tau.png"))
         .unwrap();
-    let no_light = "";
-    let mat = material("voile", "m.eigen", "{ tau = 1.0, tau_texture = \"tau.png\" }");
-    let f = render(&gpu, &top_scene(dir.path(), &["sheet.obj"], &mat, no_light));
+    let (no_light, pp) = (&[], Evaluation::PerPixel);
+    let textured = |tau: f32, texture: TauTexture| {
+        [("voile", Some(TransmissionDesc { tau_texture: Some(texture), ..thin(tau) }))]
+    };
+    let mat = textured(1.0, TauTexture::Image("tau.png".into()));
+    let f = render(&gpu, &top_scene(dir.path(), &["sheet.obj"], &mat, no_light, pp));
     let t = direct_transmittance(128.0 / 255.0, 1.0);
     assert_pixels("tau.png", &f, |i| BG[i % 3] as f64 * t, 2e-3);
     // A uniform BTF mean normalises to 1: the same as the scalar thickness.
-    let mat = material("voile", "m.eigen", "{ tau = 0.6, tau_texture = \"btf-mean\" }");
-    let f = render(&gpu, &top_scene(dir.path(), &["sheet.obj"], &mat, no_light));
+    let mat = textured(0.6, TauTexture::BtfMean);
+    let f = render(&gpu, &top_scene(dir.path(), &["sheet.obj"], &mat, no_light, pp));
     assert_pixels("btf-mean", &f, |i| BG[i % 3] as f64 * direct_transmittance(0.6, 1.0), 2e-3);
     // A bad texture is refused with the file named.
-    let mat = material("voile", "m.eigen", "{ tau = 1.0, tau_texture = \"missing.png\" }");
-    let scene = top_scene(dir.path(), &["sheet.obj"], &mat, no_light);
+    let mat = textured(1.0, TauTexture::Image("missing.png".into()));
+    let scene = top_scene(dir.path(), &["sheet.obj"], &mat, no_light, pp);
     let err = render_scene(&gpu, &scene, RenderOptions::default()).err().unwrap().to_string();
     assert!(err.contains("missing.png"), "{err}");
 }
@@ -200,7 +202,8 @@ fn scene_keys_are_validated() {
     let dir = tempfile::tempdir().unwrap();
     let base = |t: &str| {
         let text = format!(
-            "[[meshes]]\npath = \"a.obj\"\n[[materials]]\nstore = \"m.eigen\"\ntransmission = {t}\n{TOP_CAMERA}"
+            "[[meshes]]\npath = \"a.obj\"\n[[materials]]\nstore = \"m.eigen\"\ntransmission = {t}\n\
+         [camera]\neye = [0.5, 0.5, 2.0]\ntarget = [0.5, 0.5, 0.0]\n"
         );
         Scene::load(&write(dir.path(), "s.toml", &text)).map(|_| ()).map_err(|e| e.to_string())
     };
@@ -225,41 +228,39 @@ struct CurtainSet {
     dir: tempfile::TempDir,
 }
 
-const FRONT_LIGHT: &str =
-    "[[lights]]\nkind = \"point\"\nposition = [0.3, -1.0, 1.0]\nintensity = [1.0, 1.0, 1.0]\n";
-const BACK_LIGHT: &str =
-    "[[lights]]\nkind = \"point\"\nposition = [0.3, 0.45, 1.0]\nintensity = [0.25, 0.25, 0.25]\n";
+const FRONT_LIGHT: ([f32; 3], f32) = ([0.3, -1.0, 1.0], 1.0);
+const BACK_LIGHT: ([f32; 3], f32) = ([0.3, 0.45, 1.0], 0.25);
 
 impl CurtainSet {
     fn new() -> CurtainSet {
         let dir = tempfile::tempdir().unwrap();
         write_store(dir.path(), "voile.eigen", Pattern::Checker, 16, 16, 4, Quantization::F16);
         write_store(dir.path(), "wall.eigen", Pattern::Ribs, 16, 16, 4, Quantization::F16);
-        let mesh =
-            datasets::synth_mesh(datasets::MeshKind::Curtain, datasets::Resolution::Low).unwrap();
-        datasets::write_obj(&mesh, &dir.path().join("curtain.obj"), "curtain").unwrap();
+        synth_mesh(dir.path(), "curtain.obj", datasets::MeshKind::Curtain);
         write(dir.path(), "wall.obj", &wall_obj());
         CurtainSet { dir }
     }
 
-    /// The curtain (when `transmission` is `Some`; `""` = opaque) in front of the wall
-    /// (when `wall`), lit by `light`.
-    fn scene(&self, transmission: Option<&str>, wall: bool, light: &str) -> Scene {
-        let mut text = String::from("[output]\nwidth = 48\nheight = 48\n");
-        if transmission.is_some() {
-            text += "[[meshes]]\npath = \"curtain.obj\"\n";
+    /// The curtain (when `curtain` is `Some`: thin with `Some(transmission)`, else opaque)
+    /// in front of the wall (when `wall`), lit by the point light `(position, intensity)`.
+    fn scene(
+        &self,
+        curtain: Option<Option<TransmissionDesc>>,
+        wall: bool,
+        (position, intensity): ([f32; 3], f32),
+    ) -> Scene {
+        let mut b = SceneBuilder::new(self.dir.path(), 48);
+        if curtain.is_some() {
+            b = b.mesh("curtain.obj");
         }
         if wall {
-            text += "[[meshes]]\npath = \"wall.obj\"\n";
+            b = b.mesh("wall.obj");
         }
-        text += "[[materials]]\nname = \"wall\"\nstore = \"wall.eigen\"\nuv_scale = 3.0\n";
-        text += "[[materials]]\nstore = \"voile.eigen\"\nuv_scale = 4.0\n";
-        if let Some(t) = transmission.filter(|t| !t.is_empty()) {
-            text += &format!("transmission = {t}\n");
-        }
-        text += "[camera]\neye = [0.0, -2.6, 0.75]\ntarget = [0.0, 0.0, 0.75]\nup = [0.0, 0.0, 1.0]\nfov_y_deg = 40.0\n";
-        text += light;
-        Scene::load(&write(self.dir.path(), "curtain.toml", &text)).unwrap()
+        b.material_with(Some("wall"), "wall.eigen", 3.0, None)
+            .material_with(None, "voile.eigen", 4.0, curtain.flatten())
+            .perspective([0.0, -2.6, 0.75], [0.0, 0.0, 0.75], [0.0, 0.0, 1.0], 40.0)
+            .light(point(position, intensity))
+            .build()
     }
 }
 
@@ -269,19 +270,14 @@ fn curtain_limits_transparent_and_opaque() {
     let set = CurtainSet::new();
     for (side, light) in [("front", FRONT_LIGHT), ("back", BACK_LIGHT)] {
         // τ₁ → ∞: alpha 0, full share of the BTF, no transmitted light: the opaque render.
-        let opaque = render(&gpu, &set.scene(Some(""), true, light));
-        let thick = render(&gpu, &set.scene(Some("{ tau = 1e4, albedo = 1.0 }"), true, light));
+        let opaque = render(&gpu, &set.scene(Some(None), true, light));
+        let thick = render(&gpu, &set.scene(Some(slab(1e4, 1.0)), true, light));
         assert_close(&format!("thick-{side}"), 48, 48, &opaque.rgb, &thick.rgb, 1e-5);
         // τ₁ → 0: the wall behind shows through unchanged (with a per-texel thickness too).
         let wall = render(&gpu, &set.scene(None, true, light));
-        let clear = render(
-            &gpu,
-            &set.scene(
-                Some("{ tau = 1e-6, tau_texture = \"btf-mean\", albedo = 1.0 }"),
-                true,
-                light,
-            ),
-        );
+        let clear =
+            TransmissionDesc { tau_texture: Some(TauTexture::BtfMean), ..slab(1e-6, 1.0).unwrap() };
+        let clear = render(&gpu, &set.scene(Some(Some(clear)), true, light));
         assert_close(&format!("clear-{side}"), 48, 48, &wall.rgb, &clear.rgb, 1e-5);
         assert!(rel_rmse(&wall.rgb, &opaque.rgb) > 0.05, "the curtain must be visible when opaque");
     }
@@ -292,11 +288,11 @@ fn curtain_limits_transparent_and_opaque() {
 fn separate(
     gpu: &btf_render::Gpu,
     set: &CurtainSet,
-    t: &str,
-    light: &str,
+    t: &TransmissionDesc,
+    light: ([f32; 3], f32),
 ) -> (Vec<f32>, Vec<f32>, Frame) {
-    let with = render(gpu, &set.scene(Some(t), true, light));
-    let without = render(gpu, &set.scene(Some(t), false, light));
+    let with = render(gpu, &set.scene(Some(Some(t.clone())), true, light));
+    let without = render(gpu, &set.scene(Some(Some(t.clone())), false, light));
     let wall = render(gpu, &set.scene(None, true, light));
     let alpha = (0..with.rgb.len())
         .map(|i| {
@@ -311,9 +307,9 @@ fn back_lit_and_front_lit_curtain_differ_as_in_fig_2() {
     let Some(gpu) = gpu("back_lit_and_front_lit_curtain_differ_as_in_fig_2") else { return };
     let set = CurtainSet::new();
     // The paper's Fig. 2 values: ϖ₀ = 1, τ₁ = 2 (here per texel from the BTF mean).
-    let t = "{ tau = 2.0, tau_texture = \"btf-mean\", albedo = 1.0 }";
-    let (alpha_f, sheet_f, with_f) = separate(&gpu, &set, t, FRONT_LIGHT);
-    let (alpha_b, sheet_b, with_b) = separate(&gpu, &set, t, BACK_LIGHT);
+    let t = TransmissionDesc { tau_texture: Some(TauTexture::BtfMean), ..slab(2.0, 1.0).unwrap() };
+    let (alpha_f, sheet_f, with_f) = separate(&gpu, &set, &t, FRONT_LIGHT);
+    let (alpha_b, sheet_b, with_b) = separate(&gpu, &set, &t, BACK_LIGHT);
     let d = artifact_dir();
     with_b.write_png(&d.join("fig2-back-lit.png"), 3.0).unwrap();
     with_f.write_png(&d.join("fig2-front-lit.png"), 3.0).unwrap();

@@ -1,24 +1,35 @@
 //! Golden comparisons of the GPU renderer against the CPU reconstruction
-//! (`btf_core::reconstruct`, eq. 2–5), and per-vertex vs per-pixel convergence.
+//! (`btf_core::reconstruct`, `[S03 eq. 2–5]`), and per-vertex (`[S03 §4.2]`) vs per-pixel
+//! convergence.
 
-mod common;
-
+use crate::common::*;
 use btf_core::eigen::{EigenStore, Quantization};
 use btf_core::reconstruct::{ReconstructParams, reconstruct};
 use btf_core::{Direction, InterpMode};
-use btf_render::{RenderOptions, Scene, render_scene};
-use common::*;
+use btf_render::scene::{Effects, Evaluation, Light};
+use btf_render::{RenderOptions, Renderer, Scene, render_scene};
 
 fn plane_scene(
     dir: &std::path::Path,
     obj: &str,
     store: &str,
-    extra: &str,
+    fx: impl FnOnce(&mut Effects),
     light_dir: [f32; 3],
     size: u32,
 ) -> Scene {
-    let rest = format!("{}{extra}\n", directional(light_dir));
-    ortho_scene(dir, size, OVER_PLANE, obj, &format!("store = \"{store}\""), &rest)
+    let b = SceneBuilder::new(dir, size).mesh(obj).material(store);
+    b.light(directional(light_dir)).effects(fx).build()
+}
+
+/// The plane of the convergence tests from a perspective camera (view directions vary
+/// across the image).
+fn perspective_plane(dir: &std::path::Path, size: u32) -> SceneBuilder {
+    SceneBuilder::new(dir, size).mesh("plane.obj").material("m.eigen").perspective(
+        [0.5, -0.6, 1.2],
+        [0.5, 0.5, 0.0],
+        [0.0, 0.0, 1.0],
+        60.0,
+    )
 }
 
 /// World light direction on the plane → tangent direction: T = +x, B = −y, N = +z.
@@ -31,23 +42,23 @@ fn flat_plane_per_pixel_matches_cpu_reconstruction() {
     let Some(gpu) = gpu("flat_plane_per_pixel_matches_cpu_reconstruction") else { return };
     let dir = tempfile::tempdir().unwrap();
     let n = 32;
-    write(dir.path(), "plane.obj", &plane_obj(4, false));
+    unit_plane(dir.path(), "plane.obj", 4);
     for (q, name) in [(Quantization::F16, "f16"), (Quantization::U8, "u8")] {
         let store =
             write_store(dir.path(), &format!("m-{name}.eigen"), Pattern::Checker, n, n, 6, q);
         let es = EigenStore::open(&store).unwrap();
         for light in [[0.3f32, 0.5, 1.0], [-0.7, 0.2, 0.4], [0.0, 0.0, 1.0], [0.9, -0.9, 0.2]] {
-            for (fx, params) in [
-                ("", ReconstructParams::default()),
-                (
-                    "[effects]\nlight_interp = \"nearest\"\ncomponents = 3",
-                    ReconstructParams {
+            for nearest in [false, true] {
+                let (fx, params): (fn(&mut Effects), _) = if nearest {
+                    let params = ReconstructParams {
                         light_mode: InterpMode::Nearest,
                         components: Some(3),
                         ..Default::default()
-                    },
-                ),
-            ] {
+                    };
+                    (|e| (e.light_interp, e.components) = (InterpMode::Nearest, Some(3)), params)
+                } else {
+                    (|_| {}, ReconstructParams::default())
+                };
                 let scene = plane_scene(
                     dir.path(),
                     "plane.obj",
@@ -67,7 +78,7 @@ fn flat_plane_per_pixel_matches_cpu_reconstruction() {
                     &frame.rgb,
                     0.01,
                 );
-                eprintln!("{name} light {light:?} {fx:?}: relative RMSE {e:.2e}");
+                eprintln!("{name} light {light:?} nearest {nearest}: relative RMSE {e:.2e}");
                 // Negative control: the tangent frame's +y is the texture row direction (world
                 // −y here); taking world +y instead must be visibly wrong.
                 if light[1] != 0.0 {
@@ -109,37 +120,25 @@ fn per_vertex_converges_to_per_pixel_as_the_mesh_is_refined() {
 fn separable_and_full_per_vertex_layouts_render_the_same() {
     let Some(gpu) = gpu("separable_and_full_per_vertex_layouts_render_the_same") else { return };
     let dir = tempfile::tempdir().unwrap();
-    write(dir.path(), "plane.obj", &plane_obj(2, false));
+    unit_plane(dir.path(), "plane.obj", 2);
     for (components, tol) in [(4usize, 2e-3), (32, 1e-5)] {
         write_store(dir.path(), "m.eigen", Pattern::Checker, 16, 16, components, Quantization::F16);
-        let text = r#"
-            [output]
-            width = 48
-            height = 48
-            [[meshes]]
-            path = "plane.obj"
-            [[materials]]
-            store = "m.eigen"
-            [camera]
-            eye = [0.5, -0.6, 1.2]
-            target = [0.5, 0.5, 0.0]
-            up = [0.0, 0.0, 1.0]
-            fov_y_deg = 60.0
-            [[lights]]
-            kind = "point"
-            position = [0.9, 0.1, 0.3]
-            intensity = [0.3, 0.2, 0.1]
-            [[lights]]
-            kind = "directional"
-            direction = [-0.3, 0.4, 0.8]
-            irradiance = [0.2, 0.4, 0.6]
-            [effects]
-            evaluation = "per-vertex"
-            "#;
-        let scene = Scene::load(&write(dir.path(), "scene.toml", text)).unwrap();
+        let scene = perspective_plane(dir.path(), 48)
+            .light(Light::Point {
+                position: [0.9, 0.1, 0.3],
+                intensity: [0.3, 0.2, 0.1],
+                shadows: true,
+            })
+            .light(Light::Directional {
+                direction: [-0.3, 0.4, 0.8],
+                irradiance: [0.2, 0.4, 0.6],
+                shadows: true,
+            })
+            .effects(|e| e.evaluation = Evaluation::PerVertex)
+            .build();
         let frame = |full_vertex_layout| {
             let options = RenderOptions { full_vertex_layout, ..Default::default() };
-            let mut r = btf_render::Renderer::new(&gpu, &scene, options).unwrap();
+            let mut r = Renderer::new(&gpu, &scene, options).unwrap();
             assert_eq!(r.pass_key().separable(), !full_vertex_layout);
             r.render(&gpu).unwrap()
         };
@@ -162,36 +161,15 @@ fn per_vertex_convergence(
     let size = 64;
     let mut errors = Vec::new();
     for n in [1usize, 2, 4, 8, 16] {
-        write(dir, "plane.obj", &plane_obj(n, false));
+        unit_plane(dir, "plane.obj", n);
         let mut frames = Vec::new();
-        for eval in ["per-pixel", "per-vertex"] {
-            let text = format!(
-                r#"
-                [output]
-                width = {size}
-                height = {size}
-                [[meshes]]
-                path = "plane.obj"
-                [[materials]]
-                store = "m.eigen"
-                [camera]
-                eye = [0.5, -0.6, 1.2]
-                target = [0.5, 0.5, 0.0]
-                up = [0.0, 0.0, 1.0]
-                fov_y_deg = 60.0
-                [[lights]]
-                kind = "point"
-                position = [0.9, 0.2, 0.6]
-                intensity = [0.5, 0.5, 0.5]
-                [effects]
-                evaluation = "{eval}"
-                "#
-            );
-            let scene = Scene::load(&write(dir, "scene.toml", &text)).unwrap();
-            if eval == "per-vertex" && n == 1 {
-                let key = btf_render::Renderer::new(gpu, &scene, RenderOptions::default())
-                    .unwrap()
-                    .pass_key();
+        for eval in [Evaluation::PerPixel, Evaluation::PerVertex] {
+            let scene = perspective_plane(dir, size)
+                .light(point([0.9, 0.2, 0.6], 0.5))
+                .effects(|e| e.evaluation = eval)
+                .build();
+            if eval == Evaluation::PerVertex && n == 1 {
+                let key = Renderer::new(gpu, &scene, RenderOptions::default()).unwrap().pass_key();
                 let groups = if components <= 16 { components.div_ceil(4) as u32 } else { 0 };
                 assert_eq!((key.groups, key.packed), (groups, groups > 0 && weight_scale < 10.0));
                 assert!(key.separable());
@@ -235,17 +213,17 @@ fn rotating_the_uvs_turns_the_ribs() {
     let store = write_store(dir.path(), "ribs.eigen", Pattern::Ribs, n, n, 4, Quantization::F16);
     let es = EigenStore::open(&store).unwrap();
     let light = [0.4f32, 0.3, 1.0];
-    write(dir.path(), "plane.obj", &plane_obj(2, false));
+    unit_plane(dir.path(), "plane.obj", 2);
     write(dir.path(), "rot.obj", &plane_obj(2, true));
     let plain = render_scene(
         &gpu,
-        &plane_scene(dir.path(), "plane.obj", "ribs.eigen", "", light, n as u32),
+        &plane_scene(dir.path(), "plane.obj", "ribs.eigen", |_| {}, light, n as u32),
         RenderOptions::default(),
     )
     .unwrap();
     let rotated = render_scene(
         &gpu,
-        &plane_scene(dir.path(), "rot.obj", "ribs.eigen", "", light, n as u32),
+        &plane_scene(dir.path(), "rot.obj", "ribs.eigen", |_| {}, light, n as u32),
         RenderOptions::default(),
     )
     .unwrap();

@@ -4,20 +4,22 @@
 //! slot more); the sweep's rows carry the read counts the packing predicts and errors that
 //! fall with `c`.
 
-mod common;
-
+use crate::common::*;
 use btf_core::eigen::Quantization;
 use btf_render::cost_sweep::{self, SweepConfig};
 use btf_render::material::MaterialData;
 use btf_render::{Baseline, ReadForm, RenderOptions, Scene, render_scene};
-use common::*;
 use half::f16;
 
 const SIZE: u32 = 32;
 
 fn ortho_plane(dir: &std::path::Path) -> Scene {
-    let cam = Ortho { eye: [0.5, 0.5, 3.0], ..OVER_PLANE };
-    ortho_scene(dir, SIZE, cam, "plane.obj", "store = \"m.eigen\"", &directional([0.3, 0.2, 1.0]))
+    SceneBuilder::new(dir, SIZE)
+        .mesh("plane.obj")
+        .material("m.eigen")
+        .ortho(Ortho { eye: [0.5, 0.5, 3.0], ..OVER_PLANE })
+        .light(directional([0.3, 0.2, 1.0]))
+        .build()
 }
 
 fn render(scene: &Scene, gpu: &btf_render::Gpu, baseline: Baseline) -> btf_render::Frame {
@@ -39,7 +41,7 @@ fn baselines_read_what_they_claim() {
     let Some(gpu) = gpu("baselines_read_what_they_claim") else { return };
     let dir = tempfile::tempdir().unwrap();
     let store = write_store(dir.path(), "m.eigen", Pattern::Checker, 32, 32, 16, Quantization::F16);
-    write(dir.path(), "plane.obj", &plane_obj(2, false));
+    unit_plane(dir.path(), "plane.obj", 2);
     let scene = ortho_plane(dir.path());
     let data = MaterialData::load(&store, None).unwrap();
     let texels = (SIZE * SIZE) as usize;
@@ -103,26 +105,13 @@ fn sweep_rows_have_predicted_reads_and_falling_error() {
     let Some(gpu) = gpu("sweep_rows_have_predicted_reads_and_falling_error") else { return };
     let dir = tempfile::tempdir().unwrap();
     write_store(dir.path(), "m.eigen", Pattern::Checker, 16, 16, 8, Quantization::F16);
-    write(dir.path(), "plane.obj", &plane_obj(4, false));
-    let text = r#"
-        [output]
-        width = 32
-        height = 32
-        [[meshes]]
-        path = "plane.obj"
-        [[materials]]
-        store = "m.eigen"
-        [camera]
-        eye = [0.5, -0.4, 1.0]
-        target = [0.5, 0.5, 0.0]
-        up = [0.0, 0.0, 1.0]
-        fov_y_deg = 50.0
-        [[lights]]
-        kind = "directional"
-        direction = [0.3, 0.2, 1.0]
-        irradiance = [1.0, 1.0, 1.0]
-    "#;
-    let scene = Scene::load(&write(dir.path(), "scene.toml", text)).unwrap();
+    unit_plane(dir.path(), "plane.obj", 4);
+    let scene = SceneBuilder::new(dir.path(), 32)
+        .mesh("plane.obj")
+        .material("m.eigen")
+        .perspective([0.5, -0.4, 1.0], [0.5, 0.5, 0.0], [0.0, 0.0, 1.0], 50.0)
+        .light(directional([0.3, 0.2, 1.0]))
+        .build();
     let config = SweepConfig { components: vec![4, 8, 32], repeats: 1 };
     let mut calls = 0;
     let r = cost_sweep::run(&gpu, &scene, &config, &mut |_, _| calls += 1).unwrap();

@@ -5,13 +5,12 @@
 //! (the ray's `θ`, `φ`); with MSAA the target is `f16` (≤ 2⁻¹¹ relative). And the background
 //! behind a mesh with MSAA: what `show_environment` needed `msaa = 1` for before.
 
-mod common;
-
+use crate::common::*;
 use btf_core::eigen::Quantization;
 use btf_image::EnvMap;
 use btf_render::camera::CameraSetup;
+use btf_render::scene::{EnvironmentLight, Light};
 use btf_render::{RenderOptions, Renderer, Scene};
-use common::*;
 use nalgebra::Vector4;
 use std::f32::consts::PI;
 use std::path::Path;
@@ -94,31 +93,44 @@ fn sky(d: [f64; 3]) -> [f64; 3] {
     [base + s, 0.9 * base + s, 0.7 * base + 0.8 * s]
 }
 
-/// A small plane at the origin under the sky, seen by `camera` (TOML), `msaa` samples.
-fn scene(dir: &Path, camera: &str, msaa: u32, rotation_deg: f64, exposure: f32) -> Scene {
-    let text = format!(
-        "[output]\nwidth = 64\nheight = 48\nshow_environment = true\n\
-         [[meshes]]\npath = \"plane.obj\"\n[[materials]]\nstore = \"m.eigen\"\n{camera}\
-         [[lights]]\nkind = \"environment\"\npath = \"sky.exr\"\nrotation_deg = {rotation_deg}\n\
-         exposure = {exposure}\nvisibility_res = 4\n[effects]\nmsaa = {msaa}\n"
-    );
-    Scene::load(&write(dir, "scene.toml", &text)).unwrap()
+/// A camera: perspective `(eye, target, up, fov)` or, without a field of view, orthographic
+/// (view height 3).
+type Cam = ([f32; 3], [f32; 3], [f32; 3], Option<f32>);
+
+/// The unit plane under the sky, shown behind it, seen by `cam` at `msaa` samples.
+fn scene(dir: &Path, cam: Cam, msaa: u32, rotation_deg: f64, exposure: f32) -> Scene {
+    let env = EnvironmentLight {
+        rotation_deg,
+        exposure,
+        visibility_res: 4,
+        ..environment(dir, "sky.exr")
+    };
+    let (eye, target, up, fov) = cam;
+    let b = SceneBuilder::new(dir, 64).size(64, 48);
+    let b = match fov {
+        Some(fov) => b.perspective(eye, target, up, fov),
+        None => b.ortho(Ortho { eye, target, height: 3.0 }),
+    };
+    b.output(|o| o.show_environment = true)
+        .mesh("plane.obj")
+        .material("m.eigen")
+        .light(Light::Environment(env))
+        .effects(|e| e.msaa = msaa)
+        .build()
 }
 
-const SIDEWAYS: &str = "[camera]\neye = [0.0, -3.0, 0.4]\ntarget = [0.3, 0.0, 0.9]\n\
-                        up = [0.0, 0.0, 1.0]\nfov_y_deg = 100.0\n";
-const ORTHO: &str = "[camera]\nprojection = \"orthographic\"\neye = [0.2, -1.0, 3.0]\n\
-                     target = [0.0, 0.0, 0.0]\nup = [0.0, 0.0, 1.0]\northo_height = 3.0\n";
+const SIDEWAYS: Cam = ([0.0, -3.0, 0.4], [0.3, 0.0, 0.9], [0.0, 0.0, 1.0], Some(100.0));
+/// Orthographic and oblique: every ray one direction.
+const ORTHO: Cam = ([0.2, -1.0, 3.0], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], None);
 /// Straight down at the plane, `[0, 1]²` centred at `(0.2, 0.1)`: 16 pixels per unit.
-const DOWN: &str = "[camera]\nprojection = \"orthographic\"\neye = [0.2, 0.1, 3.0]\n\
-                    target = [0.2, 0.1, 0.0]\nup = [0.0, 1.0, 0.0]\northo_height = 3.0\n";
+const DOWN: Cam = ([0.2, 0.1, 3.0], [0.2, 0.1, 0.0], [0.0, 1.0, 0.0], None);
 
 #[test]
 fn background_pass_matches_the_cpu_background() {
     let Some(gpu) = gpu("background_pass_matches_the_cpu_background") else { return };
     let dir = tempfile::tempdir().unwrap();
     write_store(dir.path(), "m.eigen", Pattern::Lambert, 2, 2, 2, Quantization::F16);
-    write(dir.path(), "plane.obj", &plane_obj(1, false));
+    unit_plane(dir.path(), "plane.obj", 1);
     let map = EnvMap::from_fn(64, sky).unwrap();
     map.write_exr(&dir.path().join("sky.exr")).unwrap();
     let map = EnvMap::load(&dir.path().join("sky.exr")).unwrap();
@@ -154,7 +166,7 @@ fn background_shows_behind_the_mesh_with_msaa() {
     let Some(gpu) = gpu("background_shows_behind_the_mesh_with_msaa") else { return };
     let dir = tempfile::tempdir().unwrap();
     write_store(dir.path(), "m.eigen", Pattern::Lambert, 2, 2, 2, Quantization::F16);
-    write(dir.path(), "plane.obj", &plane_obj(1, false));
+    unit_plane(dir.path(), "plane.obj", 1);
     EnvMap::from_fn(64, sky).unwrap().write_exr(&dir.path().join("sky.exr")).unwrap();
     for msaa in [1, 4] {
         let s = scene(dir.path(), DOWN, msaa, 20.0, 1.0);

@@ -1,21 +1,18 @@
-//! An environment light computes visibility and weights only for the vertex sides the
-//! camera shows (`camera_sides.rs`): the frame is the same as with every side computed,
+//! An environment light computes visibility (`[S03 §5.2]`) and radiances
+//! (`[S03 eq. 10]`) only for the vertex sides the camera shows (the corner-id pass,
+//! `passes/corner_ids`): the frame is the same as with every side computed,
 //! bit for bit, with and without MSAA, for a camera that sees the inside of the shirt
 //! through its neck; a camera move computes the rest and again equals the full renderer.
 
-mod common;
-
+use crate::common::*;
 use btf_core::eigen::Quantization;
+use btf_render::scene::{EnvironmentLight, Light};
 use btf_render::{Frame, RenderOptions, Renderer, Scene};
-use common::*;
-use datasets::mesh::{MeshKind, Resolution};
 use std::path::Path;
 
-/// Writes the low shirt, a checker store, a sky with a sun, and returns the scene text for
-/// a perspective camera at `eye` with `msaa` samples.
+/// Writes the low shirt, a checker store and a sky with a sun.
 fn setup(dir: &Path) {
-    let m = datasets::mesh::synth_mesh(MeshKind::Shirt, Resolution::Low).unwrap();
-    datasets::mesh::write_obj(&m, &dir.join("shirt.obj"), "shirt").unwrap();
+    synth_mesh(dir, "shirt.obj", datasets::MeshKind::Shirt);
     write_store(dir, "m.eigen", Pattern::Checker, 4, 4, 8, Quantization::F16);
     let (w, h) = (64usize, 32usize);
     exr::prelude::write_rgb_file(dir.join("sky.exr"), w, h, |x, y| {
@@ -28,19 +25,27 @@ fn setup(dir: &Path) {
     .unwrap();
 }
 
+/// The shirt under the sky from a perspective camera at `eye` with `msaa` samples.
 fn scene(dir: &Path, eye: [f32; 3], msaa: u32) -> Scene {
-    scene_with(dir, eye, msaa, "")
+    scene_with(dir, eye, msaa, |_| {})
 }
 
-/// The scene with `extra` lines in its environment light's table.
-fn scene_with(dir: &Path, eye: [f32; 3], msaa: u32, extra: &str) -> Scene {
-    let text = format!(
-        "[output]\nwidth = 40\nheight = 40\n[[meshes]]\npath = \"shirt.obj\"\n\
-         [[materials]]\nstore = \"m.eigen\"\n[camera]\neye = {eye:?}\ntarget = [0.0, 0.0, 0.1]\n\
-         fov_y_deg = 40.0\n[[lights]]\nkind = \"environment\"\npath = \"sky.exr\"\n\
-         visibility_res = 8\n{extra}[effects]\nmsaa = {msaa}\n"
-    );
-    Scene::load(&write(dir, &format!("scene-{msaa}.toml"), &text)).unwrap()
+/// The scene with its environment light changed by `env`.
+fn scene_with(
+    dir: &Path,
+    eye: [f32; 3],
+    msaa: u32,
+    env: impl FnOnce(&mut EnvironmentLight),
+) -> Scene {
+    let mut light = EnvironmentLight { visibility_res: 8, ..environment(dir, "sky.exr") };
+    env(&mut light);
+    SceneBuilder::new(dir, 40)
+        .mesh("shirt.obj")
+        .material("m.eigen")
+        .perspective(eye, [0.0, 0.0, 0.1], [0.0, 1.0, 0.0], 40.0)
+        .light(Light::Environment(light))
+        .effects(|e| e.msaa = msaa)
+        .build()
 }
 
 fn build(gpu: &btf_render::Gpu, scene: &Scene, all: bool) -> Renderer {
@@ -105,7 +110,7 @@ fn cached_maps_of_every_side_serve_a_camera() {
     let Some(gpu) = gpu("cached_maps_of_every_side_serve_a_camera") else { return };
     let dir = tempfile::tempdir().unwrap();
     setup(dir.path());
-    let s = scene_with(dir.path(), FRONT, 1, "cache_dir = \"cache\"\n");
+    let s = scene_with(dir.path(), FRONT, 1, |e| e.cache_dir = Some(dir.path().join("cache")));
     // A camera's subset first: cached under its own key, and again from there.
     let mut some = build(&gpu, &s, false);
     let e = some.environment().unwrap();

@@ -4,13 +4,11 @@
 //! average of a 4×-resolution render (the reference) up to f16 rounding, while sampling the
 //! base level alone aliases.
 
-mod common;
-
+use crate::common::*;
 use btf_core::Sampling;
 use btf_core::eigen::{EigenMeta, EigenWriter, Quantization, QuantizedSlot, quantize};
 use btf_core::store::BtfMeta;
 use btf_render::{Frame, RenderOptions, Scene, render_scene};
-use common::*;
 use std::path::Path;
 
 fn noise(t: usize, salt: u32) -> f32 {
@@ -49,9 +47,13 @@ fn write_noise_store(dir: &Path, w: usize, q: Quantization) {
 }
 
 fn plane_scene(dir: &Path, size: u32, mipmaps: bool) -> Scene {
-    let cam = Ortho { eye: [0.5, 0.5, 3.0], ..OVER_PLANE };
-    let rest = format!("{}[effects]\nmipmaps = {mipmaps}\n", directional([0.0, 0.0, 1.0]));
-    ortho_scene(dir, size, cam, "plane.obj", "store = \"n.eigen\"\nuv_scale = 4.0", &rest)
+    SceneBuilder::new(dir, size)
+        .mesh("plane.obj")
+        .material_with(None, "n.eigen", 4.0, None)
+        .ortho(Ortho { eye: [0.5, 0.5, 3.0], ..OVER_PLANE })
+        .light(directional([0.0, 0.0, 1.0]))
+        .effects(|e| e.mipmaps = mipmaps)
+        .build()
 }
 
 /// `k × k` box average of a frame.
@@ -79,7 +81,7 @@ fn mipmaps_match_a_supersampled_reference_far_better() {
     for q in [Quantization::F16, Quantization::U8] {
         let dir = tempfile::tempdir().unwrap();
         write_noise_store(dir.path(), 32, q);
-        write(dir.path(), "plane.obj", &plane_obj(2, false));
+        unit_plane(dir.path(), "plane.obj", 2);
         // 128 texels across the plane: 1 texel per pixel at 128², 4×4 at 32².
         let fine =
             render_scene(&gpu, &plane_scene(dir.path(), 128, false), RenderOptions::default())

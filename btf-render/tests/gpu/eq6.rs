@@ -1,32 +1,26 @@
-//! The smooth shadow boundary of eq. 6 switched on and off: on a coarse sphere (16
+//! The smooth shadow boundary of `[S03 eq. 6]` switched on and off: on a coarse sphere (16
 //! segments) under an oblique light, shadow volumes alone cut the shading along the
 //! polygon terminator, a staircase across the segments; with eq. 6 the boundary follows the
 //! interpolated normals. Measured per image row as the first pixel (from the lit side)
 //! darker than half the unshadowed render, against a least-squares smooth curve.
 
-mod common;
-
+use crate::common::*;
 use btf_core::eigen::Quantization;
+use btf_render::scene::Shadows;
 use btf_render::{Frame, RenderOptions, Scene, render_scene};
-use common::*;
 
 const LS: [f32; 3] = [1.0, 0.35, 0.25];
 const SIZE: u32 = 128;
 const HALF_HEIGHT: f32 = 1.2;
 
-fn sphere_scene(dir: &std::path::Path, shadows: &str, smooth: bool) -> Scene {
-    let rest = format!(
-        "{}[effects]\nshadows = \"{shadows}\"\nsmooth_boundary = {smooth}\n",
-        directional(LS)
-    );
-    ortho_scene(
-        dir,
-        SIZE,
-        OVER_SPHERE.with_height(2.0 * HALF_HEIGHT),
-        "sphere.obj",
-        "store = \"u.eigen\"",
-        &rest,
-    )
+fn sphere_scene(dir: &std::path::Path, shadows: Shadows, smooth: bool) -> Scene {
+    SceneBuilder::new(dir, SIZE)
+        .mesh("sphere.obj")
+        .material("u.eigen")
+        .ortho(OVER_SPHERE.with_height(2.0 * HALF_HEIGHT))
+        .light(directional(LS))
+        .effects(|e| (e.shadows, e.smooth_boundary) = (shadows, smooth))
+        .build()
 }
 
 fn lum(f: &Frame, x: u32, y: u32) -> f32 {
@@ -109,22 +103,22 @@ fn smooth_boundary_removes_the_polygon_staircase() {
         assert!(f.all_finite());
         f
     };
-    let lit = render("none", true);
-    for shadows in ["volume", "map"] {
+    let lit = render(Shadows::None, true);
+    for shadows in [Shadows::Volume, Shadows::Map] {
         let on = deviation_from_smooth(&boundary(&render(shadows, true), &lit));
         let off_frame = render(shadows, false);
         let off = deviation_from_smooth(&boundary(&off_frame, &lit));
         eprintln!(
-            "{shadows}: boundary deviation from a smooth cubic, eq. 6 on {on:.2} px, off {off:.2} px (sphere radius {:.0} px, 16 segments)",
+            "{shadows:?}: boundary deviation from a smooth cubic, eq. 6 on {on:.2} px, off {off:.2} px (sphere radius {:.0} px, 16 segments)",
             SIZE as f32 / (2.0 * HALF_HEIGHT)
         );
         if off < 3.0 * on || on > 0.75 {
-            save_comparison(&format!("eq6-{shadows}"), SIZE, SIZE, &lit.rgb, &off_frame.rgb);
+            save_comparison(&format!("eq6-{shadows:?}"), SIZE, SIZE, &lit.rgb, &off_frame.rgb);
         }
-        assert!(on < 0.75, "{shadows}: eq. 6 boundary not smooth ({on} px)");
+        assert!(on < 0.75, "{shadows:?}: eq. 6 boundary not smooth ({on} px)");
         assert!(
             off > 3.0 * on,
-            "{shadows}: turning eq. 6 off should show the staircase ({off} vs {on} px)"
+            "{shadows:?}: turning eq. 6 off should show the staircase ({off} vs {on} px)"
         );
     }
 }

@@ -1,11 +1,15 @@
-//! Shared fixtures for the GPU tests: tiny synthetic eigen stores, OBJ meshes and scenes
-//! written into a temporary folder, plus image comparison with `-actual`/`-difference`
-//! PNGs written on failure.
-#![allow(dead_code)]
+//! Shared fixtures of the GPU tests: tiny synthetic eigen stores and meshes written into
+//! a temporary folder, [`SceneBuilder`] for `Scene` values (what a scene file would hold,
+//! built in code), the GPU guard, and image comparison with `-actual`/`-difference` PNGs
+//! written on failure.
 
 use btf_core::Sampling;
 use btf_core::eigen::{EigenMeta, EigenWriter, Quantization, QuantizedSlot, quantize};
 use btf_core::store::BtfMeta;
+use btf_render::scene::{
+    Albedo, Camera, Effects, EnvironmentLight, Light, MaterialDesc, MeshDesc, Output, PhaseDesc,
+    Projection, TransmissionDesc,
+};
 use btf_render::{Frame, Gpu, Scene};
 use std::f32::consts::TAU;
 use std::path::{Path, PathBuf};
@@ -17,8 +21,6 @@ pub enum Pattern {
     Ribs,
     /// Texture-varying in x and y, smooth in view and light.
     Checker,
-    /// The same value at every texel (tests the direction dependence alone).
-    Uniform,
     /// Exactly Lambertian, albedo 0.8: `BTF = ρ/π · cos θ_l` at every texel (component 0
     /// carries the light dependence, the others are zero).
     Lambert,
@@ -40,7 +42,7 @@ pub fn write_store(
 
 /// [`write_store`] with every per-light weight times `weight_scale` (an HDR store whose
 /// weights leave `f16`'s range at 1e6).
-#[allow(clippy::too_many_arguments, dead_code)]
+#[allow(clippy::too_many_arguments)]
 pub fn write_store_scaled(
     dir: &Path,
     name: &str,
@@ -73,14 +75,14 @@ pub fn write_store_scaled(
                 let s = match pattern {
                     Pattern::Ribs => 0.5 + 0.4 * (TAU * fx * 4.0).cos(),
                     Pattern::Checker => 0.5 + 0.3 * (TAU * fx * 2.0).sin() * (TAU * fy * 3.0).cos(),
-                    Pattern::Uniform | Pattern::Lambert => 1.0,
+                    Pattern::Lambert => 1.0,
                 };
                 let t = (y * w + x) * 3;
                 for ch in 0..3 {
                     mean[t + ch] = 0.2 * s * (1.0 + 0.3 * vd[2] as f32) * [1.0, 0.8, 0.6][ch];
                     for k in 0..c {
                         let pk = match pattern {
-                            Pattern::Uniform | Pattern::Lambert => 1.0,
+                            Pattern::Lambert => 1.0,
                             Pattern::Ribs => {
                                 (TAU * (fx * (k % 3 + 1) as f32 + 0.1 * ch as f32)).cos()
                             }
@@ -178,13 +180,6 @@ pub fn sphere_obj(r: f32, c: [f32; 3], seg: usize) -> String {
     s
 }
 
-/// Writes `text` to `dir/name` and returns the path.
-pub fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
-    let p = dir.join(name);
-    std::fs::write(&p, text).unwrap();
-    p
-}
-
 /// A GPU for this test, or `None` (skip) — a failure when `BTF_REQUIRE_GPU=1`.
 pub fn gpu(test: &str) -> Option<Gpu> {
     Gpu::for_tests(test)
@@ -259,7 +254,35 @@ fn write_lambert(
     path
 }
 
-/// An orthographic camera looking down `−z` (up `+y`) for the small test scenes.
+/// Writes `text` to `dir/name` and returns the path.
+pub fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// The unit plane `[0, 1]²` at `z = 0` with `(n + 1)²` vertices, UV = (x, y): the datasets
+/// plane (`datasets::mesh::shapes::plane`, centred at the origin) moved by `(½, ½)`, written
+/// as `dir/name`.
+pub fn unit_plane(dir: &Path, name: &str, n: usize) -> PathBuf {
+    let mut m = datasets::mesh::shapes::plane(n + 1);
+    for p in &mut m.positions {
+        (p[0], p[1]) = (p[0] + 0.5, p[1] + 0.5);
+    }
+    let path = dir.join(name);
+    datasets::write_obj(&m, &path, "unit plane").unwrap();
+    path
+}
+
+/// A datasets mesh (`kind`, low resolution) written as `dir/name`.
+pub fn synth_mesh(dir: &Path, name: &str, kind: datasets::MeshKind) -> PathBuf {
+    let m = datasets::synth_mesh(kind, datasets::Resolution::Low).unwrap();
+    let path = dir.join(name);
+    datasets::write_obj(&m, &path, name).unwrap();
+    path
+}
+
+/// An orthographic camera for the small test scenes.
 #[derive(Debug, Clone, Copy)]
 pub struct Ortho {
     pub eye: [f32; 3],
@@ -271,41 +294,6 @@ pub struct Ortho {
 /// Looking at the unit plane `[0, 1]²` from above.
 pub const OVER_PLANE: Ortho = Ortho { eye: [0.5, 0.5, 4.0], target: [0.5, 0.5, 0.0], height: 1.0 };
 
-/// `[[lights]]` entry of a white directional light shining from `direction`.
-pub fn directional(direction: [f32; 3]) -> String {
-    format!(
-        "[[lights]]\nkind = \"directional\"\ndirection = {direction:?}\nirradiance = [1.0, 1.0, 1.0]\n"
-    )
-}
-
-/// `[[lights]]` entry of a grey point light of `intensity` at `position`.
-pub fn point(position: [f32; 3], intensity: f32) -> String {
-    format!(
-        "[[lights]]\nkind = \"point\"\nposition = {position:?}\nintensity = {:?}\n",
-        [intensity; 3]
-    )
-}
-
-/// Loads (after writing `scene.toml` into `dir`) a `size²` scene of mesh `obj` with one
-/// material (`material`: the body of its `[[materials]]` table, e.g. `store = "u.eigen"`)
-/// under camera `cam`, followed by `rest` (lights, `[effects]`).
-pub fn ortho_scene(
-    dir: &Path,
-    size: u32,
-    cam: Ortho,
-    obj: &str,
-    material: &str,
-    rest: &str,
-) -> Scene {
-    let Ortho { eye, target, height } = cam;
-    let text = format!(
-        "[output]\nwidth = {size}\nheight = {size}\n[[meshes]]\npath = \"{obj}\"\n\
-         [[materials]]\n{material}\n[camera]\nprojection = \"orthographic\"\neye = {eye:?}\n\
-         target = {target:?}\northo_height = {height:?}\n{rest}"
-    );
-    Scene::load(&write(dir, "scene.toml", &text)).unwrap()
-}
-
 /// Looking at a sphere around the origin from `+z`, view height 2.
 pub const OVER_SPHERE: Ortho = Ortho { eye: [0.0, 0.0, 5.0], target: [0.0, 0.0, 0.0], height: 2.0 };
 
@@ -313,5 +301,159 @@ impl Ortho {
     /// The same camera with view height `height`.
     pub fn with_height(self, height: f32) -> Ortho {
         Ortho { height, ..self }
+    }
+}
+
+/// A white directional light shining from `direction` (irradiance 1).
+pub fn directional(direction: [f32; 3]) -> Light {
+    Light::Directional { direction, irradiance: [1.0; 3], shadows: true }
+}
+
+/// A grey point light of `intensity` at `position`.
+pub fn point(position: [f32; 3], intensity: f32) -> Light {
+    Light::Point { position, intensity: [intensity; 3], shadows: true }
+}
+
+/// An environment light of the map `dir/file` with a scene file's defaults (no rotation,
+/// exposure 1, visibility 16², two-sided, no eigenweightsets, no cache).
+pub fn environment(dir: &Path, file: &str) -> EnvironmentLight {
+    EnvironmentLight {
+        path: dir.join(file),
+        rotation_deg: 0.0,
+        exposure: 1.0,
+        visibility_res: 16,
+        two_sided: true,
+        eigenweightsets: None,
+        cache_dir: None,
+    }
+}
+
+/// A `transmission` table with a scene file's defaults (albedo 0.8, isotropic, no τ
+/// texture) and optical thickness `tau`.
+pub fn thin(tau: f32) -> TransmissionDesc {
+    TransmissionDesc {
+        tau,
+        tau_texture: None,
+        albedo: Albedo::Grey(0.8),
+        phase: PhaseDesc::Isotropic,
+    }
+}
+
+/// Builds a [`Scene`] value as a scene file in `dir` would describe it: file names are
+/// taken relative to `dir`; [`SceneBuilder::build`] validates it as `Scene::load` does.
+pub struct SceneBuilder {
+    dir: PathBuf,
+    scene: Scene,
+}
+
+impl SceneBuilder {
+    /// A `size × size` scene in `dir` with an orthographic camera over the unit plane and
+    /// no meshes, materials or lights yet.
+    pub fn new(dir: &Path, size: u32) -> SceneBuilder {
+        let mut b = SceneBuilder {
+            dir: dir.to_path_buf(),
+            scene: Scene {
+                output: Output { width: size, height: size, ..Default::default() },
+                meshes: Vec::new(),
+                materials: Vec::new(),
+                camera: Camera {
+                    projection: Projection::Perspective,
+                    eye: [0.0, 0.0, 1.0],
+                    target: [0.0; 3],
+                    up: [0.0, 1.0, 0.0],
+                    fov_y_deg: 40.0,
+                    ortho_height: 1.0,
+                },
+                lights: Vec::new(),
+                effects: Effects::default(),
+            },
+        };
+        b = b.ortho(OVER_PLANE);
+        b
+    }
+
+    /// Frame size.
+    pub fn size(mut self, width: u32, height: u32) -> Self {
+        (self.scene.output.width, self.scene.output.height) = (width, height);
+        self
+    }
+
+    /// The mesh `dir/file`.
+    pub fn mesh(mut self, file: &str) -> Self {
+        self.scene.meshes.push(MeshDesc { path: self.dir.join(file), planar_uv: None });
+        self
+    }
+
+    /// The default material: the eigen store `dir/store` on every face no other takes.
+    pub fn material(self, store: &str) -> Self {
+        self.material_with(None, store, 1.0, None)
+    }
+
+    /// A material: `name` (`usemtl`; `None`: the default), `dir/store`, `uv_scale`,
+    /// `transmission` (a τ texture's file taken relative to `dir`).
+    pub fn material_with(
+        mut self,
+        name: Option<&str>,
+        store: &str,
+        uv_scale: f32,
+        mut transmission: Option<TransmissionDesc>,
+    ) -> Self {
+        if let Some(t) = &mut transmission {
+            t.resolve(&self.dir);
+        }
+        self.scene.materials.push(MaterialDesc {
+            name: name.map(str::to_string),
+            store: self.dir.join(store),
+            uv_scale,
+            transmission,
+        });
+        self
+    }
+
+    /// An orthographic camera (up `+y`).
+    pub fn ortho(mut self, cam: Ortho) -> Self {
+        let c = &mut self.scene.camera;
+        (c.projection, c.eye, c.target, c.up) =
+            (Projection::Orthographic, cam.eye, cam.target, [0.0, 1.0, 0.0]);
+        c.ortho_height = cam.height;
+        self
+    }
+
+    /// A perspective camera.
+    pub fn perspective(
+        mut self,
+        eye: [f32; 3],
+        target: [f32; 3],
+        up: [f32; 3],
+        fov_y_deg: f32,
+    ) -> Self {
+        let c = &mut self.scene.camera;
+        (c.projection, c.eye, c.target, c.up, c.fov_y_deg) =
+            (Projection::Perspective, eye, target, up, fov_y_deg);
+        self
+    }
+
+    /// One more light.
+    pub fn light(mut self, light: Light) -> Self {
+        self.scene.lights.push(light);
+        self
+    }
+
+    /// Changes the effects.
+    pub fn effects(mut self, f: impl FnOnce(&mut Effects)) -> Self {
+        f(&mut self.scene.effects);
+        self
+    }
+
+    /// Changes the output (background, environment shown).
+    pub fn output(mut self, f: impl FnOnce(&mut Output)) -> Self {
+        f(&mut self.scene.output);
+        self
+    }
+
+    /// The scene, validated.
+    pub fn build(self) -> Scene {
+        self.scene.validate(&self.dir.join("scene (built in code)")).unwrap();
+        self.scene
     }
 }

@@ -1,13 +1,12 @@
-//! Cube shadow maps (`shadow_cube.rs`) for a point light inside the scene: a low light over a
+//! Cube shadow maps (`passes/shadow/cube.rs`, `[S03 §4.3]`) for a point light inside the scene: a low light over a
 //! ground plane with two small occluders whose shadows fall on different cube faces (one
 //! straddles the −z face and the side faces, one lies in the +x face), against the
 //! analytic central projection from the light (IoU), black inside and unchanged outside.
 
-mod common;
-
+use crate::common::*;
 use btf_core::eigen::Quantization;
+use btf_render::scene::Shadows;
 use btf_render::{Frame, RenderOptions, Scene, render_scene};
-use common::*;
 
 const LIGHT: [f32; 3] = [0.5, 0.5, 0.2];
 const HEIGHT: f32 = 0.1;
@@ -34,12 +33,13 @@ fn mesh() -> String {
     s
 }
 
-fn scene(dir: &std::path::Path, shadows: &str, size: u32) -> Scene {
-    let rest = format!(
-        "{}[effects]\nshadows = \"{shadows}\"\nshadow_map_size = 1024\nterminator_deg = 5.0\n",
-        point(LIGHT, 0.05)
-    );
-    ortho_scene(dir, size, OVER_PLANE, "scene.obj", "store = \"u.eigen\"", &rest)
+fn scene(dir: &std::path::Path, shadows: Shadows, size: u32) -> Scene {
+    SceneBuilder::new(dir, size)
+        .mesh("scene.obj")
+        .material("u.eigen")
+        .light(point(LIGHT, 0.05))
+        .effects(|e| (e.shadows, e.shadow_map_size, e.terminator_deg) = (shadows, 1024, 5.0))
+        .build()
 }
 
 /// Where the ray from ground point (x, y) to the light crosses the occluders' height.
@@ -69,8 +69,10 @@ fn cube_map_shadows_of_an_inside_point_light_match_their_projection() {
     write(dir.path(), "scene.obj", &mesh());
     let size = 96u32;
     let reference =
-        render_scene(&gpu, &scene(dir.path(), "none", size), RenderOptions::default()).unwrap();
-    let f = render_scene(&gpu, &scene(dir.path(), "map", size), RenderOptions::default()).unwrap();
+        render_scene(&gpu, &scene(dir.path(), Shadows::None, size), RenderOptions::default())
+            .unwrap();
+    let f = render_scene(&gpu, &scene(dir.path(), Shadows::Map, size), RenderOptions::default())
+        .unwrap();
     assert!(f.all_finite());
     let (mut inter, mut union, mut max_dark, mut lit_err, mut lit_n) = (0, 0, 0f32, 0f64, 0);
     let (mut faces_hit, margin) = ([false; 6], 0.012);
