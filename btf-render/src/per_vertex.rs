@@ -18,7 +18,8 @@
 //! 11) mix colours per direction and keep the full layout.
 
 use crate::material::MaterialData;
-use crate::math::Vec3;
+use crate::math::{Vec3, v3};
+use crate::scene::Light;
 use btf_core::{Direction, InterpMode};
 use btf_light::tangent;
 
@@ -34,6 +35,26 @@ pub struct VertexLight {
     pub point: bool,
     /// RGB irradiance or intensity.
     pub color: [f32; 3],
+}
+
+impl VertexLight {
+    /// The light as the per-vertex fold reads it; an environment light has zero power here
+    /// (its own coefficients, `[S03 eq. 11]`, fill its entry).
+    pub fn from_light(light: &Light) -> VertexLight {
+        match light {
+            Light::Directional { direction, irradiance, .. } => VertexLight {
+                pos_or_dir: v3(*direction).normalize(),
+                point: false,
+                color: *irradiance,
+            },
+            Light::Point { position, intensity, .. } => {
+                VertexLight { pos_or_dir: v3(*position), point: true, color: *intensity }
+            }
+            Light::Environment(_) => {
+                VertexLight { pos_or_dir: Vec3::z(), point: false, color: [0.0; 3] }
+            }
+        }
+    }
 }
 
 /// Inputs shared by all vertices.

@@ -242,7 +242,7 @@ fn alpha_map(gpu: &Gpu, r: &mut Renderer) -> Result<(Vec<f64>, Vec<bool>)> {
     r.set_show_environment(false)?;
     let dark = r.render(gpu)?;
     r.set_show_environment(true)?;
-    let bg = r.environment_background().context("the demo scene shows its environment")?;
+    let bg = r.environment_background(gpu)?.context("the demo scene shows its environment")?;
     let alpha: Vec<f64> = (0..bg.len())
         .map(|i| if bg[i] > 1e-4 { (with.rgb[i] - dark.rgb[i]) as f64 / bg[i] as f64 } else { 1.0 })
         .collect();
