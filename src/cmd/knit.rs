@@ -1,4 +1,4 @@
-//! `btf knit …` and `btf synth material --kind yarn`: command-line front end of the `yarn`
+//! `btf knit …` (and the helpers `btf synth material --kind yarn` uses): command-line front end of the `yarn`
 //! and `yarn-ref` crates — charts, stitch meshes, yarn skeletons, explicit fibers,
 //! reference renders and the yarn BTF. Arguments are parsed and validated here; the work
 //! happens in the libraries.
@@ -12,7 +12,6 @@ use yarn::bcsdf::{FiberBcsdf, HuangParams, KhungurnParams, SimpleParams};
 use yarn::fiber::{Fibers, GenOptions, generate_fibers};
 use yarn::knit::{Chart, SkeletonParams, StitchMesh, chen_skeleton};
 use yarn::params::YarnParams;
-use yarn_ref::btf::{YarnBtfOptions, YarnBtfSpec, generate_yarn_btf};
 use yarn_ref::patch::{KnitPatch, PatchOptions};
 
 /// `btf knit` subcommands.
@@ -147,7 +146,7 @@ pub fn load_yarn(s: &str) -> Result<YarnParams> {
     YarnParams::preset(s).map_err(|e| anyhow::anyhow!("{e} (and no yarn file '{s}' exists)"))
 }
 
-fn stitches(s: &Option<String>) -> Result<Option<[usize; 2]>> {
+pub(crate) fn stitches(s: &Option<String>) -> Result<Option<[usize; 2]>> {
     s.as_deref().map(|s| crate::args::numbers::<usize, 2>(s, "--stitches")).transpose()
 }
 
@@ -288,7 +287,7 @@ fn shading(name: &str, color: Option<[f64; 3]>) -> Result<yarn_ref::Shading> {
     Ok(yarn_ref::Shading::Fiber { bcsdf: Arc::new(bcsdf), tint: true })
 }
 
-fn rgb(s: &Option<String>, what: &str) -> Result<Option<[f64; 3]>> {
+pub(crate) fn rgb(s: &Option<String>, what: &str) -> Result<Option<[f64; 3]>> {
     let Some(s) = s else { return Ok(None) };
     let v = crate::args::numbers::<f64, 3>(s, what)?;
     if !v.iter().all(|x| x.is_finite() && (0.0..=1.0).contains(x)) {
@@ -456,54 +455,4 @@ fn camera(
         )?),
         _ => Err(bad()),
     }
-}
-
-/// `btf synth material --kind yarn`: the yarn BTF of DESIGN §4.2.
-pub fn synth_yarn_material(a: &crate::cmd::synth::MaterialArgs, progress: bool) -> Result<()> {
-    let chart_name = a.chart.as_deref().unwrap_or("stockinette");
-    let yarn_name = a.yarn.as_deref().unwrap_or("cotton-2ply");
-    let mut inputs: Vec<(&str, &Path)> = Vec::new();
-    if Path::new(chart_name).is_file() {
-        inputs.push(("chart", Path::new(chart_name)));
-    }
-    if Path::new(yarn_name).is_file() {
-        inputs.push(("yarn", Path::new(yarn_name)));
-    }
-    guard::refuse_overlap(&[("output", &a.output)], &inputs)?;
-    let chart = load_chart(chart_name)?;
-    let params = load_yarn(yarn_name)?;
-    let mut spec = YarnBtfSpec::new(chart, chart_name, params, a.size);
-    spec.sampling = datasets::capture::parse_sampling(&a.sampling)?;
-    spec.stitches = stitches(&a.stitches)?;
-    spec.seed = a.seed;
-    spec.method = a.method.clone();
-    if let Some(n) = a.spp {
-        spec.spp = n;
-    }
-    if let Some(b) = a.bounces {
-        spec.bounces = b;
-    }
-    if let Some(c) = rgb(&a.albedo, "--albedo")? {
-        spec.color = c.map(|x| x as f32);
-    }
-    let dtype = if a.f16 { btf_core::zarr::DType::F16 } else { btf_core::zarr::DType::F32 };
-    let opts = YarnBtfOptions { resume: a.resume, progress, dtype };
-    let r = generate_yarn_btf(&spec, &a.output, &opts)
-        .with_context(|| format!("synthesising yarn {} into {}", chart_name, a.output.display()))?;
-    eprintln!(
-        "yarn {} in {} {}² ({}, {} spp): {} fibers, {} images written, {} kept, {:.1} s, {:.2} Mrays/s, τ₁ {} -> {}",
-        spec.chart.name,
-        spec.params.name,
-        a.size,
-        a.sampling,
-        spec.spp,
-        r.fibers,
-        r.images_written,
-        r.images_skipped,
-        r.seconds,
-        r.rays as f64 / r.seconds.max(1e-9) * 1e-6,
-        r.tau1.map_or("n/a".into(), |t| format!("{t:.3}")),
-        a.output.display()
-    );
-    Ok(())
 }

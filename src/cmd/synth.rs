@@ -7,7 +7,11 @@ use clap::{Args, Subcommand};
 use datasets::material::preview::write_contact_sheet;
 use datasets::{EnvKind, EnvParams, GenerateOptions, MaterialKind, MaterialSpec};
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use yarn_ref::btf::{YarnBtfOptions, YarnBtfSpec, generate_yarn_btf};
+
+use crate::cmd::knit;
+use crate::guard;
 
 /// What to synthesise.
 #[derive(Subcommand)]
@@ -173,7 +177,7 @@ fn parse_rgb(s: &str) -> Result<[f64; 3]> {
 
 fn material(a: MaterialArgs) -> Result<()> {
     if a.kind == "yarn" {
-        crate::cmd::knit::synth_yarn_material(&a, show_progress())?;
+        synth_yarn_material(&a, show_progress())?;
         if let Some(dir) = a.preview {
             let store = btf_core::store::BtfStore::open(&a.output)?;
             eprintln!("preview -> {}", write_contact_sheet(&store, &dir, "yarn")?.display());
@@ -279,6 +283,56 @@ fn capture(a: CaptureArgs) -> Result<()> {
         r.images_skipped,
         r.seconds,
         a.out.display()
+    );
+    Ok(())
+}
+
+/// `btf synth material --kind yarn`: the yarn BTF of DESIGN §4.2.
+fn synth_yarn_material(a: &MaterialArgs, progress: bool) -> Result<()> {
+    let chart_name = a.chart.as_deref().unwrap_or("stockinette");
+    let yarn_name = a.yarn.as_deref().unwrap_or("cotton-2ply");
+    let mut inputs: Vec<(&str, &Path)> = Vec::new();
+    if Path::new(chart_name).is_file() {
+        inputs.push(("chart", Path::new(chart_name)));
+    }
+    if Path::new(yarn_name).is_file() {
+        inputs.push(("yarn", Path::new(yarn_name)));
+    }
+    guard::refuse_overlap(&[("output", &a.output)], &inputs)?;
+    let chart = knit::load_chart(chart_name)?;
+    let params = knit::load_yarn(yarn_name)?;
+    let mut spec = YarnBtfSpec::new(chart, chart_name, params, a.size);
+    spec.sampling = datasets::capture::parse_sampling(&a.sampling)?;
+    spec.stitches = knit::stitches(&a.stitches)?;
+    spec.seed = a.seed;
+    spec.method = a.method.clone();
+    if let Some(n) = a.spp {
+        spec.spp = n;
+    }
+    if let Some(b) = a.bounces {
+        spec.bounces = b;
+    }
+    if let Some(c) = knit::rgb(&a.albedo, "--albedo")? {
+        spec.color = c.map(|x| x as f32);
+    }
+    let dtype = if a.f16 { btf_core::zarr::DType::F16 } else { btf_core::zarr::DType::F32 };
+    let opts = YarnBtfOptions { resume: a.resume, progress, dtype };
+    let r = generate_yarn_btf(&spec, &a.output, &opts)
+        .with_context(|| format!("synthesising yarn {} into {}", chart_name, a.output.display()))?;
+    eprintln!(
+        "yarn {} in {} {}² ({}, {} spp): {} fibers, {} images written, {} kept, {:.1} s, {:.2} Mrays/s, τ₁ {} -> {}",
+        spec.chart.name,
+        spec.params.name,
+        a.size,
+        a.sampling,
+        spec.spp,
+        r.fibers,
+        r.images_written,
+        r.images_skipped,
+        r.seconds,
+        r.rays as f64 / r.seconds.max(1e-9) * 1e-6,
+        r.tau1.map_or("n/a".into(), |t| format!("{t:.3}")),
+        a.output.display()
     );
     Ok(())
 }
