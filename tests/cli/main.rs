@@ -9,6 +9,7 @@ mod common;
 mod capture;
 mod commands;
 mod demo;
+mod docs;
 mod hostile;
 mod import_export;
 mod knit;
