@@ -1,7 +1,7 @@
 //! Per-vertex evaluation as in the paper (§4.2): for every vertex, the view direction in
-//! its tangent frame selects up to four view slots `j_m` with weights `ω_m` (eq. 5), each
-//! light's direction gives light weights `τ_n` (eq. 3), and these fold into per-slot
-//! coefficients `ω_m · e_l · γ_kj` (eq. 3–4), computed on the CPU every frame. The fragment
+//! its tangent frame selects up to four view slots `j_m` with weights `ω_m` ([S03 eq. 5]), each
+//! light's direction gives light weights `τ_n` ([S03 eq. 3]), and these fold into per-slot
+//! coefficients `ω_m · e_l · γ_kj` ([S03 eq. 3–4]), computed on the CPU every frame. The fragment
 //! shader blends the three vertices' reconstructions of a triangle with barycentric weights
 //! (the paper's three-pass blending, done in one pass) and multiplies each light by its
 //! per-pixel visibility.
@@ -238,7 +238,7 @@ pub fn compute(
     out
 }
 
-/// `ωΣτ`, `ωΣτ b_ij` and group `g`'s `ωΣτ γ` of slot `j` for one light (eq. 3–4).
+/// `ωΣτ`, `ωΣτ b_ij` and group `g`'s `ωΣτ γ` of slot `j` for one light ([S03 eq. 3–4]).
 fn slot_scalars<'a>(
     mat: &'a MaterialData,
     j: usize,

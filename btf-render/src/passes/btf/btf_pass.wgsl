@@ -1,5 +1,5 @@
 // The BTF pass: reconstructs the BTF of each fragment from per-view-slot PCA data and
-// lights it (Sattler et al. 2003, eq. 2–5), with the smooth shadow boundary of eq. 6 and
+// lights it ([S03 eq. 2–5]), with the smooth shadow boundary of [S03 eq. 6] and
 // shadow-volume masks or shadow maps as per-light visibility.
 //
 //   T = Σ_m ω_m [ (Σ_l e_l Σ_n τ_ln) μ_j + Σ_l e_l Σ_n τ_ln b_{j,i_n} + Σ_k γ_kj B_kj ],
@@ -143,7 +143,7 @@ fn corner_out(v: CornerIn) -> VertexOut {
     out.uv = v.uv;
     out.bary = vec3<f32>(f32(v.corner == 0u), f32(v.corner == 1u), f32(v.corner == 2u));
     out.tri = v.tri;
-    // eq. 6: u = (1 + cos(α + ∠(n, l))) / 2, for both sides of a two-sided sheet; compiled
+    // [S03 eq. 6]: u = (1 + cos(α + ∠(n, l))) / 2, for both sides of a two-sided sheet; compiled
     // out where the pass does not apply the smooth boundary (at 128² on the sweep's mesh this
     // per-corner work was 0.25× the read bound of a c = 4 frame)
     if (SHADOWS != 0u && SMOOTH_BOUNDARY) {

@@ -1,7 +1,7 @@
 // Per-vertex evaluation, appended to interp.wgsl + btf_pass.wgsl: the paper's blending of
-// the three vertices' per-vertex reconstructions (Sattler et al. 2003, §4.2, eq. 2–5 with the
+// the three vertices' per-vertex reconstructions ([S03 §4.2, eq. 2–5] with the
 // coefficients folded per vertex on the CPU, per_vertex.rs), and the environment light's
-// per-vertex coefficients (eq. 11) added to per-pixel lights.
+// per-vertex coefficients ([S03 eq. 11]) added to per-pixel lights.
 
 // per-vertex mode: per (vertex, light, slot m): mean coefficient, bias, 3G coefficient vec4
 // f32 vec4s (bitcast), or with GROUPS > 0 f16 halves and a scale per entry; SEPARABLE: the

@@ -1,5 +1,5 @@
 // Interpolation weights between measured directions, exactly as btf_core::interp
-// (Sattler et al. 2003, eq. 3 for lights, eq. 5 for views): bracket θ between two rings,
+// ([S03 eq. 3] for lights, [S03 eq. 5] for views): bracket θ between two rings,
 // on each ring bracket φ between two neighbours (with wrap-around), the pole ring has a
 // single sample; lights beyond the last ring fade by cos θ / cos θ_last and vanish at or
 // below the horizon; views clamp. "Nearest" takes the nearest ring in θ, then the nearest
@@ -145,12 +145,12 @@ fn interp_weights(which: u32, a: vec2<f32>, four: bool) -> W4 {
     return w;
 }
 
-// View-slot weights ω (eq. 5); `a` = (theta_deg, phi_deg) in tangent space.
+// View-slot weights ω ([S03 eq. 5]); `a` = (theta_deg, phi_deg) in tangent space.
 fn view_weights(a: vec2<f32>, four: bool) -> W4 {
     return interp_weights(VIEW, a, four);
 }
 
-// Light weights τ (eq. 3) with the horizon fade.
+// Light weights τ ([S03 eq. 3]) with the horizon fade.
 fn light_weights(a: vec2<f32>, four: bool) -> W4 {
     if (!(a.x < 90.0)) {
         return W4(vec4<u32>(0u), vec4<f32>(0.0), 0u);

@@ -1,9 +1,9 @@
 
-// ---- Thin semi-transparent cloth (transmission/mod.rs; thin-cloth paper eq. 7–9) ----
+// ---- Thin semi-transparent cloth (transmission/mod.rs; [TC eq. 7–9]) ----
 // Appended to interp.wgsl + btf_pass.wgsl + btf_vertex.wgsl; reuses vs_main / vs_vertex,
 // tangent_frame, slot_pixel, vertex_sum.
 // Output: rgb = Σ_front share(τ, μ, μ₀) · BTF · E  +  Σ_back ϖ₀ p/(4π) · F_t(τ, μ, μ₀) · μ₀ · E,
-// alpha = e^{−τ/μ}; blended as L = L_dst · alpha + L_src (eq. 9).
+// alpha = e^{−τ/μ}; blended as L = L_dst · alpha + L_src ([TC eq. 9]).
 
 struct ThinRaw {
     // x: τ₁ (scale of the texture), y: Henyey–Greenstein g, z: 1 = τ texture bound,
