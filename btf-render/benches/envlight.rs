@@ -37,8 +37,9 @@ fn main() {
     let high = env_flag("BTF_MEASURE_HIGH");
     let (name, res) =
         if high { ("shirt high", Resolution::High) } else { ("shirt low", Resolution::Low) };
-    let mesh = datasets::mesh::synth_mesh(MeshKind::Shirt, res).unwrap();
-    datasets::mesh::write_obj(&mesh, &d.join("shirt.obj"), "shirt").unwrap();
+    let synth = datasets::mesh::synth_mesh(MeshKind::Shirt, res).unwrap();
+    datasets::mesh::write_obj(&synth, &d.join("shirt.obj"), "shirt").unwrap();
+    let mesh = btf_light::mesh::Mesh::load_obj(&d.join("shirt.obj"), None).unwrap();
     let n = mesh.positions.len();
     write_store(d, "m.eigen", Pattern::Checker, 4, 4, 16, Quantization::F16);
     let env = datasets::env::synth_env(

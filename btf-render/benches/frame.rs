@@ -86,17 +86,13 @@ fn main() {
     for (i, (case, _, effects, shadows)) in CASES.iter().enumerate() {
         let s = scene(dir.path(), i, size, effects, *shadows);
         let (gpu, samples) = (&gpu, samples.clone());
-        let mut renderer: Option<Renderer> = None;
+        let opts = RenderOptions { count_reads: true, ..Default::default() };
+        let counted = Renderer::new(gpu, &s, opts).unwrap().render(gpu).unwrap();
+        samples.push(case, "reads", counted.stats.reads_per_pixel.unwrap_or(f64::NAN));
+        let mut r = Renderer::new(gpu, &s, RenderOptions::default()).unwrap();
+        r.render(gpu).unwrap(); // warm: pipelines, per-vertex buffers
         group.bench_function(*case, move |b| {
-            let r = renderer.get_or_insert_with(|| {
-                let opts = RenderOptions { count_reads: true, ..Default::default() };
-                let counted = Renderer::new(gpu, &s, opts).unwrap().render(gpu).unwrap();
-                samples.push(case, "reads", counted.stats.reads_per_pixel.unwrap_or(f64::NAN));
-                let mut r = Renderer::new(gpu, &s, RenderOptions::default()).unwrap();
-                r.render(gpu).unwrap(); // warm: pipelines, per-vertex buffers
-                r
-            });
-            b.iter_custom(|iters| time_frames(iters, gpu, r, &samples, case, |_| {}))
+            b.iter_custom(|iters| time_frames(iters, gpu, &mut r, &samples, case))
         });
     }
     group.finish();

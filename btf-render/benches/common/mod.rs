@@ -209,19 +209,16 @@ pub fn num(v: Option<f64>, digits: usize) -> String {
 
 /// Times `iters` frames of `r` for criterion by their `Stats::frame_ms` (per-frame CPU
 /// work, encoding and GPU execution; the read-back of the image is not included), each
-/// frame also recorded as `frame` of `case` in `samples`; `before(i)` runs before the
-/// `i`-th frame (untimed).
+/// frame also recorded as `frame` of `case` in `samples` (warm-up frames included).
 pub fn time_frames(
     iters: u64,
     gpu: &Gpu,
     r: &mut Renderer,
     samples: &Samples,
     case: &str,
-    mut before: impl FnMut(&mut Renderer),
 ) -> Duration {
     let mut total = 0.0;
     for _ in 0..iters {
-        before(r);
         let f = r.render(gpu).unwrap();
         total += f.stats.frame_ms;
         samples.push(case, "frame", f.stats.frame_ms);
