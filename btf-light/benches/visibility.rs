@@ -39,7 +39,7 @@ fn main() {
     let stride = if frames.len() > 4000 { 8 } else { 1 };
     let sub: Vec<HemicubeFrame> = frames.iter().step_by(stride).copied().collect();
     println!(
-        "{name}: {} vertices, {} triangles, hemicube 32², {} ({} vertex sides; ray-cast subset: every {stride}. side, {})",
+        "{name}: {} vertices, {} triangles, hemicube 32², {} ({} vertex sides; ray cast on {} of them)",
         pos.len(),
         tris.len(),
         if two_sided { "two-sided" } else { "front sides only" },
