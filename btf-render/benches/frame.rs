@@ -9,7 +9,8 @@
 //! and four-light interpolation, unshadowed — measured in the same run; the shadowed rows
 //! are against the same unshadowed baseline. After criterion a markdown table gives, per
 //! setting, the texture reads per pixel (counted in a separate frame), the median frame
-//! time and its ratio to the baseline's median. Absolute times are CPU-Vulkan times; the
+//! time (over every frame criterion ran, warm-up included) and its ratio to the baseline's
+//! median. Absolute times are CPU-Vulkan times; the
 //! ratios are what to read.
 //!
 //! `cargo bench -p btf-render --bench frame` (`-- --quick` for a short run, `-- shadow` to
