@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Same-run A/B of two `btf` binaries (issue #17: the restructure must not slow anything):
-# the demo's numbers, `btf compress` (BENCHMARKS #2), frame times of the sphere-with-shadows
-# and shirt-under-sky scenes (#5, #6: `--stats-json` frame_ms with --repeat) and the
+# the demo's numbers, `btf compress` (BENCHMARKS #2), frame times of the demo garment under a point light with shadow volumes
+# and environment scenes of the demo (#5, #6: `--stats-json` frame_ms with --repeat) and the
 # environment-light preparation (#6: first frame of the shirt scene with a cold cache).
 # Runs alternate A, B, A, B … so load drifts hit both; the table gives medians and B/A.
 #
@@ -22,18 +22,18 @@ now() { date +%s.%N; }
 for r in $(seq 1 "$ROUNDS"); do
   for x in A B; do
     bin=${!x}
-    t0=$(now); "$bin" compress demo-A/corduroy.btf -c 16 -o c-$x.eig --fresh > /dev/null 2>&1 || \
-        "$bin" compress demo-A/corduroy.btf -c 16 -o c-$x.eig > /dev/null 2>&1; t1=$(now)
+    t0=$(now); "$bin" compress demo-A/material.btf -c 16 -o c-$x.eig --fresh > /dev/null 2>&1 || \
+        "$bin" compress demo-A/material.btf -c 16 -o c-$x.eig > /dev/null 2>&1; t1=$(now)
     echo "$x,compress,$(python3 -c "print(($t1-$t0)*1e3)")" >> times.csv
-    for scene in sphere-shadows shirt-env; do
+    for scene in scene-point scene-environment; do
       f=demo-A/$scene.toml
       [ -f "$f" ] || continue
       v=$("$bin" render "$f" -o r-$x-$scene.png --repeat 20 --stats-json 2>/dev/null | ms)
       echo "$x,frame:$scene,$v" >> times.csv
     done
-    if [ -f demo-A/shirt-env.toml ]; then
+    if [ -f demo-A/scene-environment.toml ]; then
       rm -rf demo-A/cache
-      t0=$(now); "$bin" render demo-A/shirt-env.toml -o p-$x.png > /dev/null 2>&1; t1=$(now)
+      t0=$(now); "$bin" render demo-A/scene-environment.toml -o p-$x.png > /dev/null 2>&1; t1=$(now)
       echo "$x,envlight-prepare+frame,$(python3 -c "print(($t1-$t0)*1e3)")" >> times.csv
     fi
   done
