@@ -17,7 +17,7 @@
 //! - [`renderer`], [`frame`], [`timer`]: pass selection, output images, `--stats`;
 //! - [`cost_sweep`]: components × evaluation × blending against the baselines.
 
-pub mod bind;
+pub(crate) mod bind;
 pub mod camera;
 pub mod cost_sweep;
 pub mod error;
@@ -25,13 +25,13 @@ pub mod frame;
 pub mod gpu;
 pub mod material;
 pub mod math;
-pub mod mips;
-pub mod passes;
+pub(crate) mod mips;
+pub(crate) mod passes;
 pub mod per_vertex;
 pub mod renderer;
 pub mod scene;
-pub mod timer;
-pub mod uniforms;
+pub(crate) mod timer;
+pub(crate) mod uniforms;
 
 pub use error::{Error, Result};
 pub use frame::{Frame, PassStat, Stats};

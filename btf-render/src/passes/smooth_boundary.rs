@@ -34,6 +34,7 @@ pub fn texels(blur: u32) -> Vec<f32> {
     t
 }
 
+#[cfg(test)]
 /// `u` of `[S03 eq. 6]` for the angle between normal and light (radians) and offset `α`.
 pub fn u_coordinate(angle_rad: f32, alpha_rad: f32) -> f32 {
     0.5 * (1.0 + (alpha_rad + angle_rad).cos())

@@ -3,6 +3,7 @@
 //! thin and baseline shaders. This module checks on the device that both give the same
 //! weights, via the `interp_probe.wgsl` compute shader (was `interp.rs`).
 
+#[cfg(test)]
 /// The probe shader (interpolation functions + compute entry point).
 pub const PROBE_SOURCE: &str =
     concat!(include_str!("interp.wgsl"), include_str!("interp_probe.wgsl"));

@@ -28,6 +28,7 @@ pub fn up(f: usize) -> Vec3 {
     if f / 2 == 1 { Vec3::z() } else { Vec3::y() }
 }
 
+#[cfg(test)]
 /// The face a direction from the light falls on (largest |component|; ties to x, then y).
 pub fn face_of(d: Vec3) -> usize {
     let a = d.abs();

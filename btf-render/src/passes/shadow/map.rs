@@ -37,8 +37,6 @@ pub struct MapLight {
 pub struct ShadowMaps {
     /// One layer per directional or outside point light, six per inside point light.
     pub texture: wgpu::Texture,
-    /// World → light clip per layer (what each layer is rendered with).
-    pub matrices: Vec<Mat4>,
     /// Per shadowing light, in order.
     pub lights: Vec<MapLight>,
     size: u32,
@@ -167,7 +165,7 @@ impl ShadowMaps {
                 bind::group(dev, "light camera", &layout, &[buf.as_entire_binding()])
             })
             .collect();
-        ShadowMaps { texture, matrices, lights: map_lights, size, pipeline, groups }
+        ShadowMaps { texture, lights: map_lights, size, pipeline, groups }
     }
 
     /// Texel size in texture coordinates (PCF step).

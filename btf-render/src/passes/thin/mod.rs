@@ -50,5 +50,4 @@ mod pass;
 mod pipeline;
 mod thickness;
 
-pub use pass::{ThinDraw, ThinEnv, ThinPass, back_to_front};
-pub use pipeline::SOURCE;
+pub use pass::{ThinEnv, ThinPass};
