@@ -260,6 +260,27 @@ pub fn first_difference(was: &Value, now: &Value, at: &str) -> String {
             }
             format!("{}: no difference", if at.is_empty() { "job" } else { at })
         }
+        (Value::String(a), Value::String(b)) if a.contains('\n') || b.contains('\n') => {
+            // Text (a TOML of parameters, say): name the first line that differs, so the
+            // message does not end in a shared prefix cut short.
+            let (mut la, mut lb) = (a.lines(), b.lines());
+            let mut line = 1;
+            loop {
+                match (la.next(), lb.next()) {
+                    (Some(x), Some(y)) if x == y => line += 1,
+                    (x, y) => {
+                        let show =
+                            |l: Option<&str>| l.map_or("(no line)".into(), |l| format!("{l:?}"));
+                        return format!(
+                            "{}, line {line}: was {}, now {}",
+                            if at.is_empty() { "job" } else { at },
+                            show(x),
+                            show(y)
+                        );
+                    }
+                }
+            }
+        }
         _ => {
             let short = |v: &Value| {
                 let s = v.to_string();
@@ -682,6 +703,20 @@ pub(crate) fn claim_texels(store: &Path, w: u64, h: u64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_job_difference_inside_a_text_names_the_line() {
+        let was =
+            serde_json::json!({"yarn": {"params": "name = \"a\"\nply_count = 2\nfibers = 80\n"}});
+        let now =
+            serde_json::json!({"yarn": {"params": "name = \"a\"\nply_count = 3\nfibers = 80\n"}});
+        assert_eq!(
+            first_difference(&was, &now, ""),
+            "yarn.params, line 2: was \"ply_count = 2\", now \"ply_count = 3\""
+        );
+        let shorter = serde_json::json!({"yarn": {"params": "name = \"a\"\n"}});
+        assert!(first_difference(&was, &shorter, "").ends_with("now (no line)"));
+    }
 
     #[test]
     fn metadata_claiming_8192_squared_texels_is_refused_before_allocating() {
