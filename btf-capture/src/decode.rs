@@ -35,6 +35,10 @@ fn exr_layer_sizes<R: Read + Seek>(src: R, file: &str) -> Result<Vec<(usize, usi
     for &(w, h) in &sizes {
         check_pixels(file, "dataWindow", w as u64, h as u64)?;
     }
+    for h in &meta.headers {
+        btf_image::exr_limits::check_header(h)
+            .map_err(|(field, what)| Error::limit(file, field, what))?;
+    }
     Ok(sizes)
 }
 

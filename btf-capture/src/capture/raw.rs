@@ -128,6 +128,22 @@ mod tests {
         assert!(e.contains("broken.png"), "{e}");
     }
 
+    /// The `raw_image` fuzz target's finding (fuzz/regressions/raw_image-oom-block.bin: its
+    /// first byte picked `.exr`): 569 bytes of EXR whose header implies a 1.4 GB block,
+    /// which the `exr` crate allocated before reading it. Refused from the header now.
+    #[test]
+    fn an_exr_implying_a_gigabyte_block_is_refused_by_its_header() {
+        let bytes = include_bytes!("../../../fuzz/regressions/raw_image-oom-block.bin");
+        let dir = tempfile::tempdir().unwrap();
+        let exr = dir.path().join("block.exr");
+        std::fs::write(&exr, &bytes[1..]).unwrap();
+        for e in [dimensions(&exr).unwrap_err(), read(&exr, 12).unwrap_err()] {
+            assert!(matches!(e, Error::Limit { .. }), "{e}");
+            let e = e.to_string();
+            assert!(e.contains("block.exr") && e.contains("bytes per block"), "{e}");
+        }
+    }
+
     #[test]
     fn raw_image_claiming_a_huge_size_is_refused_by_its_header() {
         let dir = tempfile::tempdir().unwrap();
