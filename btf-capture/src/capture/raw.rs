@@ -144,6 +144,21 @@ mod tests {
         }
     }
 
+    /// The `raw_image` fuzz target's second finding (fuzz/regressions/raw_image-oom-png.bin:
+    /// 72 bytes of PNG asking for a 1.6 GB 16-bit buffer, within the pixel limit; the fuzz
+    /// build skips PNG checksums, so here the same claim is made with valid ones: 16384² RGBA
+    /// at 16 bits, 2 GiB).
+    #[test]
+    fn a_png_asking_for_a_gigabyte_buffer_is_refused_by_its_header() {
+        let dir = tempfile::tempdir().unwrap();
+        let png = dir.path().join("buffer.png");
+        std::fs::write(&png, crate::decode::crafted::png_claiming_as(16384, 16384, 16, 6)).unwrap();
+        let e = read(&png, 12).unwrap_err();
+        assert!(matches!(e, Error::Limit { .. }), "{e}");
+        let e = e.to_string();
+        assert!(e.contains("buffer.png") && e.contains("bytes, more than"), "{e}");
+    }
+
     #[test]
     fn raw_image_claiming_a_huge_size_is_refused_by_its_header() {
         let dir = tempfile::tempdir().unwrap();
