@@ -13,8 +13,8 @@ mod report;
 mod view;
 
 use cmd::{
-    capture, compress, demo as demo_cmd, export, import, inspect, reconstruct, relight, render,
-    render_sweep, synth, thin,
+    capture, compress, demo as demo_cmd, export, import, inspect, knit, reconstruct, relight,
+    render, render_sweep, synth, thin,
 };
 
 use clap::{Parser, Subcommand};
@@ -55,6 +55,9 @@ enum Command {
     RenderSweep(render_sweep::RenderSweepArgs),
     /// Render a scene under several environment maps and rotations (batch relighting).
     Relight(relight::RelightArgs),
+    /// Knit and yarn: charts, stitch meshes, yarn skeletons, fibers, reference renders.
+    #[command(subcommand)]
+    Knit(knit::KnitCmd),
     /// Thin semi-transparent cloth: check the slab model against Monte Carlo.
     #[command(subcommand)]
     Thin(thin::ThinCmd),
@@ -76,6 +79,7 @@ fn main() -> ExitCode {
         Command::Render(a) => render::run(a),
         Command::RenderSweep(a) => render_sweep::run(a),
         Command::Relight(a) => relight::run(a),
+        Command::Knit(c) => knit::run(c),
         Command::Thin(c) => thin::run(c),
         Command::View(a) => view::run(a),
     };

@@ -1,4 +1,4 @@
-//! Compression of a whole BTF store into an eigen store: the per-slot PCA of eq. 1 run over
+//! Compression of a whole BTF store into an eigen store: the per-slot PCA of [S03 eq. 1] run over
 //! all view slots in parallel, one slot in memory per worker, with per-slot statistics kept
 //! beside the arrays so an interrupted run resumes where it stopped.
 

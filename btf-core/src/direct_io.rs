@@ -1,6 +1,6 @@
 //! Atomic writes of large chunk files past the page cache (`O_DIRECT` on Linux), for an
 //! output that nothing reads back soon: the eigentextures and means of a compressed store
-//! (Sattler et al. 2003, eq. 1, per view slot). A buffered write of a fresh file copies
+//! ([S03 eq. 1], per view slot). A buffered write of a fresh file copies
 //! every byte into newly allocated page-cache pages, which on a virtual machine costs more
 //! CPU than the PCA's own Gram products (0.25–1 GB/s of a core, against 1.1 GB/s of a
 //! direct write the disk performs on its own); a direct write hands the disk the bytes

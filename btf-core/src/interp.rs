@@ -1,5 +1,5 @@
-//! Interpolation weights between measured directions (Sattler et al. 2003, eq. 3 for the
-//! light weights `τ_m`, eq. 5 for the view weights `ω_m`).
+//! Interpolation weights between measured directions ([S03 eq. 3] for the
+//! light weights `τ_m`, [S03 eq. 5] for the view weights `ω_m`).
 //!
 //! "Four nearest" brackets `θ` between two rings (weight `t` to the outer one) and, on each
 //! ring, `φ` between two neighbours (weight `s`, wrapping past 360°); the products give at

@@ -1,4 +1,4 @@
-//! Dense `f64` kernels of the per-slot PCA (Sattler et al. 2003, eq. 1, by the snapshot
+//! Dense `f64` kernels of the per-slot PCA ([S03 eq. 1], by the snapshot
 //! method): the row-by-row dot products `A·Bᵀ` behind the Gram matrix `YYᵀ` and the cross
 //! products `E·Yᵀ`, and the lift `Lᵀ·Y` that forms eigentextures, each on one block of
 //! columns held in `f64` ([`Block`]).

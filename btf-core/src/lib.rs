@@ -7,10 +7,10 @@
 //!
 //! - [`direction`]: tangent-space directions and their (θ, φ) angles;
 //! - [`sampling`]: the measured ring samplings (`ubo81`, `ubo81-h1`, `dome151`, custom);
-//! - [`interp`]: nearest and "four nearest" interpolation weights (eq. 3 and 5);
+//! - [`interp`]: nearest and "four nearest" interpolation weights ([S03 eq. 3] and 5);
 //! - [`zarr`], [`store`], [`eigen`]: the chunked on-disk BTF and eigen stores;
-//! - [`pca`]: the per-view-slot PCA (eq. 1);
-//! - [`reconstruct`]: CPU reconstruction for any view and light (eq. 2–5);
+//! - [`pca`]: the per-view-slot PCA ([S03 eq. 1]);
+//! - [`reconstruct`]: CPU reconstruction for any view and light ([S03 eq. 2–5]);
 //! - [`fs`]: atomic writes, leftovers, and the output rules (never an input, replace only
 //!   what the toolkit made);
 //! - [`metrics`]: error measures (relative RMSE, PSNR, Eckart–Young);

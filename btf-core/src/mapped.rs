@@ -1,4 +1,4 @@
-//! Read-only memory maps of store chunks. The per-slot PCA (Sattler et al. 2003, eq. 1)
+//! Read-only memory maps of store chunks. The per-slot PCA ([S03 eq. 1])
 //! streams every normtexture of a slot several times; mapping the chunk files lets it read
 //! them straight from the page cache, without first copying 64 MB per slot (at 256²) into
 //! a buffer, and lets the first pass check each chunk's CRC32C on the same cache lines it

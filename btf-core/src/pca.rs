@@ -1,4 +1,4 @@
-//! Principal component analysis of one view slot (Sattler et al. 2003, eq. 1).
+//! Principal component analysis of one view slot ([S03 eq. 1]).
 //!
 //! The `n` light images of slot `j` are the rows of `X` (`n × 3hw`). With so few rows the
 //! snapshot method is the efficient one: accumulate the small Gram matrix `G = X̃X̃ᵀ` of the

@@ -1,11 +1,11 @@
 //! CPU reconstruction of a texture for any view and light direction from an eigen store
-//! (Sattler et al. 2003, eq. 2–5) — the reference the GPU renderer is tested against.
+//! ([S03 eq. 2–5]) — the reference the GPU renderer is tested against.
 //!
 //! For the light, interpolation weights `τ_n` over measured lights `i_n` fold the stored
-//! weights into `γ_k = Σ_n τ_n p_{i_n k}` (eq. 3); since every reconstructed image carries the
+//! weights into `γ_k = Σ_n τ_n p_{i_n k}` ([S03 eq. 3]); since every reconstructed image carries the
 //! slot mean, the mean enters with `Σ_n τ_n` (1 inside the sampled cone, the horizon fade
 //! beyond it). For the view, the textures of up to four slots `j_m` are blended with weights
-//! `ω_m` (eq. 5): `T = Σ_m ω_m (Σ_n τ_n · μ_{j_m} + Σ_k γ_{k j_m} B_{k j_m})`. Multiplying by
+//! `ω_m` ([S03 eq. 5]): `T = Σ_m ω_m (Σ_n τ_n · μ_{j_m} + Σ_k γ_{k j_m} B_{k j_m})`. Multiplying by
 //! the light's irradiance gives radiance.
 
 use crate::direction::Direction;
@@ -34,7 +34,7 @@ impl Default for ReconstructParams {
     }
 }
 
-/// `(Σ τ, γ)` of a slot for the given light weights, using the first `c` components (eq. 3).
+/// `(Σ τ, γ)` of a slot for the given light weights, using the first `c` components ([S03 eq. 3]).
 pub fn gamma(slot: &EigenSlot, light: &Weights, c: usize) -> (f32, Vec<f32>) {
     let mut g = vec![0f32; c];
     let mut tau_sum = 0f32;
@@ -48,7 +48,7 @@ pub fn gamma(slot: &EigenSlot, light: &Weights, c: usize) -> (f32, Vec<f32>) {
     (tau_sum, g)
 }
 
-/// Adds `scale · T_j` of one slot to `out` (eq. 4).
+/// Adds `scale · T_j` of one slot to `out` ([S03 eq. 4]).
 pub fn accumulate_slot(slot: &EigenSlot, light: &Weights, c: usize, scale: f32, out: &mut [f32]) {
     let (tau_sum, g) = gamma(slot, light, c);
     for (o, mu) in out.iter_mut().zip(&slot.mean) {

@@ -97,6 +97,22 @@ pub fn read_meta(path: &Path) -> Result<BtfMeta> {
     m.validate(path)
 }
 
+/// [`read_meta`] of a store that must be of `kind` (`"btf"` or `"eigen"`); `hint` follows
+/// the refusal of any other kind.
+pub fn read_meta_of_kind(path: &Path, kind: &str, hint: &str) -> Result<BtfMeta> {
+    let meta = read_meta(path)?;
+    if meta.kind != kind {
+        let article = if kind.starts_with(['a', 'e', 'i', 'o', 'u']) { "an" } else { "a" };
+        let name = if kind == "btf" { "BTF" } else { kind };
+        return Err(Error::Invalid(format!(
+            "{}: a '{}' store, not {article} {name} store{hint}",
+            path.display(),
+            meta.kind
+        )));
+    }
+    Ok(meta)
+}
+
 /// A store folder being written: `NAME.partial` until [`StoreTxn::commit`].
 #[derive(Debug)]
 pub struct StoreTxn {
@@ -459,14 +475,7 @@ pub struct BtfStore {
 impl BtfStore {
     /// Opens a store, checking its metadata and limits before reading any chunk.
     pub fn open(path: &Path) -> Result<Self> {
-        let meta = read_meta(path)?;
-        if meta.kind != "btf" {
-            return Err(Error::Invalid(format!(
-                "{}: a '{}' store, not a BTF store",
-                path.display(),
-                meta.kind
-            )));
-        }
+        let meta = read_meta_of_kind(path, "btf", "")?;
         let arr = ZarrArray::open(&path.join("normtextures"), &Limits::default())?;
         if arr.meta() != &normtexture_array(&meta, arr.meta().dtype) {
             return Err(Error::Corrupt {

@@ -4,11 +4,11 @@
 //!
 //! The thin-cloth paper (`thin-semitransparent-cloth.txt`) models a fabric of optical
 //! thickness `τ₁` with single-scattering albedo `ϖ₀` by the emergent-radiance equations
-//! (2)–(3) (direct transmission `e^{−τ₁/μ}` plus a diffusion term), replaces the diffusion
-//! terms by their single-scattering approximations (its eq. 4–5, lost in our copy of the
-//! text) and renders eq. 7 (front-lit) or eq. 8 (back-lit) with the alpha of eq. 9.
+//! [TC eq. 2–3] (direct transmission `e^{−τ₁/μ}` plus a diffusion term), replaces the diffusion
+//! terms by their single-scattering approximations ([TC eq. 4–5], lost in our copy of the
+//! text) and renders [TC eq. 7] (front-lit) or [TC eq. 8] (back-lit) with the alpha of [TC eq. 9].
 //!
-//! **Derivation of eq. 4–5** (Chandrasekhar, *Radiative Transfer*, 1960, §I.11 and
+//! **Derivation of [TC eq. 4–5]** (Chandrasekhar, *Radiative Transfer*, 1960, §I.11 and
 //! Chap. IX, first-order solution; the same as Blinn 1982). A collimated beam of
 //! perpendicular flux `πF` enters at `τ = 0` with direction cosine `μ₀`; the direct beam at
 //! depth `t` is `πF e^{−t/μ₀}`. With phase function `ϖ₀ p(cos Θ)` (`p` normalised to 1 over
@@ -119,7 +119,7 @@ pub fn phi1(x: f64) -> f64 {
     }
 }
 
-/// Direct (unscattered) transmittance `e^{−τ₁/μ}`: the alpha of eq. 9. 1 for `τ₁ = 0`,
+/// Direct (unscattered) transmittance `e^{−τ₁/μ}`: the alpha of [TC eq. 9]. 1 for `τ₁ = 0`,
 /// 0 for `μ ≤ 0` (grazing) when `τ₁ > 0`.
 pub fn direct_transmittance(tau: f64, mu: f64) -> f64 {
     if tau <= 0.0 {

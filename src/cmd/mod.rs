@@ -6,6 +6,7 @@ pub mod demo;
 pub mod export;
 pub mod import;
 pub mod inspect;
+pub mod knit;
 pub mod reconstruct;
 pub mod registration_sweep;
 pub mod relight;

@@ -1,5 +1,5 @@
 //! `btf reconstruct IN.eig --view θ,φ --light θ,φ`: the CPU reference texture for one view and
-//! one light direction (eq. 2–5), written as linear EXR (and optionally an sRGB PNG).
+//! one light direction ([S03 eq. 2–5]), written as linear EXR (and optionally an sRGB PNG).
 
 use anyhow::{Context, Result, bail};
 use btf_core::Direction;

@@ -2,8 +2,8 @@
 //! catalogue relighting. Renders the scene under every environment × rotation
 //! (`δ_r = δ_scene + r · 360°/N`), building the mesh's visibility maps once (cached in
 //! `OUTDIR/cache`), gathering the weights `g` once per environment (Sattler et al. 2003,
-//! eq. 10) and, with eigenweightsets, turning the environment by `e` vector additions
-//! (eq. 13). Frames are written atomically and skipped when already present, so an
+//! [S03 eq. 10]) and, with eigenweightsets, turning the environment by `e` vector additions
+//! ([S03 eq. 13]). Frames are written atomically and skipped when already present, so an
 //! interrupted job resumes; `job.json` pins the parameters a folder was rendered with.
 //! `summary.json` holds `visibility_s`, `weights_s_per_env` and `frame_ms` with per-env
 //! detail; with eigenweightsets, `OUTDIR/eigen/` gets the error table for `e = 1…8`,

@@ -73,7 +73,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         }
     };
     let options = RenderOptions { count_reads: args.count_reads, baseline, ..Default::default() };
-    let renderer = Renderer::new(&gpu, &scene, options)
+    let mut renderer = Renderer::new(&gpu, &scene, options)
         .with_context(|| format!("preparing {}", args.scene.scene.display()))?;
     let mut frame = renderer.render(&gpu)?;
     for _ in 1..args.repeat {

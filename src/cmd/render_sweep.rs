@@ -1,6 +1,6 @@
 //! `btf render-sweep SCENE.toml -o DIR`: what accuracy costs in time on the GPU — the
 //! sweep of `btf_render::cost_sweep` (components × evaluation × blending against plain
-//! texture mapping and the read bound), written as CSV, Markdown and plots, plus the eq. 6
+//! texture mapping and the read bound), written as CSV, Markdown and plots, plus the [S03 eq. 6]
 //! on/off comparison of the scene's shadows side by side.
 
 use anyhow::{Context, Result};
@@ -182,7 +182,7 @@ fn write_plots(r: &SweepResult, out: &Path) -> Result<()> {
     Ok(write_png(&out.join("cost-vs-components.png"), &render(&cost))?)
 }
 
-/// Renders the scene's shadows with and without the smooth boundary of eq. 6 and writes them
+/// Renders the scene's shadows with and without the smooth boundary of [S03 eq. 6] and writes them
 /// side by side; `None` when no light casts shadows.
 fn eq6_comparison(gpu: &Gpu, scene: &Scene, out: &Path) -> Result<Option<String>> {
     if !scene.lights.iter().any(|l| l.casts_shadows()) {

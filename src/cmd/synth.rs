@@ -7,7 +7,11 @@ use clap::{Args, Subcommand};
 use datasets::material::preview::write_contact_sheet;
 use datasets::{EnvKind, EnvParams, GenerateOptions, MaterialKind, MaterialSpec};
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use yarn_ref::btf::{YarnBtfOptions, YarnBtfSpec, generate_yarn_btf};
+
+use crate::cmd::knit;
+use crate::guard;
 
 /// What to synthesise.
 #[derive(Subcommand)]
@@ -25,9 +29,28 @@ pub enum SynthCmd {
 /// `btf synth material`.
 #[derive(Args)]
 pub struct MaterialArgs {
-    /// lambert, corduroy, knit, woven, wallpaper or stone.
+    /// lambert, corduroy, knit, woven, wallpaper, stone, or yarn (a knit patch of explicit
+    /// fibers, path traced: see `--chart`, `--yarn`).
     #[arg(long)]
     pub kind: String,
+    /// yarn: built-in chart name or chart file.
+    #[arg(long)]
+    pub chart: Option<String>,
+    /// yarn: yarn preset name or yarn TOML file.
+    #[arg(long)]
+    pub yarn: Option<String>,
+    /// yarn: how the BTF is rendered (reference).
+    #[arg(long, default_value = "reference")]
+    pub method: String,
+    /// yarn: jittered samples per texel (default 16).
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// yarn: stitches W,C of the periodic patch (default one chart repeat).
+    #[arg(long)]
+    pub stitches: Option<String>,
+    /// yarn: lit vertices per path (default 8; 1 = direct lighting).
+    #[arg(long)]
+    pub bounces: Option<u32>,
     /// Texels per side.
     #[arg(long, default_value_t = 64)]
     pub size: usize,
@@ -153,6 +176,22 @@ fn parse_rgb(s: &str) -> Result<[f64; 3]> {
 }
 
 fn material(a: MaterialArgs) -> Result<()> {
+    if a.kind == "yarn" {
+        synth_yarn_material(&a, show_progress())?;
+        if let Some(dir) = a.preview {
+            let store = btf_core::store::BtfStore::open(&a.output)?;
+            eprintln!("preview -> {}", write_contact_sheet(&store, &dir, "yarn")?.display());
+        }
+        return Ok(());
+    }
+    if a.chart.is_some()
+        || a.yarn.is_some()
+        || a.spp.is_some()
+        || a.stitches.is_some()
+        || a.bounces.is_some()
+    {
+        bail!("--chart, --yarn, --spp, --stitches and --bounces are for --kind yarn");
+    }
     let kind = MaterialKind::from_name(&a.kind)?;
     let mut spec = MaterialSpec::new(kind, a.size);
     spec.sampling = datasets::capture::parse_sampling(&a.sampling)?;
@@ -244,6 +283,56 @@ fn capture(a: CaptureArgs) -> Result<()> {
         r.images_skipped,
         r.seconds,
         a.out.display()
+    );
+    Ok(())
+}
+
+/// `btf synth material --kind yarn`: the yarn BTF of DESIGN §4.2.
+fn synth_yarn_material(a: &MaterialArgs, progress: bool) -> Result<()> {
+    let chart_name = a.chart.as_deref().unwrap_or("stockinette");
+    let yarn_name = a.yarn.as_deref().unwrap_or("cotton-2ply");
+    let mut inputs: Vec<(&str, &Path)> = Vec::new();
+    if Path::new(chart_name).is_file() {
+        inputs.push(("chart", Path::new(chart_name)));
+    }
+    if Path::new(yarn_name).is_file() {
+        inputs.push(("yarn", Path::new(yarn_name)));
+    }
+    guard::refuse_overlap(&[("output", &a.output)], &inputs)?;
+    let chart = knit::load_chart(chart_name)?;
+    let params = knit::load_yarn(yarn_name)?;
+    let mut spec = YarnBtfSpec::new(chart, chart_name, params, a.size);
+    spec.sampling = datasets::capture::parse_sampling(&a.sampling)?;
+    spec.stitches = knit::stitches(&a.stitches)?;
+    spec.seed = a.seed;
+    spec.method = a.method.clone();
+    if let Some(n) = a.spp {
+        spec.spp = n;
+    }
+    if let Some(b) = a.bounces {
+        spec.bounces = b;
+    }
+    if let Some(c) = knit::rgb(&a.albedo, "--albedo")? {
+        spec.color = c.map(|x| x as f32);
+    }
+    let dtype = if a.f16 { btf_core::zarr::DType::F16 } else { btf_core::zarr::DType::F32 };
+    let opts = YarnBtfOptions { resume: a.resume, progress, dtype };
+    let r = generate_yarn_btf(&spec, &a.output, &opts)
+        .with_context(|| format!("synthesising yarn {} into {}", chart_name, a.output.display()))?;
+    eprintln!(
+        "yarn {} in {} {}² ({}, {} spp): {} fibers, {} images written, {} kept, {:.1} s, {:.2} Mrays/s, τ₁ {} -> {}",
+        spec.chart.name,
+        spec.params.name,
+        a.size,
+        a.sampling,
+        spec.spp,
+        r.fibers,
+        r.images_written,
+        r.images_skipped,
+        r.seconds,
+        r.rays as f64 / r.seconds.max(1e-9) * 1e-6,
+        r.tau1.map_or("n/a".into(), |t| format!("{t:.3}")),
+        a.output.display()
     );
     Ok(())
 }

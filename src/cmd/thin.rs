@@ -1,6 +1,6 @@
 //! `btf thin validate`: the first-order thin-slab terms against a Monte-Carlo solution
 //! of the same slab, as a table of relative errors per optical thickness (the check of
-//! `btf_core::thin_slab`, thin-cloth paper eq. 4–5); `btf thin demo`: the curtain scene
+//! `btf_core::thin_slab`, [TC eq. 4–5]); `btf thin demo`: the curtain scene
 //! of `crate::thin_demo`.
 
 use anyhow::{Result, bail};

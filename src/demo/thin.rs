@@ -1,8 +1,8 @@
 //! `btf thin demo`: the thin-cloth paper's flag scene on embedded defaults — the datasets
 //! curtain in a synthetic woven material, in front of a synthetic sky that lights it
 //! (environment light, Sattler et al. 2003 §5) and shows through it (alpha `e^{−τ₁/μ}`,
-//! thin-cloth paper eq. 9), with a point light circling it so that the frames go from
-//! front-lit (reflection, eq. 7) to back-lit (transmission, eq. 8) and back.
+//! [TC eq. 9]), with a point light circling it so that the frames go from
+//! front-lit (reflection, [TC eq. 7]) to back-lit (transmission, [TC eq. 8]) and back.
 //!
 //! Per frame the same scene is rendered with the curtain opaque and with `transmission`,
 //! back to back (frame time ratio), and the thin one again without the background, which
@@ -242,7 +242,7 @@ fn alpha_map(gpu: &Gpu, r: &mut Renderer) -> Result<(Vec<f64>, Vec<bool>)> {
     r.set_show_environment(false)?;
     let dark = r.render(gpu)?;
     r.set_show_environment(true)?;
-    let bg = r.environment_background().context("the demo scene shows its environment")?;
+    let bg = r.environment_background(gpu)?.context("the demo scene shows its environment")?;
     let alpha: Vec<f64> = (0..bg.len())
         .map(|i| if bg[i] > 1e-4 { (with.rgb[i] - dark.rgb[i]) as f64 / bg[i] as f64 } else { 1.0 })
         .collect();

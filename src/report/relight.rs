@@ -1,4 +1,4 @@
-//! What eigenweightsets cost in accuracy (Sattler et al. 2003, §5.4, eq. 13; Fig. 12–13),
+//! What eigenweightsets cost in accuracy (Sattler et al. 2003, §5.4, [S03 eq. 13]; Fig. 12–13),
 //! written by `btf relight` per environment into `OUTDIR/eigen/`:
 //!
 //! - `STEM-error.{csv,md,png}`: the relative error `‖U_e(δ) − U(δ)‖ / ‖U(δ)‖` (in the `U`

@@ -1,8 +1,8 @@
 //! The report of `btf thin demo` (`report.json`, `report.md`): per frame the frame time of
 //! the transmission scene against the same scene with the curtain opaque, and the
 //! curtain's brightness front-lit vs back-lit (the contrast of the thin-cloth paper's
-//! Fig. 2: reflection front-lit, eq. 7; the light shining through back-lit, eq. 8), plus
-//! the alpha of eq. 9 measured through the curtain.
+//! Fig. 2: reflection front-lit, [TC eq. 7]; the light shining through back-lit, [TC eq. 8]), plus
+//! the alpha of [TC eq. 9] measured through the curtain.
 
 use anyhow::Result;
 use serde::{Deserialize, Serialize};

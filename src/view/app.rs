@@ -1,6 +1,7 @@
 //! The window of `btf view`: a winit event loop (X11), a wgpu surface on an adapter that
-//! can present to it, the frame drawn by [`Present`] beside the egui panel, and mouse and
-//! key input turned into [`Viewer`] changes. Frames are rendered only when something
+//! can present to it, the frame — rendered into a texture on the same device, never read
+//! back — drawn by [`Present`] beside the egui panel, and mouse and key input turned into
+//! [`Viewer`] changes. Frames are rendered only when something
 //! changed; the panel is repainted on input.
 
 use super::ViewArgs;
@@ -190,12 +191,12 @@ impl Running {
         })
     }
 
-    /// Renders a frame when the state changed and uploads it for presenting.
+    /// Renders a frame into the shown texture when the state changed (no read-back).
     fn render_pending(&mut self) {
         if let Some(lat) = self.viewer.update(&self.gpu) {
             self.log.record(lat);
-            if let Some(f) = &self.viewer.frame {
-                self.present.upload(&self.gpu, f);
+            if let Some(s) = &self.viewer.shown {
+                self.present.show(&self.gpu, s);
             }
             if self.print_log {
                 let env = &self.viewer.env;
@@ -352,7 +353,7 @@ impl Running {
                 break;
             }
         }
-        match self.viewer.save_frame(&path) {
+        match self.viewer.save_frame(&self.gpu, &path) {
             Ok(()) => crate::guard::outln!("screenshot {}", path.display()),
             Err(e) => self.viewer.errors.push(format!("{e:#}")),
         }
@@ -361,7 +362,12 @@ impl Running {
     fn input(&mut self, event_loop: &ActiveEventLoop, event: &WindowEvent) {
         match event {
             WindowEvent::ModifiersChanged(m) => self.modifiers = m.state(),
-            WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
+            // A key held while the window gains focus comes again as a synthetic press (winit):
+            // not a key stroke, so no action (it took a second screenshot when focus arrived
+            // while `p` was down).
+            WindowEvent::KeyboardInput { event, is_synthetic: false, .. }
+                if event.state == ElementState::Pressed =>
+            {
                 if let Some(a) = actions::for_key(&event.logical_key) {
                     self.act(event_loop, a);
                 }

@@ -54,10 +54,10 @@ fn timing(ui: &mut egui::Ui, v: &Viewer, log: &LatencyLog) {
     if let Some(l) = &v.last {
         ui.monospace(format!("frame {:7.1} ms ({})", l.total_ms(), l.change.name()));
     }
-    if let Some(f) = &v.frame {
-        let (w, h) = (f.width, f.height);
-        ui.label(format!("{w}×{h}, passes ({}):", f.stats.timing));
-        for p in &f.stats.passes {
+    if let Some(s) = &v.shown {
+        let (w, h) = (s.texture.width(), s.texture.height());
+        ui.label(format!("{w}×{h}, passes ({}):", s.stats.timing));
+        for p in &s.stats.passes {
             ui.monospace(format!("{:>7.2} ms  {}", p.ms, p.name));
         }
     }

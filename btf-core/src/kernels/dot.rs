@@ -1,4 +1,4 @@
-//! The dot-product accumulator of the per-slot PCA (Sattler et al. 2003, eq. 1, by the
+//! The dot-product accumulator of the per-slot PCA ([S03 eq. 1], by the
 //! snapshot method): `A·Bᵀ` block by block of columns, for the Gram matrix `YYᵀ`, the
 //! stored basis's `SSᵀ` and (for 8-bit storage) the correction `E·Yᵀ`, in `f64` tiles of
 //! 5 × 5 (or 4 × 5) outputs, narrower at the edge and triangular on a symmetric diagonal.

@@ -1,5 +1,5 @@
 //! The `f16` rounding of one block row of eigentextures in the fused pass of the per-slot
-//! PCA (Sattler et al. 2003, eq. 1; `pca/fused.rs`): from the exact `B` (in `f64`) the
+//! PCA ([S03 eq. 1]; `pca/fused.rs`): from the exact `B` (in `f64`) the
 //! stored halves `S` (rounded through `f32` to nearest even, at unit scale), `S` back in
 //! `f64`, the error `E = S − B` in `f32` and the running largest and smallest entry of `B`,
 //! in one pass over the row instead of five.

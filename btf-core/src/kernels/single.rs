@@ -1,5 +1,5 @@
 //! Single-precision products for a correction term of the per-slot PCA (Sattler et al.
-//! 2003, eq. 1): `E·Yᵀ`, the projections of the images on the rounding error `E = S − B`
+//! 2003, [S03 eq. 1]): `E·Yᵀ`, the projections of the images on the rounding error `E = S − B`
 //! of the stored (`f16`) eigentextures. `E` is at most `2⁻¹¹` of an entry of `B`, so its
 //! products need a relative precision of about `2⁻¹¹` less than the rest: in `f32`, with
 //! 16 lanes per register, they cost half the instructions of `f64`. Within one block of

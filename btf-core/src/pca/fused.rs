@@ -1,4 +1,4 @@
-//! Passes 2 and 3 of the per-slot PCA (Sattler et al. 2003, eq. 1) in one sweep over the
+//! Passes 2 and 3 of the per-slot PCA ([S03 eq. 1]) in one sweep over the
 //! data, for `f16` eigentextures. Each block of columns of the images `X` is widened to
 //! `f32` once (exact for `f32` and `f16` data) and lifted to the eigentextures
 //! `B = (C·lift)ᵀY = (C·lift)ᵀX` in `f64` (the centred coefficients sum to zero over the

@@ -1,6 +1,6 @@
 //! A Monte-Carlo solution of radiative transfer in a plane-parallel slab lit by a
 //! collimated beam — the numerical reference for the first-order terms of
-//! [`super`] (Chandrasekhar 1960, Chap. IX; thin-cloth paper eq. 4–5).
+//! [`super`] (Chandrasekhar 1960, Chap. IX; [TC eq. 4–5]).
 //!
 //! Photons enter at depth 0 with direction cosine `μ₀`; the first collision is forced
 //! inside the slab (depth drawn from the truncated exponential, weight `1 − e^{−τ₁/μ₀}`,

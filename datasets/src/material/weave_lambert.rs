@@ -2,7 +2,7 @@
 //! closed form): a Lambertian fabric with
 //! a basket-weave albedo texture, written straight into an eigen store. Its BTF is exactly
 //! `ρ(x)/π · cos θ_l` (DESIGN.md §3) for every view slot, which one component represents
-//! (the PCA of eq. 1–2 with mean `ρ/π · mean cos θ_l` and eigentexture `ρ/‖ρ‖`) — no
+//! (the PCA of [S03 eq. 1–2] with mean `ρ/π · mean cos θ_l` and eigentexture `ρ/‖ρ‖`) — no
 //! 81 × 81 images are rendered or stored, so it takes milliseconds.
 
 use crate::Result;

@@ -7,7 +7,7 @@
 //!   paper models a 5 % interval for knitwear), and a linear force outside it (the paper's
 //!   exponential law is replaced by a linear one, which is enough for a drape), plus a
 //!   little damping along each spring.
-//! - **Thickness force field** (§4.1.2, eq. 1): an obstacle point at distance `d < T` from
+//! - **Thickness force field** (§4.1.2, [C03 eq. 1]): an obstacle point at distance `d < T` from
 //!   the cloth's mid-surface is repelled with `c₅ (T − d)²` along the contact normal; the
 //!   field is applied to cloth nodes near the sphere and the ground.
 //! - **Friction** (§4.1.3): static (tangential force cancelled while below `K_s |F|`) and
@@ -137,7 +137,7 @@ impl Sim<'_> {
                 acc[i] = scale(acc[i], 1.0 / m);
                 continue;
             }
-            // Eq. 1 of the force field, with a stiff linear extension inside the obstacle.
+            // [C03 eq. 1] of the force field, with a stiff linear extension inside the obstacle.
             let push = self.c5 * (t - d.max(0.0)).powi(2)
                 + if d < 0.0 { 2.0 * self.c5 * t * (-d) } else { 0.0 };
             let f_other = acc[i];
