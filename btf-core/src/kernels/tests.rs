@@ -16,11 +16,6 @@ fn paths() -> Vec<Isa> {
     p
 }
 
-/// The fused paths, which must agree bit for bit.
-fn simd_paths() -> Vec<Isa> {
-    paths().into_iter().filter(|&i| i != Isa::Scalar).collect()
-}
-
 /// `γ_k = k·u / (1 − k·u)`, the relative bound of a sum of `k` products in `f64`
 /// (Higham, *Accuracy and Stability of Numerical Algorithms*, §3.1).
 fn gamma(k: usize) -> f64 {
