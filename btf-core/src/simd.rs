@@ -1,5 +1,6 @@
-//! Which instruction set the hot loops use: the dense kernels of the per-slot PCA
-//! (`kernels`) here, and the ray lanes and gathers of `btf-light`.
+//! Which instruction set the dense kernels of the per-slot PCA (`kernels`) use. (The ray
+//! lanes and gathers of `btf-light` choose AVX2 or AVX-512 by run-time detection of their
+//! own and do not read `BTF_SIMD`.)
 //!
 //! [`Isa::active`] is the best path the CPU supports — AVX-512, else AVX2 + FMA + F16C,
 //! else NEON on aarch64, else the portable ("scalar") code — unless the environment
