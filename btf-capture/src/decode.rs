@@ -15,6 +15,9 @@ pub const MAX_PIXELS: u64 = 1 << 28;
 /// 8192 × 8192 pixels.
 pub const MAX_DECODED_BYTES: u64 = 512 << 20;
 
+/// Most pixels a compressed image may claim per byte of file (see [`decode_image`]).
+pub const MAX_PIXELS_PER_BYTE: u64 = 4096;
+
 /// Refuses an empty image or one beyond [`MAX_PIXELS`]; `field` names the header field.
 pub fn check_pixels(file: &str, field: &str, w: u64, h: u64) -> Result<()> {
     if w == 0 || h == 0 || w.saturating_mul(h) > MAX_PIXELS {
@@ -87,6 +90,7 @@ pub fn read_exr_rgb<R: Read + Seek + Send>(
 pub fn decode_image<R: BufRead + Seek>(
     reader: image::ImageReader<R>,
     file: &str,
+    file_len: u64,
 ) -> Result<image::DynamicImage> {
     use image::ImageDecoder;
     let img_err = |e: image::ImageError| match e {
@@ -99,6 +103,21 @@ pub fn decode_image<R: BufRead + Seek>(
     // The decoder allocates the whole image before reading a pixel; the `image` crate's
     // own 512 MiB limit is not applied on this path (the raw_image fuzz target: 73 bytes of
     // PNG claiming a 16-bit image asked for 1.6 GB).
+    // A compressed image cannot hold more than a few hundred pixels per byte (deflate
+    // tops out near 1032:1, a flat JPEG block near 64 pixels in a few bits): more is a
+    // forged or truncated header whose decoder would fill gigabytes with nothing (the
+    // ubo2003_image fuzz target: 219 bytes of JPEG claiming 13 800² pixels).
+    let pixels = w as u64 * h as u64;
+    if pixels > MAX_PIXELS_PER_BYTE * file_len + (1 << 20) {
+        return Err(Error::limit(
+            file,
+            "width x height",
+            format!(
+                "{w} x {h} pixels claimed by a file of {file_len} bytes (more than \
+                 {MAX_PIXELS_PER_BYTE} pixels per byte): the header is forged or the file cut short"
+            ),
+        ));
+    }
     let bytes = dec.total_bytes();
     if bytes > MAX_DECODED_BYTES {
         return Err(Error::limit(
@@ -197,7 +216,7 @@ mod tests {
         ] {
             let rd =
                 image::ImageReader::new(Cursor::new(&bytes[..])).with_guessed_format().unwrap();
-            let e = decode_image(rd, name).unwrap_err();
+            let e = decode_image(rd, name, bytes.len() as u64).unwrap_err();
             assert!(matches!(e, Error::Limit { .. }), "{name}: {e}");
             let e = e.to_string();
             assert!(e.contains(name) && e.contains("width x height"), "{e}");
@@ -213,6 +232,11 @@ mod tests {
         assert!(e.contains("short.exr"), "{e}");
         let png = png_claiming(16384, 16384);
         let rd = image::ImageReader::new(Cursor::new(&png[..])).with_guessed_format().unwrap();
-        assert!(decode_image(rd, "short.png").unwrap_err().to_string().contains("short.png"));
+        assert!(
+            decode_image(rd, "short.png", png.len() as u64)
+                .unwrap_err()
+                .to_string()
+                .contains("short.png")
+        );
     }
 }

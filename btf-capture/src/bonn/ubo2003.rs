@@ -182,7 +182,7 @@ pub fn decode_image(bytes: &[u8], name: &str) -> Result<(usize, usize, Vec<f32>)
     let mut rd =
         image::ImageReader::new(Cursor::new(bytes)).with_guessed_format().map_err(|e| bad(&e))?;
     rd.limits(image::Limits::default());
-    let img = crate::decode::decode_image(rd, name)?;
+    let img = crate::decode::decode_image(rd, name, bytes.len() as u64)?;
     let (w, h) = (img.width() as usize, img.height() as usize);
     use image::DynamicImage as D;
     let px: Vec<f32> = match &img {
@@ -315,6 +315,18 @@ pub fn import(src: &Path, out: &Path, dtype: DType) -> Result<Ubo2003Report> {
 
 #[cfg(test)]
 mod tests {
+    /// The `ubo2003_image` fuzz target's finding (fuzz/regressions/ubo2003_image-oom-jpeg.bin,
+    /// first byte 0 picked `.jpg`): 219 bytes of JPEG claiming a 570 MB image, which the
+    /// decoder allocated and the conversion to `f32` then doubled past 1 GiB.
+    #[test]
+    fn a_tiny_jpeg_claiming_a_huge_image_is_refused_by_its_header() {
+        let bytes = include_bytes!("../../../fuzz/regressions/ubo2003_image-oom-jpeg.bin");
+        let e = super::decode_image(&bytes[1..], "a.jpg").unwrap_err();
+        assert!(matches!(e, crate::Error::Limit { .. }), "{e}");
+        let e = e.to_string();
+        assert!(e.contains("a.jpg") && e.contains("pixels per byte"), "{e}");
+    }
+
     use super::*;
 
     #[test]
