@@ -162,6 +162,19 @@ mod tests {
         assert!(e.contains("buffer.png") && e.contains("pixels per byte"), "{e}");
     }
 
+    /// The `raw_image` fuzz target's third finding (fuzz/regressions/raw_image-b44-overflow.bin):
+    /// a B44-compressed EXR whose block overflows the `exr` crate's B44 arithmetic (a panic
+    /// in builds with overflow checks, such as this test's). Refused from the header.
+    #[test]
+    fn a_b44_exr_is_refused_before_its_decoder_runs() {
+        let bytes = include_bytes!("../../../fuzz/regressions/raw_image-b44-overflow.bin");
+        let dir = tempfile::tempdir().unwrap();
+        let exr = dir.path().join("b44.exr");
+        std::fs::write(&exr, &bytes[1..]).unwrap();
+        let e = read(&exr, 12).unwrap_err().to_string();
+        assert!(e.contains("b44.exr") && e.contains("B44"), "{e}");
+    }
+
     #[test]
     fn raw_image_claiming_a_huge_size_is_refused_by_its_header() {
         let dir = tempfile::tempdir().unwrap();
