@@ -45,21 +45,6 @@ fn exr_layer_sizes<R: Read + Seek>(src: R, file: &str) -> Result<Vec<(usize, usi
     for h in &meta.headers {
         btf_image::exr_limits::check_header(h)
             .map_err(|(field, what)| Error::limit(file, field, what))?;
-        // B44/B44A is lossy 4 × 4-block f16 coding for playback, never a camera's or a
-        // database's format; the `exr` crate's B44 decoder also panics on malformed blocks
-        // in builds with overflow checks (the raw_image fuzz target), so refuse it here.
-        if matches!(
-            h.compression,
-            exr::compression::Compression::B44 | exr::compression::Compression::B44A
-        ) {
-            return Err(Error::unsupported(
-                file,
-                format!(
-                    "{:?} compression (lossy playback coding; save the image as ZIP, PIZ or uncompressed EXR)",
-                    h.compression
-                ),
-            ));
-        }
     }
     Ok(sizes)
 }

@@ -3,7 +3,8 @@
 //! bytes per sample × tile area or lines per block × width — before it reads that block;
 //! a few hundred bytes claiming a 16384² tile or a hundred channels therefore ask for
 //! gigabytes (the `raw_image` fuzz target found one: 570 bytes → a 1.4 GB allocation).
-//! Every EXR reader of the workspace checks each header here first.
+//! B44/B44A is refused too (see [`check_header`]). Every EXR reader of the workspace checks
+//! each header here first.
 
 /// Largest block (bytes, uncompressed) a header may imply: a 16384-pixel-wide RGBA `f32`
 /// image in DWAB's 256-line blocks is 64 MiB; four times that is left for more channels.
@@ -41,6 +42,21 @@ pub fn check_header(
             format!(
                 "{what} of {channels} channels make {block} bytes per block, more than \
                  {MAX_BLOCK_BYTES}"
+            ),
+        ));
+    }
+    // B44/B44A: the `exr` crate's decoder panics on malformed blocks in builds with
+    // overflow checks (the raw_image and envmap fuzz targets); lossy 4 × 4-block playback
+    // coding is no format for measured or lighting data, so it is refused by name.
+    if matches!(
+        h.compression,
+        exr::compression::Compression::B44 | exr::compression::Compression::B44A
+    ) {
+        return Err((
+            "compression",
+            format!(
+                "{:?} (lossy playback coding; save as ZIP, PIZ or uncompressed EXR)",
+                h.compression
             ),
         ));
     }
