@@ -16,7 +16,7 @@
 //! - [`plot`]: line plots drawn straight into images (axes, ticks, legend, log axes) so
 //!   reports need no plotting toolchain or system fonts.
 //!
-//! Values are linear inside the toolkit; only PNG output is sRGB-encoded (DESIGN.md §3).
+//! Values are linear inside the toolkit; only PNG output is sRGB-encoded (docs/DESIGN.md §3).
 //! No GPU code lives here.
 
 pub mod color;
