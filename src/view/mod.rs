@@ -31,6 +31,11 @@ pub struct ViewArgs {
     /// Environment map (equirectangular EXR/HDR) offered in the panel; repeatable.
     #[arg(long)]
     pub env: Vec<PathBuf>,
+    /// Exposure of each `--env` map's light: `auto` scales it to the horizontal irradiance
+    /// of the scene's own environment (so a dim studio and a bright sky light the garment
+    /// alike), `fixed` keeps the scene's factor for every map.
+    #[arg(long, value_enum, default_value_t = EnvExposure::Auto)]
+    pub env_exposure: EnvExposure,
     /// Frame width (overrides the scene).
     #[arg(long)]
     pub width: Option<u32>,
@@ -58,6 +63,15 @@ pub struct ViewArgs {
     /// Headless: time N interactions of each kind and print the latency table.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=10000))]
     pub bench: Option<u32>,
+}
+
+/// How the viewer lights the garment with a map chosen in the panel.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EnvExposure {
+    /// Same horizontal irradiance as the scene's environment.
+    Auto,
+    /// The scene's exposure factor for every map.
+    Fixed,
 }
 
 /// Runs `btf view`.

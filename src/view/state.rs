@@ -163,14 +163,14 @@ pub struct Viewer {
 
 impl Viewer {
     /// Builds the renderer for `scene`; a failure is kept as a panel error, not returned.
-    pub fn new(gpu: &Gpu, scene: Scene, env_files: Vec<PathBuf>) -> Viewer {
+    pub fn new(gpu: &Gpu, scene: Scene, env_files: Vec<PathBuf>, auto_exposure: bool) -> Viewer {
         let mut v = Viewer {
             orbit: Orbit::new(&scene.camera),
             lights: scene.lights.clone(),
             effects: scene.effects.clone(),
             exposure: scene.output.exposure,
             fabric: 0,
-            env: Environments::new(env_files),
+            env: Environments::new(env_files, &scene, auto_exposure),
             renderer: None,
             shown: None,
             errors: Vec::new(),
@@ -224,6 +224,24 @@ impl Viewer {
     /// Image size of the frames.
     pub fn size(&self) -> (u32, u32) {
         (self.base.output.width, self.base.output.height)
+    }
+
+    /// Renders the next frames at `width × height` (the window's frame area): the camera's
+    /// aspect follows; nothing else is recomputed. A size the device refuses keeps the old
+    /// one and goes to the panel's errors.
+    pub fn set_size(&mut self, gpu: &Gpu, width: u32, height: u32) {
+        let (width, height) = (width.max(1), height.max(1));
+        if (width, height) == self.size() {
+            return;
+        }
+        if let Some(r) = self.renderer.as_mut()
+            && let Err(e) = r.set_size(gpu, width, height)
+        {
+            self.errors.push(format!("frame size {width} × {height}: {e}"));
+            return;
+        }
+        (self.base.output.width, self.base.output.height) = (width, height);
+        self.mark(Change::Camera);
     }
 
     /// True when a frame is waiting to be rendered.
@@ -309,13 +327,18 @@ impl Viewer {
         let Some(path) = self.env.files.get(i).cloned() else { return };
         let Some(r) = self.renderer.as_mut() else { return };
         self.env.selected = Some(i);
-        let (res, ms) = env::timed(|| env::swap(r, gpu, &path));
+        let (environments, base) = (&mut self.env, &self.base);
+        let (res, ms) =
+            env::timed(|| env::swap(r, gpu, &path, |map| environments.exposure_for(base, map)));
         self.env.load_ms = ms;
         match res {
-            Ok(lit) => {
+            Ok((lit, f)) => {
                 self.env.current = Some(i);
                 self.env.lighting = lit;
                 self.env.error = None;
+                if let (true, Some(f)) = (lit, f) {
+                    self.env.light_exposure = f;
+                }
             }
             Err(e) => self.env.error = Some(e),
         }

@@ -414,3 +414,94 @@ fn bench_reports_latency_per_interaction() {
     // (With two samples the medians are means, so total = update + render exactly.)
     assert!((rows[0]["ratio_to_camera"].as_f64().unwrap() - 1.0).abs() < 1e-9);
 }
+
+/// The scene of [`turntable_frames_are_btf_render_frames`] with the camera, the point light
+/// and the environment turned by `deg` (0 or 90) about the vertical through the target.
+fn turned_scene(deg: u32) -> String {
+    let (eye, light, rotation) = match deg {
+        0 => ([0.3, -1.5, 0.5], [-0.9, -1.6, 1.5], 240.0),
+        // (x, y) − pivot turned by +90° about +z: (x, y) → (−y, x)
+        90 => ([1.5, 0.3, 0.5], [1.6, -0.9, 1.5], 330.0),
+        _ => unreachable!(),
+    };
+    format!(
+        r#"
+[output]
+width = 96
+height = 72
+exposure = 1.5
+background = [0.1, 0.0, 0.1]
+
+[[meshes]]
+path = "shirt.obj"
+
+[[materials]]
+store = "m.eig"
+uv_scale = 6.0
+
+[camera]
+eye = {eye:?}
+target = [0.0, 0.0, 0.36]
+up = [0.0, 0.0, 1.0]
+fov_y_deg = 38.0
+
+[[lights]]
+kind = "point"
+position = {light:?}
+intensity = [6.0, 6.0, 6.0]
+
+[[lights]]
+kind = "environment"
+path = "sky.exr"
+exposure = 0.014
+rotation_deg = {rotation:?}
+visibility_res = 8
+cache_dir = "cache"
+"#
+    )
+}
+
+/// Root-mean-square difference of two images over the root-mean-square of the first (8-bit
+/// sRGB levels, every pixel).
+fn rel_rmse(a: &Shot, b: &Shot) -> f64 {
+    assert_eq!((a.w, a.h), (b.w, b.h));
+    let (mut d2, mut a2) = (0.0, 0.0);
+    for (x, y) in a.rgb.iter().zip(&b.rgb) {
+        d2 += (*x as f64 - *y as f64).powi(2);
+        a2 += (*x as f64).powi(2);
+    }
+    (d2 / a2.max(1.0)).sqrt()
+}
+
+/// Turntable frame `i` is `btf render` of the scene turned by `i · 360°/N`: the same camera,
+/// lights and environment rotation give the same pixels. (Before, the turntable started the
+/// environment at 0° instead of the scene's `rotation_deg`: a dimmer, greyer garment, rel.
+/// RMSE 0.26 against `btf render`.) Exact gathers (no eigenweightsets): the viewer computes
+/// every vertex side's visibility so that the camera can orbit, `btf render` only the sides
+/// its camera sees, and an eigenweightset basis fitted over other sides approximates the
+/// rotation differently (≈ 1 % here).
+#[test]
+fn turntable_frames_are_btf_render_frames() {
+    let d = Dir::new();
+    d.ok(&["synth", "material", "--kind", "corduroy", "--size", "8", "-o", "m.btf"]);
+    d.ok(&["compress", "m.btf", "-c", "4", "-o", "m.eig"]);
+    d.ok(&["synth", "mesh", "--kind", "shirt", "-o", "shirt.obj"]);
+    d.ok(&["synth", "env", "--kind", "sky", "--width", "64", "-o", "sky.exr"]);
+    for deg in [0, 90] {
+        std::fs::write(d.path(&format!("s{deg}.toml")), turned_scene(deg)).unwrap();
+    }
+    let test = "turntable = render";
+    let Some(_) = headless(&d, test, &["view", "s0.toml", "--turntable", "4", "-o", "tt"]) else {
+        return;
+    };
+    for (frame, deg) in [(0, 0), (1, 90)] {
+        let png = format!("r{deg}.png");
+        d.ok(&["render", &format!("s{deg}.toml"), "-o", &png]);
+        let rendered = Shot::load(&d.path(&png));
+        let turned = Shot::load(&d.path(&format!("tt/turntable-{frame:04}.png")));
+        let (e, cover) = (rel_rmse(&rendered, &turned), rendered.coverage());
+        eprintln!("turntable frame {frame} vs btf render at {deg}°: rel. RMSE {e:.2e}");
+        assert!(cover > 0.1, "the garment covers {cover:.3} of the frame");
+        assert!(e <= 1e-3, "turntable frame {frame} vs btf render at {deg}°: rel. RMSE {e:.2e}");
+    }
+}

@@ -621,6 +621,26 @@ impl Renderer {
         Ok(())
     }
 
+    /// Changes the frame size (a window resized): the camera's aspect follows, the frame
+    /// targets are made anew at the next frame, and shadow-volume masks (one texel per
+    /// pixel) are rebuilt; visibility, materials and the other passes are kept.
+    pub fn set_size(&mut self, gpu: &Gpu, width: u32, height: u32) -> Result<()> {
+        if (width, height) == self.size() {
+            return Ok(());
+        }
+        gpu.check_frame(width, height, self.scene.effects.msaa)?;
+        (self.scene.output.width, self.scene.output.height) = (width, height);
+        let extra_depth = self.passes.extra_camera_depth();
+        self.camera = CameraSetup::new(&self.scene, &self.geometry.mesh, extra_depth);
+        if self.passes.shadowing.as_ref().is_some_and(Shadowing::sized_by_frame) {
+            let shadowing = Shadowing::new(gpu, &self.scene, &self.geometry.mesh)?;
+            let blur = self.scene.effects.terminator_blur;
+            self.frame.rebind(gpu, &self.passes.btf, Some(&shadowing), blur);
+            self.passes.shadowing = Some(shadowing);
+        }
+        Ok(())
+    }
+
     /// Replaces the lights (same count and kinds of light as before, so the passes the
     /// scene asked for stay valid); rebuilds the shadow pass when there is one.
     pub fn set_lights(&mut self, gpu: &Gpu, lights: &[Light]) -> Result<()> {

@@ -110,6 +110,12 @@ impl Shadowing {
         Ok(Shadowing { technique, layer_of })
     }
 
+    /// Whether the technique keeps per-pixel textures (shadow-volume masks), which a new
+    /// frame size must rebuild.
+    pub fn sized_by_frame(&self) -> bool {
+        matches!(self.technique, Technique::Volume(_))
+    }
+
     /// How far the camera's far plane must move back (shadow-volume back caps).
     pub fn extra_camera_depth(&self) -> f32 {
         match &self.technique {
