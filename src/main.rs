@@ -65,7 +65,25 @@ enum Command {
     View(view::ViewArgs),
 }
 
+/// Mesa's `VK_LAYER_MESA_device_select` layer, which the Vulkan loader puts in front of
+/// every driver, asks Wayland for the session's GPU and, without `XDG_RUNTIME_DIR` (in
+/// containers, CI, ssh sessions), has libwayland print `error: XDG_RUNTIME_DIR is invalid or
+/// not set` twice per device enumeration — noise that reads like a failure of the command.
+/// Without a runtime directory there is no Wayland session whose GPU it could pick, so the
+/// layer is switched off (`NODEVICE_SELECT=1`) unless the user set that variable.
+#[allow(unsafe_code)]
+fn quiet_vulkan_device_select() {
+    let runtime_dir = std::env::var_os("XDG_RUNTIME_DIR");
+    let no_session = runtime_dir.is_none_or(|d| !std::path::Path::new(&d).is_dir());
+    if no_session && std::env::var_os("NODEVICE_SELECT").is_none() {
+        // SAFETY: the first statement of `main`, before any thread exists, so nothing can
+        // read the environment concurrently.
+        unsafe { std::env::set_var("NODEVICE_SELECT", "1") };
+    }
+}
+
 fn main() -> ExitCode {
+    quiet_vulkan_device_select();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Demo(a) => demo_cmd::run(a),
