@@ -63,7 +63,14 @@ struct DragState {
 
 impl DragState {
     /// A button went down (`over_frame`: not on the panel) or up.
-    fn button(&mut self, pressed: bool, button: MouseButton, shift: bool, at: PhysicalPosition<f64>, over_frame: bool) {
+    fn button(
+        &mut self,
+        pressed: bool,
+        button: MouseButton,
+        shift: bool,
+        at: PhysicalPosition<f64>,
+        over_frame: bool,
+    ) {
         if !pressed {
             // Any release ends the drag: a second button released while the first is held
             // ends it too, which is harmless, and a release is never missed.
@@ -186,13 +193,23 @@ fn surface_format(caps: &wgpu::SurfaceCapabilities) -> Result<wgpu::TextureForma
         .ok_or_else(|| anyhow!("the window surface offers no format"))
 }
 
+/// The frame area the window opens with, in points: `--width`/`--height` as given, else the
+/// scene's frame scaled up (aspect kept) to fill about 960 × 720 — the scene's size is the
+/// size of its still renders, often small, and the frame follows the window from then on.
+fn initial_area(width: u32, height: u32, explicit: bool) -> (f64, f64) {
+    let (w, h) = (width.max(1) as f64, height.max(1) as f64);
+    let s = if explicit { 1.0 } else { (960.0 / w).min(720.0 / h).max(1.0) };
+    ((w * s).round(), (h * s).round())
+}
+
 impl Running {
     fn new(event_loop: &ActiveEventLoop, args: &ViewArgs, scene: Scene) -> Result<Running> {
-        let (fw, fh) = (scene.output.width, scene.output.height);
+        let explicit = args.width.is_some() || args.height.is_some();
+        let (fw, fh) = initial_area(scene.output.width, scene.output.height, explicit);
         let title = format!("btf view — {}", args.scene.display());
-        let attrs = Window::default_attributes().with_title(title).with_inner_size(
-            LogicalSize::new(fw as f64 + panel::WIDTH_PT as f64, fh.max(480) as f64),
-        );
+        let attrs = Window::default_attributes()
+            .with_title(title)
+            .with_inner_size(LogicalSize::new(fw + panel::WIDTH_PT as f64, fh));
         let window = Arc::new(event_loop.create_window(attrs).context("creating the window")?);
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
         desc.backends = wgpu::Backends::PRIMARY;
@@ -222,7 +239,12 @@ impl Running {
         let present = Present::new(&gpu, format);
         let info = &gpu.info;
         let adapter_name = format!("{} ({:?}), {format:?}", info.name, info.backend);
-        let viewer = Viewer::new(&gpu, scene, args.env.clone(), args.env_exposure == super::EnvExposure::Auto);
+        let viewer = Viewer::new(
+            &gpu,
+            scene,
+            args.env.clone(),
+            args.env_exposure == super::EnvExposure::Auto,
+        );
         crate::guard::outln!("window {} adapter {adapter_name}", u64::from(window.id()));
         Ok(Running {
             window,
@@ -248,6 +270,17 @@ impl Running {
         })
     }
 
+    /// Renders at the size of the frame area of the last layout (the whole window before
+    /// the first); a layout that changes it asks for another frame.
+    fn sync_size(&mut self) {
+        let area = if self.frame_area.w > 0.0 {
+            self.frame_area
+        } else {
+            Rect { x: 0.0, y: 0.0, w: self.config.width as f32, h: self.config.height as f32 }
+        };
+        self.viewer.set_size(&self.gpu, area.w.round() as u32, area.h.round() as u32);
+    }
+
     /// Renders a frame into the shown texture when the state changed (no read-back).
     fn render_pending(&mut self) {
         if let Some(lat) = self.viewer.update(&self.gpu) {
@@ -258,9 +291,11 @@ impl Running {
             if self.print_log {
                 let env = &self.viewer.env;
                 crate::guard::outln!(
-                    "frame {} change={:?} update_ms={:.2} render_ms={:.2} env={:?} \
+                    "frame {} size={}x{} change={:?} update_ms={:.2} render_ms={:.2} env={:?} \
                      env_rotation_deg={} env_lighting={} env_error={:?} errors={}",
                     self.viewer.frames,
+                    self.viewer.size().0,
+                    self.viewer.size().1,
                     lat.change,
                     lat.update_ms,
                     lat.render_ms,
@@ -275,15 +310,7 @@ impl Running {
     }
 
     fn redraw(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
-        // Render at the size of the frame area of the last layout (the whole window before
-        // the first); a layout that changes it below asks for another frame.
-        let area = if self.frame_area.w > 0.0 {
-            self.frame_area
-        } else {
-            Rect { x: 0.0, y: 0.0, w: self.config.width as f32, h: self.config.height as f32 }
-        };
-        let (aw, ah) = (area.w.round() as u32, area.h.round() as u32);
-        self.viewer.set_size(&self.gpu, aw, ah);
+        self.sync_size();
         self.render_pending();
         let raw = self.egui_state.take_egui_input(&self.window);
         let mut actions = Vec::new();
@@ -299,12 +326,10 @@ impl Running {
         } = full;
         self.egui_state.handle_platform_output(&self.window, platform_output);
         let ppp = pixels_per_point;
-        let area_px = Rect {
-            x: area.min.x * ppp,
-            y: area.min.y * ppp,
-            w: area.width() * ppp,
-            h: area.height() * ppp,
-        };
+        // Whole pixels, so the frame rendered at the area's size is shown texel for pixel.
+        let (x0, y0) = ((area.min.x * ppp).ceil(), (area.min.y * ppp).ceil());
+        let (x1, y1) = ((area.max.x * ppp).floor(), (area.max.y * ppp).floor());
+        let area_px = Rect { x: x0, y: y0, w: (x1 - x0).max(1.0), h: (y1 - y0).max(1.0) };
         let resized = area_px != self.frame_area;
         self.frame_area = area_px;
         let (fw, fh) = self.viewer.size();
@@ -411,6 +436,7 @@ impl Running {
 
     /// Writes the frame of the current state (pending changes rendered first).
     fn screenshot(&mut self) {
+        self.sync_size();
         self.render_pending();
         // The next free number: a screenshot never replaces an earlier session's.
         let mut path;
@@ -487,6 +513,14 @@ mod tests {
 
     fn at(x: f64, y: f64) -> PhysicalPosition<f64> {
         PhysicalPosition::new(x, y)
+    }
+
+    #[test]
+    fn the_window_opens_at_a_useful_size() {
+        assert_eq!(initial_area(320, 240, false), (960.0, 720.0));
+        assert_eq!(initial_area(96, 72, false), (960.0, 720.0));
+        assert_eq!(initial_area(1920, 1080, false), (1920.0, 1080.0)); // never shrunk
+        assert_eq!(initial_area(320, 240, true), (320.0, 240.0));
     }
 
     #[test]

@@ -57,6 +57,7 @@ impl Environments {
             rotation_deg,
             light_exposure,
             auto_exposure,
+            lighting: scene.environment().is_some(),
             ..Default::default()
         }
     }
@@ -77,8 +78,7 @@ impl Environments {
                 })
                 .unwrap_or(1.0)
         });
-        let e_h = horizontal_irradiance(map);
-        (e_h > 0.0 && target > 0.0).then(|| (target / e_h) as f32)
+        exposure_giving(target, map)
     }
 
     /// Display name of file `i`.
@@ -96,6 +96,13 @@ impl Environments {
         }
         Some(self.selected.map_or(0, |c| (c + 1) % self.files.len()))
     }
+}
+
+/// The exposure `f` that gives a horizontal surface under `map` the irradiance `target`
+/// (`None` for a map black above the horizon).
+pub fn exposure_giving(target: f64, map: &EnvMap) -> Option<f32> {
+    let e_h = horizontal_irradiance(map);
+    (e_h > 0.0 && target > 0.0).then(|| (target / e_h) as f32)
 }
 
 /// `E_h`, the mean over channels of the irradiance of a horizontal surface (normal `+z`).
@@ -157,4 +164,25 @@ fn apply_rotation(renderer: &mut Renderer, _gpu: &Gpu, rotation_deg: f32) -> Res
     }
     renderer.set_environment_rotation(rotation_deg as f64).map_err(|e| e.to_string())?;
     Ok(true)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A constant sky of radiance `L` gives a horizontal surface `E_h = π L`, so the
+    /// exposure that matches a sky of `L₀` at `f₀` is `f₀ L₀ / L₁` — a map 1000× dimmer is
+    /// lit 1000× brighter — up to the map's pixel quadrature (≤ 1e-3 at 256 × 128).
+    #[test]
+    fn auto_exposure_matches_horizontal_irradiance() {
+        let sky = EnvMap::constant(256, [2.0, 2.0, 2.0]).unwrap();
+        let studio = EnvMap::constant(256, [0.002, 0.002, 0.002]).unwrap();
+        let e_sky = horizontal_irradiance(&sky);
+        assert!((e_sky / (2.0 * std::f64::consts::PI) - 1.0).abs() < 1e-3, "{e_sky}");
+        let f0 = 0.5;
+        let f = exposure_giving(f0 * e_sky, &studio).unwrap() as f64;
+        assert!((f / (f0 * 1000.0) - 1.0).abs() < 1e-6, "{f}");
+        let black = EnvMap::constant(256, [0.0; 3]).unwrap();
+        assert_eq!(exposure_giving(1.0, &black), None);
+    }
 }

@@ -36,10 +36,11 @@ pub struct ViewArgs {
     /// alike), `fixed` keeps the scene's factor for every map.
     #[arg(long, value_enum, default_value_t = EnvExposure::Auto)]
     pub env_exposure: EnvExposure,
-    /// Frame width (overrides the scene).
+    /// Frame width: of the turntable frames, and of the frame area the window opens with
+    /// (the window shows frames at its own size after that). Overrides the scene.
     #[arg(long)]
     pub width: Option<u32>,
-    /// Frame height (overrides the scene).
+    /// Frame height (as `--width`). Overrides the scene.
     #[arg(long)]
     pub height: Option<u32>,
     /// Folder for screenshots (`p` / F12 write `shot-NNNN.png`).

@@ -62,9 +62,10 @@ const KINDS: [Change; 5] =
 
 fn timing(ui: &mut egui::Ui, v: &Viewer, log: &LatencyLog) {
     let frame = v.last.map_or("-".to_string(), |l| format!("{:.1} ms", l.total_ms()));
-    let size = v.shown.as_ref().map_or("-".to_string(), |s| {
-        format!("{} x {} px", s.texture.width(), s.texture.height())
-    });
+    let size = v
+        .shown
+        .as_ref()
+        .map_or("-".to_string(), |s| format!("{} x {} px", s.texture.width(), s.texture.height()));
     ui.monospace(format!("frame {frame:>10}  {size}"))
         .on_hover_text("time from the last change to the finished frame; the frame is rendered at the size of the window's frame area");
     ui.collapsing("passes of the last frame", |ui| {
@@ -121,7 +122,9 @@ fn fabric_and_env(ui: &mut egui::Ui, v: &Viewer, out: &mut Vec<Action>) {
     let slider = egui::Slider::new(&mut rot, 0.0..=360.0).suffix("°").text("env. rotation");
     if ui
         .add(slider)
-        .on_hover_text("the environment's absolute turn about the up axis (the scene's value at the start)")
+        .on_hover_text(
+            "the environment's absolute turn about the up axis (the scene's value at the start)",
+        )
         .changed()
     {
         out.push(Action::RotateEnv(rot - v.env.rotation_deg));
@@ -132,7 +135,7 @@ fn fabric_and_env(ui: &mut egui::Ui, v: &Viewer, out: &mut Vec<Action>) {
             .on_hover_text("the factor on the map's radiance; auto gives every map the horizontal irradiance of the scene's own environment (--env-exposure)");
     }
     let mut ev = v.exposure.log2();
-    let slider = egui::Slider::new(&mut ev, -8.0..=8.0).step_by(0.25).text("display EV");
+    let slider = egui::Slider::new(&mut ev, -8.0..=8.0).text("display EV");
     if ui
         .add(slider)
         .on_hover_text(format!(
