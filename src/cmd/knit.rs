@@ -35,7 +35,7 @@ pub struct ChartArgs {
     /// Built-in chart name or chart file.
     pub chart: String,
     /// Also write the chart text to this file.
-    #[arg(short, long)]
+    #[arg(short = 'o', long = "out", alias = "output")]
     pub output: Option<PathBuf>,
 }
 
@@ -61,8 +61,22 @@ pub struct PatchArgs {
     #[arg(long, default_value_t = 12)]
     pub samples_per_turn: u32,
     /// Output file: .obj (mesh, lines), .bcc or .txt (Mitsuba curve text).
-    #[arg(short, long)]
+    #[arg(short = 'o', long = "out", alias = "output")]
     pub output: Option<PathBuf>,
+}
+
+crate::args::choices! {
+    /// `btf knit ref --shading`: how a fiber scatters light.
+    ShadingChoice {
+        /// Khungurn R + TT lobes and a diffuse term [W19 eq. 6–10].
+        Khungurn = "khungurn",
+        /// The simple fiber model [W19 eq. 5] plus a diffuse term.
+        Simple = "simple",
+        /// R + TT + D as in [H25 eq. 7].
+        Huang = "huang",
+        /// Lambertian fibers (albedo from `--albedo`).
+        Lambert = "lambert",
+    }
 }
 
 /// `btf knit ref`.
@@ -83,9 +97,9 @@ pub struct RefArgs {
     /// Environment map (equirectangular EXR/HDR), optionally ,SCALE.
     #[arg(long)]
     pub env: Option<String>,
-    /// Fiber scattering: khungurn, simple, huang or lambert.
+    /// Fiber scattering.
     #[arg(long, default_value = "khungurn")]
-    pub shading: String,
+    pub shading: ShadingChoice,
     /// Lambert albedo or yarn colour R,G,B (linear).
     #[arg(long)]
     pub albedo: Option<String>,
@@ -110,8 +124,8 @@ pub struct RefArgs {
     /// Print a JSON summary on stdout.
     #[arg(long)]
     pub json: bool,
-    /// Output image (.exr linear, or .png sRGB).
-    #[arg(long = "image", short = 'i')]
+    /// Output image (.exr linear, or .png sRGB). `-i/--image` is the old spelling.
+    #[arg(short = 'o', long = "out", alias = "image", short_alias = 'i')]
     pub image: PathBuf,
 }
 
@@ -379,7 +393,7 @@ fn ref_cmd(a: RefArgs) -> Result<()> {
     if lights.is_empty() {
         bail!("no light: give --light dir:THETA,PHI, --light point:X,Y,Z,I or --env FILE");
     }
-    let shading = shading(&a.shading, color)?;
+    let shading = shading(a.shading.as_str(), color)?;
     let sc = yarn_ref::Scene { fibers: &scene, lights: &lights, shading: &shading };
     let mut s = yarn_ref::RenderSettings::new(w, h, a.spp);
     s.seed = a.render_seed;
