@@ -138,9 +138,10 @@ mod tests {
         subcommands(&Cli::command(), Vec::new(), &mut all);
         assert!(all.len() > 25, "{} subcommands", all.len());
         for path in all {
-            // clap_complete's bash script has one case per command path, `btf__synth__material`
-            // (with `-` spelled `__`).
-            let case = format!("btf__{}", path.join("__").replace('-', "__"));
+            // clap_complete's bash script selects each command path by a line
+            // `cmd="btf__subcmd__capture__subcmd__registration__subcmd__sweep"`.
+            let case = format!("cmd=\"btf__subcmd__{}\"", path.join("__subcmd__"))
+                .replace('-', "__subcmd__");
             assert!(script.contains(&case), "the bash script lacks {case}");
         }
     }

@@ -6,7 +6,8 @@
 //!
 //! Synopsis notation (docs/cli.md, "Reading the synopses"): `[…]` is optional, `a|b` inside a
 //! word and ` | ` inside brackets are alternatives, `…` repeats, an upper-case word (`N`,
-//! `DIR`, `W,C`) or `θ`/`φ` is a placeholder. Each synopsis gives variants `k = 0, 1, …`
+//! `DIR`, `W,C`) or `θ`/`φ` is a placeholder, a `…` standing alone is the rest of a command
+//! line (its required arguments may be missing: `btf view …`). Each synopsis gives variants `k = 0, 1, …`
 //! that take alternative `k` (modulo its count) everywhere, once without and once with
 //! every optional part, so every alternative and every optional flag is parsed at least once.
 
@@ -67,15 +68,11 @@ fn word(w: &str, k: usize) -> Option<String> {
     let alts: Vec<&str> = w.split('|').collect();
     let w = alts[k % alts.len()].replace('…', "").replace("θ,φ", "30,45").replace('θ', "30");
     let placeholder = |p: &str| {
-        !p.is_empty() && p.chars().all(|c| c.is_ascii_uppercase() || c.is_ascii_digit() || c == '_')
+        p.chars().any(|c| c.is_ascii_uppercase())
+            && p.chars().all(|c| c.is_ascii_uppercase() || c.is_ascii_digit() || c == '_')
     };
-    if w.is_empty() {
-        None
-    } else if w.split(',').all(placeholder) {
-        Some(w.split(',').map(|_| "2").collect::<Vec<_>>().join(","))
-    } else {
-        Some(w)
-    }
+    let parts: Vec<&str> = w.split(',').map(|p| if placeholder(p) { "2" } else { p }).collect();
+    (!w.is_empty()).then(|| parts.join(","))
 }
 
 /// The concrete command lines (without the leading `btf`) of one synopsis.
@@ -104,6 +101,7 @@ pub fn synopses(markdown: &str) -> Vec<(usize, String)> {
     let mut out = Vec::new();
     let mut in_sh = None;
     let mut pending = String::new();
+    let mut start = 0;
     for (i, line) in markdown.lines().enumerate() {
         let trimmed = line.trim();
         if trimmed.starts_with("```") {
@@ -113,6 +111,9 @@ pub fn synopses(markdown: &str) -> Vec<(usize, String)> {
         match in_sh {
             Some(true) => {
                 let l = trimmed.replace("cargo run --release -- ", "btf ");
+                if pending.is_empty() {
+                    start = i + 1;
+                }
                 if let Some(cont) = l.strip_suffix('\\') {
                     pending.push_str(cont);
                     continue;
@@ -120,7 +121,7 @@ pub fn synopses(markdown: &str) -> Vec<(usize, String)> {
                 pending.push_str(&l);
                 let cmd = std::mem::take(&mut pending);
                 if cmd.starts_with("btf ") {
-                    out.push((i + 1, cmd));
+                    out.push((start, without_pipe(&cmd).to_string()));
                 }
             }
             Some(false) => {}
@@ -137,14 +138,15 @@ pub fn synopses(markdown: &str) -> Vec<(usize, String)> {
     out
 }
 
-/// `s` up to a shell pipe (` | ` outside brackets: `btf inspect M.btf | head`).
+/// `s` up to a shell pipe or redirection (` | `, ` > ` outside brackets:
+/// `btf inspect M.btf | head`).
 fn without_pipe(s: &str) -> &str {
     let mut depth = 0i32;
     for (i, c) in s.char_indices() {
         match c {
             '[' => depth += 1,
             ']' => depth -= 1,
-            '|' if depth == 0 && s[..i].ends_with(' ') && s[i + 1..].starts_with(' ') => {
+            '|' | '>' if depth == 0 && s[..i].ends_with(' ') && s[i + 1..].starts_with(' ') => {
                 return s[..i].trim_end();
             }
             _ => {}
@@ -158,19 +160,23 @@ fn check(file: &str, text: &str) -> (usize, Vec<String>) {
     let mut parsed = 0;
     let mut failures = Vec::new();
     for (line, synopsis) in synopses(text) {
+        // A standalone `…` stands for the rest of a command line (`btf view …`): its required
+        // arguments may be missing, nothing else may be wrong.
+        let partial = synopsis.split_whitespace().any(|w| w == "…");
         for v in variants(&synopsis) {
             parsed += 1;
             let help = |e: &clap::Error| {
                 matches!(
                     e.kind(),
                     clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion
-                )
+                ) || (partial && e.kind() == clap::error::ErrorKind::MissingRequiredArgument)
             };
             if let Err(e) = crate::Cli::try_parse_from(&v)
                 .map(|_| ())
                 .or_else(|e| if help(&e) { Ok(()) } else { Err(e) })
             {
-                let first = e.to_string().lines().next().unwrap_or("").to_string();
+                let text = e.to_string();
+                let first = text.lines().take(2).map(str::trim).collect::<Vec<_>>().join(" ");
                 failures.push(format!("{file}:{line}: `{}`: {first}", v.join(" ")));
             }
         }
@@ -214,11 +220,14 @@ mod tests {
         );
         let v = variants("btf knit ref [--chart C | --bcc F.bcc] [--light dir:θ,φ[,E]]… -o o.exr");
         let lines: Vec<String> = v.iter().map(|w| w.join(" ")).collect();
-        assert!(lines.contains(&"btf knit ref --chart 2 --light dir:30,45,2 -o o.exr".into()));
+        assert!(
+            lines.contains(&"btf knit ref --chart 2 --light dir:30,45,2 -o o.exr".into()),
+            "{lines:?}"
+        );
         assert!(lines.contains(&"btf knit ref --bcc F.bcc --light dir:30,45,2 -o o.exr".into()));
         assert!(lines.contains(&"btf knit ref -o o.exr".into()));
         let s = synopses("| `btf a --x p\\|q` / `btf b` |\n```sh\nbtf c \\\n  --d\n```\n");
-        assert_eq!(s, [(1, "btf a --x p|q".into()), (1, "btf b".into()), (5, "btf c --d".into())]);
+        assert_eq!(s, [(1, "btf a --x p|q".into()), (1, "btf b".into()), (3, "btf c --d".into())]);
     }
 
     #[test]
