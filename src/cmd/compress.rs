@@ -63,11 +63,12 @@ pub fn run(a: CompressArgs) -> Result<()> {
         outln!("{}", serde_json::to_string_pretty(&r)?);
     } else {
         outln!(
-            "compressed {} slots × {} lights to {} components ({}) in {:.2} s",
+            "compressed {} slots × {} lights to {} components ({}) into {} in {:.2} s",
             r.slots.len(),
             input.meta().n_lights(),
             r.components,
             r.quantization.name(),
+            output.display(),
             r.seconds
         );
         outln!(

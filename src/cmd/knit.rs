@@ -346,7 +346,7 @@ fn ref_cmd(a: RefArgs) -> Result<()> {
     if let Some(e) = &env_path {
         inputs.push(("env", e.as_path()));
     }
-    guard::refuse_overlap(&[("image", &image)], &inputs)?;
+    guard::refuse_overlap(&[("-o", &image)], &inputs)?;
     let kind = match ext(&image).as_str() {
         "exr" => btf_core::fs::EXR,
         "png" => btf_core::fs::PNG,

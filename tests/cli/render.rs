@@ -164,3 +164,16 @@ fn bad_input_is_refused_with_its_location() {
         "{err}"
     );
 }
+
+#[test]
+fn render_sweep_refuses_component_counts_the_store_does_not_hold() {
+    // Checked before any GPU work: runs without an adapter.
+    let d = setup();
+    std::fs::write(d.path().join("s.toml"), scene("none", false)).unwrap();
+    let o = btf(d.path(), &["render-sweep", "s.toml", "-o", "sweep", "-c", "4,8"]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--components 8") && err.contains("holds only 4"), "{err}");
+    assert!(err.contains("m.eigen"), "{err}");
+    assert!(!d.path().join("sweep").exists());
+}
