@@ -352,3 +352,40 @@ fn score_table(s: &score::Score, a: &ScoreArgs) -> String {
     }
     t
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_score_table_names_one_unit_and_every_ring() {
+        let s = score::Score {
+            mean_reprojection_texels: 0.0123,
+            max_reprojection_texels: 0.0456,
+            rel_rmse: 0.019,
+            rel_rmse_nominal: Some(0.048),
+            texel_mm: 4.6,
+            per_view: vec![],
+            rel_rmse_by_theta: vec![[0.0, 0.01], [45.0, 0.02]],
+            rel_rmse_nominal_by_theta: vec![[0.0, 0.03], [45.0, 0.05]],
+            light_incidence_correction: true,
+            fallback_views: vec![3],
+            filters: vec![],
+        };
+        let a = ScoreArgs {
+            store: "m.btf".into(),
+            truth: "raw".into(),
+            compare_filters: false,
+            report: None,
+            json: false,
+            nominal: true,
+        };
+        let t = score_table(&s, &a);
+        assert!(t.contains("mean 0.0123 texel, max 0.0456 texel"), "{t}");
+        assert!(!t.contains("px"), "one unit, texels: {t}");
+        assert!(t.contains(" 45.0°     0.02000   0.05000"), "{t}");
+        assert!(
+            t.contains("fallback views     3") && t.contains("nominal-direction truth: 0.04800")
+        );
+    }
+}
