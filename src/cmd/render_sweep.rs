@@ -34,8 +34,8 @@ pub struct RenderSweepArgs {
 /// Runs `btf render-sweep`.
 pub fn run(a: RenderSweepArgs) -> Result<()> {
     let scene = a.scene.load()?;
-    let components = components_to_sweep(&scene, a.components.as_deref())?;
     crate::guard::refuse_scene_overlap(&[("-o", &a.output)], &a.scene.scene, &scene, &[])?;
+    let components = components_to_sweep(&scene, a.components.as_deref())?;
     let gpu = Gpu::new().context("creating a headless GPU device")?;
     let md = sweep_into(&gpu, &scene, &components, a.repeat as usize, &a.output)?;
     crate::guard::outln!("{md}");
@@ -45,8 +45,8 @@ pub fn run(a: RenderSweepArgs) -> Result<()> {
 
 /// The component counts of the sweep: those asked for, each of which every material's eigen
 /// store must hold (an error naming the store otherwise: a count cannot be honoured by
-/// rendering fewer), or by default 4, 8, 16, 32 up to the smallest store's count, with a
-/// note on standard error for those left out.
+/// rendering fewer), or by default 4, 8, 16, 32 up to the smallest store's count (that
+/// count alone when it is below 4), with a note on standard error for those left out.
 pub fn components_to_sweep(scene: &Scene, asked: Option<&[usize]>) -> Result<Vec<usize>> {
     let mut stored: Option<(usize, &Path)> = None;
     for m in &scene.materials {
@@ -71,19 +71,17 @@ pub fn components_to_sweep(scene: &Scene, asked: Option<&[usize]>) -> Result<Vec
             Ok(cs.to_vec())
         }
         None => {
-            let (kept, left): (Vec<usize>, Vec<usize>) =
+            let (mut kept, left): (Vec<usize>, Vec<usize>) =
                 [4, 8, 16, 32].into_iter().partition(|&c| c <= stored);
+            if kept.is_empty() {
+                kept.push(stored);
+            }
             if !left.is_empty() {
                 eprintln!(
                     "note: components {left:?} left out of the default sweep: {} holds {stored}",
                     store.display()
                 );
             }
-            anyhow::ensure!(
-                !kept.is_empty(),
-                "{} holds {stored} components; give --components up to {stored}",
-                store.display()
-            );
             Ok(kept)
         }
     }
