@@ -35,7 +35,7 @@ pub struct ChartArgs {
     /// Built-in chart name or chart file.
     pub chart: String,
     /// Also write the chart text to this file.
-    #[arg(short, long)]
+    #[arg(short = 'o', long = "out", alias = "output")]
     pub output: Option<PathBuf>,
 }
 
@@ -60,9 +60,24 @@ pub struct PatchArgs {
     /// Fiber polyline points per helix turn.
     #[arg(long, default_value_t = 12)]
     pub samples_per_turn: u32,
-    /// Output file: .obj (mesh, lines), .bcc or .txt (Mitsuba curve text).
-    #[arg(short, long)]
+    /// Output file: .obj (mesh, lines), .bcc or .txt (Mitsuba curve text); for `knit ref`
+    /// the image (.exr linear, or .png sRGB; `-i/--image` is its old spelling).
+    #[arg(short = 'o', long = "out", aliases = ["output", "image"], short_alias = 'i')]
     pub output: Option<PathBuf>,
+}
+
+crate::args::choices! {
+    /// `btf knit ref --shading`: how a fiber scatters light.
+    ShadingChoice {
+        /// Khungurn R + TT lobes and a diffuse term [W19 eq. 6–10].
+        Khungurn = "khungurn",
+        /// The simple fiber model [W19 eq. 5] plus a diffuse term.
+        Simple = "simple",
+        /// R + TT + D as in [H25 eq. 7].
+        Huang = "huang",
+        /// Lambertian fibers (albedo from `--albedo`).
+        Lambert = "lambert",
+    }
 }
 
 /// `btf knit ref`.
@@ -83,9 +98,9 @@ pub struct RefArgs {
     /// Environment map (equirectangular EXR/HDR), optionally ,SCALE.
     #[arg(long)]
     pub env: Option<String>,
-    /// Fiber scattering: khungurn, simple, huang or lambert.
+    /// Fiber scattering.
     #[arg(long, default_value = "khungurn")]
-    pub shading: String,
+    pub shading: ShadingChoice,
     /// Lambert albedo or yarn colour R,G,B (linear).
     #[arg(long)]
     pub albedo: Option<String>,
@@ -110,9 +125,6 @@ pub struct RefArgs {
     /// Print a JSON summary on stdout.
     #[arg(long)]
     pub json: bool,
-    /// Output image (.exr linear, or .png sRGB).
-    #[arg(long = "image", short = 'i')]
-    pub image: PathBuf,
 }
 
 /// Runs one `btf knit` subcommand.
@@ -162,7 +174,7 @@ fn patch_opts(a: &PatchArgs) -> Result<PatchOptions> {
 }
 
 fn output(a: &PatchArgs, inputs: &[(&str, &Path)]) -> Result<PathBuf> {
-    let Some(out) = a.output.clone() else { bail!("-o/--output is required") };
+    let Some(out) = a.output.clone() else { bail!("-o/--out is required") };
     guard::refuse_overlap(&[("output", &out)], inputs)?;
     let kind = if ext(&out) == "bcc" {
         btf_core::fs::OutputKind::File { magic: b"BCC", format: "BCC" }
@@ -323,6 +335,9 @@ fn light(s: &str) -> Result<yarn_ref::Light> {
 }
 
 fn ref_cmd(a: RefArgs) -> Result<()> {
+    let Some(image) = a.patch.output.clone() else {
+        bail!("give the image with -o OUT.exr|OUT.png")
+    };
     let mut inputs = chart_inputs(&a.patch);
     if let Some(b) = &a.bcc {
         inputs.push(("bcc", b.as_path()));
@@ -331,13 +346,13 @@ fn ref_cmd(a: RefArgs) -> Result<()> {
     if let Some(e) = &env_path {
         inputs.push(("env", e.as_path()));
     }
-    guard::refuse_overlap(&[("image", &a.image)], &inputs)?;
-    let kind = match ext(&a.image).as_str() {
+    guard::refuse_overlap(&[("-o", &image)], &inputs)?;
+    let kind = match ext(&image).as_str() {
         "exr" => btf_core::fs::EXR,
         "png" => btf_core::fs::PNG,
-        e => bail!("{}: unknown image extension '{e}' (exr or png)", a.image.display()),
+        e => bail!("{}: unknown image extension '{e}' (exr or png)", image.display()),
     };
-    guard::check_file(&a.image, kind)?;
+    guard::check_file(&image, kind)?;
     let [w, h] = crate::args::numbers::<usize, 2>(&a.size, "--size")?;
     let color = rgb(&a.albedo, "--albedo")?;
     let params = load_yarn(&a.patch.yarn)?;
@@ -379,7 +394,7 @@ fn ref_cmd(a: RefArgs) -> Result<()> {
     if lights.is_empty() {
         bail!("no light: give --light dir:THETA,PHI, --light point:X,Y,Z,I or --env FILE");
     }
-    let shading = shading(&a.shading, color)?;
+    let shading = shading(a.shading.as_str(), color)?;
     let sc = yarn_ref::Scene { fibers: &scene, lights: &lights, shading: &shading };
     let mut s = yarn_ref::RenderSettings::new(w, h, a.spp);
     s.seed = a.render_seed;
@@ -387,15 +402,15 @@ fn ref_cmd(a: RefArgs) -> Result<()> {
     let bar = crate::progress::bar(h as u64, "rows");
     let (img, stats) = yarn_ref::render_with(&sc, &camera, &s, &|| bar.inc(1))?;
     bar.finish_and_clear();
-    match ext(&a.image).as_str() {
-        "exr" => btf_image::write::write_exr_rgb(&a.image, w, h, &img.rgb)?,
-        _ => btf_image::write::write_png_linear(&a.image, w, h, &img.rgb, 1.0)?,
+    match ext(&image).as_str() {
+        "exr" => btf_image::write::write_exr_rgb(&image, w, h, &img.rgb)?,
+        _ => btf_image::write::write_png_linear(&image, w, h, &img.rgb, 1.0)?,
     }
     let mean: f64 = img.rgb.iter().map(|v| *v as f64).sum::<f64>() / img.rgb.len() as f64;
     let coverage: f64 = img.coverage.iter().map(|v| *v as f64).sum::<f64>() / (w * h) as f64;
     if a.json {
         let j = serde_json::json!({
-            "image": a.image, "width": w, "height": h, "spp": a.spp, "bounces": a.bounces,
+            "image": image, "width": w, "height": h, "spp": a.spp, "bounces": a.bounces,
             "fibers": fibers.fiber_count(), "segments": scene.segment_count(),
             "scene_bytes": scene.bytes(), "build_seconds": build_s,
             "render_seconds": stats.seconds, "rays": stats.rays, "camera_rays": stats.camera_rays,
@@ -413,7 +428,7 @@ fn ref_cmd(a: RefArgs) -> Result<()> {
         a.spp,
         stats.rays_per_second() * 1e-6,
         stats.seconds,
-        a.image.display()
+        image.display()
     );
     Ok(())
 }

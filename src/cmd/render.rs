@@ -13,7 +13,7 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub scene: crate::args::SceneArgs,
     /// Output PNG (sRGB, exposure applied).
-    #[arg(short, long)]
+    #[arg(short = 'o', long = "out", alias = "output")]
     pub output: PathBuf,
     /// Also write the linear HDR image as EXR.
     #[arg(long)]

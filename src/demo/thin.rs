@@ -25,7 +25,7 @@ use std::path::{Path, PathBuf};
 #[derive(clap::Args)]
 pub struct DemoArgs {
     /// Output folder.
-    #[arg(short = 'o', long, default_value = "thin-demo")]
+    #[arg(short = 'o', long, alias = "output", default_value = "thin-demo")]
     out: PathBuf,
     /// Light positions on the orbit (frames).
     #[arg(long, default_value_t = 12)]
@@ -42,7 +42,7 @@ pub struct DemoArgs {
     /// Curtain material: `woven` (datasets mesostructure BTF, synthesised and compressed;
     /// the uncompressed store is removed afterwards) or `weave-lambert` (a Lambertian
     /// basket weave written straight into an eigen store, in milliseconds).
-    #[arg(long, default_value = "woven")]
+    #[arg(long, default_value = "woven", value_parser = ["woven", "weave-lambert"])]
     material: String,
     /// Optical thickness τ₁ of the curtain.
     #[arg(long, default_value_t = 0.6)]

@@ -56,7 +56,7 @@ pub struct ViewArgs {
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=3600))]
     pub turntable: Option<u32>,
     /// Output folder of `--turntable`.
-    #[arg(short, long)]
+    #[arg(short = 'o', long = "out", alias = "output")]
     pub output: Option<PathBuf>,
     /// Keep turntable frames that already exist (continue an interrupted export).
     #[arg(long)]

@@ -200,3 +200,46 @@ fn equation_index_has_every_numbered_equation_once() {
     }
     assert!(failures.is_empty(), "equation index:\n{}", failures.join("\n"));
 }
+
+/// The lines of the first fenced `sh` block after the heading `heading` of README.md.
+fn readme_block(heading: &str) -> Vec<String> {
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md"))
+        .expect("README.md reads");
+    let after = text.split_once(heading).unwrap_or_else(|| panic!("README has no {heading}")).1;
+    let block = after.split_once("```sh\n").expect("an sh block").1;
+    block.split_once("```").expect("closed").0.lines().map(str::to_string).collect()
+}
+
+/// README's "A first session" runs as written, in a shell, in an empty folder (the parse
+/// test of every README command line is `src/readme_commands.rs`); each command says what it
+/// wrote where, and the round trip through a Bonn folder gives the same store back.
+#[test]
+fn the_readme_first_session_runs_as_written() {
+    let lines = readme_block("## A first session");
+    assert!(lines.len() >= 8 && lines.iter().all(|l| l.starts_with("btf ")), "{lines:?}");
+    let d = crate::common::Dir::new();
+    let bin_dir = Path::new(env!("CARGO_BIN_EXE_btf")).parent().unwrap().to_path_buf();
+    let path = format!("{}:{}", bin_dir.display(), std::env::var("PATH").unwrap_or_default());
+    for line in &lines {
+        let o = std::process::Command::new("sh")
+            .args(["-c", line])
+            .current_dir(d.tmp.path())
+            .env("PATH", &path)
+            .env("BTF_NO_PROGRESS", "1")
+            .output()
+            .expect("sh runs");
+        let (out, err) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+        assert!(o.status.success(), "README: `{line}` failed:\n{out}\n{err}");
+        // The last word is what the command wrote (or read, for inspect): it is named.
+        let target = line.split_whitespace().last().unwrap();
+        assert!(out.contains(target) || err.contains(target), "`{line}` says nothing of {target}");
+    }
+    // The Bonn folder round trip keeps every value (16-bit PNG of values ≤ 1: ≤ 2⁻¹⁶ relative).
+    let a = btf_core::store::BtfStore::open(&d.path("corduroy.btf")).unwrap();
+    let b = btf_core::store::BtfStore::open(&d.path("again.btf")).unwrap();
+    assert_eq!((a.meta().n_views(), a.meta().n_lights()), (5, 5));
+    let (x, y) = (a.read_image(3, 2).unwrap(), b.read_image(3, 2).unwrap());
+    let peak = x.iter().fold(0f32, |m, &v| m.max(v)).max(1.0);
+    let worst = x.iter().zip(&y).map(|(p, q)| (p - q).abs()).fold(0f32, f32::max);
+    assert!(worst <= peak / 65535.0, "round trip error {worst} (peak {peak})");
+}

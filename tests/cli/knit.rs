@@ -109,9 +109,9 @@ fn knit_refusals_name_what_is_wrong() {
     let e = d.fails(&["knit", "chart", "bad.chart"]);
     assert!(e.contains("bad.chart"), "{e}");
     let e =
-        d.fails(&["knit", "ref", "--yarn", "no-such-yarn", "--light", "dir:0,0", "-i", "r.exr"]);
+        d.fails(&["knit", "ref", "--yarn", "no-such-yarn", "--light", "dir:0,0", "-o", "r.exr"]);
     assert!(e.contains("no-such-yarn"), "{e}");
-    let e = d.fails(&["knit", "ref", "--chart", "stockinette", "-i", "r.exr"]);
+    let e = d.fails(&["knit", "ref", "--chart", "stockinette", "-o", "r.exr"]);
     assert!(e.contains("no light"), "{e}");
     // An output that is an input.
     std::fs::write(d.path("c.chart"), "name: c\nkp\n").unwrap();

@@ -200,3 +200,16 @@ fn quiet_on_success_and_an_install_hint_without_vulkan() {
     assert!(err.contains("no GPU adapter") && err.contains("mesa-vulkan-drivers"), "{err}");
     assert!(!err.contains("Validation"), "{err}");
 }
+
+#[test]
+fn render_sweep_refuses_component_counts_the_store_does_not_hold() {
+    // Checked before any GPU work: runs without an adapter.
+    let d = setup();
+    std::fs::write(d.path().join("s.toml"), scene("none", false)).unwrap();
+    let o = btf(d.path(), &["render-sweep", "s.toml", "-o", "sweep", "-c", "4,8"]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--components 8") && err.contains("holds only 4"), "{err}");
+    assert!(err.contains("m.eigen"), "{err}");
+    assert!(!d.path().join("sweep").exists());
+}

@@ -226,6 +226,16 @@ pub struct Ubo2003Report {
 
 /// Imports a folder or zip of UBO2003 images at `src` into a BTF store at `out`.
 pub fn import(src: &Path, out: &Path, dtype: DType) -> Result<Ubo2003Report> {
+    import_with_progress(src, out, dtype, &|_, _| {})
+}
+
+/// [`import`], calling `progress(done, total)` after each image stored.
+pub fn import_with_progress(
+    src: &Path,
+    out: &Path,
+    dtype: DType,
+    progress: &dyn Fn(usize, usize),
+) -> Result<Ubo2003Report> {
     let (mut source, names, scale) = Source::open(src)?;
     let src_name = src.display().to_string();
     if names.is_empty() {
@@ -303,6 +313,7 @@ pub fn import(src: &Path, out: &Path, dtype: DType) -> Result<Ubo2003Report> {
             px.iter_mut().for_each(|v| *v *= scale);
         }
         writer.write_image(i / nl, i % nl, &px)?;
+        progress(i + 1, slot_of.len());
     }
     writer.finish()?;
     Ok(Ubo2003Report {

@@ -29,8 +29,8 @@ fn knit_writers_refuse_their_inputs_as_outputs() {
         &["knit", "skeleton", "--chart", "c.chart", "-o", "./c.chart"],
         &["knit", "skeleton", "--chart", "c.chart", "--yarn", "y.toml", "-o", "y.toml"],
         &["knit", "fibers", "--chart", "c.chart", "--yarn", "y.toml", "-o", "x/../y.toml"],
-        &["knit", "ref", "--bcc", "y.bcc", "--yarn", "y.toml", "--light", "dir:0,0", "-i", "y.bcc"],
-        &["knit", "ref", "--chart", "c.chart", "--light", "dir:0,0", "-i", "c.chart"],
+        &["knit", "ref", "--bcc", "y.bcc", "--yarn", "y.toml", "--light", "dir:0,0", "-o", "y.bcc"],
+        &["knit", "ref", "--chart", "c.chart", "--light", "dir:0,0", "-o", "c.chart"],
         &[
             "synth", "material", "--kind", "yarn", "--chart", "c.chart", "--size", "4", "-o",
             "c.chart",
@@ -74,7 +74,7 @@ fn bad_bcc_files_are_refused_by_name_and_leave_nothing() {
         ("cut.bcc", "truncated"),
         ("nan.bcc", "curve 0, control point 1"),
     ] {
-        let err = d.fails(&["knit", "ref", "--bcc", file, "--light", "dir:0,0", "-i", "out.exr"]);
+        let err = d.fails(&["knit", "ref", "--bcc", file, "--light", "dir:0,0", "-o", "out.exr"]);
         assert_no_panic(&err);
         assert!(err.contains(file), "{file}: the message names the file: {err}");
         assert!(err.contains(named), "{file}: the message names '{named}': {err}");
