@@ -62,12 +62,14 @@ const KINDS: [Change; 5] =
 
 fn timing(ui: &mut egui::Ui, v: &Viewer, log: &LatencyLog) {
     let frame = v.last.map_or("-".to_string(), |l| format!("{:.1} ms", l.total_ms()));
-    let size = v
-        .shown
-        .as_ref()
-        .map_or("-".to_string(), |s| format!("{} x {} px", s.texture.width(), s.texture.height()));
-    ui.monospace(format!("frame {frame:>10}  {size}"))
-        .on_hover_text("time from the last change to the finished frame; the frame is rendered at the size of the window's frame area");
+    let size = v.shown.as_ref().map_or("-".to_string(), |s| {
+        format!("{} x {} px", s.texture.width(), s.texture.height())
+    });
+    ui.monospace(format!("frame {frame:>10}")).on_hover_text(
+        "time from the last change to the finished frame (work before rendering + rendering)",
+    );
+    ui.monospace(format!("size  {size:>10}"))
+        .on_hover_text("frames are rendered at the size of the window's frame area");
     ui.collapsing("passes of the last frame", |ui| {
         if let Some(s) = &v.shown {
             ui.label(RichText::new(format!("timed by {}", s.stats.timing)).small());
@@ -76,21 +78,29 @@ fn timing(ui: &mut egui::Ui, v: &Viewer, log: &LatencyLog) {
             }
         }
     });
-    ui.label("latency of the last change (ms):").on_hover_text(
-        "change to finished frame = work before rendering (update) + rendering (render)",
-    );
+    ui.label("last change of each kind, ms:");
     for kind in KINDS {
         let line = match log.by_kind.get(kind.name()) {
-            Some(l) => format!(
-                "{:>6.1} = {:>5.1} + {:>5.1}  {}",
-                l.total_ms(),
-                l.update_ms,
-                l.render_ms,
-                kind.name()
-            ),
-            None => format!("{:>6} {:>15}  {}", "-", "", kind.name()),
+            Some(l) => format!("{:<12}{:>9.1}", short_name(kind), l.total_ms()),
+            None => format!("{:<12}{:>9}", short_name(kind), "-"),
         };
-        ui.monospace(line);
+        let hover = log.by_kind.get(kind.name()).map_or_else(
+            || format!("{}: not done yet", kind.name()),
+            |l| format!("{}: {:.1} ms update + {:.1} ms render", kind.name(), l.update_ms, l.render_ms),
+        );
+        ui.monospace(line).on_hover_text(hover);
+    }
+}
+
+/// A label of at most 12 characters for the latency lines.
+fn short_name(kind: Change) -> &'static str {
+    match kind {
+        Change::Camera => "camera",
+        Change::Light => "light",
+        Change::EnvRotation => "env. turn",
+        Change::EnvSwap => "env. swap",
+        Change::Rebuild => "rebuild",
+        Change::Start => "start",
     }
 }
 
