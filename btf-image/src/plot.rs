@@ -286,6 +286,32 @@ fn ticks(lo: f64, hi: f64, log: bool) -> Vec<f64> {
     v
 }
 
+/// Where a point label `w` pixels wide goes: the first of eight places around the point
+/// (right-above, right-below, left-above, left-below, then further out) that overlaps no
+/// label placed before and stays in the data area; the last resort is the first place.
+fn place_label(placed: &mut Vec<Rect>, (x, y): (f64, f64), w: i64, area: &Rect) -> (i64, i64) {
+    let (x, y) = (x as i64, y as i64);
+    let candidates = [
+        (x + 7, y - 13),
+        (x + 7, y + 5),
+        (x - 7 - w, y - 13),
+        (x - 7 - w, y + 5),
+        (x + 7, y - 25),
+        (x + 7, y + 17),
+        (x - 7 - w, y - 25),
+        (x - 7 - w, y + 17),
+    ];
+    let rect = |(cx, cy): (i64, i64)| Rect { x0: cx - 1, y0: cy - 1, x1: cx + w + 1, y1: cy + 9 };
+    let fits = |q: &Rect| q.x0 >= area.x0 && q.x1 <= area.x1 + 40 && q.y0 >= area.y0 - 12;
+    let at = candidates
+        .iter()
+        .copied()
+        .find(|&c| fits(&rect(c)) && !placed.iter().any(|p| p.intersects(&rect(c))))
+        .unwrap_or(candidates[0]);
+    placed.push(rect(at));
+    at
+}
+
 /// Renders the plot.
 pub fn render(p: &Plot) -> RgbImage {
     let lay = layout(p);
@@ -318,6 +344,7 @@ pub fn render(p: &Plot) -> RgbImage {
     }
     line(&mut img, (left, top), (left, top + ph), black, 1, Dash::Solid);
     line(&mut img, (left, top + ph), (left + pw, top + ph), black, 1, Dash::Solid);
+    let mut placed: Vec<Rect> = Vec::new();
     for (k, s) in p.series.iter().enumerate() {
         let (c, m, dash) = style(k);
         let kept: Vec<usize> =
@@ -332,7 +359,8 @@ pub fn render(p: &Plot) -> RgbImage {
         for (&i, &q) in kept.iter().zip(&mapped) {
             marker(&mut img, q, m, c);
             if let Some(l) = s.labels.get(i) {
-                text::draw(&mut img, q.0 as i64 + 7, q.1 as i64 - 13, l, ink, 1);
+                let at = place_label(&mut placed, q, text::width(l, 1), &r);
+                text::draw(&mut img, at.0, at.1, l, ink, 1);
             }
         }
         if let Some(lg) = lay.legend {

@@ -10,7 +10,6 @@
 use anyhow::{Context, Result};
 use btf_render::{Gpu, RenderOptions, Renderer, Scene};
 use datasets::{EnvKind, EnvParams, MeshKind, Resolution};
-use std::fmt::Write as _;
 use std::path::Path;
 
 /// A demo stage runner: `(name, already done, work)`.
@@ -196,8 +195,32 @@ cache_dir = "cache"       # visibility maps are kept here
     )
 }
 
-/// Runs the mesh, environment and render stages; returns the report section.
-pub fn run(out: &Path, width: u32, stage: &mut StageFn<'_>) -> Result<String> {
+/// One render of the demo, for the report.
+pub struct RenderFact {
+    /// File name of the PNG, relative to the demo folder.
+    pub png: String,
+    /// File name of its scene.
+    pub scene: String,
+    /// What it shows, in plain words.
+    pub caption: &'static str,
+    /// Frame size.
+    pub size: (u32, u32),
+    /// The pass timings of the first frame (setup costs included).
+    pub stats: btf_render::Stats,
+    /// Median wall-clock time of three further frames, ms (shaders compiled, caches warm).
+    pub steady_frame_ms: f64,
+}
+
+/// What the render stages produced: the renders, or why there are none.
+pub struct Renders {
+    /// The renders, in the order of the report.
+    pub renders: Vec<RenderFact>,
+    /// Why renders were skipped (no GPU), if they were.
+    pub skipped: Option<String>,
+}
+
+/// Runs the mesh, environment and render stages.
+pub fn run(out: &Path, width: u32, stage: &mut StageFn<'_>) -> Result<Renders> {
     let mesh_path = out.join("garment.obj");
     let env_path = out.join("sky.exr");
     let mesh = datasets::synth_mesh(MeshKind::Shirt, Resolution::Low)?;
@@ -215,7 +238,6 @@ pub fn run(out: &Path, width: u32, stage: &mut StageFn<'_>) -> Result<String> {
         }),
     )?;
     let env_exposure = btf_image::EnvMap::load(&env_path)?.unit_irradiance_exposure();
-    let mut md = String::from("## Renders\n\n");
     let gpu = match Gpu::new() {
         Ok(g) => g,
         Err(e) if std::env::var("BTF_REQUIRE_GPU").is_ok_and(|v| v == "1") => {
@@ -224,20 +246,35 @@ pub fn run(out: &Path, width: u32, stage: &mut StageFn<'_>) -> Result<String> {
         Err(e) => {
             let msg = "no GPU adapter (install `mesa-vulkan-drivers` for the CPU one)";
             eprintln!("warning: {msg}: {e}; renders skipped");
-            writeln!(md, "Renders skipped: {msg}: {e}.")?;
-            return Ok(md);
+            return Ok(Renders { renders: Vec::new(), skipped: Some(format!("{msg}: {e}")) });
         }
     };
     let renders = [
-        ("point", "render point light", Lighting::Point("volume")),
-        ("point-noshadow", "render without shadows", Lighting::Point("none")),
-        ("environment", "render environment", Lighting::Environment(env_exposure)),
+        (
+            "point",
+            "render point light",
+            Lighting::Point("volume"),
+            "The shirt under a lamp, with its shadows.",
+        ),
+        (
+            "point-noshadow",
+            "render without shadows",
+            Lighting::Point("none"),
+            "The same lamp without shadows: what the shadow pass adds.",
+        ),
+        (
+            "environment",
+            "render environment",
+            Lighting::Environment(env_exposure),
+            "The shirt under an open sky (light from every direction of a sky photograph).",
+        ),
     ];
-    for (name, stage_name, lighting) in renders {
+    let mut facts = Vec::new();
+    for (name, stage_name, lighting, caption) in renders {
         let scene_path = out.join(format!("scene-{name}.toml"));
         let png = out.join(format!("render-{name}.png"));
         btf_image::write::write_text(&scene_path, &scene_toml(width, &mesh.positions, lighting))?;
-        let mut stats = None;
+        let mut fact = None;
         stage(
             stage_name,
             false,
@@ -249,31 +286,25 @@ pub fn run(out: &Path, width: u32, stage: &mut StageFn<'_>) -> Result<String> {
                 anyhow::ensure!(frame.all_finite(), "the render has non-finite pixels");
                 frame.write_png(&png, scene.output.exposure)?;
                 frame.write_exr(&png.with_extension("exr"))?;
-                stats = Some(frame.stats.clone());
+                let mut ms = Vec::new();
+                for _ in 0..3 {
+                    ms.push(renderer.render(&gpu)?.stats.frame_ms);
+                }
+                ms.sort_by(f64::total_cmp);
+                fact = Some(RenderFact {
+                    png: format!("render-{name}.png"),
+                    scene: format!("scene-{name}.toml"),
+                    caption,
+                    size: (scene.output.width, scene.output.height),
+                    stats: frame.stats.clone(),
+                    steady_frame_ms: ms[1],
+                });
                 Ok(())
             }),
         )?;
-        writeln!(
-            md,
-            "### {name} (`{}`)\n\n![{name}](render-{name}.png)\n",
-            scene_path.file_name().unwrap().to_string_lossy()
-        )?;
-        if let Some(s) = stats {
-            writeln!(md, "| pass | ms (lavapipe) |\n|---|---:|")?;
-            for p in &s.setup {
-                writeln!(md, "| {} (setup, once) | {:.2} |", p.name, p.ms)?;
-            }
-            for p in &s.passes {
-                writeln!(md, "| {} | {:.2} |", p.name, p.ms)?;
-            }
-            writeln!(md, "| frame | {:.2} |\n", s.frame_ms)?;
-        }
+        facts.extend(fact);
     }
-    writeln!(
-        md,
-        "The environment render lights the garment by `sky.exr` with per-vertex visibility maps (cached in `cache/`); `btf relight scene-environment.toml --env sky.exr --rotations 12 --eigen 5 -o relight` turns it.\n"
-    )?;
-    Ok(md)
+    Ok(Renders { renders: facts, skipped: None })
 }
 
 #[cfg(test)]

@@ -108,3 +108,18 @@ fn parametric_series_sort_by_parameter_and_refuse_zig_zags() {
     let z = Series::parametric("t", vec![(1.0, 1.0, 0.5), (2.0, 0.8, 0.3), (4.0, 3.0, 0.1)], label);
     assert!(z.points_only, "time fell from c = 1 to 2: no line");
 }
+
+#[test]
+fn labels_of_crowded_points_do_not_overlap() {
+    let area = Rect { x0: 0, y0: 0, x1: 400, y1: 300 };
+    let mut placed = Vec::new();
+    // Three points 3 px apart: each label takes a free place.
+    for k in 0..3 {
+        place_label(&mut placed, (100.0 + 3.0 * k as f64, 100.0), 32, &area);
+    }
+    for i in 0..3 {
+        for j in i + 1..3 {
+            assert!(!placed[i].intersects(&placed[j]), "{:?} {:?}", placed[i], placed[j]);
+        }
+    }
+}
