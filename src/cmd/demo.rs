@@ -86,7 +86,8 @@ pub fn run(a: DemoArgs) -> Result<()> {
     let sweep_dir = a.out.join("sweep");
     stage(&mut stages, "component sweep", sweep_dir.join("report.md").exists(), || {
         anyhow::ensure!(!a.sweep.is_empty() && !a.sweep.contains(&0), "--sweep needs counts ≥ 1");
-        crate::report::compress_sweep::run(&btf, &a.sweep, Quantization::F16, &sweep_dir)
+        crate::report::compress_sweep::write_report(&btf, &a.sweep, Quantization::F16, &sweep_dir)?;
+        Ok(())
     })?;
     let renders = crate::demo::scene::run(&a.out, a.width, &mut |name, done, f| {
         stage(&mut stages, name, done, f)

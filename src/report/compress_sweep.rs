@@ -50,8 +50,16 @@ fn slot_near(store: &BtfStore, theta: f64, phi: f64) -> usize {
     w.as_slice()[0].0
 }
 
-/// Runs the sweep and writes the report into `dir`.
+/// Runs the sweep, writes the report into `dir` and prints its tables.
 pub fn run(input: &BtfStore, cs: &[usize], q: Quantization, dir: &Path) -> Result<()> {
+    let tables = write_report(input, cs, q, dir)?;
+    crate::guard::outln!("{tables}");
+    crate::guard::outln!("report written to {}", dir.join("report.md").display());
+    Ok(())
+}
+
+/// Runs the sweep and writes the report into `dir`; returns its tables (Markdown).
+pub fn write_report(input: &BtfStore, cs: &[usize], q: Quantization, dir: &Path) -> Result<String> {
     crate::guard::output_folder(dir, "compress --sweep", false, &|_| false)?;
     let meta = input.meta();
     let (w, h) = (meta.width, meta.height);
@@ -162,9 +170,7 @@ pub fn run(input: &BtfStore, cs: &[usize], q: Quantization, dir: &Path) -> Resul
         "Difference heat-maps against the original (length of the RGB error vector; green = 0, red ≥ 10 % of the image's peak; colour bar below):\n\n![heat-maps](heatmaps.png)"
     )?;
     btf_image::write::write_text(&dir.join("report.md"), &md)?;
-    crate::guard::outln!("{}{quant_md}", std::fs::read_to_string(dir.join("sweep.md"))?);
-    crate::guard::outln!("report written to {}", dir.join("report.md").display());
-    Ok(())
+    Ok(format!("{}{quant_md}", std::fs::read_to_string(dir.join("sweep.md"))?))
 }
 
 fn write_tables(dir: &Path, rows: &[SweepRow], input: &BtfStore) -> Result<()> {

@@ -71,17 +71,17 @@ pub fn mb(bytes: u64) -> String {
     format!("{:.1} MB", bytes as f64 / 1e6)
 }
 
-/// `swatch.png`: the compressed material tiled 3 × 3, seen from above (θ = 0) under a light
-/// from θ = 45° and under a grazing light (θ = 75°) that shows the relief, each exposed so
-/// its brightest texel is 0.9 of white, enlarged to 360 px.
+/// `swatch.png`: the compressed material tiled 3 × 3, seen from θ = 20°, under a light from
+/// θ = 35° and under a grazing light (θ = 70°, across the texture's rows) that shows the
+/// relief, each exposed so its brightest texel is 0.9 of white, enlarged to 360 px.
 fn swatch(eig: &EigenStore, out: &Path) -> Result<()> {
     let m = &eig.meta().btf;
     let (w, h) = (m.width, m.height);
     let mut panels = Vec::new();
-    for (theta, phi) in [(45.0, 200.0), (75.0, 180.0)] {
+    for (theta, phi) in [(35.0, 60.0), (70.0, 0.0)] {
         let rgb = reconstruct(
             eig,
-            Direction::new(0.0, 0.0),
+            Direction::new(20.0, 270.0),
             Direction::new(theta, phi),
             ReconstructParams::default(),
         )?;
@@ -106,7 +106,7 @@ fn swatch(eig: &EigenStore, out: &Path) -> Result<()> {
         ));
     }
     let strip = captioned_strip(
-        &[(&panels[0], "light from 45 deg"), (&panels[1], "grazing light (75 deg)")],
+        &[(&panels[0], "soft light from above"), (&panels[1], "grazing light")],
         12,
     );
     Ok(write_png(&out.join("swatch.png"), &strip)?)
