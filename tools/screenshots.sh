@@ -12,7 +12,7 @@ set -euo pipefail
 
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 FIGURES="$ROOT/docs/figures"
-BTF="${CARGO_TARGET_DIR:-$ROOT/target}/release/btf"
+BTF="${BTF:-${CARGO_TARGET_DIR:-$ROOT/target}/release/btf}"   # or BTF=path/to/btf
 WORK="$(mktemp -d)"
 trap 'rm -rf "$WORK"' EXIT
 ALL=(report)

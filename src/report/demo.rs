@@ -187,21 +187,24 @@ pub fn write(
         Block::Figure {
             src: "swatch.png".into(),
             caption: format!(
-                "The material: the compressed {kind} tiled 3 × 3, seen from straight above, lit from 45° (left) and from a grazing angle that shows its relief (right)."
+                "The material: the compressed {kind} tiled 3 × 3, seen from 20° off straight above, lit softly from above (left) and from a grazing angle that shows its relief (right)."
             ),
         },
     ];
     if let Some(why) = &renders.skipped {
         page.push(Block::Para(format!("Renders skipped: {why}.")));
     }
-    for r in &renders.renders {
-        page.push(Block::Figure {
+    for (k, r) in renders.renders.iter().enumerate() {
+        let fig = Block::Figure {
             src: r.png.clone(),
             caption: format!(
                 "{} ({}×{} pixels, scene file {})",
                 r.caption, r.size.0, r.size.1, r.scene
             ),
-        });
+        };
+        // The garment first, right under the key numbers; the swatch after it.
+        let at = if k == 0 { page.len() - 1 } else { page.len() };
+        page.insert(at, fig);
     }
     page.push(Block::Heading("What accuracy costs".into()));
     page.push(Block::Para("Each viewing direction of the material is stored as a few components. More components make the material more faithful, and the file larger and slower to draw:".into()));
