@@ -14,7 +14,8 @@
 //! - [`heatmap`]: per-pixel error heat maps between two linear images;
 //! - [`compose`]: images side by side and enlarged, for reports and contact sheets;
 //! - [`plot`]: line plots drawn straight into images (axes, ticks, legend, log axes) so
-//!   reports need no plotting toolchain or system fonts.
+//!   reports need no plotting toolchain or system fonts;
+//! - [`text`]: labels in an 8×8 bitmap font at integer scales, for plots and strips.
 //!
 //! Values are linear inside the toolkit; only PNG output is sRGB-encoded (docs/DESIGN.md §3).
 //! No GPU code lives here.
@@ -26,6 +27,7 @@ pub mod error;
 pub mod exr_limits;
 pub mod heatmap;
 pub mod plot;
+pub mod text;
 pub mod write;
 
 pub use envmap::EnvMap;

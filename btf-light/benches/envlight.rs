@@ -328,6 +328,7 @@ fn error_table(s: &SceneEnvironment) {
             .map(|(k, c)| Series {
                 name: format!("k = {}", k + 1),
                 points: c.iter().enumerate().map(|(d, v)| (d as f64, *v)).collect(),
+                ..Default::default()
             })
             .collect(),
     };

@@ -1,14 +1,15 @@
 //! `btf demo`: the README's main job on embedded defaults — synthesise a material, compress
 //! it, sweep the number of components, make an environment and a garment, render the
-//! garment, and write a short report. Every stage keeps its output and is skipped when that
+//! garment, and write a report for a non-developer (`report.html`, `report.md`) with the
+//! developer tables in `details.{html,md}`; the terminal gets a summary of a few lines. Every stage keeps its output and is skipped when that
 //! output is already complete, so an interrupted demo resumes where it stopped.
 
 use crate::progress::compress_with_progress;
+use crate::report::demo::StageTime;
 use anyhow::{Context, Result};
 use btf_core::compress::CompressParams;
 use btf_core::eigen::{EigenStore, Quantization};
 use btf_core::store::BtfStore;
-use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -38,14 +39,8 @@ pub struct DemoArgs {
     fresh: bool,
 }
 
-struct Stage {
-    name: &'static str,
-    seconds: f64,
-    reused: bool,
-}
-
 fn stage(
-    stages: &mut Vec<Stage>,
+    stages: &mut Vec<StageTime>,
     name: &'static str,
     done: bool,
     f: impl FnOnce() -> Result<()>,
@@ -57,7 +52,7 @@ fn stage(
         eprintln!("[demo] {name} …");
         f().with_context(|| format!("demo stage '{name}'"))?;
     }
-    stages.push(Stage { name, seconds: t0.elapsed().as_secs_f64(), reused: done });
+    stages.push(StageTime { name, seconds: t0.elapsed().as_secs_f64(), reused: done });
     Ok(())
 }
 
@@ -67,7 +62,6 @@ pub fn run(a: DemoArgs) -> Result<()> {
     let kind = datasets::MaterialKind::from_name(a.kind.as_str())?;
     let (btf_path, eig_path) = (a.out.join("material.btf"), a.out.join("material.eig"));
     let mut stages = Vec::new();
-    let mut report = String::new();
 
     stage(&mut stages, "synthesise material", BtfStore::open(&btf_path).is_ok(), || {
         let spec = datasets::MaterialSpec::new(kind, a.size);
@@ -80,71 +74,32 @@ pub fn run(a: DemoArgs) -> Result<()> {
         Ok(())
     })?;
     let btf = BtfStore::open(&btf_path)?;
-    let mut compress_line = String::new();
     stage(&mut stages, "compress", EigenStore::open(&eig_path).is_ok(), || {
         let params = CompressParams {
             components: a.components,
             quantization: Quantization::F16,
             resume: true,
         };
-        let r = compress_with_progress(&btf, &eig_path, params)?;
-        compress_line = format!(
-            "{} components, relative RMSE {:.3e}, PSNR {:.1} dB, {:.1} MiB → {:.1} MiB in {:.2} s",
-            r.components,
-            r.rel_rmse,
-            r.psnr_db,
-            r.input_bytes as f64 / 1048576.0,
-            r.output_bytes as f64 / 1048576.0,
-            r.seconds
-        );
+        compress_with_progress(&btf, &eig_path, params)?;
         Ok(())
     })?;
     let sweep_dir = a.out.join("sweep");
     stage(&mut stages, "component sweep", sweep_dir.join("report.md").exists(), || {
         anyhow::ensure!(!a.sweep.is_empty() && !a.sweep.contains(&0), "--sweep needs counts ≥ 1");
-        crate::report::compress_sweep::run(&btf, &a.sweep, Quantization::F16, &sweep_dir)
+        crate::report::compress_sweep::write_report(&btf, &a.sweep, Quantization::F16, &sweep_dir)?;
+        Ok(())
     })?;
     let renders = crate::demo::scene::run(&a.out, a.width, &mut |name, done, f| {
         stage(&mut stages, name, done, f)
     })?;
-    let cost =
-        crate::cmd::render_sweep::demo_section(&a.out, a.components, &mut |name, done, f| {
-            stage(&mut stages, name, done, f)
-        })?;
-
-    let m = btf.meta();
-    writeln!(report, "# btf demo\n")?;
-    writeln!(
-        report,
-        "Material: synthetic **{}**, {}×{} texels, {} view slots × {} lights (`material.btf`, {:.1} MiB).\n",
-        a.kind,
-        m.width,
-        m.height,
-        m.n_views(),
-        m.n_lights(),
-        btf.bytes() as f64 / 1048576.0
-    )?;
-    if !compress_line.is_empty() {
-        writeln!(report, "Compression (`material.eig`): {compress_line}.\n")?;
+    // The GPU cost sweep writes render-cost/; the details page reads its CSV.
+    crate::cmd::render_sweep::demo_section(&a.out, a.components, &mut |name, done, f| {
+        stage(&mut stages, name, done, f)
+    })?;
+    let eig = EigenStore::open(&eig_path)?;
+    let summary = crate::report::demo::write(&a.out, &a.kind, &btf, &eig, &renders, &stages)?;
+    for line in summary {
+        crate::guard::outln!("{line}");
     }
-    writeln!(
-        report,
-        "What accuracy costs: [sweep/report.md](sweep/report.md)\n\n![error](sweep/error.png)\n"
-    )?;
-    report.push_str(&renders);
-    report.push_str(&cost);
-    writeln!(report, "\n## Stages\n\n| stage | seconds | |\n|---|---:|---|")?;
-    for s in &stages {
-        writeln!(
-            report,
-            "| {} | {:.2} | {} |",
-            s.name,
-            s.seconds,
-            if s.reused { "reused" } else { "" }
-        )?;
-    }
-    btf_image::write::write_text(&a.out.join("report.md"), &report)?;
-    crate::guard::outln!("{report}");
-    crate::guard::outln!("demo written to {}", a.out.join("report.md").display());
     Ok(())
 }

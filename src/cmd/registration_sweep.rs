@@ -405,6 +405,7 @@ fn fraction_plot(
                         (s, ok as f64 / c.len().max(1) as f64)
                     })
                     .collect(),
+                ..Default::default()
             })
             .collect(),
     }

@@ -4,7 +4,7 @@
 //! on/off comparison of the scene's shadows side by side.
 
 use anyhow::{Context, Result};
-use btf_image::compose::side_by_side;
+use btf_image::compose::captioned_strip;
 use btf_image::plot::{Plot, Series, render};
 use btf_image::write::{to_srgb_image as to_srgb, write_png, write_text};
 use btf_render::cost_sweep::{self, READ_BOUND_TARGET, SweepConfig, SweepResult};
@@ -177,52 +177,46 @@ pub fn markdown(r: &SweepResult) -> String {
 
 fn write_plots(r: &SweepResult, out: &Path) -> Result<()> {
     let modes = ["per-pixel/four", "per-pixel/nearest", "per-vertex/four", "per-vertex/nearest"];
-    let series = |f: &dyn Fn(&cost_sweep::CostRow) -> (f64, f64)| {
-        modes
-            .iter()
-            .map(|m| Series {
-                name: (*m).into(),
-                points: r
-                    .rows
-                    .iter()
-                    .filter(|x| format!("{}/{}", x.evaluation, x.blending) == *m)
-                    .map(f)
-                    .collect(),
-            })
-            .collect::<Vec<_>>()
+    let of_mode = |m: &'static str| {
+        r.rows.iter().filter(move |x| format!("{}/{}", x.evaluation, x.blending) == m)
     };
-    let mut cs: Vec<usize> = r.rows.iter().map(|x| x.components).collect();
-    cs.dedup();
-    let counts = cs.iter().map(|c| c.to_string()).collect::<Vec<_>>().join(", ");
+    let series = |f: &dyn Fn(&cost_sweep::CostRow) -> (f64, f64)| {
+        modes.iter().map(|m| Series::new(*m, of_mode(m).map(f).collect())).collect::<Vec<_>>()
+    };
+    // Each point labelled with its c; joined only where the time grows with c.
     let accuracy = Plot {
-        title: format!("Accuracy vs BTF pass time (points: c = {counts})"),
-        x_label: "BTF pass ms".into(),
-        y_label: "rel. RMSE".into(),
+        title: "Accuracy against BTF pass time".into(),
+        x_label: "BTF pass time per frame (ms)".into(),
+        y_label: "relative RMSE against the reference (log)".into(),
         log_y: true,
         log_x: false,
-        series: series(&|x| (x.btf_ms, x.rel_rmse)),
+        series: modes
+            .iter()
+            .map(|m| {
+                let pts = of_mode(m).map(|x| (x.components as f64, x.btf_ms, x.rel_rmse));
+                Series::parametric(*m, pts.collect(), |c| format!("c={c}"))
+            })
+            .collect(),
     };
     write_png(&out.join("render-cost.png"), &render(&accuracy))?;
     let mut by_c = series(&|x| (x.components as f64, x.btf_ms));
-    by_c.push(Series {
-        name: "read bound, per-pixel/four".into(),
-        points: r
-            .rows
-            .iter()
-            .filter(|x| x.evaluation == "per-pixel" && x.blending == "four")
-            .map(|x| (x.components as f64, x.read_bound_ms))
-            .collect(),
-    });
+    by_c.push(Series::new(
+        "read bound, per-pixel/four",
+        of_mode("per-pixel/four").map(|x| (x.components as f64, x.read_bound_ms)).collect(),
+    ));
     let cost = Plot {
-        title: "BTF pass time vs components".into(),
+        title: "BTF pass time against components".into(),
         x_label: "components c".into(),
-        y_label: "ms".into(),
+        y_label: "BTF pass time per frame (ms)".into(),
         log_y: false,
         log_x: false,
         series: by_c,
     };
     Ok(write_png(&out.join("cost-vs-components.png"), &render(&cost))?)
 }
+
+/// Narrowest panel of `eq6-on-off.png`, pixels.
+pub const EQ6_MIN_WIDTH: u32 = 400;
 
 /// Renders the scene's shadows with and without the smooth boundary of [S03 eq. 6] and writes them
 /// side by side; `None` when no light casts shadows.
@@ -234,13 +228,23 @@ fn eq6_comparison(gpu: &Gpu, scene: &Scene, out: &Path) -> Result<Option<String>
     if s.effects.shadows == Shadows::None {
         s.effects.shadows = Shadows::Volume;
     }
+    // Readable at any sweep size: at least EQ6_MIN_WIDTH pixels wide per panel.
+    if s.output.width < EQ6_MIN_WIDTH {
+        let f = EQ6_MIN_WIDTH as f64 / s.output.width as f64;
+        s.output.height = (s.output.height as f64 * f).round() as u32;
+        s.output.width = EQ6_MIN_WIDTH;
+    }
     let mut images = Vec::new();
     for on in [true, false] {
         s.effects.smooth_boundary = on;
         let f = Renderer::new(gpu, &s, RenderOptions::default())?.render(gpu)?;
         images.push(to_srgb(f.width as usize, f.height as usize, &f.rgb, s.output.exposure));
     }
-    write_png(&out.join("eq6-on-off.png"), &side_by_side(&[&images[0], &images[1]], 8))?;
+    let strip = captioned_strip(
+        &[(&images[0], "smooth boundary (eq. 6)"), (&images[1], "hard shadow edge")],
+        8,
+    );
+    write_png(&out.join("eq6-on-off.png"), &strip)?;
     Ok(Some(format!(
         "Shadows ({:?}) with the smooth boundary of eq. 6 (left) and without it (right):\n\n![eq. 6 on/off](eq6-on-off.png)\n\n",
         s.effects.shadows

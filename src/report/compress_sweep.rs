@@ -11,8 +11,8 @@ use btf_core::compress::CompressParams;
 use btf_core::eigen::{EigenStore, Quantization};
 use btf_core::reconstruct::{ReconstructParams, reconstruct, reconstruct_sample};
 use btf_core::store::BtfStore;
-use btf_image::compose::{side_by_side, upscale};
-use btf_image::heatmap::error_heatmap_image;
+use btf_image::compose::{captioned_strip, side_by_side, stacked, upscale};
+use btf_image::heatmap::{colour_bar, error_heatmap_image};
 use btf_image::plot::{Plot, Series, render};
 use btf_image::write::{to_srgb_image as to_srgb, write_png};
 use std::fmt::Write as _;
@@ -50,8 +50,16 @@ fn slot_near(store: &BtfStore, theta: f64, phi: f64) -> usize {
     w.as_slice()[0].0
 }
 
-/// Runs the sweep and writes the report into `dir`.
+/// Runs the sweep, writes the report into `dir` and prints its tables.
 pub fn run(input: &BtfStore, cs: &[usize], q: Quantization, dir: &Path) -> Result<()> {
+    let tables = write_report(input, cs, q, dir)?;
+    crate::guard::outln!("{tables}");
+    crate::guard::outln!("report written to {}", dir.join("report.md").display());
+    Ok(())
+}
+
+/// Runs the sweep and writes the report into `dir`; returns its tables (Markdown).
+pub fn write_report(input: &BtfStore, cs: &[usize], q: Quantization, dir: &Path) -> Result<String> {
     crate::guard::output_folder(dir, "compress --sweep", false, &|_| false)?;
     let meta = input.meta();
     let (w, h) = (meta.width, meta.height);
@@ -87,16 +95,14 @@ pub fn run(input: &BtfStore, cs: &[usize], q: Quantization, dir: &Path) -> Resul
         heat.push(upscale(&error_heatmap_image(w, h, &original, &rec, 0.1 * peak, None), 128));
         if c == *cs.iter().max().unwrap() {
             for (name, th, ph) in [
-                ("theta 0", 0.0, 0.0),
-                ("theta 45 phi 300", 45.0, 300.0),
-                ("theta 75 phi 45", 75.0, 45.0),
+                ("view theta 0", 0.0, 0.0),
+                ("view theta 45, phi 300", 45.0, 300.0),
+                ("view theta 75, phi 45", 75.0, 45.0),
             ] {
                 let j = slot_near(input, th, ph);
                 let ev = store.read_slot(j)?.eigenvalues;
-                decay.push(Series {
-                    name: name.into(),
-                    points: ev.iter().enumerate().map(|(k, &l)| ((k + 1) as f64, l)).collect(),
-                });
+                let points = ev.iter().enumerate().map(|(k, &l)| ((k + 1) as f64, l)).collect();
+                decay.push(Series::new(name, points));
             }
         }
         rows.push(SweepRow {
@@ -135,76 +141,8 @@ pub fn run(input: &BtfStore, cs: &[usize], q: Quantization, dir: &Path) -> Resul
         r_other.output_bytes as f64 / 1048576.0
     );
     write_tables(dir, &rows, input)?;
-    write_png(
-        &dir.join("reconstructions.png"),
-        &side_by_side(&panels.iter().collect::<Vec<_>>(), 6),
-    )?;
-    write_png(&dir.join("heatmaps.png"), &side_by_side(&heat.iter().collect::<Vec<_>>(), 6))?;
-    let pts = |f: &dyn Fn(&SweepRow) -> (f64, f64)| rows.iter().map(f).collect::<Vec<_>>();
-    let plots = [
-        (
-            "error.png",
-            Plot {
-                title: "Relative RMSE vs components".into(),
-                x_label: "components c".into(),
-                y_label: "rel. RMSE".into(),
-                log_y: true,
-                log_x: false,
-                series: vec![Series {
-                    name: "stored".into(),
-                    points: pts(&|r| (r.components as f64, r.rel_rmse)),
-                }],
-            },
-        ),
-        (
-            "accuracy_vs_time.png",
-            Plot {
-                title: "Accuracy vs compression time".into(),
-                x_label: "seconds".into(),
-                y_label: "rel. RMSE".into(),
-                log_y: true,
-                log_x: false,
-                series: vec![Series {
-                    name: "compress".into(),
-                    points: pts(&|r| (r.compress_s, r.rel_rmse)),
-                }],
-            },
-        ),
-        (
-            "size_time.png",
-            Plot {
-                title: "Size and reconstruction time vs components".into(),
-                x_label: "components c".into(),
-                y_label: "MiB / ms".into(),
-                log_y: false,
-                log_x: false,
-                series: vec![
-                    Series {
-                        name: "store MiB".into(),
-                        points: pts(&|r| (r.components as f64, r.output_bytes as f64 / 1048576.0)),
-                    },
-                    Series {
-                        name: "CPU recon. ms".into(),
-                        points: pts(&|r| (r.components as f64, r.reconstruct_ms)),
-                    },
-                ],
-            },
-        ),
-        (
-            "eigenvalues.png",
-            Plot {
-                title: "Eigenvalue decay of three view slots".into(),
-                x_label: "index".into(),
-                y_label: "eigenvalue".into(),
-                log_y: true,
-                log_x: false,
-                series: decay,
-            },
-        ),
-    ];
-    for (name, p) in &plots {
-        write_png(&dir.join(name), &render(p))?;
-    }
+    write_strips(dir, cs, &panels, &heat)?;
+    write_plots(dir, &rows, decay)?;
     let mut md = String::new();
     writeln!(
         md,
@@ -221,7 +159,7 @@ pub fn run(input: &BtfStore, cs: &[usize], q: Quantization, dir: &Path) -> Resul
     md.push_str(&quant_md);
     writeln!(
         md,
-        "\n![error](error.png) ![accuracy vs time](accuracy_vs_time.png)\n\n![size and time](size_time.png) ![eigenvalues](eigenvalues.png)\n"
+        "\n![error](error.png) ![accuracy vs time](accuracy_vs_time.png)\n\nEach point of the accuracy-vs-time plot is labelled with its c; the points are joined only when the time grows with c (timings are noisy).\n\n![size and time](size_time.png) ![eigenvalues](eigenvalues.png)\n"
     )?;
     writeln!(
         md,
@@ -229,12 +167,10 @@ pub fn run(input: &BtfStore, cs: &[usize], q: Quantization, dir: &Path) -> Resul
     )?;
     writeln!(
         md,
-        "Difference heat-maps (length of the RGB error vector; green = 0, red ≥ 10 % of the image's peak):\n\n![heat-maps](heatmaps.png)"
+        "Difference heat-maps against the original (length of the RGB error vector; green = 0, red ≥ 10 % of the image's peak; colour bar below):\n\n![heat-maps](heatmaps.png)"
     )?;
     btf_image::write::write_text(&dir.join("report.md"), &md)?;
-    crate::guard::outln!("{}{quant_md}", std::fs::read_to_string(dir.join("sweep.md"))?);
-    crate::guard::outln!("report written to {}", dir.join("report.md").display());
-    Ok(())
+    Ok(format!("{}{quant_md}", std::fs::read_to_string(dir.join("sweep.md"))?))
 }
 
 fn write_tables(dir: &Path, rows: &[SweepRow], input: &BtfStore) -> Result<()> {
@@ -272,5 +208,92 @@ fn write_tables(dir: &Path, rows: &[SweepRow], input: &BtfStore) -> Result<()> {
     writeln!(md, "\nInput store: {:.1} MiB.", input.bytes() as f64 / 1048576.0)?;
     btf_image::write::write_text(&dir.join("sweep.csv"), &csv)?;
     btf_image::write::write_text(&dir.join("sweep.md"), &md)?;
+    Ok(())
+}
+
+/// `reconstructions.png` and `heatmaps.png`: the original and each `c`, captioned; the
+/// heat-maps with their colour bar below.
+fn write_strips(
+    dir: &Path,
+    cs: &[usize],
+    panels: &[image::RgbImage],
+    heat: &[image::RgbImage],
+) -> Result<()> {
+    let mut captions = vec!["original".to_string()];
+    captions.extend(cs.iter().map(|c| format!("c = {c}")));
+    let strip = |imgs: &[image::RgbImage]| {
+        let pairs: Vec<(&image::RgbImage, &str)> =
+            imgs.iter().zip(&captions).map(|(i, c)| (i, c.as_str())).collect();
+        captioned_strip(&pairs, 6)
+    };
+    write_png(&dir.join("reconstructions.png"), &strip(panels))?;
+    let heat_strip = strip(heat);
+    let bar = colour_bar(
+        heat_strip.width().clamp(260, 520),
+        &[(0.0, "0"), (0.5, "5 % of peak"), (1.0, ">= 10 % of peak")],
+    );
+    write_png(&dir.join("heatmaps.png"), &stacked(&[&heat_strip, &bar], 4))?;
+    Ok(())
+}
+
+/// The sweep's plots, one unit per axis: error, accuracy against compression time (points
+/// labelled with c), size and CPU reconstruction time (two panels), eigenvalue decay.
+fn write_plots(dir: &Path, rows: &[SweepRow], decay: Vec<Series>) -> Result<()> {
+    let pts = |f: &dyn Fn(&SweepRow) -> (f64, f64)| rows.iter().map(f).collect::<Vec<_>>();
+    let c_label = |c: f64| format!("c={c}");
+    let line = |title: &str, x: &str, y: &str, log_y: bool, series: Vec<Series>| Plot {
+        title: title.into(),
+        x_label: x.into(),
+        y_label: y.into(),
+        log_y,
+        log_x: false,
+        series,
+    };
+    let error = line(
+        "Error against components",
+        "components c",
+        "relative RMSE (log)",
+        true,
+        vec![Series::new("whole BTF", pts(&|r| (r.components as f64, r.rel_rmse)))],
+    );
+    let accuracy = line(
+        "Accuracy against compression time",
+        "time to compress the whole BTF (s)",
+        "relative RMSE (log)",
+        true,
+        vec![Series::parametric(
+            "compress (label: c)",
+            rows.iter().map(|r| (r.components as f64, r.compress_s, r.rel_rmse)).collect(),
+            c_label,
+        )],
+    );
+    let size = line(
+        "Store size against components",
+        "components c",
+        "eigen store (MiB)",
+        false,
+        vec![Series::new(
+            "eigen store",
+            pts(&|r| (r.components as f64, r.output_bytes as f64 / 1048576.0)),
+        )],
+    );
+    let time = line(
+        "CPU reconstruction time against components",
+        "components c",
+        "one texture (ms)",
+        false,
+        vec![Series::new("CPU reconstruct", pts(&|r| (r.components as f64, r.reconstruct_ms)))],
+    );
+    let eigen = line(
+        "Eigenvalue decay of three view slots",
+        "eigenvalue index",
+        "eigenvalue (log)",
+        true,
+        decay,
+    );
+    write_png(&dir.join("error.png"), &render(&error))?;
+    write_png(&dir.join("accuracy_vs_time.png"), &render(&accuracy))?;
+    write_png(&dir.join("size_time.png"), &side_by_side(&[&render(&size), &render(&time)], 16))?;
+    write_png(&dir.join("eigenvalues.png"), &render(&eigen))?;
     Ok(())
 }

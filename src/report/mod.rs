@@ -2,5 +2,7 @@
 //! (plots and heat maps from `btf_image`).
 
 pub mod compress_sweep;
+pub mod demo;
+pub mod doc;
 pub mod relight;
 pub mod thin;

@@ -136,6 +136,7 @@ fn write_coefficients(stem: &str, dir: &Path, curves: &[Vec<f64>]) -> Result<()>
             .map(|(k, c)| Series {
                 name: format!("o_{}", k + 1),
                 points: c.iter().enumerate().map(|(d, v)| (d as f64, *v)).collect(),
+                ..Default::default()
             })
             .collect(),
     };
@@ -173,10 +174,12 @@ fn write_tables(stem: &str, dir: &Path, a_n: usize, rows: &[EigenRow]) -> Result
             Series {
                 name: "mean".into(),
                 points: rows.iter().map(|r| (r.e as f64, r.mean_rel_error)).collect(),
+                ..Default::default()
             },
             Series {
                 name: "max".into(),
                 points: rows.iter().map(|r| (r.e as f64, r.max_rel_error)).collect(),
+                ..Default::default()
             },
         ],
     };

@@ -1,5 +1,6 @@
 //! `btf demo` end to end at a tiny size: every stage runs, the report and pictures exist,
-//! the numbers in them are sane, and a second run reuses the finished stages.
+//! the headline numbers agree with the stores and the sweep, the garment fills the frame,
+//! the terminal gets a short summary, and a second run reuses the finished stages.
 
 use crate::common;
 use common::*;
@@ -12,6 +13,10 @@ fn demo_runs_end_to_end_and_resumes() {
     let out = d.path("out");
     for f in [
         "report.md",
+        "report.html",
+        "details.md",
+        "details.html",
+        "swatch.png",
         "material.btf/zarr.json",
         "material.eig/zarr.json",
         "sweep/report.md",
@@ -20,15 +25,40 @@ fn demo_runs_end_to_end_and_resumes() {
     ] {
         assert!(out.join(f).exists(), "missing {f}");
     }
-    assert!(stdout.contains("Compression (`material.eig`): 8 components"), "{stdout}");
+    // A summary, not the report: at most 10 lines, pointing at the report.
+    assert!(stdout.lines().count() <= 10, "{stdout}");
+    assert!(stdout.contains("report.html") && !stdout.contains("| "), "{stdout}");
     let m: serde_json::Value =
         serde_json::from_str(&d.ok(&["inspect", "out/material.eig", "--json"])).unwrap();
     assert_eq!((m["n_views"].as_u64(), m["components"].as_u64()), (Some(81), Some(8)));
+    let b: serde_json::Value =
+        serde_json::from_str(&d.ok(&["inspect", "out/material.btf", "--json"])).unwrap();
+    // The headline sizes are the stores' sizes (MB = 10⁶ bytes, one decimal).
+    let mb = |v: &serde_json::Value| format!("{:.1} MB", v["bytes"].as_u64().unwrap() as f64 / 1e6);
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    for text in [&stdout, &report, &html] {
+        let sizes = format!("{} instead of {}", mb(&m), mb(&b));
+        assert!(text.contains(&mb(&m)) && text.contains(&mb(&b)), "{sizes}: {text}");
+    }
+    assert!(report.contains(&format!("{} instead of {}", mb(&m), mb(&b))), "{report}");
     // Sweep: the error falls from 2 to 8 components.
     let csv = std::fs::read_to_string(out.join("sweep/sweep.csv")).unwrap();
     let errs: Vec<f64> =
         csv.lines().skip(1).map(|l| l.split(',').nth(2).unwrap().parse().unwrap()).collect();
     assert!(errs.len() == 2 && errs[1] < errs[0] && errs[1] > 0.0, "{errs:?}");
+    // The headline error is the store's (c = 8, the sweep's last row, same compression):
+    // equal to the rounding of two decimals in per cent.
+    let pct = format!("error {:.2} %", 100.0 * errs[1]);
+    assert!(stdout.contains(&pct) && stdout.contains("8 components"), "{pct}: {stdout}");
+    assert!(report.contains(&format!("{:.2} %", 100.0 * errs[1])), "{report}");
+    // The report is self-contained: relative images that exist, no scripts or remote files.
+    assert!(!html.contains("<script") && !html.contains("http"));
+    for src in html.split("src=\"").skip(1).map(|t| t.split('"').next().unwrap()) {
+        assert!(out.join(src).exists(), "report.html shows a missing {src}");
+    }
+    let details = std::fs::read_to_string(out.join("details.md")).unwrap();
+    assert!(report.contains("(details.html)") && details.contains("| synthesise material |"));
     let gpu_required = std::env::var("BTF_REQUIRE_GPU").is_ok_and(|v| v == "1");
     let png = out.join("render-point.png");
     if png.exists() {
@@ -43,6 +73,17 @@ fn demo_runs_end_to_end_and_resumes() {
             .count();
         let frac = lit as f64 / (96.0 * 72.0);
         assert!(frac > 0.05 && frac < 0.9, "lit fraction {frac}");
+        // Framed: the rows the garment covers span ≥ 60 % of the frame's height.
+        let rows: Vec<u32> = (0..72)
+            .filter(|&y| {
+                (0..96).any(|x| {
+                    let p = img.get_pixel(x, y).0;
+                    p.iter().zip(bg).map(|(a, b)| (*a as i32 - b as i32).abs()).sum::<i32>() > 30
+                })
+            })
+            .collect();
+        let span = (rows.last().unwrap() - rows[0] + 1) as f64 / 72.0;
+        assert!(span >= 0.6, "the garment spans {span} of the height");
         // Under the sky (exposure: horizontal irradiance 1) the garment is lit as well, and
         // the report lists the environment's one-off costs.
         let img = image::open(out.join("render-environment.png")).unwrap().to_rgb8();
@@ -53,20 +94,24 @@ fn demo_runs_end_to_end_and_resumes() {
             .count();
         let frac = lit as f64 / (96.0 * 72.0);
         assert!(frac > 0.05 && frac < 0.9, "environment: lit fraction {frac}");
-        assert!(stdout.contains("env visibility maps"), "{stdout}");
+        assert!(details.contains("env visibility maps"), "{details}");
+        assert!(stdout.contains("render: 96×72 frame in"), "{stdout}");
         // Render cost sweep: c = 4, 8 × two evaluations × two blendings, with its checks.
         let cost = std::fs::read_to_string(out.join("render-cost/render-cost.csv")).unwrap();
         assert_eq!(cost.lines().count(), 1 + 8, "{cost}");
-        assert!(out.join("render-cost/eq6-on-off.png").exists());
-        let report = std::fs::read_to_string(out.join("report.md")).unwrap();
-        assert!(report.contains("× read bound") && report.contains("render-cost/render-cost.png"));
+        // The shadow comparison is readable: two captioned panels of ≥ 400 px.
+        let eq6 = image::open(out.join("render-cost/eq6-on-off.png")).unwrap();
+        assert!(eq6.width() >= 2 * 400 && eq6.height() >= 300, "{}×{}", eq6.width(), eq6.height());
+        assert!(
+            details.contains("read_bound_ms") && details.contains("render-cost/render-cost.png")
+        );
     } else {
         assert!(!gpu_required, "BTF_REQUIRE_GPU=1 but the demo rendered nothing");
     }
     // Second run: everything reused, same report numbers.
     let again = d.ok(&args);
-    assert!(
-        again.contains("| synthesise material | ") && again.matches("reused").count() >= 3,
-        "{again}"
-    );
+    let details = std::fs::read_to_string(out.join("details.md")).unwrap();
+    assert!(details.matches("reused").count() >= 3, "{details}");
+    // Same headline numbers from the kept stores.
+    assert_eq!(again.lines().nth(1), stdout.lines().nth(1), "{again}");
 }

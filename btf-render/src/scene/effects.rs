@@ -50,7 +50,8 @@ pub struct Effects {
     pub terminator_blur: u32,
     /// Shadow-map resolution (texels per side).
     pub shadow_map_size: u32,
-    /// Samples per pixel (1 or 4).
+    /// Samples per pixel (1 or 4; default 4: smooth silhouettes for every render and
+    /// turntable, at the cost measured in BENCHMARKS.md, "Demo and report (issue #25)").
     pub msaa: u32,
     /// The smooth shadow boundary of `[S03 eq. 6]` (off: shadow volume / map alone, for comparison).
     pub smooth_boundary: bool,
@@ -71,7 +72,7 @@ impl Default for Effects {
             terminator_deg: 15.0,
             terminator_blur: 0,
             shadow_map_size: 1024,
-            msaa: 1,
+            msaa: 4,
             smooth_boundary: true,
             mipmaps: true,
             anisotropy: 1,
