@@ -365,7 +365,10 @@ impl SceneBuilder {
                     ortho_height: 1.0,
                 },
                 lights: Vec::new(),
-                effects: Effects::default(),
+                // One sample per pixel: the references are per-pixel CPU evaluations at
+                // pixel centres (the scene default, 4 samples, averages silhouettes); the
+                // tests that are about MSAA ask for it.
+                effects: Effects { msaa: 1, ..Effects::default() },
             },
         };
         b = b.ortho(OVER_PLANE);
