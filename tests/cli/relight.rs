@@ -135,6 +135,7 @@ path = "{env}"
 visibility_res = 16
 [effects]
 evaluation = "{evaluation}"
+msaa = 1   # exact sums within 1e-4: MSAA frames resolve into f16
 "#
     )
 }
