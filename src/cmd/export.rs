@@ -1,7 +1,8 @@
 //! `btf export`: data for other tools. `npy` writes one view slot of a BTF store as a
 //! `lights × (h·w·3)` float32 array; `ubo2003` writes a BTF store as a Bonn image folder;
 //! `pvf` writes an eigen store as a Bonn PVF file; `exr` writes one slot of an eigen store
-//! (mean and eigentextures) as a multi-layer OpenEXR for any image tool.
+//! as one single-part OpenEXR (channels `mean.R/G/B`, `eigen00.R/G/B`, …) and its weights as
+//! `OUT.weights.npy`, for any image tool (docs/stores.md).
 
 use anyhow::{Context, Result, bail};
 use btf_capture::bonn::export::{ImageEncoding, export_pvf, export_ubo2003};
@@ -20,8 +21,9 @@ pub struct ExportArgs {
     /// Output format (npy|ubo2003|pvf|exr).
     #[arg(long, default_value = "npy")]
     format: String,
-    /// Image encoding of a ubo2003 folder (png|png16|jpg|exr).
-    #[arg(long, default_value = "png16")]
+    /// Image encoding of a ubo2003 folder: png (8-bit sRGB, the default), png16 (16-bit
+    /// sRGB: Pillow and imageio decode it to 8 bit), jpg or exr (linear float).
+    #[arg(long, default_value = "png")]
     image: String,
     /// Material name at the start of ubo2003 file names.
     #[arg(long, default_value = "material")]
@@ -52,42 +54,6 @@ pub fn write_npy(path: &Path, rows: usize, cols: usize, data: &[f32]) -> Result<
         }
         Ok(())
     })?;
-    Ok(())
-}
-
-/// Writes `layers` (name, `h·w·3` linear RGB) as one multi-layer float32 EXR, atomically.
-pub fn write_layers_exr(
-    path: &Path,
-    w: usize,
-    h: usize,
-    layers: &[(String, Vec<f32>)],
-) -> Result<()> {
-    use exr::prelude::*;
-    let list: Vec<Layer<AnyChannels<FlatSamples>>> = layers
-        .iter()
-        .map(|(name, px)| {
-            let ch = |c: usize, n: &str| {
-                AnyChannel::new(
-                    n,
-                    FlatSamples::F32(px.iter().skip(c).step_by(3).copied().collect()),
-                )
-            };
-            Layer::new(
-                (w, h),
-                LayerAttributes::named(name.as_str()),
-                Encoding::FAST_LOSSLESS,
-                AnyChannels::sort(vec![ch(0, "R"), ch(1, "G"), ch(2, "B")].into()),
-            )
-        })
-        .collect();
-    let image =
-        Image::from_layers(ImageAttributes::new(IntegerBounds::from_dimensions((w, h))), list);
-    let mut bytes = std::io::Cursor::new(Vec::new());
-    image
-        .write()
-        .to_buffered(&mut bytes)
-        .with_context(|| format!("cannot encode {}", path.display()))?;
-    btf_core::fs::write_atomic(path, bytes.get_ref())?;
     Ok(())
 }
 
@@ -156,14 +122,19 @@ pub fn run(a: ExportArgs) -> Result<()> {
                 .with_context(|| format!("cannot write {}", a.output.display()))
         }
         "exr" => {
+            // One single-part EXR (channels mean.R, …, eigen00.R, …) and the slot's weights
+            // beside it as WEIGHTS.npy (lights × components): docs/stores.md.
+            let weights = a.output.with_extension("weights.npy");
+            crate::guard::refuse_overlap(&[("weights", &weights)], &[("input", &a.input)])?;
+            crate::guard::check_file(&weights, btf_core::fs::NPY)?;
             let store = open_eigen(&a.input)?;
             let m = &store.meta().btf;
             let s = store.read_slot(slot_arg(&a, m.n_views())?)?;
-            let mut layers = vec![("mean".to_string(), s.mean.clone())];
-            for k in 0..s.components {
-                layers.push((format!("eigen{k:02}"), s.basis_row(k).to_vec()));
-            }
-            write_layers_exr(&a.output, m.width, m.height, &layers)
+            let names: Vec<String> = (0..s.components).map(|k| format!("eigen{k:02}")).collect();
+            let mut images = vec![("mean", &s.mean[..])];
+            images.extend(names.iter().enumerate().map(|(k, n)| (n.as_str(), s.basis_row(k))));
+            btf_image::write::write_exr_named_rgb(&a.output, m.width, m.height, &images)?;
+            write_npy(&weights, m.n_lights(), s.components, &s.weights)
         }
         o => bail!("unsupported export format '{o}' (npy, ubo2003, pvf, exr)"),
     }
