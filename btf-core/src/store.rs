@@ -405,6 +405,20 @@ impl BtfWriter {
         resume: bool,
         job: Value,
     ) -> Result<Self> {
+        Self::create_compressed(path, meta, dtype, resume, job, zarr::Compression::DEFAULT_ZSTD)
+    }
+
+    /// [`BtfWriter::create_for_job`] with the chunks' compression chosen:
+    /// [`zarr::Compression::None`] writes the pre-#25 layout, whose chunks the PCA maps in
+    /// place ([`BtfStore::map_slot`]).
+    pub fn create_compressed(
+        path: &Path,
+        meta: BtfMeta,
+        dtype: DType,
+        resume: bool,
+        job: Value,
+        compression: zarr::Compression,
+    ) -> Result<Self> {
         if !matches!(dtype, DType::F16 | DType::F32) {
             return Err(Error::Unsupported(format!(
                 "normtexture dtype {dtype:?} (use f16 or f32)"
@@ -413,8 +427,8 @@ impl BtfWriter {
         let meta = meta.validate(path)?;
         let record = json!({"store": "btf", "meta": meta, "dtype": dtype.zarr_name(), "job": job});
         let txn = StoreTxn::begin(path, resume, &record)?;
-        let arr =
-            ZarrArray::create(&txn.dir().join("normtextures"), normtexture_array(&meta, dtype))?;
+        let array = ArrayMeta { compression, ..normtexture_array(&meta, dtype) };
+        let arr = ZarrArray::create(&txn.dir().join("normtextures"), array)?;
         Ok(BtfWriter { txn, meta, arr })
     }
 
@@ -750,16 +764,18 @@ mod tests {
         write_store(&p, 1.0);
         claim_texels(&p, 8192, 8192);
         // Consistent metadata opens; reading refuses by naming the chunk file and the claim
-        // instead of allocating 4 × 805 MB for the slot.
+        // (the decoded size its zstd frame records against the claim) instead of
+        // allocating 4 × 805 MB for the slot.
         let s = BtfStore::open(&p).unwrap();
         assert_eq!((s.meta().width, s.meta().height), (8192, 8192));
         for e in [s.read_slot(1).unwrap_err(), s.read_image(1, 2).unwrap_err()] {
             assert!(matches!(e, Error::Corrupt { .. }), "{e}");
             let e = e.to_string();
             assert!(e.contains("normtextures/c/1/") && e.contains("view slot 1"), "{e}");
-            assert!(e.contains("claims 805306372"), "{e}");
+            assert!(e.contains("claims 805306368"), "{e}");
         }
-        assert!(s.map_slot(1).is_err());
+        // Compressed chunks are decoded, never mapped.
+        assert!(s.map_slot(1).unwrap().is_none());
     }
 
     fn tiny_meta() -> BtfMeta {

@@ -662,6 +662,63 @@ mod tests {
     }
 
     #[test]
+    fn zstd_chunks_round_trip_and_hostile_frames_are_named_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = ArrayMeta { compression: Compression::DEFAULT_ZSTD, ..meta() };
+        let a = ZarrArray::create(dir.path(), m).unwrap();
+        let raw = encode_f32(&[0.5, 0.5, 0.5, 0.5], DType::F32);
+        a.write_chunk(&[2, 0], &raw).unwrap();
+        let b = ZarrArray::open(dir.path(), &Limits::default()).unwrap();
+        assert_eq!(b.meta().compression, Compression::Zstd { level: 3 });
+        assert_eq!(b.read_chunk(&[2, 0]).unwrap(), raw);
+        assert!(b.has_chunk(&[2, 0]) && !b.has_chunk(&[1, 0]));
+        b.check_chunk_file(&[2, 0]).unwrap();
+        let p = b.chunk_path(&[2, 0]);
+        let with_crc = |frame: Vec<u8>| {
+            let crc = crc32c::crc32c(&frame).to_le_bytes();
+            [frame, crc.to_vec()].concat()
+        };
+        // A bit flip: the checksum over the compressed bytes catches it, naming the chunk.
+        let mut bytes = fs::read(&p).unwrap();
+        bytes[5] ^= 0x10;
+        fs::write(&p, &bytes).unwrap();
+        let e = b.read_chunk(&[2, 0]).unwrap_err().to_string();
+        assert!(e.contains("checksum") && e.contains("c/2/0"), "{e}");
+        // A valid frame (and checksum) of 1 MiB where the chunk holds 16 bytes: refused
+        // from the frame header, before any decoding, by the size check and by the reader.
+        let big = zstd::bulk::compress(&vec![0u8; 1 << 20], 3).unwrap();
+        fs::write(&p, with_crc(big)).unwrap();
+        for e in [b.check_chunk_file(&[2, 0]).unwrap_err(), b.read_chunk(&[2, 0]).unwrap_err()] {
+            let e = e.to_string();
+            assert!(e.contains("decodes to 1048576 bytes") && e.contains("claims 16"), "{e}");
+        }
+        // Not a zstd frame at all, with a right checksum.
+        fs::write(&p, with_crc(b"no zstd here".to_vec())).unwrap();
+        let e = b.read_chunk(&[2, 0]).unwrap_err().to_string();
+        assert!(e.contains("not a zstd frame") && e.contains("c/2/0"), "{e}");
+        // A frame without a recorded size that decodes to more than the chunk: capped.
+        let mut enc = zstd::stream::Encoder::new(Vec::new(), 3).unwrap();
+        std::io::Write::write_all(&mut enc, &[7u8; 4096]).unwrap();
+        fs::write(&p, with_crc(enc.finish().unwrap())).unwrap();
+        let e = b.read_chunk(&[2, 0]).unwrap_err().to_string();
+        assert!(e.contains("c/2/0") && e.contains("zstd"), "{e}");
+    }
+
+    #[test]
+    fn the_codec_chain_is_what_zarr_python_reads() {
+        let m = ArrayMeta { compression: Compression::DEFAULT_ZSTD, ..meta() };
+        let codecs = m.to_json()["codecs"].clone();
+        assert_eq!(
+            codecs,
+            json!([
+                {"name": "bytes", "configuration": {"endian": "little"}},
+                {"name": "zstd", "configuration": {"level": 3, "checksum": false}},
+                {"name": "crc32c"}
+            ])
+        );
+    }
+
+    #[test]
     fn absurd_header_refused_before_allocating() {
         let dir = tempfile::tempdir().unwrap();
         let mut m = meta();
