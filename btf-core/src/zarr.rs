@@ -315,10 +315,12 @@ pub fn read_group(dir: &Path) -> Result<Value> {
 /// them without a warning. Atomic, like every metadata write.
 pub fn write_record(dir: &Path, group: &str, name: &str, record: &Value) -> Result<()> {
     let parent = dir.join(group);
+    let node = parent.join(name);
+    fs::create_dir_all(&node).map_err(|e| Error::io(&node, e))?;
     if !parent.join("zarr.json").exists() {
         write_group(&parent, &json!({}))?;
     }
-    write_group(&parent.join(name), &json!({ "record": record }))
+    write_group(&node, &json!({ "record": record }))
 }
 
 /// The record [`write_record`] wrote, or — in a store written before issue #25 — the JSON
