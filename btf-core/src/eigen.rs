@@ -295,6 +295,7 @@ impl EigenWriter {
         let record = serde_json::json!({"store": "eigen", "meta": meta, "job": job});
         let txn = StoreTxn::begin(path, resume, &record)?;
         let arrays = open_arrays(txn.dir(), &meta, true)?;
+        zarr::ensure_record_group(txn.dir(), "stats")?;
         Ok(EigenWriter { txn, meta, arrays })
     }
 

@@ -314,13 +314,22 @@ pub fn read_group(dir: &Path) -> Result<Value> {
 /// statistics, registrations) stay inside a valid Zarr hierarchy, where zarr-python walks
 /// them without a warning. Atomic, like every metadata write.
 pub fn write_record(dir: &Path, group: &str, name: &str, record: &Value) -> Result<()> {
-    let parent = dir.join(group);
-    let node = parent.join(name);
+    ensure_record_group(dir, group)?;
+    let node = dir.join(group).join(name);
     fs::create_dir_all(&node).map_err(|e| Error::io(&node, e))?;
-    if !parent.join("zarr.json").exists() {
-        write_group(&parent, &json!({}))?;
-    }
     write_group(&node, &json!({ "record": record }))
+}
+
+/// Creates the (empty) group `dir/group` of side records if it is absent. Call it once
+/// before writing records from several threads: the metadata writes of one process share
+/// a temporary name, so two threads must not write the same document at once.
+pub fn ensure_record_group(dir: &Path, group: &str) -> Result<()> {
+    let parent = dir.join(group);
+    if parent.join("zarr.json").exists() {
+        return Ok(());
+    }
+    fs::create_dir_all(&parent).map_err(|e| Error::io(&parent, e))?;
+    write_group(&parent, &json!({}))
 }
 
 /// The record [`write_record`] wrote, or — in a store written before issue #25 — the JSON

@@ -321,6 +321,7 @@ pub fn process(
     });
     let mut writer = BtfWriter::create_for_job(out, meta, opt.dtype, opt.resume, job)?;
     let partial = writer.dir().to_owned();
+    btf_core::zarr::ensure_record_group(&partial, "registration")?;
     let result = run_slots(&layout, &writer, &grid, opt, tick);
     let outcome = result.and_then(|(regs, written, kept)| {
         writer.set_provenance(provenance(&layout, &grid, opt, &regs));
