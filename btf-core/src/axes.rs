@@ -97,7 +97,9 @@ pub fn check(path: &Path, meta: &BtfMeta) -> Result<()> {
         if got.len() != want.len() {
             return Err(bad(format!("{} angles, the sampling has {}", got.len(), want.len())));
         }
-        if let Some(i) = (0..want.len()).find(|&i| !((got[i] - want[i]).abs() <= TOLERANCE_DEG)) {
+        // Written so that a NaN fails too.
+        let close = |i: usize| (got[i] - want[i]).abs() <= TOLERANCE_DEG;
+        if let Some(i) = (0..want.len()).find(|&i| !close(i)) {
             return Err(bad(format!(
                 "entry {i} is {}°, the sampling '{}' says {}°",
                 got[i], s.name, want[i]
