@@ -280,7 +280,12 @@ mod tests {
             ],
         )
         .unwrap();
-        let w = BtfWriter::create(path, BtfMeta::new(s.clone(), s, 4, 3), dtype, false).unwrap();
+        // Uncompressed (the pre-#25 layout): the tests below patch chunk bytes and map slots.
+        let meta = BtfMeta::new(s.clone(), s, 4, 3);
+        let none = crate::zarr::Compression::None;
+        let w =
+            BtfWriter::create_compressed(path, meta, dtype, false, serde_json::Value::Null, none)
+                .unwrap();
         for v in 0..5 {
             for l in 0..5 {
                 let img: Vec<f32> =
@@ -358,7 +363,16 @@ mod tests {
         let (p16, p32) = (dir.path().join("h.btf"), dir.path().join("f.btf"));
         tiny_store_as(&p16, DType::F16);
         let h = BtfStore::open(&p16).unwrap();
-        let w = BtfWriter::create(&p32, h.meta().clone(), DType::F32, false).unwrap();
+        let none = crate::zarr::Compression::None;
+        let w = BtfWriter::create_compressed(
+            &p32,
+            h.meta().clone(),
+            DType::F32,
+            false,
+            serde_json::Value::Null,
+            none,
+        )
+        .unwrap();
         for v in 0..5 {
             for l in 0..5 {
                 w.write_image(v, l, &h.read_image(v, l).unwrap()).unwrap();

@@ -148,10 +148,8 @@ mod tests {
         // 70 001 values: 280 004 bytes, above the 256 KiB threshold, with an unaligned tail.
         let dir = tempfile::tempdir().unwrap();
         let meta = ArrayMeta {
-            shape: vec![2, 70_001],
-            chunk_shape: vec![1, 70_001],
-            dtype: DType::F32,
-            dimension_names: vec!["a".into(), "b".into()],
+            compression: crate::zarr::Compression::None,
+            ..ArrayMeta::new(vec![2, 70_001], vec![1, 70_001], DType::F32, &["a", "b"])
         };
         let a = ZarrArray::create(dir.path(), meta).unwrap().with_direct_writes();
         let values: Vec<f32> = (0..70_001).map(|i| (i as f32 * 0.37).sin()).collect();

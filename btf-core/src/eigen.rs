@@ -128,53 +128,54 @@ fn array_metas(m: &EigenMeta) -> [(&'static str, ArrayMeta); 5] {
         m.btf.width as u64,
         m.components as u64,
     );
-    let names = |n: &[&str]| n.iter().map(|s| s.to_string()).collect::<Vec<_>>();
     [
         (
             "mean",
-            ArrayMeta {
-                shape: vec![v, h, w, 3],
-                chunk_shape: vec![1, h, w, 3],
-                dtype: DType::F32,
-                dimension_names: names(&["view", "y", "x", "channel"]),
-            },
+            ArrayMeta::new(
+                vec![v, h, w, 3],
+                vec![1, h, w, 3],
+                DType::F32,
+                &["view", "y", "x", "channel"],
+            ),
         ),
         (
             "eigentextures",
             ArrayMeta {
-                shape: vec![v, c, h, w, 3],
-                chunk_shape: vec![1, c, h, w, 3],
-                dtype: m.quantization.dtype(),
-                dimension_names: names(&["view", "component", "y", "x", "channel"]),
+                attributes: json!({
+                    "description": "unit-norm eigentextures B_kj, quantised: value = stored * scale_offset[view, component, 0] + scale_offset[view, component, 1]",
+                }),
+                ..ArrayMeta::new(
+                    vec![v, c, h, w, 3],
+                    vec![1, c, h, w, 3],
+                    m.quantization.dtype(),
+                    &["view", "component", "y", "x", "channel"],
+                )
             },
         ),
         (
             "scale_offset",
             ArrayMeta {
-                shape: vec![v, c, 2],
-                chunk_shape: vec![1, c, 2],
-                dtype: DType::F32,
-                dimension_names: names(&["view", "component", "scale_offset"]),
+                attributes: json!({
+                    "description": "per (view, component): [scale, offset]; eigentexture value = stored * scale + offset",
+                }),
+                ..ArrayMeta::new(
+                    vec![v, c, 2],
+                    vec![1, c, 2],
+                    DType::F32,
+                    &["view", "component", "scale_offset"],
+                )
             },
         ),
         (
             "weights",
-            ArrayMeta {
-                shape: vec![v, l, c],
-                chunk_shape: vec![1, l, c],
-                dtype: DType::F32,
-                dimension_names: names(&["view", "light", "component"]),
-            },
+            ArrayMeta::new(
+                vec![v, l, c],
+                vec![1, l, c],
+                DType::F32,
+                &["view", "light", "component"],
+            ),
         ),
-        (
-            "eigenvalues",
-            ArrayMeta {
-                shape: vec![v, l],
-                chunk_shape: vec![1, l],
-                dtype: DType::F64,
-                dimension_names: names(&["view", "index"]),
-            },
-        ),
+        ("eigenvalues", ArrayMeta::new(vec![v, l], vec![1, l], DType::F64, &["view", "index"])),
     ]
 }
 
@@ -185,6 +186,8 @@ fn open_arrays(dir: &Path, m: &EigenMeta, create: bool) -> Result<Arrays> {
             ZarrArray::create(&p, meta)
         } else {
             let a = ZarrArray::open(&p, &Limits::default())?;
+            // Stores before issue #25 are uncompressed: any codec chain we read is fine.
+            let meta = ArrayMeta { compression: a.meta().compression, ..meta };
             if a.meta() != &meta {
                 return Err(Error::Corrupt {
                     path: p.join("zarr.json"),
@@ -261,14 +264,6 @@ pub fn dequantize(raw: &[u8], scale_offset: &[[f32; 2]], q: Quantization) -> Vec
     out
 }
 
-fn read_stats_file(path: &Path) -> Option<serde_json::Value> {
-    let bytes = std::fs::read(path).ok()?;
-    if bytes.len() > 1 << 20 {
-        return None;
-    }
-    serde_json::from_slice(&bytes).ok()
-}
-
 /// Writer of an eigen store, one slot at a time, resumable.
 pub struct EigenWriter {
     txn: StoreTxn,
@@ -300,6 +295,7 @@ impl EigenWriter {
         let record = serde_json::json!({"store": "eigen", "meta": meta, "job": job});
         let txn = StoreTxn::begin(path, resume, &record)?;
         let arrays = open_arrays(txn.dir(), &meta, true)?;
+        zarr::ensure_record_group(txn.dir(), "stats")?;
         Ok(EigenWriter { txn, meta, arrays })
     }
 
@@ -342,15 +338,15 @@ impl EigenWriter {
         self.arrays.values.write_chunk(&[v, 0], &ev_raw)
     }
 
-    /// Stores per-slot statistics (JSON) beside the arrays; they survive a resume.
+    /// Stores per-slot statistics beside the arrays, as the attributes of the Zarr group
+    /// `stats/<view>` ([`zarr::write_record`]); they survive a resume.
     pub fn write_stats(&self, view: usize, stats: &serde_json::Value) -> Result<()> {
-        let path = self.txn.dir().join("stats").join(format!("{view}.json"));
-        zarr::write_atomic(&path, serde_json::to_string(stats).unwrap().as_bytes())
+        zarr::write_record(self.txn.dir(), "stats", &view.to_string(), stats)
     }
 
     /// Statistics written for slot `view` by [`EigenWriter::write_stats`], if any.
     pub fn read_stats(&self, view: usize) -> Option<serde_json::Value> {
-        read_stats_file(&self.txn.dir().join("stats").join(format!("{view}.json")))
+        zarr::read_record(self.txn.dir(), "stats", &view.to_string())
     }
 
     /// Checks every slot is present and moves the store into place.
@@ -362,6 +358,7 @@ impl EigenWriter {
         }
         let mut btf = self.meta.btf.clone();
         btf.kind = "eigen".into();
+        crate::axes::write(self.txn.dir(), &btf)?;
         let attrs = json!({"btf": btf, "eigen": {"components": self.meta.components, "quantization": self.meta.quantization}});
         self.txn.commit(attrs)
     }
@@ -389,6 +386,7 @@ impl EigenStore {
                 what: format!("components {components} out of range"),
             });
         }
+        crate::axes::check(path, &btf)?;
         let meta = EigenMeta { btf, components, quantization };
         let arrays = open_arrays(path, &meta, false)?;
         Ok(EigenStore { path: path.to_owned(), meta, arrays })
@@ -448,9 +446,10 @@ impl EigenStore {
         Ok(())
     }
 
-    /// Per-slot statistics written at compression time, if present.
+    /// Per-slot statistics written at compression time, if present (`stats/<view>` group
+    /// attributes; `stats/<view>.json` in stores before issue #25).
     pub fn slot_stats(&self, view: usize) -> Option<serde_json::Value> {
-        read_stats_file(&self.path.join("stats").join(format!("{view}.json")))
+        zarr::read_record(&self.path, "stats", &view.to_string())
     }
 
     /// Reads slot `view` as stored.

@@ -19,6 +19,7 @@
 //!
 //! No GPU code and no image-format crates live here.
 
+pub mod axes;
 pub mod compress;
 pub mod direct_io;
 pub mod direction;

@@ -1,5 +1,6 @@
-//! The BTF store: uncompressed normtextures `[view][light][y][x][rgb]` in a Zarr v3 group,
-//! one chunk per (view slot, light) image, linear values in `f16` or `f32`.
+//! The BTF store: normtextures `[view][light][y][x][rgb]` in a Zarr v3 group, one chunk
+//! per (view slot, light) image (zstd-compressed since issue #25), linear values in `f16`
+//! or `f32`, with the (θ, φ) of every view slot and light beside them ([`crate::axes`]).
 //!
 //! A store is written into `NAME.partial/` and renamed to `NAME` only when every chunk is
 //! in place, so an interrupted run leaves any previous output untouched; running the same
@@ -378,18 +379,13 @@ pub struct BtfWriter {
 }
 
 fn normtexture_array(meta: &BtfMeta, dtype: DType) -> ArrayMeta {
-    ArrayMeta {
-        shape: vec![
-            meta.n_views() as u64,
-            meta.n_lights() as u64,
-            meta.height as u64,
-            meta.width as u64,
-            3,
-        ],
-        chunk_shape: vec![1, 1, meta.height as u64, meta.width as u64, 3],
+    let (h, w) = (meta.height as u64, meta.width as u64);
+    ArrayMeta::new(
+        vec![meta.n_views() as u64, meta.n_lights() as u64, h, w, 3],
+        vec![1, 1, h, w, 3],
         dtype,
-        dimension_names: ["view", "light", "y", "x", "channel"].map(String::from).to_vec(),
-    }
+        &["view", "light", "y", "x", "channel"],
+    )
 }
 
 impl BtfWriter {
@@ -409,6 +405,20 @@ impl BtfWriter {
         resume: bool,
         job: Value,
     ) -> Result<Self> {
+        Self::create_compressed(path, meta, dtype, resume, job, zarr::Compression::DEFAULT_ZSTD)
+    }
+
+    /// [`BtfWriter::create_for_job`] with the chunks' compression chosen:
+    /// [`zarr::Compression::None`] writes the pre-#25 layout, whose chunks the PCA maps in
+    /// place ([`BtfStore::map_slot`]).
+    pub fn create_compressed(
+        path: &Path,
+        meta: BtfMeta,
+        dtype: DType,
+        resume: bool,
+        job: Value,
+        compression: zarr::Compression,
+    ) -> Result<Self> {
         if !matches!(dtype, DType::F16 | DType::F32) {
             return Err(Error::Unsupported(format!(
                 "normtexture dtype {dtype:?} (use f16 or f32)"
@@ -417,8 +427,8 @@ impl BtfWriter {
         let meta = meta.validate(path)?;
         let record = json!({"store": "btf", "meta": meta, "dtype": dtype.zarr_name(), "job": job});
         let txn = StoreTxn::begin(path, resume, &record)?;
-        let arr =
-            ZarrArray::create(&txn.dir().join("normtextures"), normtexture_array(&meta, dtype))?;
+        let array = ArrayMeta { compression, ..normtexture_array(&meta, dtype) };
+        let arr = ZarrArray::create(&txn.dir().join("normtextures"), array)?;
         Ok(BtfWriter { txn, meta, arr })
     }
 
@@ -477,6 +487,7 @@ impl BtfWriter {
                 }
             }
         }
+        crate::axes::write(self.txn.dir(), &self.meta)?;
         let attrs = json!({"btf": self.meta});
         self.txn.commit(attrs)
     }
@@ -515,7 +526,12 @@ impl BtfStore {
     pub fn open(path: &Path) -> Result<Self> {
         let meta = read_meta_of_kind(path, "btf", "")?;
         let arr = ZarrArray::open(&path.join("normtextures"), &Limits::default())?;
-        if arr.meta() != &normtexture_array(&meta, arr.meta().dtype) {
+        let expect = ArrayMeta {
+            compression: arr.meta().compression,
+            ..normtexture_array(&meta, arr.meta().dtype)
+        };
+        crate::axes::check(path, &meta)?;
+        if arr.meta() != &expect {
             return Err(Error::Corrupt {
                 path: path.join("normtextures/zarr.json"),
                 what: "array shape disagrees with the store's sampling and size".into(),
@@ -634,9 +650,12 @@ impl BtfStore {
     /// Maps the chunks of view slot `view` read-only when they hold little-endian `f32` or
     /// `f16` (in-memory layouts the PCA's loads widen in place), for a caller that reads
     /// the slot several times and checks the checksums itself ([`crate::mapped`]); `None`
-    /// for a dtype that must be decoded.
+    /// for a dtype or a compression that must be decoded.
     pub fn map_slot(&self, view: usize) -> Result<Option<crate::mapped::MappedSlot>> {
-        if !matches!(self.dtype(), DType::F32 | DType::F16) || !cfg!(target_endian = "little") {
+        if !matches!(self.dtype(), DType::F32 | DType::F16)
+            || !cfg!(target_endian = "little")
+            || self.arr.meta().compression != zarr::Compression::None
+        {
             return Ok(None);
         }
         if view >= self.meta.n_views() {
@@ -703,7 +722,10 @@ pub(crate) fn claim_texels(store: &Path, w: u64, h: u64) {
         let meta = e.unwrap().path().join("zarr.json");
         let Ok(bytes) = fs::read(&meta) else { continue };
         let mut a: Value = serde_json::from_slice(&bytes).unwrap();
-        let names: Vec<String> = serde_json::from_value(a["dimension_names"].clone()).unwrap();
+        // Groups (stats/, registration/) have no dimensions.
+        let Ok(names) = serde_json::from_value::<Vec<String>>(a["dimension_names"].clone()) else {
+            continue;
+        };
         for (i, n) in names.iter().enumerate() {
             let v = match n.as_str() {
                 "y" => h,
@@ -742,16 +764,18 @@ mod tests {
         write_store(&p, 1.0);
         claim_texels(&p, 8192, 8192);
         // Consistent metadata opens; reading refuses by naming the chunk file and the claim
-        // instead of allocating 4 × 805 MB for the slot.
+        // (the decoded size its zstd frame records against the claim) instead of
+        // allocating 4 × 805 MB for the slot.
         let s = BtfStore::open(&p).unwrap();
         assert_eq!((s.meta().width, s.meta().height), (8192, 8192));
         for e in [s.read_slot(1).unwrap_err(), s.read_image(1, 2).unwrap_err()] {
             assert!(matches!(e, Error::Corrupt { .. }), "{e}");
             let e = e.to_string();
             assert!(e.contains("normtextures/c/1/") && e.contains("view slot 1"), "{e}");
-            assert!(e.contains("claims 805306372"), "{e}");
+            assert!(e.contains("claims 805306368"), "{e}");
         }
-        assert!(s.map_slot(1).is_err());
+        // Compressed chunks are decoded, never mapped.
+        assert!(s.map_slot(1).unwrap().is_none());
     }
 
     fn tiny_meta() -> BtfMeta {

@@ -1,6 +1,8 @@
 //! A small, strict implementation of the Zarr v3 on-disk format: one JSON metadata document
 //! per group and array, regular chunk grids, the `default` chunk-key encoding with `/`, and
-//! the codec chain `bytes` (little endian) → `crc32c`, so every chunk carries a checksum.
+//! the codec chain `bytes` (little endian) → `zstd` → `crc32c`, so every chunk is
+//! compressed and carries a checksum of its compressed bytes. Stores written before issue
+//! #25 use `bytes` → `crc32c` (uncompressed) and stay readable.
 //!
 //! The stores written here open in zarr-python ≥ 3 (`zarr.open_group(path)`), numpy and
 //! Dask. Only what the toolkit needs is implemented; anything else in a metadata document
@@ -73,8 +75,25 @@ impl Default for Limits {
     }
 }
 
+/// The bytes-to-bytes compression of an array's chunks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Compression {
+    /// No compression: a chunk is its raw bytes and a CRC32C (stores before issue #25).
+    None,
+    /// The Zarr v3 `zstd` codec at this level (zarr-python's `ZstdCodec`).
+    Zstd {
+        /// zstd compression level (1‥22; 3 is zstd's own default).
+        level: i32,
+    },
+}
+
+impl Compression {
+    /// What new stores use: zstd level 3 (BENCHMARKS.md, "Stores on disk").
+    pub const DEFAULT_ZSTD: Compression = Compression::Zstd { level: 3 };
+}
+
 /// Metadata of one array.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct ArrayMeta {
     /// Array shape.
     pub shape: Vec<u64>,
@@ -84,6 +103,35 @@ pub struct ArrayMeta {
     pub dtype: DType,
     /// Names of the dimensions.
     pub dimension_names: Vec<String>,
+    /// Chunk compression.
+    pub compression: Compression,
+    /// The array's `attributes` (units, frames, descriptions); not part of equality.
+    pub attributes: Value,
+}
+
+impl PartialEq for ArrayMeta {
+    fn eq(&self, o: &Self) -> bool {
+        self.shape == o.shape
+            && self.chunk_shape == o.chunk_shape
+            && self.dtype == o.dtype
+            && self.dimension_names == o.dimension_names
+            && self.compression == o.compression
+    }
+}
+
+impl ArrayMeta {
+    /// An array of `shape` in chunks of `chunk_shape`, compressed with
+    /// [`Compression::DEFAULT_ZSTD`], without attributes.
+    pub fn new(shape: Vec<u64>, chunk_shape: Vec<u64>, dtype: DType, dims: &[&str]) -> Self {
+        ArrayMeta {
+            shape,
+            chunk_shape,
+            dtype,
+            dimension_names: dims.iter().map(|d| d.to_string()).collect(),
+            compression: Compression::DEFAULT_ZSTD,
+            attributes: json!({}),
+        }
+    }
 }
 
 impl ArrayMeta {
@@ -100,13 +148,22 @@ impl ArrayMeta {
             "chunk_grid": {"name": "regular", "configuration": {"chunk_shape": self.chunk_shape}},
             "chunk_key_encoding": {"name": "default", "configuration": {"separator": "/"}},
             "fill_value": fill,
-            "codecs": [
-                {"name": "bytes", "configuration": {"endian": "little"}},
-                {"name": "crc32c"}
-            ],
-            "attributes": {},
+            "codecs": self.codecs_json(),
+            "attributes": self.attributes,
             "dimension_names": self.dimension_names,
         })
+    }
+
+    fn codecs_json(&self) -> Value {
+        let bytes = json!({"name": "bytes", "configuration": {"endian": "little"}});
+        match self.compression {
+            Compression::None => json!([bytes, {"name": "crc32c"}]),
+            Compression::Zstd { level } => json!([
+                bytes,
+                {"name": "zstd", "configuration": {"level": level, "checksum": false}},
+                {"name": "crc32c"}
+            ]),
+        }
     }
 
     fn from_json(path: &Path, v: &Value) -> Result<Self> {
@@ -143,21 +200,34 @@ impl ArrayMeta {
             .iter()
             .map(|c| c["name"].as_str().unwrap_or(""))
             .collect();
-        if codecs != ["bytes", "crc32c"]
-            || v["codecs"][0]["configuration"]["endian"] != json!("little")
-        {
-            return Err(Error::Unsupported(format!(
-                "{}: codec chain {codecs:?} (this toolkit reads bytes(little) + crc32c)",
+        let unsupported = || {
+            Error::Unsupported(format!(
+                "{}: codec chain {codecs:?} (this toolkit reads bytes(little) → [zstd] → crc32c)",
                 path.display()
-            )));
+            ))
+        };
+        if v["codecs"][0]["configuration"]["endian"] != json!("little") {
+            return Err(unsupported());
         }
+        let compression = match codecs[..] {
+            ["bytes", "crc32c"] => Compression::None,
+            ["bytes", "zstd", "crc32c"] => {
+                let level = v["codecs"][1]["configuration"]["level"]
+                    .as_i64()
+                    .and_then(|l| i32::try_from(l).ok())
+                    .ok_or_else(|| bad("zstd codec without an integer configuration.level"))?;
+                Compression::Zstd { level }
+            }
+            _ => return Err(unsupported()),
+        };
         let dtype =
             DType::from_zarr_name(v["data_type"].as_str().ok_or_else(|| bad("data_type"))?)?;
         let dimension_names = v["dimension_names"]
             .as_array()
             .map(|a| a.iter().map(|x| x.as_str().unwrap_or("").to_owned()).collect())
             .unwrap_or_default();
-        Ok(ArrayMeta { shape, chunk_shape, dtype, dimension_names })
+        let attributes = v.get("attributes").cloned().unwrap_or_else(|| json!({}));
+        Ok(ArrayMeta { shape, chunk_shape, dtype, dimension_names, compression, attributes })
     }
 
     /// Elements per chunk, or an error when that overflows.
@@ -168,7 +238,19 @@ impl ArrayMeta {
             .ok_or_else(|| Error::Limit("chunk element count overflows".into()))
     }
 
-    /// Bytes of one encoded chunk (data + 4-byte checksum).
+    /// The largest chunk file that can hold one chunk: [`ArrayMeta::chunk_bytes`] when
+    /// uncompressed, zstd's bound on its output (plus the checksum) when compressed. A chunk
+    /// file larger than this is refused before it is read.
+    pub fn max_stored_bytes(&self) -> Result<u64> {
+        let raw = self.chunk_bytes()?;
+        Ok(match self.compression {
+            Compression::None => raw,
+            Compression::Zstd { .. } => zstd_bound(raw - 4) + 4,
+        })
+    }
+
+    /// Bytes of one decoded chunk (data + 4-byte checksum; compressed chunk files are
+    /// smaller, see [`ArrayMeta::max_stored_bytes`]).
     pub fn chunk_bytes(&self) -> Result<u64> {
         self.chunk_elems()?
             .checked_mul(self.dtype.size() as u64)
@@ -225,6 +307,43 @@ pub fn read_group(dir: &Path) -> Result<Value> {
         return Err(Error::Invalid(format!("{}: not a Zarr v3 group", path.display())));
     }
     Ok(v["attributes"].clone())
+}
+
+/// Writes `record` as the attributes (`{"record": …}`) of the Zarr group `dir/group/name`,
+/// creating the group `dir/group` if needed: side records of a store (compression
+/// statistics, registrations) stay inside a valid Zarr hierarchy, where zarr-python walks
+/// them without a warning. Atomic, like every metadata write.
+pub fn write_record(dir: &Path, group: &str, name: &str, record: &Value) -> Result<()> {
+    ensure_record_group(dir, group)?;
+    let node = dir.join(group).join(name);
+    fs::create_dir_all(&node).map_err(|e| Error::io(&node, e))?;
+    write_group(&node, &json!({ "record": record }))
+}
+
+/// Creates the (empty) group `dir/group` of side records if it is absent. Call it once
+/// before writing records from several threads: the metadata writes of one process share
+/// a temporary name, so two threads must not write the same document at once.
+pub fn ensure_record_group(dir: &Path, group: &str) -> Result<()> {
+    let parent = dir.join(group);
+    if parent.join("zarr.json").exists() {
+        return Ok(());
+    }
+    fs::create_dir_all(&parent).map_err(|e| Error::io(&parent, e))?;
+    write_group(&parent, &json!({}))
+}
+
+/// The record [`write_record`] wrote, or — in a store written before issue #25 — the JSON
+/// file `dir/group/name.json`; `None` when absent or unreadable.
+pub fn read_record(dir: &Path, group: &str, name: &str) -> Option<Value> {
+    if let Ok(attrs) = read_group(&dir.join(group).join(name)) {
+        return attrs.get("record").cloned();
+    }
+    let legacy = dir.join(group).join(format!("{name}.json"));
+    let bytes = fs::read(legacy).ok()?;
+    if bytes.len() > 1 << 20 {
+        return None;
+    }
+    serde_json::from_slice(&bytes).ok()
 }
 
 /// One array of a store.
@@ -287,7 +406,8 @@ impl ZarrArray {
         p
     }
 
-    /// Writes one chunk given its raw little-endian element bytes.
+    /// Writes one chunk given its raw little-endian element bytes (compressed first when
+    /// the array is), atomically: a reader sees the whole chunk or none.
     pub fn write_chunk(&self, idx: &[u64], raw: &[u8]) -> Result<()> {
         let expect = self.meta.chunk_bytes()? - 4;
         if raw.len() as u64 != expect {
@@ -297,8 +417,14 @@ impl ZarrArray {
                 raw.len()
             )));
         }
-        let crc = crc32c::crc32c(raw).to_le_bytes();
         let path = self.chunk_path(idx);
+        if let Compression::Zstd { level } = self.meta.compression {
+            let mut buf = zstd::bulk::compress(raw, level).map_err(|e| Error::io(&path, e))?;
+            let crc = crc32c::crc32c(&buf).to_le_bytes();
+            buf.extend_from_slice(&crc);
+            return crate::fs::write_atomic_unsynced(&path, &buf);
+        }
+        let crc = crc32c::crc32c(raw).to_le_bytes();
         if self.direct
             && raw.len() >= DIRECT_MIN_BYTES
             && crate::direct_io::write_atomic_direct(&path, raw, &crc)?
@@ -321,30 +447,48 @@ impl ZarrArray {
     /// Like [`ZarrArray::read_chunk`], into a reusable buffer (no allocation once it is large
     /// enough).
     pub fn read_chunk_into(&self, idx: &[u64], buf: &mut Vec<u8>) -> Result<()> {
-        use std::io::Read;
-        let path = self.chunk_path(idx);
+        let n = (self.meta.chunk_bytes()? - 4) as usize;
+        buf.resize(n, 0);
+        self.read_chunk_to(idx, buf)
+    }
+
+    /// Opens chunk `idx` and checks its file size against what the metadata allows: exactly
+    /// [`ArrayMeta::chunk_bytes`] uncompressed, 5‥[`ArrayMeta::max_stored_bytes`] compressed.
+    fn open_chunk(&self, path: &Path) -> Result<(fs::File, u64)> {
+        let f = fs::File::open(path).map_err(|e| Error::io(path, e))?;
+        let len = f.metadata().map_err(|e| Error::io(path, e))?.len();
+        self.check_len(path, len)?;
+        Ok((f, len))
+    }
+
+    fn check_len(&self, path: &Path, len: u64) -> Result<()> {
         let expect = self.meta.chunk_bytes()?;
-        let mut f = fs::File::open(&path).map_err(|e| Error::io(&path, e))?;
-        let len = f.metadata().map_err(|e| Error::io(&path, e))?.len();
-        if len != expect {
-            return Err(Error::Corrupt {
-                path,
-                what: format!("chunk has {len} bytes, {expect} expected (truncated or foreign)"),
-            });
+        let ok = match self.meta.compression {
+            Compression::None => len == expect,
+            Compression::Zstd { .. } => len > 4 && len <= self.meta.max_stored_bytes()?,
+        };
+        if ok {
+            return Ok(());
         }
-        buf.resize(expect as usize, 0);
-        f.read_exact(buf).map_err(|e| Error::io(&path, e))?;
-        let n = buf.len() - 4;
-        let stored = u32::from_le_bytes(buf[n..].try_into().unwrap());
-        if crc32c::crc32c(&buf[..n]) != stored {
-            return Err(Error::Corrupt { path, what: "crc32c checksum mismatch".into() });
-        }
-        buf.truncate(n);
-        Ok(())
+        let claim = match self.meta.compression {
+            Compression::None => format!("{expect}"),
+            Compression::Zstd { .. } => {
+                format!("at most {} (compressed)", self.meta.max_stored_bytes()?)
+            }
+        };
+        Err(Error::Corrupt {
+            path: path.to_owned(),
+            what: format!(
+                "chunk has {len} bytes, but zarr.json (shape, chunk_shape, data_type, codecs) \
+                 claims {claim} (truncated or foreign)"
+            ),
+        })
     }
 
     /// Reads and checks chunk `idx` straight into `out`, which must hold exactly the chunk's
-    /// payload (its size less the 4-byte checksum): no intermediate buffer, no copy.
+    /// decoded payload (its decoded size less the 4-byte checksum). Uncompressed chunks are
+    /// read with no intermediate buffer; compressed ones are decompressed into `out`, which
+    /// caps what a hostile frame can make the decoder write at the chunk's known size.
     pub fn read_chunk_to(&self, idx: &[u64], out: &mut [u8]) -> Result<()> {
         use std::io::Read;
         let path = self.chunk_path(idx);
@@ -356,52 +500,96 @@ impl ZarrArray {
                 out.len()
             )));
         }
-        let mut f = fs::File::open(&path).map_err(|e| Error::io(&path, e))?;
-        let len = f.metadata().map_err(|e| Error::io(&path, e))?.len();
-        if len != expect {
+        let (mut f, len) = self.open_chunk(&path)?;
+        if self.meta.compression == Compression::None {
+            f.read_exact(out).map_err(|e| Error::io(&path, e))?;
+            let mut crc = [0u8; 4];
+            f.read_exact(&mut crc).map_err(|e| Error::io(&path, e))?;
+            if crc32c::crc32c(out) != u32::from_le_bytes(crc) {
+                return Err(Error::Corrupt { path, what: "crc32c checksum mismatch".into() });
+            }
+            return Ok(());
+        }
+        let mut stored = vec![0u8; len as usize];
+        f.read_exact(&mut stored).map_err(|e| Error::io(&path, e))?;
+        let n = stored.len() - 4;
+        if crc32c::crc32c(&stored[..n]) != u32::from_le_bytes(stored[n..].try_into().unwrap()) {
+            return Err(Error::Corrupt { path, what: "crc32c checksum mismatch".into() });
+        }
+        self.check_frame_size(&path, &stored[..n])?;
+        let got = zstd::bulk::decompress_to_buffer(&stored[..n], out).map_err(|e| {
+            Error::Corrupt { path: path.clone(), what: format!("zstd frame does not decode: {e}") }
+        })?;
+        if got != out.len() {
             return Err(Error::Corrupt {
                 path,
-                what: format!("chunk has {len} bytes, {expect} expected (truncated or foreign)"),
+                what: format!("zstd frame decodes to {got} bytes, {} expected", out.len()),
             });
-        }
-        f.read_exact(out).map_err(|e| Error::io(&path, e))?;
-        let mut crc = [0u8; 4];
-        f.read_exact(&mut crc).map_err(|e| Error::io(&path, e))?;
-        if crc32c::crc32c(out) != u32::from_le_bytes(crc) {
-            return Err(Error::Corrupt { path, what: "crc32c checksum mismatch".into() });
         }
         Ok(())
     }
 
-    /// Maps one chunk read-only (size checked; the checksum is left to the caller, who can
-    /// fold it into its own pass over the bytes, see [`crate::mapped`]).
+    /// Maps one uncompressed chunk read-only (size checked; the checksum is left to the
+    /// caller, who can fold it into its own pass over the bytes, see [`crate::mapped`]).
     pub fn map_chunk(&self, idx: &[u64]) -> Result<crate::mapped::MappedChunk> {
+        if self.meta.compression != Compression::None {
+            return Err(Error::Unsupported(format!(
+                "{}: compressed chunks cannot be mapped",
+                self.chunk_path(idx).display()
+            )));
+        }
         crate::mapped::MappedChunk::open(&self.chunk_path(idx), self.meta.chunk_bytes()?)
     }
 
-    /// Checks that chunk `idx` is on disk with the size the metadata claims (not its
-    /// checksum), so that a caller can refuse a claim before allocating for it; the error
+    /// Checks that chunk `idx` is on disk with a size the metadata allows (not its
+    /// checksum) — for a compressed chunk, also the decoded size its zstd frame header
+    /// records — so that a caller can refuse a claim before allocating for it; the error
     /// names the chunk file, the claimed size and the real one.
     pub fn check_chunk_file(&self, idx: &[u64]) -> Result<()> {
+        use std::io::Read;
         let path = self.chunk_path(idx);
-        let expect = self.meta.chunk_bytes()?;
-        let len = fs::metadata(&path).map_err(|e| Error::io(&path, e))?.len();
-        if len != expect {
-            return Err(Error::Corrupt {
-                path,
-                what: format!(
-                    "chunk has {len} bytes, but zarr.json (shape, chunk_shape, data_type) claims {expect} (truncated or foreign)"
-                ),
-            });
+        let (f, len) = self.open_chunk(&path)?;
+        if self.meta.compression != Compression::None {
+            // A zstd frame header is at most 18 bytes.
+            let mut head = Vec::with_capacity(18);
+            f.take(18).read_to_end(&mut head).map_err(|e| Error::io(&path, e))?;
+            head.truncate((len - 4).min(18) as usize);
+            self.check_frame_size(&path, &head)?;
         }
         Ok(())
     }
 
-    /// True when the chunk exists with the right size (checksum not verified; used to resume).
-    pub fn has_chunk(&self, idx: &[u64]) -> bool {
-        let expect = self.meta.chunk_bytes().unwrap_or(0);
-        fs::metadata(self.chunk_path(idx)).map(|m| m.len() == expect).unwrap_or(false)
+    /// Refuses a zstd frame whose header records a decoded size other than the chunk's.
+    fn check_frame_size(&self, path: &Path, frame: &[u8]) -> Result<()> {
+        let expect = self.meta.chunk_bytes()? - 4;
+        match zstd::zstd_safe::get_frame_content_size(frame) {
+            Ok(Some(n)) if n != expect => Err(Error::Corrupt {
+                path: path.to_owned(),
+                what: format!(
+                    "zstd frame decodes to {n} bytes, but zarr.json (shape, chunk_shape, \
+                     data_type) claims {expect}"
+                ),
+            }),
+            Ok(_) => Ok(()),
+            Err(_) => Err(Error::Corrupt {
+                path: path.to_owned(),
+                what: "not a zstd frame (bad magic or header)".into(),
+            }),
+        }
     }
+
+    /// True when the chunk exists with a plausible size (checksum not verified; used to
+    /// resume: chunks are renamed into place whole, so a present chunk is a written one).
+    pub fn has_chunk(&self, idx: &[u64]) -> bool {
+        let path = self.chunk_path(idx);
+        fs::metadata(&path).is_ok_and(|m| self.check_len(&path, m.len()).is_ok())
+    }
+}
+
+/// zstd's bound on the compressed size of `n` bytes (`ZSTD_COMPRESSBOUND`).
+fn zstd_bound(n: u64) -> u64 {
+    const KB128: u64 = 128 << 10;
+    n + (n >> 8) + if n < KB128 { (KB128 - n) >> 11 } else { 0 }
 }
 
 /// Encodes `f32` values into the little-endian bytes of `dtype` (`F16`/`F32`/`F64`).
@@ -459,10 +647,8 @@ mod tests {
 
     fn meta() -> ArrayMeta {
         ArrayMeta {
-            shape: vec![3, 4],
-            chunk_shape: vec![1, 4],
-            dtype: DType::F32,
-            dimension_names: vec!["a".into(), "b".into()],
+            compression: Compression::None,
+            ..ArrayMeta::new(vec![3, 4], vec![1, 4], DType::F32, &["a", "b"])
         }
     }
 
@@ -484,6 +670,63 @@ mod tests {
         // Truncate.
         fs::write(&p, &bytes[..7]).unwrap();
         assert!(b.read_chunk(&[1, 0]).unwrap_err().to_string().contains("truncated"));
+    }
+
+    #[test]
+    fn zstd_chunks_round_trip_and_hostile_frames_are_named_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = ArrayMeta { compression: Compression::DEFAULT_ZSTD, ..meta() };
+        let a = ZarrArray::create(dir.path(), m).unwrap();
+        let raw = encode_f32(&[0.5, 0.5, 0.5, 0.5], DType::F32);
+        a.write_chunk(&[2, 0], &raw).unwrap();
+        let b = ZarrArray::open(dir.path(), &Limits::default()).unwrap();
+        assert_eq!(b.meta().compression, Compression::Zstd { level: 3 });
+        assert_eq!(b.read_chunk(&[2, 0]).unwrap(), raw);
+        assert!(b.has_chunk(&[2, 0]) && !b.has_chunk(&[1, 0]));
+        b.check_chunk_file(&[2, 0]).unwrap();
+        let p = b.chunk_path(&[2, 0]);
+        let with_crc = |frame: Vec<u8>| {
+            let crc = crc32c::crc32c(&frame).to_le_bytes();
+            [frame, crc.to_vec()].concat()
+        };
+        // A bit flip: the checksum over the compressed bytes catches it, naming the chunk.
+        let mut bytes = fs::read(&p).unwrap();
+        bytes[5] ^= 0x10;
+        fs::write(&p, &bytes).unwrap();
+        let e = b.read_chunk(&[2, 0]).unwrap_err().to_string();
+        assert!(e.contains("checksum") && e.contains("c/2/0"), "{e}");
+        // A valid frame (and checksum) of 1 MiB where the chunk holds 16 bytes: refused
+        // from the frame header, before any decoding, by the size check and by the reader.
+        let big = zstd::bulk::compress(&vec![0u8; 1 << 20], 3).unwrap();
+        fs::write(&p, with_crc(big)).unwrap();
+        for e in [b.check_chunk_file(&[2, 0]).unwrap_err(), b.read_chunk(&[2, 0]).unwrap_err()] {
+            let e = e.to_string();
+            assert!(e.contains("decodes to 1048576 bytes") && e.contains("claims 16"), "{e}");
+        }
+        // Not a zstd frame at all, with a right checksum.
+        fs::write(&p, with_crc(b"no zstd here".to_vec())).unwrap();
+        let e = b.read_chunk(&[2, 0]).unwrap_err().to_string();
+        assert!(e.contains("not a zstd frame") && e.contains("c/2/0"), "{e}");
+        // A frame without a recorded size that decodes to more than the chunk: capped.
+        let mut enc = zstd::stream::Encoder::new(Vec::new(), 3).unwrap();
+        std::io::Write::write_all(&mut enc, &[7u8; 4096]).unwrap();
+        fs::write(&p, with_crc(enc.finish().unwrap())).unwrap();
+        let e = b.read_chunk(&[2, 0]).unwrap_err().to_string();
+        assert!(e.contains("c/2/0") && e.contains("zstd"), "{e}");
+    }
+
+    #[test]
+    fn the_codec_chain_is_what_zarr_python_reads() {
+        let m = ArrayMeta { compression: Compression::DEFAULT_ZSTD, ..meta() };
+        let codecs = m.to_json()["codecs"].clone();
+        assert_eq!(
+            codecs,
+            json!([
+                {"name": "bytes", "configuration": {"endian": "little"}},
+                {"name": "zstd", "configuration": {"level": 3, "checksum": false}},
+                {"name": "crc32c"}
+            ])
+        );
     }
 
     #[test]

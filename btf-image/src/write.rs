@@ -46,6 +46,41 @@ pub fn write_exr_rgb(path: &Path, w: usize, h: usize, rgb: &[f32]) -> Result<()>
     Ok(btf_core::fs::write_atomic(path, bytes.get_ref())?)
 }
 
+/// Writes several linear RGB images of one size (`[y][x][rgb]` each) as one single-part
+/// 32-bit float EXR whose channels are `NAME.R`, `NAME.G`, `NAME.B` per image — the
+/// OpenEXR layer naming inside one part, so a reader of single-part files (OpenEXR's
+/// `InputFile`, OpenImageIO, imageio) sees every image, not only the first part.
+pub fn write_exr_named_rgb(
+    path: &Path,
+    w: usize,
+    h: usize,
+    images: &[(&str, &[f32])],
+) -> Result<()> {
+    use exr::prelude::{AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer};
+    use exr::prelude::{LayerAttributes, WritableImage};
+    let mut channels = Vec::with_capacity(images.len() * 3);
+    for (name, rgb) in images {
+        check_rgb(path, w, h, rgb)?;
+        for (c, ch) in ["R", "G", "B"].iter().enumerate() {
+            let samples = rgb.iter().skip(c).step_by(3).copied().collect();
+            channels
+                .push(AnyChannel::new(format!("{name}.{ch}").as_str(), FlatSamples::F32(samples)));
+        }
+    }
+    let layer = Layer::new(
+        (w, h),
+        LayerAttributes::default(),
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(channels.into()),
+    );
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    Image::from_layer(layer)
+        .write()
+        .to_buffered(&mut bytes)
+        .map_err(|e| Error::Image { path: path.to_owned(), what: e.to_string() })?;
+    Ok(btf_core::fs::write_atomic(path, bytes.get_ref())?)
+}
+
 /// Linear RGB → 8-bit sRGB codes after multiplying by `exposure` (clipped to `[0, 1]`).
 pub fn to_srgb8(rgb: &[f32], exposure: f32) -> Vec<u8> {
     rgb.iter().map(|v| srgb_encode8(v * exposure)).collect()

@@ -12,13 +12,54 @@ fn check_obj(mesh: &Mesh, name: &str) {
     let (models, _) =
         tobj::load_obj(&path, &tobj::LoadOptions { triangulate: true, ..Default::default() })
             .unwrap();
-    assert_eq!(models.len(), 1, "{name}");
-    let m = &models[0].mesh;
-    assert_eq!(m.positions.len(), 3 * mesh.positions.len(), "{name}");
-    assert_eq!(m.indices.len(), 3 * mesh.triangles.len(), "{name}");
-    assert_eq!(m.texcoord_indices.len(), m.indices.len(), "{name}: UVs on every corner");
-    assert_eq!(m.normal_indices.len(), m.indices.len(), "{name}: normals on every corner");
-    assert!(m.texcoords.iter().all(|t| t.is_finite()));
+    // One model per material run (tobj splits at `usemtl`), one for a mesh without.
+    assert_eq!(models.len(), mesh.material_names.len().max(1), "{name}");
+    let faces: usize = models.iter().map(|m| m.mesh.indices.len()).sum();
+    assert_eq!(faces, 3 * mesh.triangles.len(), "{name}");
+    if let [one] = &models[..] {
+        assert_eq!(one.mesh.positions.len(), 3 * mesh.positions.len(), "{name}");
+    }
+    for m in models.iter().map(|m| &m.mesh) {
+        assert_eq!(m.texcoord_indices.len(), m.indices.len(), "{name}: UVs on every corner");
+        assert_eq!(m.normal_indices.len(), m.indices.len(), "{name}: normals on every corner");
+        assert!(m.texcoords.iter().all(|t| t.is_finite()));
+    }
+}
+
+#[test]
+fn garment_material_names_survive_an_obj_round_trip() {
+    // usemtl/mtllib: tobj (what trimesh and most tools read the same way) loads the .mtl
+    // written beside the OBJ and gives each face run its material's name back.
+    for (kind, names) in [
+        (MeshKind::Shirt, ["torso", "sleeve_right", "sleeve_left"]),
+        (MeshKind::Trousers, ["hip", "leg_right", "leg_left"]),
+    ] {
+        let mesh = synth_mesh(kind, Resolution::Low).unwrap();
+        assert_eq!(mesh.material_names, names);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("g.obj");
+        write_obj(&mesh, &path, "g").unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(
+            text.contains("mtllib g.mtl\n")
+                && text.contains("usemtl torso\n") == (names[0] == "torso")
+        );
+        let (models, mats) =
+            tobj::load_obj(&path, &tobj::LoadOptions { triangulate: true, ..Default::default() })
+                .unwrap();
+        let mats = mats.unwrap();
+        let got: Vec<&str> = mats.iter().map(|m| m.name.as_str()).collect();
+        assert_eq!(got, names);
+        for (k, name) in names.iter().enumerate() {
+            let faces: usize = models
+                .iter()
+                .filter(|m| m.mesh.material_id.map(|i| mats[i].name.as_str()) == Some(name))
+                .map(|m| m.mesh.indices.len() / 3)
+                .sum();
+            let want = mesh.triangle_material.iter().filter(|&&t| t == k as u32).count();
+            assert_eq!(faces, want, "{name}");
+        }
+    }
 }
 
 fn outward_fraction(mesh: &Mesh, outward: impl Fn([f64; 3]) -> [f64; 3]) -> f64 {

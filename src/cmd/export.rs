@@ -1,7 +1,8 @@
 //! `btf export`: data for other tools. `npy` writes one view slot of a BTF store as a
 //! `lights × (h·w·3)` float32 array; `ubo2003` writes a BTF store as a Bonn image folder;
 //! `pvf` writes an eigen store as a Bonn PVF file; `exr` writes one slot of an eigen store
-//! (mean and eigentextures) as a multi-layer OpenEXR for any image tool.
+//! as one single-part OpenEXR (channels `mean.R/G/B`, `eigen00.R/G/B`, …) and its weights as
+//! `OUT.weights.npy`, for any image tool (docs/stores.md).
 
 use crate::guard::outln;
 use anyhow::{Context, Result, bail};
@@ -19,7 +20,8 @@ crate::args::choices! {
         Ubo2003 = "ubo2003",
         /// An eigen store as a Bonn PVF file.
         Pvf = "pvf",
-        /// One view slot of an eigen store (mean, eigentextures) as multi-layer EXR (`--slot`).
+        /// One view slot of an eigen store: mean and eigentextures as one single-part EXR
+        /// (channels `mean.R`, …, `eigen00.R`, …) and the weights as `OUT.weights.npy`.
         Exr = "exr",
     }
 }
@@ -27,9 +29,9 @@ crate::args::choices! {
 crate::args::choices! {
     /// `btf export --image`: image encoding of a ubo2003 folder.
     ImageChoice {
-        /// 8-bit PNG (values scaled to the peak).
+        /// 8-bit PNG (values scaled to the peak; the default).
         Png = "png",
-        /// 16-bit PNG (values scaled to the peak).
+        /// 16-bit PNG (values scaled to the peak; Pillow and imageio read it as 8 bit).
         Png16 = "png16",
         /// JPEG, quality 95.
         Jpg = "jpg",
@@ -49,8 +51,9 @@ pub struct ExportArgs {
     /// Output format.
     #[arg(long, default_value = "npy")]
     format: ExportFormat,
-    /// Image encoding of a ubo2003 folder.
-    #[arg(long, default_value = "png16")]
+    /// Image encoding of a ubo2003 folder: png (8-bit sRGB, the default), png16 (16-bit
+    /// sRGB: Pillow and imageio decode it to 8 bit), jpg or exr (linear float).
+    #[arg(long, default_value = "png")]
     image: ImageChoice,
     /// Material name at the start of ubo2003 file names.
     #[arg(long, default_value = "material")]
@@ -81,42 +84,6 @@ pub fn write_npy(path: &Path, rows: usize, cols: usize, data: &[f32]) -> Result<
         }
         Ok(())
     })?;
-    Ok(())
-}
-
-/// Writes `layers` (name, `h·w·3` linear RGB) as one multi-layer float32 EXR, atomically.
-pub fn write_layers_exr(
-    path: &Path,
-    w: usize,
-    h: usize,
-    layers: &[(String, Vec<f32>)],
-) -> Result<()> {
-    use exr::prelude::*;
-    let list: Vec<Layer<AnyChannels<FlatSamples>>> = layers
-        .iter()
-        .map(|(name, px)| {
-            let ch = |c: usize, n: &str| {
-                AnyChannel::new(
-                    n,
-                    FlatSamples::F32(px.iter().skip(c).step_by(3).copied().collect()),
-                )
-            };
-            Layer::new(
-                (w, h),
-                LayerAttributes::named(name.as_str()),
-                Encoding::FAST_LOSSLESS,
-                AnyChannels::sort(vec![ch(0, "R"), ch(1, "G"), ch(2, "B")].into()),
-            )
-        })
-        .collect();
-    let image =
-        Image::from_layers(ImageAttributes::new(IntegerBounds::from_dimensions((w, h))), list);
-    let mut bytes = std::io::Cursor::new(Vec::new());
-    image
-        .write()
-        .to_buffered(&mut bytes)
-        .with_context(|| format!("cannot encode {}", path.display()))?;
-    btf_core::fs::write_atomic(path, bytes.get_ref())?;
     Ok(())
 }
 
@@ -205,22 +172,29 @@ pub fn run(a: ExportArgs) -> Result<()> {
             Ok(())
         }
         "exr" => {
+            // One single-part EXR (channels mean.R, …, eigen00.R, …) and the slot's weights
+            // beside it as WEIGHTS.npy (lights × components): docs/stores.md.
+            let weights = a.output.with_extension("weights.npy");
+            crate::guard::refuse_overlap(&[("weights", &weights)], &[("input", &a.input)])?;
+            crate::guard::check_file(&weights, btf_core::fs::NPY)?;
             let store = open_eigen(&a.input)?;
             let m = &store.meta().btf;
             let j = slot_arg(&a, m.n_views())?;
             let s = store.read_slot(j)?;
-            let mut layers = vec![("mean".to_string(), s.mean.clone())];
-            for k in 0..s.components {
-                layers.push((format!("eigen{k:02}"), s.basis_row(k).to_vec()));
-            }
-            write_layers_exr(&a.output, m.width, m.height, &layers)?;
+            let names: Vec<String> = (0..s.components).map(|k| format!("eigen{k:02}")).collect();
+            let mut images = vec![("mean", &s.mean[..])];
+            images.extend(names.iter().enumerate().map(|(k, n)| (n.as_str(), s.basis_row(k))));
+            btf_image::write::write_exr_named_rgb(&a.output, m.width, m.height, &images)?;
+            write_npy(&weights, m.n_lights(), s.components, &s.weights)?;
             outln!(
-                "wrote view slot {j} of {} (mean + {} eigentextures, {}×{}) to {}",
+                "wrote view slot {j} of {} (mean + {} eigentextures, {}×{}, one single-part EXR) \
+                 to {} and its weights to {}",
                 a.input.display(),
                 s.components,
                 m.width,
                 m.height,
-                a.output.display()
+                a.output.display(),
+                weights.display()
             );
             Ok(())
         }

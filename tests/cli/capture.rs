@@ -267,7 +267,7 @@ fn an_interrupted_run_resumes() {
     std::fs::write(partial.join("zarr.json"), record).unwrap();
     let chunks = partial.join("normtextures/c/2");
     std::fs::remove_dir_all(&chunks).unwrap();
-    std::fs::remove_file(partial.join("registration/view_0002.json")).unwrap();
+    std::fs::remove_dir_all(partial.join("registration/view_0002")).unwrap();
     let before = std::fs::read(d.path("m.btf/normtextures/c/2/3/0/0/0")).unwrap();
     std::fs::remove_dir_all(d.path("m.btf")).unwrap();
     let p = process(&d, "raw", "m.btf", &["--resume"]);

@@ -68,19 +68,34 @@ fn pvf_round_trip_and_exr_layers() {
         let want = s.mean[i] + (0..3).map(|k| s.weights_of(5)[k] * s.basis_row(k)[i]).sum::<f32>();
         assert!((x - want).abs() < 1e-6, "texel value {i}: {x} vs {want}");
     }
-    // EXR: mean and eigentextures of one slot as layers.
+    // EXR: one single-part file with every image as named channels, read the way a
+    // single-part reader does (the first and only part), and the weights beside it.
     d.ok(&["export", "m.eigen", "--format", "exr", "--slot", "4", "-o", "slot4.exr"]);
     let img = exr::prelude::read_all_flat_layers_from_file(d.path("slot4.exr")).unwrap();
-    let names: Vec<String> = img
-        .layer_data
-        .iter()
-        .map(|l| l.attributes.layer_name.as_ref().unwrap().to_string())
+    assert_eq!(img.layer_data.len(), 1, "single part");
+    let part = &img.layer_data[0];
+    let channel = |name: &str| -> Vec<f32> {
+        let c = part.channel_data.list.iter().find(|c| c.name.to_string() == name);
+        let c = c.unwrap_or_else(|| panic!("no channel {name}"));
+        let exr::prelude::FlatSamples::F32(v) = &c.sample_data else { panic!("f32 samples") };
+        v.clone()
+    };
+    let mut names: Vec<String> =
+        part.channel_data.list.iter().map(|c| c.name.to_string()).collect();
+    names.sort();
+    assert_eq!(names.len(), 3 * 4);
+    assert!(names.contains(&"mean.R".into()) && names.contains(&"eigen02.B".into()));
+    // Texel 5 (y=1, x=1 of 4×4) red is texel value 15 of the slot; eigentexture 2 blue is 17.
+    assert_eq!(channel("mean.R")[5], s.mean[15]);
+    assert_eq!(channel("eigen02.B")[5], s.basis_row(2)[17]);
+    let npy = std::fs::read(d.path("slot4.weights.npy")).unwrap();
+    let header = u16::from_le_bytes([npy[8], npy[9]]) as usize;
+    assert!(String::from_utf8_lossy(&npy[10..10 + header]).contains("'shape': (7, 3)"));
+    let w: Vec<f32> = npy[10 + header..]
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
         .collect();
-    assert_eq!(names, ["mean", "eigen00", "eigen01", "eigen02"]);
-    let red =
-        img.layer_data[0].channel_data.list.iter().find(|c| c.name.to_string() == "R").unwrap();
-    let exr::prelude::FlatSamples::F32(r) = &red.sample_data else { panic!("f32 samples") };
-    assert_eq!(r[5], s.mean[15]);
+    assert_eq!(w, s.weights, "weights [light][component]");
 }
 
 #[test]
@@ -138,4 +153,40 @@ fn ubo2003_import_and_export_show_progress_only_on_a_terminal() {
         .unwrap();
     assert!(o.status.success());
     assert!(o.stderr.is_empty(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
+fn ubo2003_export_is_8_bit_unless_16_is_asked_for_and_says_so() {
+    // Pillow reads 16-bit RGB PNGs as 8 bit without a warning (issue #25): the default is
+    // 8-bit sRGB, `--image png16` writes 16 bits, and the sidecar records which.
+    let d = Dir::new();
+    write_test_btf(&d.path("m.btf"), 4);
+    for (args, bits, color) in [
+        (&[][..], 8, image::ColorType::Rgb8),
+        (&["--image", "png16"][..], 16, image::ColorType::Rgb16),
+    ] {
+        let mut a = vec!["export", "m.btf", "--format", "ubo2003", "-o", "ex"];
+        a.extend_from_slice(args);
+        d.ok(&a);
+        let side: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(d.path("ex/btf-export.json")).unwrap())
+                .unwrap();
+        assert_eq!(side["bits_per_channel"], bits);
+        let png = std::fs::read_dir(d.path("ex/tv040_pv060")).unwrap().next().unwrap().unwrap();
+        let img = image::open(png.path()).unwrap();
+        assert_eq!(img.color(), color, "{args:?}");
+    }
+    // The 8-bit default round-trips within half an 8-bit code through the sRGB curve's
+    // steepest decoding slope, times the scale.
+    d.ok(&["export", "m.btf", "--format", "ubo2003", "-o", "ex8"]);
+    d.ok(&["import", "ubo2003", "ex8", "-o", "back.btf"]);
+    let side: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.path("ex8/btf-export.json")).unwrap())
+            .unwrap();
+    let scale = side["scale"].as_f64().unwrap() as f32;
+    let (a, b) =
+        (BtfStore::open(&d.path("m.btf")).unwrap(), BtfStore::open(&d.path("back.btf")).unwrap());
+    let bound = 0.5 / 255.0 * 2.4 / 1.055 * scale;
+    let e = max_abs_diff(&a, &b);
+    assert!(e <= bound, "{e} > {bound} (scale {scale})");
 }

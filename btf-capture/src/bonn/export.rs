@@ -33,6 +33,15 @@ pub enum ImageEncoding {
 }
 
 impl ImageEncoding {
+    /// Bits per channel of the written files (recorded in the folder's sidecar).
+    pub fn bits_per_channel(self) -> u32 {
+        match self {
+            ImageEncoding::Png8 | ImageEncoding::Jpeg(_) => 8,
+            ImageEncoding::Png16 => 16,
+            ImageEncoding::Exr => 32,
+        }
+    }
+
     /// File extension.
     pub fn extension(self) -> &'static str {
         match self {
@@ -261,7 +270,9 @@ fn write_folder(
             progress(running, total);
         }
     }
-    let side = json!({"scale": scale, "encoding": format!("{enc:?}"), "note": "linear value = decoded value x scale",
+    let side = json!({"scale": scale, "encoding": format!("{enc:?}"),
+        "bits_per_channel": enc.bits_per_channel(),
+        "note": "linear value = decoded value x scale; decoded value = sRGB-decoded code / (2^bits - 1) for PNG and JPEG (Pillow and imageio's Pillow plugin read 16-bit RGB PNGs as 8 bit: use OpenCV's IMREAD_UNCHANGED or pypng), the stored float for EXR",
         "view_sampling": m.view_sampling, "light_sampling": m.light_sampling});
     let sp = tmp.join(super::ubo2003::SIDECAR);
     btf_core::fs::write_atomic(

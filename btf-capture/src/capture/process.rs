@@ -21,7 +21,7 @@ use btf_core::store::{BtfMeta, BtfWriter};
 use btf_core::zarr::DType;
 use rayon::prelude::*;
 use serde_json::json;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The region of interest, in pixels of the rectified frontal image.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -291,8 +291,10 @@ pub fn slot_plan(
     })
 }
 
-fn sidecar(dir: &Path, view: usize) -> PathBuf {
-    dir.join("registration").join(format!("view_{view:04}.json"))
+/// The name of view `view`'s registration record: the Zarr group `registration/<name>`
+/// inside the store being written ([`btf_core::zarr::write_record`]).
+fn sidecar(view: usize) -> String {
+    format!("view_{view:04}")
 }
 
 /// Processes `raw_dir` into the BTF store `out`; `tick` is called once per image.
@@ -319,6 +321,7 @@ pub fn process(
     });
     let mut writer = BtfWriter::create_for_job(out, meta, opt.dtype, opt.resume, job)?;
     let partial = writer.dir().to_owned();
+    btf_core::zarr::ensure_record_group(&partial, "registration")?;
     let result = run_slots(&layout, &writer, &grid, opt, tick);
     let outcome = result.and_then(|(regs, written, kept)| {
         writer.set_provenance(provenance(&layout, &grid, opt, &regs));
@@ -342,11 +345,12 @@ fn run_slots(
     let results: Vec<(Registration, usize)> = (0..n)
         .into_par_iter()
         .map(|view| -> Result<(Registration, usize)> {
-            let side = sidecar(writer.dir(), view);
+            let side = sidecar(view);
             let done = (0..n).all(|l| writer.has_image(view, l));
             if done
-                && let Ok(text) = std::fs::read_to_string(&side)
-                && let Ok(reg) = serde_json::from_str::<Registration>(&text)
+                && let Some(record) =
+                    btf_core::zarr::read_record(writer.dir(), "registration", &side)
+                && let Ok(reg) = serde_json::from_value::<Registration>(record)
                 && sidecar_is_sound(&reg, view)
             {
                 (0..n).for_each(|_| tick());
@@ -368,7 +372,7 @@ fn run_slots(
                 }
                 tick();
             }
-            write_sidecar(&side, &reg)?;
+            write_sidecar(writer.dir(), &side, &reg)?;
             Ok((reg, written))
         })
         .collect::<Result<_>>()?;
@@ -383,9 +387,9 @@ fn sidecar_is_sound(reg: &Registration, view: usize) -> bool {
     reg.view == view && h.iter().all(|v| v.is_finite()) && h.try_inverse().is_some()
 }
 
-fn write_sidecar(path: &Path, reg: &Registration) -> Result<()> {
-    let text = serde_json::to_string_pretty(reg).expect("registration serialises");
-    Ok(btf_core::fs::write_atomic_unsynced(path, text.as_bytes())?)
+fn write_sidecar(dir: &Path, name: &str, reg: &Registration) -> Result<()> {
+    let record = serde_json::to_value(reg).expect("registration serialises");
+    Ok(btf_core::zarr::write_record(dir, "registration", name, &record)?)
 }
 
 fn provenance(

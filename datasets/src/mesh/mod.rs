@@ -34,6 +34,11 @@ pub struct Mesh {
     pub triangles: Vec<[u32; 3]>,
     /// UV indices of each triangle's corners.
     pub triangle_uvs: Vec<[u32; 3]>,
+    /// Material names (OBJ `usemtl`, declared in the `mtllib` written beside the OBJ);
+    /// empty for a mesh without materials.
+    pub material_names: Vec<String>,
+    /// Index into `material_names` of each triangle; empty when there are no materials.
+    pub triangle_material: Vec<u32>,
 }
 
 /// The mesh kinds of `btf synth mesh`.
@@ -109,6 +114,13 @@ pub fn synth_mesh(kind: MeshKind, res: Resolution) -> Result<Mesh> {
 }
 
 impl Mesh {
+    /// Gives the triangles added since the last call (all untagged ones) material `name`.
+    pub fn tag_material(&mut self, name: &str) {
+        let id = self.material_names.len() as u32;
+        self.material_names.push(name.to_owned());
+        self.triangle_material.resize(self.triangles.len(), id);
+    }
+
     /// Appends a `nu × nv` grid chart: `pos(s, t)` and `uv(s, t)` for `s, t ∈ [0, 1]`;
     /// with `wrap`, the column `s = 1` reuses the positions of `s = 0` (a closed tube)
     /// while keeping its own UVs.

@@ -1,6 +1,8 @@
 //! Wavefront OBJ output: `v`, `vt`, `vn` and `f p/t/n` records (1-based), positions and
-//! normals sharing indices, UVs indexed separately so seams keep a closed surface closed.
-//! Written to a temporary file and renamed into place.
+//! normals sharing indices, UVs indexed separately so seams keep a closed surface closed;
+//! a mesh with materials gets `usemtl NAME` before each run of its faces and an `mtllib`
+//! beside it (`NAME.mtl`, one `newmtl` per material) so OBJ readers keep the names.
+//! Written to a temporary file and renamed into place (the `.mtl` first).
 
 use super::Mesh;
 use crate::{Error, Result};
@@ -15,6 +17,10 @@ pub fn write_obj(mesh: &Mesh, path: &Path, comment: &str) -> Result<()> {
     if !finite
         || mesh.normals.len() != mesh.positions.len()
         || mesh.triangles.len() != mesh.triangle_uvs.len()
+        || !mesh.triangle_material.is_empty()
+            && (mesh.triangle_material.len() != mesh.triangles.len()
+                || mesh.triangle_material.iter().any(|&m| m as usize >= mesh.material_names.len()))
+        || mesh.material_names.iter().any(|n| n.is_empty() || n.contains(char::is_whitespace))
     {
         return Err(Error::Invalid(format!(
             "{}: mesh has non-finite or inconsistent data",
@@ -42,7 +48,22 @@ pub fn write_obj(mesh: &Mesh, path: &Path, comment: &str) -> Result<()> {
     for n in &mesh.normals {
         let _ = writeln!(s, "vn {:.6} {:.6} {:.6}", n[0], n[1], n[2]);
     }
-    for (f, ft) in mesh.triangles.iter().zip(&mesh.triangle_uvs) {
+    let materials = !mesh.triangle_material.is_empty();
+    if materials {
+        let mtl_path = path.with_extension("mtl");
+        let mtl: String =
+            mesh.material_names.iter().map(|n| format!("newmtl {n}\nKd 0.8 0.8 0.8\n")).collect();
+        btf_core::fs::write_atomic(&mtl_path, mtl.as_bytes())?;
+        let name = mtl_path.file_name().unwrap_or_default().to_string_lossy();
+        s = format!("mtllib {name}\n{s}");
+    }
+    let mut current = None;
+    for (i, (f, ft)) in mesh.triangles.iter().zip(&mesh.triangle_uvs).enumerate() {
+        if materials && current != Some(mesh.triangle_material[i]) {
+            current = Some(mesh.triangle_material[i]);
+            let _ =
+                writeln!(s, "usemtl {}", mesh.material_names[mesh.triangle_material[i] as usize]);
+        }
         let _ = writeln!(
             s,
             "f {}/{}/{} {}/{}/{} {}/{}/{}",

@@ -117,6 +117,7 @@ pub fn shirt(high: bool) -> Mesh {
             1.0 + 0.08 * (1.0 - t) * (7.0 * phi + 3.0 * t).sin() + 0.025 * (38.0 * t + phi).sin();
         ellipse * shoulder * folds
     });
+    m.tag_material("torso");
     for side in [-1.0f64, 1.0] {
         let angle = 40f64.to_radians();
         // From the cuff up to the shoulder (ending inside the torso), so v points up.
@@ -132,6 +133,7 @@ pub fn shirt(high: bool) -> Mesh {
                 + 0.07 * (28.0 * t + 2.0 * PI * s).sin() * (1.0 - t)
                 + 0.04 * (5.0 * 2.0 * PI * s).sin())
         });
+        m.tag_material(if side < 0.0 { "sleeve_right" } else { "sleeve_left" });
     }
     m.compute_normals();
     m
@@ -150,6 +152,7 @@ pub fn trousers(high: bool) -> Mesh {
         let ellipse = a * b / ((b * phi.cos()).powi(2) + (a * phi.sin()).powi(2)).sqrt();
         ellipse * (1.0 + 0.02 * (9.0 * phi).sin() * t)
     });
+    m.tag_material("hip");
     for (k, side) in [-1.0f64, 1.0].into_iter().enumerate() {
         tube(
             &mut m,
@@ -169,6 +172,7 @@ pub fn trousers(high: bool) -> Mesh {
                 r * (1.0 + pooling + knee + 0.03 * (6.0 * phi + 9.0 * t).sin())
             },
         );
+        m.tag_material(if side < 0.0 { "leg_right" } else { "leg_left" });
     }
     m.compute_normals();
     m

@@ -77,7 +77,10 @@ fn claim_texels(store: &Path, w: u64, h: u64) {
         let meta = e.path().join("zarr.json");
         let Ok(bytes) = std::fs::read(&meta) else { continue };
         let mut a: Value = serde_json::from_slice(&bytes).unwrap();
-        let names: Vec<String> = serde_json::from_value(a["dimension_names"].clone()).unwrap();
+        // Groups (stats/, registration/) have no dimensions.
+        let Ok(names) = serde_json::from_value::<Vec<String>>(a["dimension_names"].clone()) else {
+            continue;
+        };
         for (i, n) in names.iter().enumerate() {
             let v = match n.as_str() {
                 "y" => h,

@@ -88,7 +88,7 @@ fn every_writer_survives_kill_9() {
             gpu: false,
         },
         Case {
-            v1: vec!["export", "A.btf", "--format", "ubo2003", "-o", "ex"],
+            v1: vec!["export", "A.btf", "--format", "ubo2003", "--image", "png16", "-o", "ex"],
             v2: vec!["export", "A.btf", "--format", "ubo2003", "--image", "png", "-o", "ex"],
             rerun: &[],
             out: "ex",
