@@ -102,6 +102,11 @@ fn quiet_vulkan_device_select() {
 
 fn main() -> ExitCode {
     quiet_vulkan_device_select();
+    // A `BTF_SIMD` this CPU cannot run is refused here, before any kernel would panic on it.
+    if let Err(e) = btf_core::simd::Isa::from_env() {
+        eprintln!("error: {e}");
+        return ExitCode::from(2);
+    }
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Demo(a) => demo_cmd::run(a),

@@ -554,9 +554,32 @@ impl ZarrArray {
             let mut head = Vec::with_capacity(18);
             f.take(18).read_to_end(&mut head).map_err(|e| Error::io(&path, e))?;
             head.truncate((len - 4).min(18) as usize);
-            self.check_frame_size(&path, &head)?;
+            if let Err(e) = self.check_frame_size(&path, &head) {
+                // A damaged header is first of all a checksum mismatch: say so when it is.
+                if !self.stored_crc_matches(&path, len)? {
+                    return Err(Error::Corrupt { path, what: "crc32c checksum mismatch".into() });
+                }
+                return Err(e);
+            }
         }
         Ok(())
+    }
+
+    /// Whether the chunk file's trailing crc32c matches its other bytes (streamed through a
+    /// fixed buffer: nothing is allocated by the file's claim).
+    fn stored_crc_matches(&self, path: &Path, len: u64) -> Result<bool> {
+        use std::io::Read;
+        let (mut f, _) = self.open_chunk(path)?;
+        let (mut left, mut crc, mut buf) = (len - 4, 0u32, [0u8; 1 << 16]);
+        while left > 0 {
+            let n = left.min(buf.len() as u64) as usize;
+            f.read_exact(&mut buf[..n]).map_err(|e| Error::io(path, e))?;
+            crc = crc32c::crc32c_append(crc, &buf[..n]);
+            left -= n as u64;
+        }
+        let mut tail = [0u8; 4];
+        f.read_exact(&mut tail).map_err(|e| Error::io(path, e))?;
+        Ok(crc == u32::from_le_bytes(tail))
     }
 
     /// Refuses a zstd frame whose header records a decoded size other than the chunk's.

@@ -68,8 +68,15 @@ impl Mesh {
         let opts =
             tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
         // tobj calls the material loader only for an `mtllib` line and otherwise drops every
-        // `usemtl`; the materials we need are just the names, so declare a library first.
-        let text = format!("mtllib usemtl-names.mtl\n{text}");
+        // `usemtl`; the materials we need are just the names, so declare one library first
+        // and turn the file's own `mtllib` lines into comments (a second library would
+        // append the names again and shift every material id past the list).
+        let own: String = text
+            .lines()
+            .map(|l| if l.trim_start().starts_with("mtllib") { "#" } else { l })
+            .flat_map(|l| [l, "\n"])
+            .collect();
+        let text = format!("mtllib usemtl-names.mtl\n{own}");
         let (models, _) = tobj::load_obj_buf(&mut text.as_bytes(), &opts, |_| {
             tobj::load_mtl_buf(&mut mtl.as_bytes())
         })
@@ -95,7 +102,17 @@ impl Mesh {
                 any_missing_uv = true;
                 mesh.uvs.extend(std::iter::repeat_n([0.0; 2], n));
             }
-            let mat = g.material_id.map(|i| i as u32).unwrap_or(none_id);
+            let mat = match g.material_id {
+                Some(i) if i < scan.usemtl.len() => i as u32,
+                Some(i) => {
+                    return Err(Error::Invalid(format!(
+                        "{name}: material id {i} of object '{}' outside its {} usemtl names",
+                        m.name,
+                        scan.usemtl.len()
+                    )));
+                }
+                None => none_id,
+            };
             for t in g.indices.chunks_exact(3) {
                 mesh.triangles.push([base + t[0], base + t[1], base + t[2]]);
                 mesh.triangle_material.push(mat);
@@ -284,4 +301,23 @@ fn prescan(text: &str, name: &str) -> Result<Prescan> {
         }
     }
     Ok(Prescan { usemtl })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A file naming its own material library (as `datasets`' OBJ writer does) keeps its
+    /// `usemtl` names once, in order of first use, and every triangle's id points into them.
+    #[test]
+    fn an_own_mtllib_keeps_names_and_ids() {
+        let obj = "mtllib shirt.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n\
+                   vt 0 0\nvt 1 0\nvt 0 1\nvt 1 1\nusemtl torso\nf 1/1 2/2 3/3\n\
+                   usemtl sleeve\nf 2/2 4/4 3/3\nusemtl torso\nf 1/1 2/2 4/4\n";
+        let m = Mesh::parse_obj(obj, "shirt.obj", None).unwrap();
+        assert_eq!(m.material_names, ["torso", "sleeve"]);
+        let mut ids = m.triangle_material.clone();
+        ids.sort_unstable();
+        assert_eq!(ids, [0, 0, 1], "two torso triangles and one sleeve");
+    }
 }

@@ -97,7 +97,8 @@ pub fn run(a: DemoArgs) -> Result<()> {
         stage(&mut stages, name, done, f)
     })?;
     let eig = EigenStore::open(&eig_path)?;
-    let summary = crate::report::demo::write(&a.out, a.kind.as_str(), &btf, &eig, &renders, &stages)?;
+    let summary =
+        crate::report::demo::write(&a.out, a.kind.as_str(), &btf, &eig, &renders, &stages)?;
     for line in summary {
         crate::guard::outln!("{line}");
     }

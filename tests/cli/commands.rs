@@ -317,3 +317,21 @@ fn missing_and_wrong_kind_inputs_give_clear_errors() {
     let err = d.fails(&["compress", "m.btf", "-o", "x.eig", "--quantization", "f8"]);
     assert!(err.contains("f8"), "{err}");
 }
+
+/// A `BTF_SIMD` that names no path, or one this CPU cannot run, is refused before any work
+/// with the variable named — never a panic inside a kernel.
+#[test]
+fn a_bad_btf_simd_is_refused_up_front() {
+    let d = Dir::new();
+    write_test_btf(&d.path("m.btf"), 2);
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_btf"))
+        .args(["compress", "m.btf", "-c", "2", "-o", "m.eig"])
+        .current_dir(d.tmp.path())
+        .env("BTF_SIMD", "sse9")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("BTF_SIMD") && err.contains("sse9") && !err.contains("panicked"), "{err}");
+    assert!(!d.path("m.eig").exists());
+}

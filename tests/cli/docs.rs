@@ -234,7 +234,8 @@ fn the_readme_first_session_runs_as_written() {
         let target = line.split_whitespace().last().unwrap();
         assert!(out.contains(target) || err.contains(target), "`{line}` says nothing of {target}");
     }
-    // The Bonn folder round trip keeps every value (16-bit PNG of values ≤ 1: ≤ 2⁻¹⁶ relative).
+    // The Bonn folder round trip with `--image png16` keeps every value (16-bit PNG of
+    // values ≤ 1: ≤ 2⁻¹⁶ relative; the 8-bit default would lose up to 2.4/255 of the peak).
     let a = btf_core::store::BtfStore::open(&d.path("corduroy.btf")).unwrap();
     let b = btf_core::store::BtfStore::open(&d.path("again.btf")).unwrap();
     assert_eq!((a.meta().n_views(), a.meta().n_lights()), (5, 5));
