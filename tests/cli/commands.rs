@@ -219,11 +219,12 @@ fn corrupt_input_is_named_and_leaves_no_output() {
         "{err}"
     );
     assert!(!d.path("m.eig").exists());
-    // A NaN with a valid checksum: refused, slot and light named.
+    // A NaN with a valid checksum, in the store's codec (zstd, then crc32c over the frame):
+    // refused, slot and light named.
     let mut raw = vec![0u8; 48 * 4];
     raw[..4].copy_from_slice(&f32::NAN.to_le_bytes());
-    let mut with_crc = raw.clone();
-    with_crc.extend_from_slice(&crc32c::crc32c(&raw).to_le_bytes());
+    let mut with_crc = zstd::bulk::compress(&raw, 3).unwrap();
+    with_crc.extend_from_slice(&crc32c::crc32c(&with_crc).to_le_bytes());
     std::fs::write(&chunk, &with_crc).unwrap();
     let err = d.fails(&["compress", "m.btf", "-c", "2", "-o", "m.eig"]);
     assert!(err.contains("view slot 4, light 2") && err.contains("non-finite"), "{err}");
