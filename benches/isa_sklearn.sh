@@ -13,12 +13,16 @@
 # Environment: BTF (the btf binary; default $CARGO_TARGET_DIR/release/btf, else
 #   target/release/btf), ROUNDS (rounds of the paths, interleaved; default 1),
 #   PATHS (e.g. "avx2 avx512"; default every path the CPU runs), SKLEARN_THREADS (BLAS
-#   threads; default: the library's own choice).
+#   threads of scikit-learn, through OPENBLAS/OMP/MKL_NUM_THREADS; default: the library's
+#   own choice, all cores — on a loaded machine its spinning threads inflate its times).
 # Example, quiet machine: benches/quiet.sh benches/isa_sklearn.sh /tmp/bench/corduroy256_f16.btf
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 if ! python3 -c "import sklearn, numpy" 2>/dev/null; then
   echo "installing scikit-learn and numpy from PyPI" >&2
   python3 -m pip install --quiet scikit-learn numpy threadpoolctl
+fi
+if [ -n "${SKLEARN_THREADS:-}" ]; then # read by the BLAS libraries when they load
+  export OPENBLAS_NUM_THREADS=$SKLEARN_THREADS OMP_NUM_THREADS=$SKLEARN_THREADS MKL_NUM_THREADS=$SKLEARN_THREADS
 fi
 exec python3 "$here/isa_sklearn.py" "$@"
