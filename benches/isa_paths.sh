@@ -48,7 +48,7 @@ for p in $PATHS; do
   rm -rf "$out/$kind$size-$p.btf"
   la=$(cat /proc/loadavg)
   BTF_SIMD=$p BTF_NO_PROGRESS=1 /usr/bin/time -f "%e %U %M" -o "$out/time-synth-$p.txt" \
-    "$btf" synth material --kind "$kind" --size "$size" -o "$out/$kind$size-$p.btf" > /dev/null
+    "$btf" synth material --kind "$kind" --size "$size" -o "$out/$kind$size-$p.btf" > /dev/null 2> "$out/synth-$p.err"
   read -r wall user rss < "$out/time-synth-$p.txt"
   echo "| BTF_SIMD=$p | $wall | $user | $((rss / 1024)) | $la |"
   rm -rf "$out/$kind$size-$p.btf"
