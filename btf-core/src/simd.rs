@@ -1,6 +1,6 @@
-//! Which instruction set the dense kernels of the per-slot PCA (`kernels`) use. (The ray
-//! lanes and gathers of `btf-light` choose AVX2 or AVX-512 by run-time detection of their
-//! own and do not read `BTF_SIMD`.)
+//! Which instruction set the dense kernels of the per-slot PCA (`kernels`) use — and, through
+//! `btf_light::simd`, the ray lanes of the visibility rasteriser and the gather's source
+//! codes: one switch for the toolkit.
 //!
 //! [`Isa::active`] is the best path the CPU supports — AVX-512, else AVX2 + FMA + F16C,
 //! else NEON on aarch64, else the portable ("scalar") code — unless the environment

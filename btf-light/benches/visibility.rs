@@ -14,10 +14,13 @@
 //! `cargo bench -p btf-light --bench visibility` (`-- --quick` for a short run);
 //! `BTF_MEASURE_HIGH=1`: the 9160-vertex shirt instead of the 925-vertex one;
 //! `BTF_ONE_SIDED=1`: the front sides only (what a `two_sided = false` scene computes);
-//! `BTF_FAST_ONLY=1`: the rasteriser over every side alone (for `perf`; no ray cast).
+//! `BTF_FAST_ONLY=1`: the rasteriser over every side alone (for `perf`; no ray cast);
+//! `BTF_SIMD=scalar|avx2|avx512`: the ray lanes' path (`btf_light::simd`; default the best
+//! the CPU runs), named in the header and the table (`benches/isa_paths.sh` runs each).
 
 mod common;
 
+use btf_light::simd::Isa;
 use btf_light::tangent::compute_tangents;
 use btf_light::{Hemicube, HemicubeFrame, VisibilityMaps};
 use common::*;
@@ -38,8 +41,9 @@ fn main() {
     let (pos, tris) = (&mesh.positions, &mesh.triangles);
     let stride = if frames.len() > 4000 { 8 } else { 1 };
     let sub: Vec<HemicubeFrame> = frames.iter().step_by(stride).copied().collect();
+    let isa = Isa::from_env().unwrap_or_else(|e| panic!("{e}"));
     println!(
-        "{name}: {} vertices, {} triangles, hemicube 32², {} ({} vertex sides; ray cast on {} of them)",
+        "{name}: {} vertices, {} triangles, hemicube 32², {} ({} vertex sides; ray cast on {} of them); ray lanes: BTF_SIMD={isa}",
         pos.len(),
         tris.len(),
         if two_sided { "two-sided" } else { "front sides only" },
@@ -103,7 +107,9 @@ fn main() {
     g.finish();
     c.final_summary();
 
-    println!("\n## visibility: {name}, medians; baseline: the ray cast on the same sides\n");
+    println!(
+        "\n## visibility: {name}, BTF_SIMD={isa}, medians; baseline: the ray cast on the same sides\n"
+    );
     println!("| | ms | ms per vertex side | × rasteriser |");
     println!("|---|---:|---:|---:|");
     let per_side = |m: Option<f64>, k: usize| num(m.map(|m| m / k as f64), 3);

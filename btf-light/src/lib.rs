@@ -16,7 +16,8 @@
 //!   [`env_coefficients`];
 //! - the scene's environment light at run time (state, rotation, timings): [`environment`];
 //! - `[TC eq. 7–8]` under an environment — per-vertex thin-cloth tables: [`thin_tables`];
-//! - meshes (OBJ) and the UV tangent frame: [`mesh`], [`tangent`], [`math`].
+//! - meshes (OBJ) and the UV tangent frame: [`mesh`], [`tangent`], [`math`];
+//! - which vector code the ray lanes and gathers run (`BTF_SIMD`): [`simd`].
 
 pub mod coefficients;
 pub mod eigenweights;
@@ -28,6 +29,7 @@ pub mod gather;
 pub mod hemicube;
 pub mod math;
 pub mod mesh;
+pub mod simd;
 pub mod tangent;
 pub mod thin_tables;
 pub mod visibility;

@@ -14,11 +14,18 @@ use crate::env_cube::EnvCube;
 use crate::hemicube::HemicubeFrame;
 #[cfg(doc)]
 use crate::hemicube::pixel_of;
+use crate::simd::Lanes;
 use rayon::prelude::*;
 
 /// Gathers `g` for the environment turned by `rotation_deg` about world `+z` (eq. 10): the
-/// sums of [`Radiances::gather_reference`], bit for bit (see the module doc).
-pub(super) fn gather(input: &GatherInput, env: &EnvCube, rotation_deg: f64) -> Radiances {
+/// sums of [`Radiances::gather_reference`], bit for bit (see the module doc), with the
+/// source codes computed by the vector code `lanes`.
+pub(super) fn gather(
+    input: &GatherInput,
+    env: &EnvCube,
+    rotation_deg: f64,
+    lanes: Lanes,
+) -> Radiances {
     let n_l = input.lights;
     let n = input.frames.len();
     let (sin, cos) = rotation_deg.to_radians().sin_cos();
@@ -29,7 +36,7 @@ pub(super) fn gather(input: &GatherInput, env: &EnvCube, rotation_deg: f64) -> R
     if let Some(half) = mirrored_half(input.frames) {
         let (front, back) = g.split_at_mut(half * row);
         front.par_chunks_mut(row).zip(back.par_chunks_mut(row)).enumerate().for_each_init(
-            || Scratch::new(n_l, sources.len()),
+            || Scratch::new(n_l, sources.len(), lanes),
             |s, (v, (fo, bo))| {
                 let bits = [input.visibility.frame_bits(v), input.visibility.frame_bits(half + v)];
                 if bits.iter().all(|b| occluded(b)) {
@@ -42,7 +49,7 @@ pub(super) fn gather(input: &GatherInput, env: &EnvCube, rotation_deg: f64) -> R
         );
     } else {
         g.par_chunks_mut(row).enumerate().for_each_init(
-            || Scratch::new(n_l, sources.len()),
+            || Scratch::new(n_l, sources.len(), lanes),
             |s, (f, out)| {
                 let bits = input.visibility.frame_bits(f);
                 if occluded(bits) {
@@ -110,6 +117,8 @@ struct Scratch {
     /// `pixel · 2 + side`, or `u32::MAX` for a source on the horizon.
     code: Vec<u32>,
     acc: Vec<[f32; 4]>,
+    /// The vector code of the source codes (`BTF_SIMD`).
+    lanes: Lanes,
 }
 
 /// The rotated tangent axes of a frame and what [`source_codes`] needs besides.
@@ -171,21 +180,21 @@ fn codes_avx2(c: &CodeInput, out: &mut [u32]) {
     codes_kernel(c, out);
 }
 
-/// [`codes_kernel`] with 8-lane vectors where the CPU has them.
+/// [`codes_kernel`] with 8-lane AVX2 vectors on the `avx2` and `avx512` paths, else for
+/// the baseline target.
 #[allow(unsafe_code)]
-fn source_codes(c: &CodeInput, out: &mut [u32]) {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU supports AVX2 (checked just above); the kernel is plain safe code.
-        unsafe { codes_avx2(c, out) };
-        return;
+fn source_codes(c: &CodeInput, out: &mut [u32], lanes: Lanes) {
+    match lanes {
+        // SAFETY: `Lanes::of` checked that the CPU supports AVX2; plain safe code.
+        #[cfg(target_arch = "x86_64")]
+        Lanes::Avx2 | Lanes::Avx512 => unsafe { codes_avx2(c, out) },
+        Lanes::Portable => codes_kernel(c, out),
     }
-    codes_kernel(c, out);
 }
 
 impl Scratch {
-    fn new(lights: usize, sources: usize) -> Scratch {
-        Scratch { lights, code: vec![0; sources], acc: vec![[0.0; 4]; 2 * lights] }
+    fn new(lights: usize, sources: usize, lanes: Lanes) -> Scratch {
+        Scratch { lights, code: vec![0; sources], acc: vec![[0.0; 4]; 2 * lights], lanes }
     }
 
     /// Accumulates the sources of `frame` (side 0) and of its mirror (side 1, `bits[1]`
@@ -204,7 +213,7 @@ impl Scratch {
             two_sided: !bits[1].is_empty(),
             src,
         };
-        source_codes(&c, &mut self.code);
+        source_codes(&c, &mut self.code, self.lanes);
         self.acc.fill([0.0; 4]);
         let n_l = self.lights;
         for (&code, pw) in self.code.iter().zip(&src.power) {

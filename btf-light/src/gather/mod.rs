@@ -21,6 +21,7 @@ mod fast;
 use crate::coefficients::{CoefficientMatrix, gamma_star_of, metric_dot};
 use crate::env_cube::EnvCube;
 use crate::hemicube::{HemicubeFrame, LightTable, pixel_of};
+use crate::simd::{Isa, Lanes};
 use crate::visibility::VisibilityMaps;
 use btf_core::gemm::{Mat, sgemm};
 use rayon::prelude::*;
@@ -58,9 +59,21 @@ pub(crate) fn rotate_z(d: [f32; 3], cos: f32, sin: f32) -> [f32; 3] {
 impl Radiances {
     /// Gathers `g` for the environment turned by `rotation_deg` about world `+z` (eq. 10),
     /// organised for speed (`fast.rs`): the sums of [`Radiances::gather_reference`], bit
-    /// for bit.
+    /// for bit. The source codes run on the path `BTF_SIMD` chooses ([`Isa::active`];
+    /// panics if it names one this CPU cannot run).
     pub fn gather(input: &GatherInput, env: &EnvCube, rotation_deg: f64) -> Radiances {
-        fast::gather(input, env, rotation_deg)
+        Radiances::gather_with(input, env, rotation_deg, Isa::active())
+    }
+
+    /// [`Radiances::gather`] with the source codes on the path `isa` (which this CPU must
+    /// run; `neon` is the portable code and runs anywhere): the same bits on every path.
+    pub fn gather_with(
+        input: &GatherInput,
+        env: &EnvCube,
+        rotation_deg: f64,
+        isa: Isa,
+    ) -> Radiances {
+        fast::gather(input, env, rotation_deg, Lanes::of(isa))
     }
 
     /// Eq. 10 frame by frame, the definition [`Radiances::gather`] must reproduce: every

@@ -23,6 +23,7 @@ mod raster_face;
 mod ray_lanes;
 
 use crate::hemicube::{Hemicube, HemicubeFrame};
+use crate::simd::{Isa, Lanes};
 use crate::{Error, Result};
 use bvh::Bvh;
 use raster::FrameRaster;
@@ -48,19 +49,34 @@ pub struct VisibilityMaps {
 impl VisibilityMaps {
     /// The maps of every frame: the answer of [`VisibilityMaps::compute_ray_cast`], found by
     /// projecting the culled mesh onto each hemicube (see `raster`) and testing only the
-    /// still-visible pixels a triangle may cover.
+    /// still-visible pixels a triangle may cover. The ray lanes run on the path `BTF_SIMD`
+    /// chooses ([`Isa::active`]; panics if it names one this CPU cannot run).
     pub fn compute(
         cube: &Hemicube,
         frames: &[HemicubeFrame],
         positions: &[[f32; 3]],
         triangles: &[[u32; 3]],
     ) -> VisibilityMaps {
+        VisibilityMaps::compute_with(cube, frames, positions, triangles, Isa::active())
+    }
+
+    /// [`VisibilityMaps::compute`] with the ray lanes on the path `isa` (which this CPU must
+    /// run; `neon` is the portable code and runs anywhere): the same bits on every path,
+    /// how tests and benchmarks compare the paths in one process.
+    pub fn compute_with(
+        cube: &Hemicube,
+        frames: &[HemicubeFrame],
+        positions: &[[f32; 3]],
+        triangles: &[[u32; 3]],
+        isa: Isa,
+    ) -> VisibilityMaps {
+        let lanes = Lanes::of(isa);
         let bvh = Bvh::new(positions, triangles);
         let eps = offset(positions);
         let words = cube.len().div_ceil(64);
         let mut bits = vec![0u64; frames.len() * words];
         bits.par_chunks_mut(words).zip(frames.par_iter()).for_each_init(
-            || FrameRaster::new(cube),
+            || FrameRaster::new(cube, lanes),
             |raster, (out, f)| raster.run(&bvh, f, eps, out),
         );
         VisibilityMaps { res: cube.res, frames: frames.len(), words, bits }
@@ -78,6 +94,7 @@ impl VisibilityMaps {
         triangles: &[[u32; 3]],
     ) -> VisibilityMaps {
         assert_eq!(wanted.len(), frames.len(), "one wanted flag per frame");
+        let lanes = Lanes::active();
         let bvh = Bvh::new(positions, triangles);
         let eps = offset(positions);
         let words = cube.len().div_ceil(64);
@@ -86,7 +103,7 @@ impl VisibilityMaps {
             .zip(frames.par_iter().zip(wanted.par_iter()))
             .filter(|(_, (_, w))| **w)
             .for_each_init(
-                || FrameRaster::new(cube),
+                || FrameRaster::new(cube, lanes),
                 |raster, (out, (f, _))| raster.run(&bvh, f, eps, out),
             );
         VisibilityMaps { res: cube.res, frames: frames.len(), words, bits }

@@ -23,6 +23,7 @@ use super::bvh::{Bvh, Tri, dot, sub};
 use super::raster_face::{Rect, face_bounds, face_of, ratio_range, span_mask, xy_distance};
 use super::ray_lanes::{FrameRays, Packet, RowWord, TriFromOrigin, packet_hits, tri_rows};
 use crate::hemicube::{Face, Hemicube, HemicubeFrame, faces};
+use crate::simd::Lanes;
 
 /// Nodes with at most this many still-visible pixels under their projection are finished
 /// by casting those pixels' rays through the node's subtree, as one packet.
@@ -50,10 +51,12 @@ pub(super) struct FrameRaster<'a> {
     rays: FrameRays,
     /// Scratch: open row words of a rectangle.
     rows: Vec<RowWord>,
+    /// The vector code of the ray lanes (`BTF_SIMD`).
+    lanes: Lanes,
 }
 
 impl<'a> FrameRaster<'a> {
-    pub(super) fn new(cube: &'a Hemicube) -> FrameRaster<'a> {
+    pub(super) fn new(cube: &'a Hemicube, lanes: Lanes) -> FrameRaster<'a> {
         let res = cube.res as usize;
         let faces = faces(res);
         let wpr = res.div_ceil(64);
@@ -77,6 +80,7 @@ impl<'a> FrameRaster<'a> {
                 * cube.dirs.iter().map(|d| d[2] / d[0].hypot(d[1])).fold(f32::INFINITY, f32::min),
             rays: FrameRays::new(&cube.dirs),
             rows: Vec::new(),
+            lanes,
         }
     }
 
@@ -86,7 +90,7 @@ impl<'a> FrameRaster<'a> {
         self.frame = *frame;
         self.origin = [0, 1, 2].map(|a| frame.origin[a] + eps * frame.axes[2][a]);
         self.eps = eps;
-        self.rays.set(frame);
+        self.rays.set(frame, self.lanes);
         self.occ.fill(0);
         self.occluded = 0;
         self.walk(bvh);
@@ -294,7 +298,7 @@ impl<'a> FrameRaster<'a> {
         if packet.len == 0 {
             return;
         }
-        let mut hits = packet_hits(bvh, root, self.origin, self.eps, packet);
+        let mut hits = packet_hits(bvh, root, self.origin, self.eps, packet, self.lanes);
         self.occluded += hits.count_ones() as usize;
         while hits != 0 {
             let b = packet.bit[hits.trailing_zeros() as usize] as usize;
@@ -354,7 +358,9 @@ impl<'a> FrameRaster<'a> {
             return;
         }
         let tf = TriFromOrigin::new(t, self.origin);
-        self.occluded += tri_rows(&tf, self.eps, &self.rays, &self.rows, &mut self.occ) as usize;
+        let lanes = self.lanes;
+        self.occluded +=
+            tri_rows(&tf, self.eps, &self.rays, &self.rows, &mut self.occ, lanes) as usize;
     }
 }
 

@@ -11,11 +11,13 @@
 //! its reciprocal exactly as [`super::bvh::Bvh::occluded`] forms them), so a lane reports a
 //! hit exactly when the scalar test does. Per triangle `s = o − p₀`, `q = s × e₁` and
 //! `e₂ · q` do not depend on the ray and are formed once, as the scalar test forms them.
-//! With AVX2 (detected at run time) the lanes become one 8-wide vector; elsewhere the same
-//! code runs as scalar loops.
+//! On the `avx2` and `avx512` paths ([`crate::simd`], `BTF_SIMD`) the lanes become one
+//! 8-wide vector (the packet traversal 16-wide with AVX-512); on the others the same code
+//! is compiled for the baseline target. Every path gives the same bits.
 
 use super::bvh::{Bvh, Node, Tri, cross, dot, sub};
 use crate::hemicube::HemicubeFrame;
+use crate::simd::Lanes;
 
 /// Most rays in one packet (the lane masks are a `u64`).
 pub(super) const PACKET: usize = 64;
@@ -43,17 +45,18 @@ impl FrameRays {
 
     /// The rays of `frame`: [`HemicubeFrame::to_world`] of every pixel direction and its
     /// reciprocal, per axis (the same operations in the same order, so the same bits).
-    pub(super) fn set(&mut self, frame: &HemicubeFrame) {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2 (checked just above); the kernel is plain safe code.
-            #[allow(unsafe_code)]
-            unsafe {
-                self.set_avx2(frame)
-            };
-            return;
+    pub(super) fn set(&mut self, frame: &HemicubeFrame, lanes: Lanes) {
+        match lanes {
+            #[cfg(target_arch = "x86_64")]
+            Lanes::Avx2 | Lanes::Avx512 => {
+                // SAFETY: `Lanes::of` checked that the CPU supports AVX2; plain safe code.
+                #[allow(unsafe_code)]
+                unsafe {
+                    self.set_avx2(frame)
+                };
+            }
+            Lanes::Portable => self.set_kernel(frame),
         }
-        self.set_kernel(frame);
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -266,22 +269,26 @@ fn packet_hits_avx512(bvh: &Bvh, root: u32, o: [f32; 3], t_min: f32, packet: &Pa
     packet_hits_kernel::<16>(bvh, root, o, t_min, packet)
 }
 
-/// [`packet_hits_kernel`] with 16-lane (AVX-512) or 8-lane (AVX2) vectors where the CPU
-/// has them.
+/// [`packet_hits_kernel`] with 16-lane (AVX-512) or 8-lane (AVX2, portable) vectors, as
+/// `lanes` says.
 #[allow(unsafe_code)]
-pub(super) fn packet_hits(bvh: &Bvh, root: u32, o: [f32; 3], t_min: f32, packet: &Packet) -> u64 {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU supports AVX-512F (checked just above); plain safe code.
-            return unsafe { packet_hits_avx512(bvh, root, o, t_min, packet) };
-        }
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2 (checked just above); plain safe code.
-            return unsafe { packet_hits_avx2(bvh, root, o, t_min, packet) };
-        }
+pub(super) fn packet_hits(
+    bvh: &Bvh,
+    root: u32,
+    o: [f32; 3],
+    t_min: f32,
+    packet: &Packet,
+    lanes: Lanes,
+) -> u64 {
+    match lanes {
+        // SAFETY: `Lanes::of` checked that the CPU supports AVX-512F; plain safe code.
+        #[cfg(target_arch = "x86_64")]
+        Lanes::Avx512 => unsafe { packet_hits_avx512(bvh, root, o, t_min, packet) },
+        // SAFETY: `Lanes::of` checked that the CPU supports AVX2; plain safe code.
+        #[cfg(target_arch = "x86_64")]
+        Lanes::Avx2 => unsafe { packet_hits_avx2(bvh, root, o, t_min, packet) },
+        Lanes::Portable => packet_hits_kernel::<8>(bvh, root, o, t_min, packet),
     }
-    packet_hits_kernel::<8>(bvh, root, o, t_min, packet)
 }
 
 /// One row word of open pixels for [`tri_rows`]: the pixel of bit 0, the index of the
@@ -335,7 +342,8 @@ fn tri_rows_avx2(
 }
 
 /// Tests the open pixels of `rows` against one triangle, sets the bits of the hit ones in
-/// `occ` and returns how many were newly occluded.
+/// `occ` and returns how many were newly occluded (8 lanes; AVX2 on the `avx2` and
+/// `avx512` paths).
 #[allow(unsafe_code)]
 pub(super) fn tri_rows(
     tf: &TriFromOrigin,
@@ -343,11 +351,12 @@ pub(super) fn tri_rows(
     rays: &FrameRays,
     rows: &[RowWord],
     occ: &mut [u64],
+    lanes: Lanes,
 ) -> u32 {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU supports AVX2 (checked just above); the kernel is plain safe code.
-        return unsafe { tri_rows_avx2(tf, t_min, rays, rows, occ) };
+    match lanes {
+        // SAFETY: `Lanes::of` checked that the CPU supports AVX2; plain safe code.
+        #[cfg(target_arch = "x86_64")]
+        Lanes::Avx2 | Lanes::Avx512 => unsafe { tri_rows_avx2(tf, t_min, rays, rows, occ) },
+        Lanes::Portable => tri_rows_kernel(tf, t_min, rays, rows, occ),
     }
-    tri_rows_kernel(tf, t_min, rays, rows, occ)
 }

@@ -332,3 +332,15 @@ pub fn shirt_low() -> Mesh {
     datasets::mesh::write_obj(&m, &p, "shirt").unwrap();
     Mesh::load_obj(&p, None).unwrap()
 }
+
+/// Every path this CPU runs, plus `neon` (the portable code, which runs anywhere), scalar
+/// first.
+pub fn simd_paths() -> Vec<btf_light::simd::Isa> {
+    use btf_light::simd::Isa;
+    let mut paths = vec![Isa::Scalar];
+    paths.extend(Isa::supported_all().into_iter().filter(|&i| i != Isa::Scalar));
+    if !paths.contains(&Isa::Neon) {
+        paths.push(Isa::Neon);
+    }
+    paths
+}

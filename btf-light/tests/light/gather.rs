@@ -1,11 +1,12 @@
 //! The gathered radiances `g` of `[S03 eq. 10]` through the hemicube and visibility maps
 //! (`[S03 eq. 7–9]`): a white furnace gives the albedo, a vertex inside a closed box is
 //! black, a 1e5 sun keeps its power and direction without speckle, and the fast gather
-//! reproduces the frame-by-frame sums bit for bit.
+//! reproduces the frame-by-frame sums bit for bit, on every `BTF_SIMD` path this CPU runs.
 
 use crate::common::*;
 use btf_core::Direction;
 use btf_image::EnvMap;
+use btf_light::simd::Isa;
 use btf_light::tangent::compute_tangents;
 use btf_light::{EnvCube, GatherInput, HemicubeFrame, Radiances, VisibilityMaps};
 use std::f64::consts::PI;
@@ -136,6 +137,43 @@ fn fast_gather_reproduces_the_frame_by_frame_sums_bit_for_bit() {
             let reference = Radiances::gather_reference(&input, &cube_env, delta);
             assert!(fast.g.iter().any(|&g| g > 0.0));
             assert_eq!(fast, reference, "two-sided {two_sided}, subset {subset}, δ = {delta}");
+        }
+    }
+}
+
+/// The source codes are the same `f32` divisions, floors and comparisons on every path (no
+/// fused multiply-add), and the sums are scalar in the reference's order: every `BTF_SIMD`
+/// path must give the scalar path's `g` bit for bit, which is the reference's.
+#[test]
+fn every_simd_path_gathers_the_scalar_sums_bit_for_bit() {
+    let mesh = crumpled_sheet();
+    let (env, _) = sun_env(256, [0.5, 0.3, 0.812]);
+    let cube_env = EnvCube::new(&env, 16);
+    let paths = simd_paths();
+    for two_sided in [false, true] {
+        let (mut s, _d) = setup(&mesh, 16, Pattern::Checker, 4);
+        let tangents = compute_tangents(&mesh);
+        s.frames = HemicubeFrame::of_mesh(&mesh.positions, &mesh.normals, &tangents, two_sided);
+        let (pos, tris) = (&mesh.positions, &mesh.triangles);
+        s.vis = VisibilityMaps::compute_with(&s.cube, &s.frames, pos, tris, Isa::Scalar);
+        let input = GatherInput {
+            table: &s.table,
+            visibility: &s.vis,
+            frames: &s.frames,
+            dirs: &s.cube.dirs,
+            lights: s.p.lights,
+        };
+        for delta in [0.0, 37.0] {
+            let scalar = Radiances::gather_with(&input, &cube_env, delta, Isa::Scalar);
+            let reference = Radiances::gather_reference(&input, &cube_env, delta);
+            assert!(scalar.g.iter().filter(|&&g| g > 0.0).count() > scalar.g.len() / 4);
+            assert_eq!(scalar, reference, "scalar, two-sided {two_sided}, δ = {delta}");
+            for &isa in &paths[1..] {
+                let got = Radiances::gather_with(&input, &cube_env, delta, isa);
+                let differ =
+                    got.g.iter().zip(&scalar.g).filter(|(a, b)| a.to_bits() != b.to_bits());
+                assert_eq!(differ.count(), 0, "{isa}, two-sided {two_sided}, δ = {delta}");
+            }
         }
     }
 }

@@ -1,10 +1,11 @@
 //! Visibility maps (`[S03 §5.2]`, the `V` of `[S03 eq. 9]`): a concave corner against its
 //! analytic visible fraction, the fast rasteriser against the ray cast it replaces (bit for
-//! bit), the cache (round trip, corruption, subsets), and environment files refused when
+//! bit, on every `BTF_SIMD` path this CPU runs), the cache (round trip, corruption, subsets), and environment files refused when
 //! not finite.
 
 use crate::common::*;
 use btf_image::EnvMap;
+use btf_light::simd::Isa;
 use btf_light::tangent::compute_tangents;
 use btf_light::{Hemicube, HemicubeFrame, VisibilityMaps};
 use std::f64::consts::PI;
@@ -116,6 +117,40 @@ fn fast_visibility_equals_the_ray_cast() {
         assert_eq!(differ, 0, "{name}: fast visibility differs from the ray cast");
         // Not a trivial case: both occluded and visible pixels occur.
         assert!(share > 0.05 && share < 0.95, "{name}: visible share {share}");
+    }
+}
+
+/// The ray lanes do the scalar test's `f32` operations in its order on every path (no
+/// fused multiply-add), so every `BTF_SIMD` path must give the scalar path's bits, which
+/// are the ray cast's: the tolerance is zero pixels.
+#[test]
+fn every_simd_path_gives_the_scalar_visibility_bits() {
+    let meshes = [
+        ("crumpled sheet", crumpled_sheet(), 16),
+        ("shirt low", shirt_low(), 8),
+        // Rows of two mask words (96 = 64 + 32).
+        ("corner", corner_mesh(0.1, 0.5, 0.3), 96),
+    ];
+    let paths = simd_paths();
+    eprintln!("paths: {paths:?}");
+    for (name, mesh, res) in meshes {
+        let cube = Hemicube::new(res).unwrap();
+        let tangents = compute_tangents(&mesh);
+        let frames = HemicubeFrame::of_mesh(&mesh.positions, &mesh.normals, &tangents, true);
+        let (pos, tris) = (&mesh.positions, &mesh.triangles);
+        let scalar = VisibilityMaps::compute_with(&cube, &frames, pos, tris, Isa::Scalar);
+        let reference = VisibilityMaps::compute_ray_cast(&cube, &frames, pos, tris);
+        assert!(scalar == reference, "{name}: the scalar path differs from the ray cast");
+        let visible: u32 = scalar.bits.iter().map(|w| w.count_ones()).sum();
+        let share = visible as f64 / (frames.len() * cube.len()) as f64;
+        assert!(share > 0.05 && share < 0.95, "{name}: visible share {share}");
+        for &isa in &paths[1..] {
+            let got = VisibilityMaps::compute_with(&cube, &frames, pos, tris, isa);
+            let differ: u32 =
+                got.bits.iter().zip(&scalar.bits).map(|(a, b)| (a ^ b).count_ones()).sum();
+            eprintln!("{name}, res {res}: {isa} vs scalar: {differ} differing pixels");
+            assert_eq!(differ, 0, "{name}: the {isa} path differs from the scalar path");
+        }
     }
 }
 
