@@ -6,8 +6,7 @@ can time what is left. The images they render are not valid; only their frame ti
 Usage: python3 benches/shader_variants.py OUT_DIR
 Then, per variant (idle machine; `benches/quiet.sh` pauses everything else):
   BTF_PASS_WGSL=OUT_DIR/NAME.wgsl BTF_SWEEP_SIZE=128 BTF_SWEEP_COMPONENTS=4 \
-    CARGO_PROFILE_DEV_OPT_LEVEL=3 cargo test -p btf-render --test measure cost_sweep \
-    -- --ignored --nocapture
+    cargo bench -p btf-render --bench sweep
 and read the row "| 4 | per-pixel | four |".
 """
 import os

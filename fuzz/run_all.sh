@@ -11,7 +11,8 @@
 # target/). Per target: the corpus starts from fuzz/seeds/<target>/ (make_seeds.sh) plus
 # whatever fuzz/corpus/<target>/ already holds; findings go to fuzz/artifacts/<target>/;
 # the libFuzzer log to fuzz/logs/<target>.log. The table goes to fuzz/logs/summary.md
-# (and stdout). Exit status: 0 when no target found anything.
+# (and stdout; SUMMARY=FILE elsewhere, for runs in parallel). Exit status: 0 when no
+# target found anything.
 set -uo pipefail
 cd "$(dirname "$0")"
 
@@ -43,7 +44,7 @@ nice -n "$NICE" cargo fuzz build -s "$SANITIZER" >logs/build.txt 2>&1 \
     || { tail -30 logs/build.txt >&2; exit 2; }
 
 bin_dir=target/$TRIPLE/release
-summary=logs/summary.md
+summary=${SUMMARY:-logs/summary.md}
 {
     echo "| target | max_len | executions | wall time | exec/s | peak RSS | corpus (files / bytes) | coverage (cov / ft) | findings |"
     echo "|---|---:|---:|---:|---:|---:|---:|---:|---|"

@@ -1,11 +1,116 @@
 //! Arguments shared by several commands: the scene every rendering command loads
 //! ([`SceneArgs`]: load, override the frame size, validate — in one place, with the key at
 //! fault named), and the comma-separated number lists of `--roi`, `--albedo`, `--pose-noise`
-//! and the like ([`numbers`]).
+//! and the like ([`numbers`]), and the closed sets of choices every command shares
+//! ([`choices!`]: clap value enums, so `--help` lists them and a typo gets clap's "possible
+//! values" error). The flag naming scheme they follow is written down in `docs/cli.md`.
 
 use anyhow::{Context, Result, bail};
 use btf_render::Scene;
 use std::path::PathBuf;
+
+/// Declares a clap value enum whose values are spelled as given, with `as_str` (the
+/// spelling, so code that matched the old string options reads the same) and `Display`.
+macro_rules! choices {
+    ($(#[$m:meta])* $name:ident { $($(#[$vm:meta])* $variant:ident = $text:literal),+ $(,)? }) => {
+        $(#[$m])*
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+        pub enum $name {
+            $($(#[$vm])* #[value(name = $text)] $variant),+
+        }
+        impl $name {
+            /// The value as written on the command line.
+            #[allow(dead_code)]
+            pub fn as_str(self) -> &'static str {
+                match self { $($name::$variant => $text),+ }
+            }
+        }
+        impl std::fmt::Display for $name {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str(self.as_str())
+            }
+        }
+    };
+}
+pub(crate) use choices;
+
+choices! {
+    /// Element type of a BTF store (`--dtype`).
+    Dtype {
+        /// 32-bit float (exact).
+        F32 = "f32",
+        /// 16-bit float (half the bytes, ~3 significant digits).
+        F16 = "f16",
+    }
+}
+
+impl Dtype {
+    /// The store's element type.
+    pub fn dtype(self) -> btf_core::zarr::DType {
+        match self {
+            Dtype::F32 => btf_core::zarr::DType::F32,
+            Dtype::F16 => btf_core::zarr::DType::F16,
+        }
+    }
+}
+
+choices! {
+    /// Storage of eigentextures in an eigen store (`--quantization`).
+    Quantization {
+        /// Half precision per value.
+        F16 = "f16",
+        /// 8 bits per value with a per-component scale and offset.
+        U8 = "u8",
+    }
+}
+
+impl Quantization {
+    /// The eigen store's quantization.
+    pub fn quantization(self) -> btf_core::eigen::Quantization {
+        match self {
+            Quantization::F16 => btf_core::eigen::Quantization::F16,
+            Quantization::U8 => btf_core::eigen::Quantization::U8,
+        }
+    }
+}
+
+choices! {
+    /// Blending of the nearest sampled directions (`--blend`, `--light-interp`).
+    Blend {
+        /// The four nearest directions, weighted ([S03 eq. 3, 5]).
+        Four = "four",
+        /// The nearest direction only.
+        Nearest = "nearest",
+    }
+}
+
+impl Blend {
+    /// The interpolation mode.
+    pub fn mode(self) -> btf_core::interp::InterpMode {
+        match self {
+            Blend::Four => btf_core::interp::InterpMode::Four,
+            Blend::Nearest => btf_core::interp::InterpMode::Nearest,
+        }
+    }
+}
+
+choices! {
+    /// A synthetic mesostructure material (`datasets::MaterialKind`).
+    Material {
+        /// Flat Lambertian with a patterned albedo (the analytic validation case).
+        Lambert = "lambert",
+        /// Rounded wales with a sheen pile (anisotropic).
+        Corduroy = "corduroy",
+        /// Stockinette knit of yarn tubes.
+        Knit = "knit",
+        /// Plain weave of two yarn colours.
+        Woven = "woven",
+        /// Embossed glossy paint.
+        Wallpaper = "wallpaper",
+        /// Fractal stone relief.
+        Stone = "stone",
+    }
+}
 
 /// A scene file and the overrides every rendering command takes (`#[command(flatten)]`).
 #[derive(clap::Args, Debug, Clone)]

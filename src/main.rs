@@ -2,28 +2,30 @@
 //! the libraries (`btf-core`, `btf-image`, `btf-light`, `datasets`, `btf-capture`,
 //! `btf-render`). Glue only: one file per command in [`cmd`], shared arguments in
 //! [`args`], report writers in [`report`], the two demos in [`demo`], the viewer in
-//! [`view`].
+//! [`view`]. The flag naming scheme every command follows is `docs/cli.md`.
 
 mod args;
 mod cmd;
 mod demo;
 mod guard;
 mod progress;
+#[cfg(test)]
+mod readme_commands;
 mod report;
 mod view;
 
 use cmd::{
-    capture, compress, demo as demo_cmd, export, import, inspect, reconstruct, relight, render,
-    render_sweep, synth, thin,
+    capture, compress, demo as demo_cmd, export, import, inspect, knit, reconstruct, relight,
+    render, render_sweep, synth, thin,
 };
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, Parser, Subcommand};
 use std::process::ExitCode;
 
 /// Capture processing, PCA compression and rendering of bidirectional texture functions.
 #[derive(Parser)]
 #[command(name = "btf", version, about, propagate_version = true)]
-struct Cli {
+pub(crate) struct Cli {
     #[command(subcommand)]
     command: Command,
 }
@@ -55,14 +57,51 @@ enum Command {
     RenderSweep(render_sweep::RenderSweepArgs),
     /// Render a scene under several environment maps and rotations (batch relighting).
     Relight(relight::RelightArgs),
+    /// Knit and yarn: charts, stitch meshes, yarn skeletons, fibers, reference renders.
+    #[command(subcommand)]
+    Knit(knit::KnitCmd),
     /// Thin semi-transparent cloth: check the slab model against Monte Carlo.
     #[command(subcommand)]
     Thin(thin::ThinCmd),
     /// Inspect a garment interactively (window), or export a turntable (headless).
     View(view::ViewArgs),
+    /// Print a shell completion script (e.g. `btf completions bash > /etc/bash_completion.d/btf`).
+    Completions(CompletionsArgs),
+}
+
+/// Arguments of `btf completions`.
+#[derive(clap::Args)]
+struct CompletionsArgs {
+    /// The shell.
+    shell: clap_complete::Shell,
+}
+
+/// The completion script of `btf` for `shell`.
+fn completions(shell: clap_complete::Shell) -> String {
+    let mut script = Vec::new();
+    clap_complete::generate(shell, &mut Cli::command(), "btf", &mut script);
+    String::from_utf8_lossy(&script).into_owned()
+}
+
+/// Mesa's `VK_LAYER_MESA_device_select` layer, which the Vulkan loader puts in front of
+/// every driver, asks Wayland for the session's GPU and, without `XDG_RUNTIME_DIR` (in
+/// containers, CI, ssh sessions), has libwayland print `error: XDG_RUNTIME_DIR is invalid or
+/// not set` twice per device enumeration — noise that reads like a failure of the command.
+/// Without a runtime directory there is no Wayland session whose GPU it could pick, so the
+/// layer is switched off (`NODEVICE_SELECT=1`) unless the user set that variable.
+#[allow(unsafe_code)]
+fn quiet_vulkan_device_select() {
+    let runtime_dir = std::env::var_os("XDG_RUNTIME_DIR");
+    let no_session = runtime_dir.is_none_or(|d| !std::path::Path::new(&d).is_dir());
+    if no_session && std::env::var_os("NODEVICE_SELECT").is_none() {
+        // SAFETY: the first statement of `main`, before any thread exists, so nothing can
+        // read the environment concurrently.
+        unsafe { std::env::set_var("NODEVICE_SELECT", "1") };
+    }
 }
 
 fn main() -> ExitCode {
+    quiet_vulkan_device_select();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Demo(a) => demo_cmd::run(a),
@@ -76,8 +115,13 @@ fn main() -> ExitCode {
         Command::Render(a) => render::run(a),
         Command::RenderSweep(a) => render_sweep::run(a),
         Command::Relight(a) => relight::run(a),
+        Command::Knit(c) => knit::run(c),
         Command::Thin(c) => thin::run(c),
         Command::View(a) => view::run(a),
+        Command::Completions(a) => {
+            guard::outln!("{}", completions(a.shell).trim_end());
+            Ok(())
+        }
     };
     match result {
         Ok(()) => {
@@ -88,5 +132,40 @@ fn main() -> ExitCode {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every subcommand, at every depth, as its path of names (`["synth", "material"]`).
+    fn subcommands(cmd: &clap::Command, path: Vec<String>, out: &mut Vec<Vec<String>>) {
+        for sub in cmd.get_subcommands() {
+            let mut p = path.clone();
+            p.push(sub.get_name().to_string());
+            out.push(p.clone());
+            subcommands(sub, p, out);
+        }
+    }
+
+    #[test]
+    fn the_bash_completions_name_every_subcommand() {
+        let script = completions(clap_complete::Shell::Bash);
+        let mut all = Vec::new();
+        subcommands(&Cli::command(), Vec::new(), &mut all);
+        assert!(all.len() > 25, "{} subcommands", all.len());
+        for path in all {
+            // clap_complete's bash script selects each command path by a line
+            // `cmd="btf__subcmd__capture__subcmd__registration__subcmd__sweep"`.
+            let case = format!("cmd=\"btf__subcmd__{}\"", path.join("__subcmd__"))
+                .replace('-', "__subcmd__");
+            assert!(script.contains(&case), "the bash script lacks {case}");
+        }
+    }
+
+    #[test]
+    fn the_command_line_definition_is_consistent() {
+        Cli::command().debug_assert();
     }
 }

@@ -10,7 +10,7 @@ use std::path::Path;
 /// A bar of `len` steps labelled `what`.
 pub fn bar(len: u64, what: &str) -> ProgressBar {
     let pb = ProgressBar::new(len);
-    if std::env::var_os("BTF_NO_PROGRESS").is_some() {
+    if !enabled() {
         pb.set_draw_target(ProgressDrawTarget::hidden());
     }
     pb.set_style(
@@ -20,6 +20,18 @@ pub fn bar(len: u64, what: &str) -> ProgressBar {
     );
     pb.set_message(what.to_owned());
     pb
+}
+
+/// Runs `work` with a bar labelled `what` that it moves by calling `progress(done, total)`
+/// (the total is learnt from the first call); the bar is cleared afterwards.
+pub fn counted<T>(what: &str, work: impl FnOnce(&dyn Fn(usize, usize)) -> T) -> T {
+    let pb = bar(0, what);
+    let out = work(&|done, total| {
+        pb.set_length(total as u64);
+        pb.set_position(done as u64);
+    });
+    pb.finish_and_clear();
+    out
 }
 
 /// True when progress bars should be drawn.

@@ -11,6 +11,13 @@ use std::io::{BufRead, Read, Seek};
 /// Largest image accepted, in pixels: 16384², the largest camera `capture.toml` allows.
 pub const MAX_PIXELS: u64 = 1 << 28;
 
+/// Largest decoded image (bytes) a PNG/TIFF/… header may ask for: a 16-bit RGBA image of
+/// 8192 × 8192 pixels.
+pub const MAX_DECODED_BYTES: u64 = 512 << 20;
+
+/// Most pixels a compressed image may claim per byte of file (see [`decode_image`]).
+pub const MAX_PIXELS_PER_BYTE: u64 = 4096;
+
 /// Refuses an empty image or one beyond [`MAX_PIXELS`]; `field` names the header field.
 pub fn check_pixels(file: &str, field: &str, w: u64, h: u64) -> Result<()> {
     if w == 0 || h == 0 || w.saturating_mul(h) > MAX_PIXELS {
@@ -34,6 +41,10 @@ fn exr_layer_sizes<R: Read + Seek>(src: R, file: &str) -> Result<Vec<(usize, usi
     }
     for &(w, h) in &sizes {
         check_pixels(file, "dataWindow", w as u64, h as u64)?;
+    }
+    for h in &meta.headers {
+        btf_image::exr_limits::check_header(h)
+            .map_err(|(field, what)| Error::limit(file, field, what))?;
     }
     Ok(sizes)
 }
@@ -79,6 +90,7 @@ pub fn read_exr_rgb<R: Read + Seek + Send>(
 pub fn decode_image<R: BufRead + Seek>(
     reader: image::ImageReader<R>,
     file: &str,
+    file_len: u64,
 ) -> Result<image::DynamicImage> {
     use image::ImageDecoder;
     let img_err = |e: image::ImageError| match e {
@@ -88,6 +100,35 @@ pub fn decode_image<R: BufRead + Seek>(
     let dec = reader.into_decoder().map_err(img_err)?;
     let (w, h) = dec.dimensions();
     check_pixels(file, "width x height", w as u64, h as u64)?;
+    // The decoder allocates the whole image before reading a pixel; the `image` crate's
+    // own 512 MiB limit is not applied on this path (the raw_image fuzz target: 73 bytes of
+    // PNG claiming a 16-bit image asked for 1.6 GB).
+    // A compressed image cannot hold more than a few hundred pixels per byte (deflate
+    // tops out near 1032:1, a flat JPEG block near 64 pixels in a few bits): more is a
+    // forged or truncated header whose decoder would fill gigabytes with nothing (the
+    // ubo2003_image fuzz target: 219 bytes of JPEG claiming 13 800² pixels).
+    let pixels = w as u64 * h as u64;
+    if pixels > MAX_PIXELS_PER_BYTE * file_len + (1 << 20) {
+        return Err(Error::limit(
+            file,
+            "width x height",
+            format!(
+                "{w} x {h} pixels claimed by a file of {file_len} bytes (more than \
+                 {MAX_PIXELS_PER_BYTE} pixels per byte): the header is forged or the file cut short"
+            ),
+        ));
+    }
+    let bytes = dec.total_bytes();
+    if bytes > MAX_DECODED_BYTES {
+        return Err(Error::limit(
+            file,
+            "width x height",
+            format!(
+                "{w} x {h} pixels of {:?} decode to {bytes} bytes, more than {MAX_DECODED_BYTES}",
+                dec.color_type()
+            ),
+        ));
+    }
     image::DynamicImage::from_decoder(dec).map_err(|e| match e {
         image::ImageError::Limits(l) => Error::limit(
             file,
@@ -127,10 +168,15 @@ pub(crate) mod crafted {
 
     /// A PNG (8-bit RGB) whose IHDR claims `w × h` pixels, with an empty IDAT.
     pub fn png_claiming(w: u32, h: u32) -> Vec<u8> {
+        png_claiming_as(w, h, 8, 2)
+    }
+
+    /// [`png_claiming`] with another bit depth and colour type (6 = RGBA).
+    pub fn png_claiming_as(w: u32, h: u32, bits: u8, colour: u8) -> Vec<u8> {
         let mut chunk = b"IHDR".to_vec();
         chunk.extend_from_slice(&w.to_be_bytes());
         chunk.extend_from_slice(&h.to_be_bytes());
-        chunk.extend_from_slice(&[8, 2, 0, 0, 0]);
+        chunk.extend_from_slice(&[bits, colour, 0, 0, 0]);
         let mut b = b"\x89PNG\r\n\x1a\n".to_vec();
         b.extend_from_slice(&13u32.to_be_bytes());
         b.extend_from_slice(&chunk);
@@ -170,7 +216,7 @@ mod tests {
         ] {
             let rd =
                 image::ImageReader::new(Cursor::new(&bytes[..])).with_guessed_format().unwrap();
-            let e = decode_image(rd, name).unwrap_err();
+            let e = decode_image(rd, name, bytes.len() as u64).unwrap_err();
             assert!(matches!(e, Error::Limit { .. }), "{name}: {e}");
             let e = e.to_string();
             assert!(e.contains(name) && e.contains("width x height"), "{e}");
@@ -186,6 +232,11 @@ mod tests {
         assert!(e.contains("short.exr"), "{e}");
         let png = png_claiming(16384, 16384);
         let rd = image::ImageReader::new(Cursor::new(&png[..])).with_guessed_format().unwrap();
-        assert!(decode_image(rd, "short.png").unwrap_err().to_string().contains("short.png"));
+        assert!(
+            decode_image(rd, "short.png", png.len() as u64)
+                .unwrap_err()
+                .to_string()
+                .contains("short.png")
+        );
     }
 }

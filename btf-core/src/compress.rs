@@ -73,6 +73,8 @@ pub struct CompressReport {
     pub rel_rmse_exact: f64,
     /// Wall-clock seconds.
     pub seconds: f64,
+    /// The kernel path the PCA ran on (`BTF_SIMD`, or the best the CPU has).
+    pub simd: &'static str,
     /// Bytes of the input store's chunks.
     pub input_bytes: u64,
     /// Bytes of the output store's chunks.
@@ -94,6 +96,8 @@ pub fn compress(
     progress: &(dyn Fn() + Sync),
 ) -> Result<CompressReport> {
     let start = Instant::now();
+    // A forced kernel path this CPU cannot run is refused before any work.
+    let isa = crate::simd::Isa::from_env()?;
     let meta = input.meta().clone();
     let n_l = meta.n_lights();
     let mut warnings = Vec::new();
@@ -174,7 +178,7 @@ pub fn compress(
     let spent = Mutex::new(Vec::<Vec<u8>>::new());
     let work = |to_writer: &mpsc::SyncSender<_>| -> Result<Vec<(SlotReport, bool)>> {
         let mut slot = SlotData { view: 0, n_lights: 0, texel_values: 0, data: Vec::new() };
-        let (mut raw, mut scratch) = (Vec::new(), PcaScratch::default());
+        let (mut raw, mut scratch) = (Vec::new(), PcaScratch::for_isa(isa));
         let mut done = Vec::new();
         loop {
             let v = next.fetch_add(1, Ordering::Relaxed);
@@ -249,6 +253,7 @@ pub fn compress(
         psnr_db: psnr_db(sse / values, peak),
         rel_rmse_exact: rel_rmse_from(sse_exact, energy),
         seconds: start.elapsed().as_secs_f64(),
+        simd: isa.name(),
         input_bytes: input.bytes(),
         output_bytes: out.bytes(),
         resumed_slots,

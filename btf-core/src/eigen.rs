@@ -10,7 +10,7 @@
 //! onto 0‥255. Means and weights are `f32`, eigenvalues `f64`.
 
 use crate::sampling::Sampling;
-use crate::store::{BtfMeta, StoreTxn, read_meta};
+use crate::store::{BtfMeta, StoreTxn, read_meta_of_kind};
 use crate::zarr::{self, ArrayMeta, DType, Limits, ZarrArray};
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -377,14 +377,7 @@ pub struct EigenStore {
 impl EigenStore {
     /// Opens an eigen store, validating metadata and limits before reading any chunk.
     pub fn open(path: &Path) -> Result<Self> {
-        let btf = read_meta(path)?;
-        if btf.kind != "eigen" {
-            return Err(Error::Invalid(format!(
-                "{}: a '{}' store, not an eigen store (run `btf compress` first)",
-                path.display(),
-                btf.kind
-            )));
-        }
+        let btf = read_meta_of_kind(path, "eigen", " (run `btf compress` first)")?;
         let attrs = zarr::read_group(path)?;
         let components = attrs["eigen"]["components"].as_u64().unwrap_or(0) as usize;
         let quantization: Quantization =

@@ -67,36 +67,91 @@ fn write_impl(
     sync: bool,
     produce: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<()> {
-    if path.file_name().is_none() {
-        return Err(Error::Invalid(format!("{}: not a file name", path.display())));
+    let mut file = AtomicFile::create(path)?;
+    produce(&mut file).map_err(|e| Error::io(path, e))?;
+    file.commit(sync)
+}
+
+/// A file written under a temporary name ([`temp_path`]) and moved into place by
+/// [`AtomicFile::commit`]: the one atomic writer of the workspace ([`write_atomic`] and
+/// [`write_atomic_with`] stream through it; writers that append piece by piece, such as the
+/// PVF exporter, hold one). Dropped without a commit — an error, a refusal, a panic — it
+/// removes its temporary and `path` stays as it was.
+pub struct AtomicFile {
+    out: Option<BufWriter<fs::File>>,
+    tmp: PathBuf,
+    path: PathBuf,
+}
+
+impl AtomicFile {
+    /// Creates the temporary beside `path` (making the folder if needed). Refuses a path
+    /// without a file name and a path that is a folder.
+    pub fn create(path: &Path) -> Result<Self> {
+        if path.file_name().is_none() {
+            return Err(Error::Invalid(format!("{}: not a file name", path.display())));
+        }
+        if path.is_dir() {
+            return Err(Error::Invalid(format!(
+                "{}: is a folder; give the path of a file to write",
+                path.display()
+            )));
+        }
+        let dir = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        let tmp = temp_path(path);
+        let file = fs::File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
+        Ok(AtomicFile {
+            out: Some(BufWriter::with_capacity(1 << 16, file)),
+            tmp,
+            path: path.to_owned(),
+        })
     }
-    if path.is_dir() {
-        return Err(Error::Invalid(format!(
-            "{}: is a folder; give the path of a file to write",
-            path.display()
-        )));
+
+    /// The final path.
+    pub fn path(&self) -> &Path {
+        &self.path
     }
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    let tmp = temp_path(path);
-    let file = fs::File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
-    let mut w = BufWriter::with_capacity(1 << 16, file);
-    let written = produce(&mut w)
-        .and_then(|()| w.flush())
-        .and_then(|()| w.into_inner().map_err(|e| e.into_error()))
-        .and_then(|f| if sync { f.sync_all() } else { Ok(()) });
-    if let Err(e) = written {
-        let _ = fs::remove_file(&tmp);
-        return Err(Error::io(path, e));
+
+    /// Flushes, checks the flush, `fsync`s when `sync` and renames into place; any failure
+    /// removes the temporary and leaves `path` untouched, with `path` named in the error.
+    pub fn commit(mut self, sync: bool) -> Result<()> {
+        let out = self.out.take().expect("an AtomicFile is committed once");
+        let done = out
+            .into_inner()
+            .map_err(|e| e.into_error())
+            .and_then(|f| if sync { f.sync_all() } else { Ok(()) })
+            .and_then(|()| fs::rename(&self.tmp, &self.path));
+        if let Err(e) = done {
+            let _ = fs::remove_file(&self.tmp);
+            return Err(Error::io(&self.path, e));
+        }
+        Ok(())
     }
-    if let Err(e) = fs::rename(&tmp, path) {
-        let _ = fs::remove_file(&tmp);
-        return Err(Error::io(path, e));
+}
+
+impl Write for AtomicFile {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.out.as_mut().expect("an AtomicFile before its commit").write(buf)
     }
-    Ok(())
+
+    fn write_all(&mut self, buf: &[u8]) -> std::io::Result<()> {
+        self.out.as_mut().expect("an AtomicFile before its commit").write_all(buf)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.out.as_mut().expect("an AtomicFile before its commit").flush()
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        if self.out.take().is_some() {
+            let _ = fs::remove_file(&self.tmp);
+        }
+    }
 }
 
 /// Removes every temporary file ([`is_temp_name`]) below `dir`; returns how many.

@@ -4,11 +4,20 @@
 //! columns held in `f64` ([`Block`]).
 //!
 //! Every product is of `f32` data widened to `f64`, so each single product is exact and only
-//! the sums round. The AVX-512 versions are chosen at run time; the portable versions (the
-//! same loops, left to the compiler's vectoriser) run elsewhere, and the tests check that
-//! both agree. This and `gemm.rs` are the only modules allowed `unsafe`: the raw-pointer
-//! loads of `std::arch`, behind bounds checked once per call.
+//! the sums round. Each kernel has a path per instruction set ([`Isa`], chosen at run time
+//! or forced by `BTF_SIMD`): AVX-512 intrinsics (`avx512.rs`); the portable lane model
+//! (`lanes.rs`) with fused multiply-adds, compiled for AVX2 + FMA + F16C (`avx2.rs`) or
+//! for NEON; and the same lane model without fusing, the scalar reference. The SIMD paths
+//! agree bit for bit, the scalar one within the rounding of its unfused products; the
+//! tests check both. `f16` rows are widened by the `half` crate's slice conversions
+//! (F16C or the ARM half-precision instructions, detected at run time) except on the
+//! AVX-512 path, which widens them in its loads. This and `gemm.rs` are the only modules
+//! allowed `unsafe`: the raw-pointer loads of `std::arch`, and calls of functions compiled
+//! for a CPU feature, behind bounds and the feature checked once per call.
 #![allow(unsafe_code)]
+
+use crate::simd::Isa;
+use half::slice::HalfFloatSliceExt;
 
 /// `f64` lanes of one AVX-512 register; block widths are padded to a multiple of it.
 pub const LANES: usize = 8;
@@ -87,15 +96,14 @@ pub(crate) fn padded_stride(stride: usize, lanes: usize) -> usize {
     if stride > 0 && (stride * 64 / lanes).is_multiple_of(4096) { stride + lanes } else { stride }
 }
 
-fn has_avx512() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx512f")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
+/// `isa`, checked to be one this CPU runs (the x86 paths would otherwise be undefined
+/// behaviour). The NEON path is the portable lane model with fused multiply-adds, which
+/// computes the same bits on any CPU, so it is accepted everywhere: the tests run it on
+/// x86-64 too (`BTF_SIMD=neon` is still refused there, by [`Isa::choose`]).
+#[inline]
+fn runnable(isa: Isa) -> Isa {
+    assert!(isa.supported() || isa == Isa::Neon, "the {isa} kernels cannot run on this CPU");
+    isa
 }
 
 /// `out[k·ldo + c0 + t] = Σ_i coef[i·cp + k]·y_i[t]` for `k < cp` (`cp` a multiple of
@@ -103,10 +111,10 @@ fn has_avx512() -> bool {
 /// widened to `f64` exactly as it is loaded: the columns `c0..` of `Lᵀ·Y` for an `n × cp`
 /// coefficient matrix `L`, summed in `f64`.
 pub fn lift_rows32(y: &Block32, coef: &[f64], cp: usize, out: &mut [f64], ldo: usize, c0: usize) {
-    lift_rows32_with(y, coef, cp, out, ldo, c0, has_avx512());
+    lift_rows32_with(y, coef, cp, out, ldo, c0, Isa::active());
 }
 
-/// [`lift_rows32`] with the kernel chosen by the caller.
+/// [`lift_rows32`] on the path `isa`.
 pub(crate) fn lift_rows32_with(
     y: &Block32,
     coef: &[f64],
@@ -114,41 +122,45 @@ pub(crate) fn lift_rows32_with(
     out: &mut [f64],
     ldo: usize,
     c0: usize,
-    simd: bool,
+    isa: Isa,
 ) {
     let (n, w) = (y.rows, y.stride);
     assert!(cp.is_multiple_of(LIFT_COMPONENTS) && coef.len() >= n * cp);
     assert!(cp == 0 || out.len() >= (cp - 1) * ldo + c0 + w, "lift output too small");
     assert!(y.data.len() >= n * w && w.is_multiple_of(LANES));
-    let simd = simd && has_avx512();
-    let mut k0 = 0;
-    while k0 < cp {
-        let o = &mut out[k0 * ldo + c0..];
-        // Sixteen components at once where there are: each widened vector feeds 16 FMAs.
-        let step =
-            if cp - k0 >= 2 * LIFT_COMPONENTS { 2 * LIFT_COMPONENTS } else { LIFT_COMPONENTS };
-        if simd {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: AVX-512F checked at run time; y holds n rows of w values, coef n·cp
-            // (`step` components from k0), and out `step` rows of ldo values from c0 with
-            // w ≤ ldo − c0 (asserted).
-            unsafe {
-                let (yp, cf, op) = (y.data.as_ptr(), coef.as_ptr().add(k0), o.as_mut_ptr());
-                if step == 2 * LIFT_COMPONENTS {
-                    avx512::lift32::<{ 2 * LIFT_COMPONENTS }>(yp, n, w, cf, cp, op, ldo)
+    let all = (cp, 0, cp);
+    match runnable(isa) {
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx512 => {
+            let mut k0 = 0;
+            while k0 < cp {
+                let o = &mut out[k0 * ldo + c0..];
+                // Sixteen components at once where there are: each widened vector feeds 16
+                // FMAs.
+                let step = if cp - k0 >= 2 * LIFT_COMPONENTS {
+                    2 * LIFT_COMPONENTS
                 } else {
-                    avx512::lift32::<LIFT_COMPONENTS>(yp, n, w, cf, cp, op, ldo)
-                }
-            };
-        } else {
-            for t in 0..w {
-                for k in 0..step {
-                    o[k * ldo + t] =
-                        (0..n).map(|i| coef[i * cp + k0 + k] * y.data[i * w + t] as f64).sum();
-                }
+                    LIFT_COMPONENTS
+                };
+                // SAFETY: AVX-512F checked (`runnable`); y holds n rows of w values, coef
+                // n·cp (`step` components from k0), and out `step` rows of ldo values from
+                // c0 with w ≤ ldo − c0 (asserted).
+                unsafe {
+                    let (yp, cf, op) = (y.data.as_ptr(), coef.as_ptr().add(k0), o.as_mut_ptr());
+                    if step == 2 * LIFT_COMPONENTS {
+                        avx512::lift32::<{ 2 * LIFT_COMPONENTS }>(yp, n, w, cf, cp, op, ldo)
+                    } else {
+                        avx512::lift32::<LIFT_COMPONENTS>(yp, n, w, cf, cp, op, ldo)
+                    }
+                };
+                k0 += step;
             }
         }
-        k0 += step;
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: AVX2, FMA and F16C checked (`runnable`); the kernel is safe code.
+        Isa::Avx2 => unsafe { avx2::lift(&y.data, n, w, coef, all, &mut out[c0..], ldo) },
+        Isa::Scalar => lanes::lift::<false>(&y.data, n, w, coef, all, &mut out[c0..], ldo),
+        _ => lanes::lift::<true>(&y.data, n, w, coef, all, &mut out[c0..], ldo),
     }
 }
 
@@ -171,6 +183,18 @@ pub fn prefetch_rows<T: Texel>(x: &[&[T]], c0: usize, w: usize) {
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = (x, c0, w);
+}
+
+/// `to[t] = from[t]` widened to `f32` (exact): a copy, or the `half` crate's conversion.
+#[inline(always)]
+fn widen_portable<T: Texel>(from: &[T], to: &mut [f32]) {
+    let n = from.len().min(to.len());
+    if T::HALF {
+        let halves: &[half::f16] = bytemuck::cast_slice(&from[..n]);
+        halves.convert_to_f32_slice(&mut to[..n]);
+    } else {
+        to[..n].copy_from_slice(bytemuck::cast_slice(&from[..n]));
+    }
 }
 
 /// What [`load_shifted`] saw of the input, when asked for statistics.
@@ -196,10 +220,10 @@ pub fn load_shifted<T: Texel>(
     blk: &mut Block,
     colsum: Option<&mut [f64]>,
 ) -> Option<LoadStats> {
-    load_shifted_with(x, c0, w, shift, blk, colsum, has_avx512())
+    load_shifted_with(x, c0, w, shift, blk, colsum, Isa::active())
 }
 
-/// [`load_shifted`] with the kernel chosen by the caller.
+/// [`load_shifted`] on the path `isa`.
 pub(crate) fn load_shifted_with<T: Texel>(
     x: &[&[T]],
     c0: usize,
@@ -207,20 +231,45 @@ pub(crate) fn load_shifted_with<T: Texel>(
     shift: Option<&[T]>,
     blk: &mut Block,
     colsum: Option<&mut [f64]>,
-    simd: bool,
+    isa: Isa,
 ) -> Option<LoadStats> {
     assert!(x.iter().all(|r| c0 + w <= r.len()), "block outside the rows");
     assert!(shift.is_none_or(|s| s.len() >= c0 + w), "shift row too short");
     assert!(colsum.as_ref().is_none_or(|c| c.len() >= w), "column sums too short");
     blk.shape(x.len(), w);
-    if simd && has_avx512() {
+    match runnable(isa) {
         #[cfg(target_arch = "x86_64")]
-        // SAFETY: AVX-512F was detected at run time; the function itself is safe code.
-        return unsafe { avx512::load_shifted(x, c0, w, shift, blk, colsum) };
+        // SAFETY: AVX-512F checked (`runnable`); the function itself is safe code.
+        Isa::Avx512 => unsafe { avx512::load_shifted(x, c0, w, shift, blk, colsum) },
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: AVX2, FMA and F16C checked (`runnable`); the function is safe code.
+        Isa::Avx2 => unsafe { avx2::load_shifted(x, c0, w, shift, blk, colsum) },
+        _ => load_shifted_body(x, c0, w, shift, blk, colsum),
     }
-    load_shifted_body(x, c0, w, shift, blk, colsum)
 }
 
+/// Columns widened to `f32` at a time for the portable loads.
+const PIECE: usize = 256;
+
+/// `src` as `f32` values: itself, or (for `f16`) widened into `buf` by the `half` crate's
+/// slice conversion (F16C or the ARM half-precision instructions where the CPU has them).
+#[inline(always)]
+fn as_f32<'a, T: Texel>(src: &'a [T], buf: &'a mut [f32]) -> &'a [f32] {
+    if T::HALF {
+        let halves: &[half::f16] = bytemuck::cast_slice(src);
+        let buf = &mut buf[..src.len()];
+        halves.convert_to_f32_slice(buf);
+        buf
+    } else {
+        bytemuck::cast_slice(src)
+    }
+}
+
+/// The portable load (the scalar, AVX2 and NEON paths), in the AVX-512 load's lanes: the
+/// energy of column `t` of a group of sixteen goes to lane `t mod 8`, the last `w mod 16`
+/// columns are added after the lanes are reduced ([`lanes::reduce8`]), so every path
+/// computes the same statistics bit for bit (the squares of `f32` values are exact in
+/// `f64`, fused or not).
 #[inline(always)]
 fn load_shifted_body<T: Texel>(
     x: &[&[T]],
@@ -230,70 +279,86 @@ fn load_shifted_body<T: Texel>(
     blk: &mut Block,
     mut colsum: Option<&mut [f64]>,
 ) -> Option<LoadStats> {
-    let zeros: [T; 0] = [];
+    let body = w - w % 16;
+    let (mut vb, mut hb) = ([0f32; PIECE], [0f32; PIECE]);
     let mut e = [0f64; LANES];
     let mut p = [f32::MIN; LANES];
     let mut bad = [0f32; LANES];
+    let stats = colsum.is_some() && shift.is_some();
     for i in 0..blk.rows {
-        let src = &x[i][c0..c0 + w];
-        let sh = shift.map_or(&zeros[..], |s| &s[c0..c0 + w]);
         let dst = &mut blk.row_mut(i)[..w];
-        match (&mut colsum, shift) {
-            (Some(cs), Some(_)) => {
-                let cs = &mut cs[..w];
-                for (((s8, h8), d8), c8) in src
-                    .chunks_exact(LANES)
-                    .zip(sh.chunks_exact(LANES))
-                    .zip(dst.chunks_exact_mut(LANES))
-                    .zip(cs.chunks_exact_mut(LANES))
-                {
-                    for l in 0..LANES {
-                        let v = s8[l].widen();
-                        let y = v as f64 - h8[l].widen() as f64;
-                        d8[l] = y;
-                        c8[l] += y;
-                        e[l] += (v as f64) * (v as f64);
-                        p[l] = p[l].max(v);
-                        bad[l] += v * 0.0; // NaN for NaN or ±∞, 0 otherwise
+        let upto = if stats { body } else { w };
+        for p0 in (0..upto).step_by(PIECE) {
+            let p1 = (p0 + PIECE).min(upto);
+            let src = as_f32(&x[i][c0 + p0..c0 + p1], &mut vb);
+            let d = &mut dst[p0..p1];
+            match (&mut colsum, shift) {
+                (Some(cs), Some(s)) => {
+                    let sh = as_f32(&s[c0 + p0..c0 + p1], &mut hb);
+                    let cs = &mut cs[p0..p1];
+                    for (((s16, h16), d16), c16) in src
+                        .chunks_exact(16)
+                        .zip(sh.chunks_exact(16))
+                        .zip(d.chunks_exact_mut(16))
+                        .zip(cs.chunks_exact_mut(16))
+                    {
+                        for l in 0..16 {
+                            let v = s16[l];
+                            let y = v as f64 - h16[l] as f64;
+                            d16[l] = y;
+                            c16[l] += y;
+                            e[l % 8] += (v as f64) * (v as f64);
+                            p[l % 8] = p[l % 8].max(v);
+                            bad[l % 8] += v * 0.0; // NaN for NaN or ±∞, 0 otherwise
+                        }
                     }
                 }
-                let tail = w - w % LANES;
-                for t in tail..w {
-                    let v = src[t].widen();
-                    let y = v as f64 - sh[t].widen() as f64;
-                    dst[t] = y;
-                    cs[t] += y;
-                    e[0] += (v as f64) * (v as f64);
-                    p[0] = p[0].max(v);
-                    bad[0] += v * 0.0;
+                (_, Some(s)) => {
+                    let sh = as_f32(&s[c0 + p0..c0 + p1], &mut hb);
+                    for ((d, &v), &h) in d.iter_mut().zip(src).zip(sh) {
+                        *d = v as f64 - h as f64;
+                    }
                 }
-            }
-            (_, Some(_)) => {
-                for ((d, &v), &h) in dst.iter_mut().zip(src).zip(sh) {
-                    *d = v.widen() as f64 - h.widen() as f64;
-                }
-            }
-            (_, None) => {
-                for (d, &v) in dst.iter_mut().zip(src) {
-                    *d = v.widen() as f64;
+                (_, None) => {
+                    for (d, &v) in d.iter_mut().zip(src) {
+                        *d = v as f64;
+                    }
                 }
             }
         }
     }
-    colsum.map(|_| LoadStats {
-        energy: e.iter().sum(),
+    let (Some(cs), Some(sh)) = (colsum, shift) else { return None };
+    let mut st = LoadStats {
+        energy: lanes::reduce8(e),
         peak: p.iter().copied().fold(f32::MIN, f32::max),
         finite: bad.iter().all(|b| *b == 0.0),
-    })
+    };
+    for i in 0..blk.rows {
+        let dst = blk.row_mut(i);
+        for t in body..w {
+            let v = x[i][c0 + t].widen();
+            let y = v as f64 - sh[c0 + t].widen() as f64;
+            dst[t] = y;
+            cs[t] += y;
+            st.energy += (v as f64) * (v as f64);
+            st.peak = st.peak.max(v);
+            st.finite &= v.is_finite();
+        }
+    }
+    Some(st)
 }
 
+#[cfg(target_arch = "x86_64")]
+mod avx2;
 #[cfg(target_arch = "x86_64")]
 mod avx512;
 mod dot;
 mod f16_round;
+mod lanes;
 mod single;
 pub use dot::DotAcc;
 pub use f16_round::round_to_f16;
+pub(crate) use f16_round::round_to_f16_with;
 pub use single::{Block32, CrossAcc32, LANES32};
 
 #[cfg(test)]

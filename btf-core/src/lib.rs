@@ -34,6 +34,7 @@ pub mod metrics;
 pub mod pca;
 pub mod reconstruct;
 pub mod sampling;
+pub mod simd;
 pub mod store;
 pub mod thin_slab;
 pub mod zarr;

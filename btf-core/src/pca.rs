@@ -17,8 +17,10 @@
 use crate::eigen::{Quantization, QuantizedSlot, dequantize, quantize};
 use crate::gemm::{Mat, dgemm};
 use crate::kernels::{
-    Block, Block32, DotAcc, LANES, LIFT_COMPONENTS, Texel, lift_rows32, load_shifted, prefetch_rows,
+    Block, Block32, DotAcc, LANES, LIFT_COMPONENTS, Texel, lift_rows32_with, load_shifted_with,
+    prefetch_rows,
 };
+use crate::simd::Isa;
 use crate::store::SlotData;
 use crate::{Error, Result};
 use nalgebra::{DMatrix, SymmetricEigen};
@@ -73,9 +75,17 @@ pub struct PcaScratch {
     raw: Vec<u8>,
     /// The passes' blocks, kept so that their pages stay mapped from slot to slot.
     blocks: fused::Blocks,
+    /// The kernel path; `None`: the one `BTF_SIMD` asks for ([`Isa::from_env`]).
+    isa: Option<Isa>,
 }
 
 impl PcaScratch {
+    /// Working memory whose PCA runs on the kernel path `isa` (which this CPU must run),
+    /// whatever `BTF_SIMD` says: how tests and benchmarks compare the paths in one process.
+    pub fn for_isa(isa: Isa) -> Self {
+        PcaScratch { isa: Some(isa), ..PcaScratch::default() }
+    }
+
     /// Hands back the eigentexture bytes of a slot already written, so that the next slot
     /// forms its own in them (6 MB at 256², c = 16: a fresh allocation would be faulted in
     /// page by page and its release would flush the other core's TLB).
@@ -151,8 +161,15 @@ pub fn pca_rows_in<T: Texel>(
             slot.rows[l].len()
         )));
     }
+    let isa = match scratch.isa {
+        Some(isa) if !isa.supported() => {
+            return Err(Error::Unsupported(format!("the {isa} kernels cannot run on this CPU")));
+        }
+        Some(isa) => isa,
+        None => Isa::from_env()?,
+    };
     // Pass 1: the centred Gram matrix, mean, energy and peak (and the checksums).
-    let first = first_pass(slot, checksums.is_some(), &mut scratch.blocks.y)?;
+    let first = first_pass(slot, checksums.is_some(), &mut scratch.blocks.y, isa)?;
     if let Some(check) = checksums {
         check(&first.crcs)?;
     }
@@ -180,15 +197,16 @@ pub fn pca_rows_in<T: Texel>(
         Quantization::F16 => {
             let raw = std::mem::take(&mut scratch.raw);
             let blocks = &mut scratch.blocks;
-            let f = fused::lift_store_f16(&slot.rows, m, &mut lift, c, effective, raw, blocks);
+            let f =
+                fused::lift_store_f16(&slot.rows, m, (&mut lift, c), effective, raw, blocks, isa);
             (f.raw, f.scale_offset, f.cross, f.bgram)
         }
         Quantization::U8 => {
             let basis =
-                lift_pass(slot, &mut lift, c, effective, std::mem::take(&mut scratch.basis));
+                lift_pass(slot, &mut lift, c, effective, std::mem::take(&mut scratch.basis), isa);
             let (raw, scale_offset) = quantize(&basis.rows_f32(), c, quantization);
             let stored_basis = dequantize(&raw, &scale_offset, quantization);
-            let (cross, bgram) = stored_pass(slot, &basis, &stored_basis, c);
+            let (cross, bgram) = stored_pass(slot, &basis, &stored_basis, c, isa);
             scratch.basis = basis.data;
             (raw, scale_offset, cross, bgram)
         }
@@ -255,6 +273,7 @@ fn first_pass<T: Texel>(
     slot: &SlotRows<'_, T>,
     with_crc: bool,
     blk: &mut Block,
+    isa: Isa,
 ) -> Result<FirstPass> {
     let (n, m, x) = (slot.rows.len(), slot.texel_values, &slot.rows[..]);
     let shift = x[0];
@@ -276,7 +295,7 @@ fn first_pass<T: Texel>(
                 *crc = crc32c::crc32c_append(*crc, bytemuck::cast_slice(piece));
             }
         }
-        let st = load_shifted(x, c0, w, Some(shift), blk, Some(&mut colsum))
+        let st = load_shifted_with(x, c0, w, Some(shift), blk, Some(&mut colsum), isa)
             .expect("statistics were asked for");
         if !st.finite {
             for (i, row) in x.iter().enumerate() {
@@ -287,7 +306,7 @@ fn first_pass<T: Texel>(
         energy += st.energy;
         peak = peak.max(st.peak);
         prefetch_rows(x, c0 + w, BLOCK);
-        gram.add(blk, blk);
+        gram.add_with(blk, blk, isa);
         for t in 0..w {
             mean[c0 + t] = (shift[c0 + t].widen() as f64 + colsum[t] / n as f64) as f32;
         }
@@ -358,6 +377,7 @@ fn lift_pass<T: Texel>(
     c: usize,
     effective: usize,
     mut data: Vec<f64>,
+    isa: Isa,
 ) -> Basis {
     let (n, m, x) = (slot.rows.len(), slot.texel_values, &slot.rows[..]);
     let cp = c.div_ceil(LIFT_COMPONENTS) * LIFT_COMPONENTS;
@@ -372,9 +392,9 @@ fn lift_pass<T: Texel>(
     for c0 in (0..m).step_by(BLOCK) {
         let w = BLOCK.min(m - c0);
         // The images widened exactly; the centred coefficients give coefᵀX = coefᵀY.
-        blk.widen_from(x, c0, w);
+        blk.widen_from_with(x, c0, w, isa);
         tmp.resize(cp * blk.stride, 0.0);
-        lift_rows32(&blk, &coef, cp, &mut tmp, blk.stride, 0);
+        lift_rows32_with(&blk, &coef, cp, &mut tmp, blk.stride, 0, isa);
         for k in 0..cp {
             let from = &tmp[k * blk.stride..k * blk.stride + w];
             data[k * mp + c0..k * mp + c0 + w].copy_from_slice(from);
@@ -408,6 +428,7 @@ fn stored_pass<T: Texel>(
     basis: &Basis,
     stored: &[f32],
     c: usize,
+    isa: Isa,
 ) -> (Vec<f64>, Vec<f64>) {
     let (n, m, x) = (slot.rows.len(), slot.texel_values, &slot.rows[..]);
     let stored: Vec<&[f32]> = stored.chunks_exact(m).collect();
@@ -416,8 +437,8 @@ fn stored_pass<T: Texel>(
     let (mut yb, mut sb, mut eb) = (Block::default(), Block::default(), Block::default());
     for c0 in (0..m).step_by(BLOCK) {
         let w = BLOCK.min(m - c0);
-        load_shifted(x, c0, w, Some(x[0]), &mut yb, None);
-        load_shifted(&stored, c0, w, None, &mut sb, None);
+        load_shifted_with(x, c0, w, Some(x[0]), &mut yb, None, isa);
+        load_shifted_with(&stored, c0, w, None, &mut sb, None, isa);
         eb.shape(c, w);
         for k in 0..c {
             let b = &basis.data[k * mp + c0..k * mp + c0 + w];
@@ -426,8 +447,8 @@ fn stored_pass<T: Texel>(
                 *e = s - b;
             }
         }
-        cross_acc.add(&eb, &yb);
-        bgram_acc.add(&sb, &sb);
+        cross_acc.add_with(&eb, &yb, isa);
+        bgram_acc.add_with(&sb, &sb, isa);
     }
     finish_correction(&cross_acc, &bgram_acc, c, n)
 }

@@ -97,6 +97,22 @@ pub fn read_meta(path: &Path) -> Result<BtfMeta> {
     m.validate(path)
 }
 
+/// [`read_meta`] of a store that must be of `kind` (`"btf"` or `"eigen"`); `hint` follows
+/// the refusal of any other kind.
+pub fn read_meta_of_kind(path: &Path, kind: &str, hint: &str) -> Result<BtfMeta> {
+    let meta = read_meta(path)?;
+    if meta.kind != kind {
+        let article = if kind.starts_with(['a', 'e', 'i', 'o', 'u']) { "an" } else { "a" };
+        let name = if kind == "btf" { "BTF" } else { kind };
+        return Err(Error::Invalid(format!(
+            "{}: a '{}' store, not {article} {name} store{hint}",
+            path.display(),
+            meta.kind
+        )));
+    }
+    Ok(meta)
+}
+
 /// A store folder being written: `NAME.partial` until [`StoreTxn::commit`].
 #[derive(Debug)]
 pub struct StoreTxn {
@@ -129,6 +145,16 @@ impl StoreTxn {
             // Left by a writer killed just after its commit's rename: the store is whole.
             fs::remove_file(&sidecar).map_err(|e| Error::io(&sidecar, e))?;
         }
+        if sidecar.exists() && partial.exists() {
+            // Killed after the commit's exchange swapped the new store in: `path` holds the
+            // attributes the sidecar recorded, and the partial is the old store (or what
+            // its removal left). The commit is done; what remains is to clear up.
+            let committed = read_sidecar(&sidecar).map(|(_, attrs)| attrs);
+            if committed.is_some() && zarr::read_group(path).ok() == committed {
+                fs::remove_dir_all(&partial).map_err(|e| Error::io(&partial, e))?;
+                fs::remove_file(&sidecar).map_err(|e| Error::io(&sidecar, e))?;
+            }
+        }
         if partial.exists() && resume && !partial.join("zarr.json").exists() {
             // Killed between creating the folder and recording the job: nothing was
             // written yet (the record comes before any chunk), so start afresh.
@@ -137,8 +163,7 @@ impl StoreTxn {
         if partial.exists() && resume {
             // A writer killed inside its commit left the final attributes in the partial and
             // its job in the sidecar; it resumes (and commits) like any other.
-            let sidecar_job =
-                || fs::read(&sidecar).ok().and_then(|b| serde_json::from_slice::<Value>(&b).ok());
+            let sidecar_job = || read_sidecar(&sidecar).map(|(job, _)| job);
             let recorded = zarr::read_group(&partial)
                 .ok()
                 .and_then(|a| a.get("partial_job").cloned())
@@ -197,7 +222,8 @@ impl StoreTxn {
         // The final attributes replace the job record: keep the job beside the partial until
         // the store is in place, so a writer killed in between can still be resumed.
         let sidecar = job_sidecar(&self.partial);
-        crate::fs::write_atomic(&sidecar, self.job.to_string().as_bytes())?;
+        let record = json!({ "job": self.job, "attributes": attrs });
+        crate::fs::write_atomic(&sidecar, record.to_string().as_bytes())?;
         zarr::write_group(&self.partial, &attrs)?;
         if self.final_path.exists() && exchange(&self.partial, &self.final_path).is_ok() {
             // One atomic step swapped the new store in; the old one now sits at `partial`.
@@ -224,6 +250,13 @@ impl StoreTxn {
     }
 }
 
+/// The job and the final attributes a commit recorded beside its partial (`None` when
+/// unreadable: a sidecar killed mid-write is never renamed into place, so that means absent).
+fn read_sidecar(sidecar: &Path) -> Option<(Value, Value)> {
+    let v: Value = serde_json::from_slice(&fs::read(sidecar).ok()?).ok()?;
+    Some((v.get("job")?.clone(), v.get("attributes")?.clone()))
+}
+
 fn is_empty_dir(p: &Path) -> bool {
     fs::read_dir(p).map(|mut d| d.next().is_none()).unwrap_or(false)
 }
@@ -243,6 +276,27 @@ pub fn first_difference(was: &Value, now: &Value, at: &str) -> String {
                 }
             }
             format!("{}: no difference", if at.is_empty() { "job" } else { at })
+        }
+        (Value::String(a), Value::String(b)) if a.contains('\n') || b.contains('\n') => {
+            // Text (a TOML of parameters, say): name the first line that differs, so the
+            // message does not end in a shared prefix cut short.
+            let (mut la, mut lb) = (a.lines(), b.lines());
+            let mut line = 1;
+            loop {
+                match (la.next(), lb.next()) {
+                    (Some(x), Some(y)) if x == y => line += 1,
+                    (x, y) => {
+                        let show =
+                            |l: Option<&str>| l.map_or("(no line)".into(), |l| format!("{l:?}"));
+                        return format!(
+                            "{}, line {line}: was {}, now {}",
+                            if at.is_empty() { "job" } else { at },
+                            show(x),
+                            show(y)
+                        );
+                    }
+                }
+            }
         }
         _ => {
             let short = |v: &Value| {
@@ -459,14 +513,7 @@ pub struct BtfStore {
 impl BtfStore {
     /// Opens a store, checking its metadata and limits before reading any chunk.
     pub fn open(path: &Path) -> Result<Self> {
-        let meta = read_meta(path)?;
-        if meta.kind != "btf" {
-            return Err(Error::Invalid(format!(
-                "{}: a '{}' store, not a BTF store",
-                path.display(),
-                meta.kind
-            )));
-        }
+        let meta = read_meta_of_kind(path, "btf", "")?;
         let arr = ZarrArray::open(&path.join("normtextures"), &Limits::default())?;
         if arr.meta() != &normtexture_array(&meta, arr.meta().dtype) {
             return Err(Error::Corrupt {
@@ -675,6 +722,20 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_job_difference_inside_a_text_names_the_line() {
+        let was =
+            serde_json::json!({"yarn": {"params": "name = \"a\"\nply_count = 2\nfibers = 80\n"}});
+        let now =
+            serde_json::json!({"yarn": {"params": "name = \"a\"\nply_count = 3\nfibers = 80\n"}});
+        assert_eq!(
+            first_difference(&was, &now, ""),
+            "yarn.params, line 2: was \"ply_count = 2\", now \"ply_count = 3\""
+        );
+        let shorter = serde_json::json!({"yarn": {"params": "name = \"a\"\n"}});
+        assert!(first_difference(&was, &shorter, "").ends_with("now (no line)"));
+    }
+
+    #[test]
     fn metadata_claiming_8192_squared_texels_is_refused_before_allocating() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("m.btf");
@@ -758,7 +819,8 @@ mod tests {
         let job = json!({ "what": "a", "n": 1 });
         let txn = StoreTxn::begin(&p, false, &job).unwrap();
         let partial = txn.dir().to_owned();
-        crate::fs::write_atomic(&job_sidecar(&partial), job.to_string().as_bytes()).unwrap();
+        let record = json!({ "job": job, "attributes": { "complete": true } });
+        crate::fs::write_atomic(&job_sidecar(&partial), record.to_string().as_bytes()).unwrap();
         zarr::write_group(&partial, &json!({ "complete": true })).unwrap();
         drop(txn);
         let other = json!({ "what": "a", "n": 2 });
@@ -777,6 +839,36 @@ mod tests {
         fs::write(job_sidecar(&partial), "{}").unwrap();
         StoreTxn::begin(&p, false, &job).unwrap().commit(json!({})).unwrap();
         assert!(!job_sidecar(&partial).exists());
+    }
+
+    #[test]
+    fn a_writer_killed_after_its_exchange_leaves_the_new_store_and_a_clean_resume() {
+        // The exchange put the new store at `path` and the old one at the partial's name;
+        // killed before the old one was removed (the hostile suite's kill -9 of `compress
+        // --resume` met this: the resume then wrote into the old store's arrays and was
+        // refused for their different metadata). The next writer clears up and starts anew.
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("m.btf");
+        let old_job = json!({ "c": 2 });
+        StoreTxn::begin(&p, false, &old_job).unwrap().commit(json!({ "btf": { "c": 2 } })).unwrap();
+        let job = json!({ "c": 3 });
+        let txn = StoreTxn::begin(&p, false, &job).unwrap();
+        let partial = txn.dir().to_owned();
+        let new_attrs = json!({ "btf": { "c": 3 }, "complete": true });
+        let record = json!({ "job": job, "attributes": new_attrs });
+        crate::fs::write_atomic(&job_sidecar(&partial), record.to_string().as_bytes()).unwrap();
+        zarr::write_group(&partial, &new_attrs).unwrap();
+        drop(txn);
+        // The exchange, then death: the old store sits at the partial's name.
+        fs::rename(&p, dir.path().join("old")).unwrap();
+        fs::rename(&partial, &p).unwrap();
+        fs::rename(dir.path().join("old"), &partial).unwrap();
+        let txn = StoreTxn::begin(&p, true, &job).unwrap();
+        assert!(!job_sidecar(&partial).exists());
+        assert_eq!(zarr::read_group(txn.dir()).unwrap(), json!({ "partial_job": job }));
+        txn.commit(json!({ "btf": { "c": 3 } })).unwrap();
+        assert_eq!(zarr::read_group(&p).unwrap(), new_attrs);
+        assert!(!partial.exists() && !job_sidecar(&partial).exists());
     }
 
     #[test]

@@ -4,7 +4,7 @@
 //!
 //! The thin-cloth paper (`thin-semitransparent-cloth.txt`) models a fabric of optical
 //! thickness `τ₁` with single-scattering albedo `ϖ₀` by the emergent-radiance equations
-//! (2)–(3) (direct transmission `e^{−τ₁/μ}` plus a diffusion term), replaces the diffusion
+//! [TC eq. 2–3] (direct transmission `e^{−τ₁/μ}` plus a diffusion term), replaces the diffusion
 //! terms by their single-scattering approximations ([TC eq. 4–5], lost in our copy of the
 //! text) and renders [TC eq. 7] (front-lit) or [TC eq. 8] (back-lit) with the alpha of [TC eq. 9].
 //!

@@ -95,6 +95,9 @@ impl EnvMap {
                 }
                 for h in &meta.headers {
                     check_size(&name, h.layer_size.width(), h.layer_size.height())?;
+                    crate::exr_limits::check_header(h).map_err(|(field, what)| {
+                        Error::Limit(format!("{name}: {field}: {what}"))
+                    })?;
                 }
                 // Rows are allocated as they are decoded: a small file claiming a large
                 // map costs what it holds, not what its header claims.

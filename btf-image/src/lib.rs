@@ -9,18 +9,21 @@
 //! - [`write`]: linear RGB → EXR, linear RGB → sRGB PNG after exposure, 8-bit PNG — all
 //!   through `btf_core::fs::write_atomic` (a file is complete or absent), all refusing
 //!   non-finite values with the file and pixel named;
+//! - [`exr_limits`]: what an EXR header may claim (channels, block bytes) before any
+//!   reader allocates for it;
 //! - [`heatmap`]: per-pixel error heat maps between two linear images;
 //! - [`compose`]: images side by side and enlarged, for reports and contact sheets;
 //! - [`plot`]: line plots drawn straight into images (axes, ticks, legend, log axes) so
 //!   reports need no plotting toolchain or system fonts.
 //!
-//! Values are linear inside the toolkit; only PNG output is sRGB-encoded (DESIGN.md §3).
+//! Values are linear inside the toolkit; only PNG output is sRGB-encoded (docs/DESIGN.md §3).
 //! No GPU code lives here.
 
 pub mod color;
 pub mod compose;
 pub mod envmap;
 pub mod error;
+pub mod exr_limits;
 pub mod heatmap;
 pub mod plot;
 pub mod write;

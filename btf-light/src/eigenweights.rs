@@ -1,4 +1,4 @@
-//! Eigenweightsets (Sattler et al. 2003, §5.4, eq. 13): a PCA over the weight vectors
+//! Eigenweightsets ([S03 §5.4, eq. 13]): a PCA over the weight vectors
 //! `U_a` of `A` rotations of the environment about world `+z` (default 30 in 12° steps), so
 //! that the lighting for any rotation `δ` is `U(δ) ≈ Ū + Σ_{k≤e} o_k(δ) W_k` at the cost of
 //! `e` vector additions instead of a new gather.

@@ -1,5 +1,5 @@
 //! The per-vertex coefficients of a scene's environment light for one camera
-//! (`[S03 §5.3–5.4]`: `f · ω_m · γ*_{k j_m}` of eq. 11 for the four view slots `j_m` of
+//! (`[S03 §5.3–5.4]`: `f · ω_m · γ*_{k j_m}` of [S03 eq. 11] for the four view slots `j_m` of
 //! each vertex, with `γ*` from the eigenweightsets of eq. 13).
 //!
 //! **Output layout** (what the renderer's per-vertex pass reads): per vertex, per light

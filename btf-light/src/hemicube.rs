@@ -1,4 +1,4 @@
-//! The hemicube of a vertex (Sattler et al. 2003, §5.1–5.2, eq. 9): the discretisation of
+//! The hemicube of a vertex ([S03 §5.1–5.2, eq. 9]): the discretisation of
 //! the hemisphere above a surface point into the pixels of half a cube, built once in
 //! tangent space and shared by every vertex.
 //!

@@ -11,9 +11,11 @@
 //! per-pixel evaluation no more reads than per-vertex blending. Shadows are turned off and
 //! the background set to black for the sweep (the error is over the shaded pixels only).
 
-use crate::plain_texture::{Baseline, ReadForm};
+use crate::frame::Frame;
+use crate::passes::baselines::{Baseline, ReadForm};
+use crate::renderer::{RenderOptions, Renderer};
 use crate::scene::{Evaluation, Scene, Shadows};
-use crate::{Error, Frame, Gpu, RenderOptions, Renderer, Result};
+use crate::{Error, Gpu, Result};
 use btf_core::InterpMode;
 use serde::Serialize;
 
@@ -149,19 +151,19 @@ struct Timing {
 /// forms), interleaved frame by frame.
 fn time_setting(gpu: &Gpu, scene: &Scene, reads: f64, repeats: usize) -> Result<Timing> {
     let with = |baseline| RenderOptions { baseline, ..Default::default() };
-    let btf = Renderer::new(gpu, scene, with(None))?;
-    let plain = Renderer::new(gpu, scene, with(Some(Baseline::Plain)))?;
+    let mut btf = Renderer::new(gpu, scene, with(None))?;
+    let mut plain = Renderer::new(gpu, scene, with(Some(Baseline::Plain)))?;
     let bound = |form| {
         let read_bound = Baseline::ReadBound { reads_per_pixel: reads, form };
         Renderer::new(gpu, scene, with(Some(read_bound)))
     };
-    let bounds = [bound(ReadForm::Loop)?, bound(ReadForm::Groups)?];
+    let mut bounds = [bound(ReadForm::Loop)?, bound(ReadForm::Groups)?];
     let mut t: [Vec<f64>; 5] = Default::default();
     for r in 0..=repeats {
         let f = btf.render(gpu)?;
         let p = plain.render(gpu)?;
         let b: Vec<f64> = bounds
-            .iter()
+            .iter_mut()
             .map(|b| Ok(b.render(gpu)?.stats.ms_of("read bound")))
             .collect::<Result<_>>()?;
         if r > 0 {
@@ -189,7 +191,7 @@ pub fn run(
     let mut base = scene.clone();
     base.effects.shadows = Shadows::None;
     base.output.background = [0.0; 3];
-    let reference = Renderer::new(
+    let mut reference = Renderer::new(
         gpu,
         &variant(&base, None, Evaluation::PerPixel, InterpMode::Four),
         RenderOptions::default(),

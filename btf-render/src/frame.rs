@@ -2,7 +2,7 @@
 //! output as linear EXR or as sRGB PNG after exposure (DESIGN.md §3: values stay linear
 //! inside the toolkit; only the PNG is gamma-encoded).
 
-use crate::Result;
+use crate::{Error, Gpu, Result};
 use serde::Serialize;
 use std::path::Path;
 
@@ -61,6 +61,20 @@ pub struct Frame {
 }
 
 impl Frame {
+    /// Reads back a frame a renderer encoded into `texture` (linear RGBA, `Rgba32Float` or
+    /// `Rgba16Float`, as [`crate::Renderer::target_format`] gives), with its `stats`: the
+    /// read-back a viewer that presents the texture itself makes only for screenshots.
+    pub fn read(gpu: &Gpu, texture: &wgpu::Texture, stats: Stats) -> Result<Frame> {
+        let (width, height, format) = (texture.width(), texture.height(), texture.format());
+        let texel = format.block_copy_size(None).unwrap_or(0);
+        let mut rgb = Vec::with_capacity((width * height * 3) as usize);
+        let raw = gpu.read_texture(texture, texel)?;
+        if !push_linear_rgb(&mut rgb, &raw, format) {
+            return Err(Error::Invalid(format!("Frame::read: {format:?} is not a frame")));
+        }
+        Ok(Frame { width, height, rgb, stats })
+    }
+
     /// Pixel `(x, y)` as linear RGB.
     pub fn pixel(&self, x: u32, y: u32) -> [f32; 3] {
         let i = ((y * self.width + x) * 3) as usize;
@@ -89,6 +103,27 @@ impl Frame {
     pub fn all_finite(&self) -> bool {
         self.rgb.iter().all(|v| v.is_finite())
     }
+}
+
+/// Appends the RGB of linear RGBA `texels` (`Rgba32Float` or `Rgba16Float`) to `rgb`;
+/// false for another format.
+pub(crate) fn push_linear_rgb(
+    rgb: &mut Vec<f32>,
+    texels: &[u8],
+    format: wgpu::TextureFormat,
+) -> bool {
+    match format {
+        wgpu::TextureFormat::Rgba32Float => {
+            let f: &[f32] = bytemuck::cast_slice(texels);
+            rgb.extend(f.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]));
+        }
+        wgpu::TextureFormat::Rgba16Float => {
+            let h: &[half::f16] = bytemuck::cast_slice(texels);
+            rgb.extend(h.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]].map(half::f16::to_f32)));
+        }
+        _ => return false,
+    }
+    true
 }
 
 #[cfg(test)]

@@ -18,13 +18,27 @@ pub struct Gpu {
     pub timestamps: bool,
 }
 
+/// What to do when no adapter can render (the CPU Vulkan driver is a package away).
+pub const HINT: &str = "no Vulkan adapter found: install a Vulkan driver — on Debian/Ubuntu \
+    `apt-get install mesa-vulkan-drivers` (lavapipe, the CPU one) — or run on a machine with a GPU";
+
+/// Why `adapter` cannot run the renderer, if it cannot: every frame is drawn into a linear
+/// `Rgba32Float` target (a render attachment that plain OpenGL ES adapters lack).
+fn unusable(adapter: &wgpu::Adapter) -> Option<&'static str> {
+    let f = adapter.get_texture_format_features(wgpu::TextureFormat::Rgba32Float);
+    (!f.allowed_usages.contains(wgpu::TextureUsages::RENDER_ATTACHMENT))
+        .then_some("cannot render into an Rgba32Float target")
+}
+
 /// The most bytes of render targets one frame may take (see [`Gpu::check_frame`]).
 pub const MAX_FRAME_TARGET_BYTES: u64 = 3 << 30;
 
 impl Gpu {
     /// Creates a headless device on the first adapter wgpu finds (any backend, software
-    /// adapters included), requesting the adapter's own limits so that large texture arrays
-    /// fit.
+    /// adapters included) that can render the frame's linear `Rgba32Float` target,
+    /// requesting the adapter's own limits so that large texture arrays fit. Without one the
+    /// error says what to install (an OpenGL-only machine, e.g. llvmpipe without a Vulkan
+    /// driver, has an adapter that cannot render the frame).
     pub fn new() -> Result<Gpu> {
         let options = wgpu::RequestAdapterOptions {
             power_preference: wgpu::PowerPreference::HighPerformance,
@@ -48,7 +62,14 @@ impl Gpu {
                 Err(e) => last_err = e.to_string(),
             }
         }
-        let adapter = adapter.ok_or(Error::NoAdapter(last_err))?;
+        let adapter = adapter.ok_or_else(|| Error::NoAdapter(format!("{last_err}; {HINT}")))?;
+        if let Some(why) = unusable(&adapter) {
+            let info = adapter.get_info();
+            return Err(Error::NoAdapter(format!(
+                "the only adapter, {} ({:?}), {why}; {HINT}",
+                info.name, info.backend
+            )));
+        }
         Gpu::from_adapter(&adapter)
     }
 

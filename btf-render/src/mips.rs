@@ -18,6 +18,7 @@ pub fn level_count(w: u32, h: u32) -> u32 {
     32 - w.max(h).max(1).leading_zeros()
 }
 
+#[cfg(test)]
 /// Sizes of every level, base first.
 pub fn level_sizes(w: u32, h: u32) -> Vec<(u32, u32)> {
     (0..level_count(w, h)).map(|l| ((w >> l).max(1), (h >> l).max(1))).collect()

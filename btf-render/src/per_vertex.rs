@@ -1,7 +1,7 @@
 //! Per-vertex evaluation as in the paper (§4.2): for every vertex, the view direction in
-//! its tangent frame selects up to four view slots `j_m` with weights `ω_m` (eq. 5), each
-//! light's direction gives light weights `τ_n` (eq. 3), and these fold into per-slot
-//! coefficients `ω_m · e_l · γ_kj` (eq. 3–4), computed on the CPU every frame. The fragment
+//! its tangent frame selects up to four view slots `j_m` with weights `ω_m` ([S03 eq. 5]), each
+//! light's direction gives light weights `τ_n` ([S03 eq. 3]), and these fold into per-slot
+//! coefficients `ω_m · e_l · γ_kj` ([S03 eq. 3–4]), computed on the CPU every frame. The fragment
 //! shader blends the three vertices' reconstructions of a triangle with barycentric weights
 //! (the paper's three-pass blending, done in one pass) and multiplies each light by its
 //! per-pixel visibility.
@@ -18,7 +18,8 @@
 //! 11) mix colours per direction and keep the full layout.
 
 use crate::material::MaterialData;
-use crate::math::Vec3;
+use crate::math::{Vec3, v3};
+use crate::scene::Light;
 use btf_core::{Direction, InterpMode};
 use btf_light::tangent;
 
@@ -34,6 +35,26 @@ pub struct VertexLight {
     pub point: bool,
     /// RGB irradiance or intensity.
     pub color: [f32; 3],
+}
+
+impl VertexLight {
+    /// The light as the per-vertex fold reads it; an environment light has zero power here
+    /// (its own coefficients, `[S03 eq. 11]`, fill its entry).
+    pub fn from_light(light: &Light) -> VertexLight {
+        match light {
+            Light::Directional { direction, irradiance, .. } => VertexLight {
+                pos_or_dir: v3(*direction).normalize(),
+                point: false,
+                color: *irradiance,
+            },
+            Light::Point { position, intensity, .. } => {
+                VertexLight { pos_or_dir: v3(*position), point: true, color: *intensity }
+            }
+            Light::Environment(_) => {
+                VertexLight { pos_or_dir: Vec3::z(), point: false, color: [0.0; 3] }
+            }
+        }
+    }
 }
 
 /// Inputs shared by all vertices.
@@ -217,7 +238,7 @@ pub fn compute(
     out
 }
 
-/// `ωΣτ`, `ωΣτ b_ij` and group `g`'s `ωΣτ γ` of slot `j` for one light (eq. 3–4).
+/// `ωΣτ`, `ωΣτ b_ij` and group `g`'s `ωΣτ γ` of slot `j` for one light ([S03 eq. 3–4]).
 fn slot_scalars<'a>(
     mat: &'a MaterialData,
     j: usize,

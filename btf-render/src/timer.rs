@@ -1,49 +1,64 @@
-//! Per-pass timing for `--stats`: GPU timestamp queries around each render pass when the
-//! adapter supports them, otherwise CPU time around submit + wait of each pass.
+//! Per-pass timing for `--stats`, recorded into the one command encoder a frame is encoded
+//! in: GPU timestamp queries around each render pass when the adapter has them (resolved at
+//! the end of the same encoder, read after the caller's submit), otherwise — only when the
+//! renderer owns the encoder — CPU time around a submit and wait of each pass. Work done on
+//! the CPU for the frame is recorded by name with its milliseconds. No equation lives here.
 
 use crate::frame::PassStat;
-use crate::{Error, Gpu, Result};
+use crate::{Gpu, Result};
 use std::time::Instant;
 
-/// Collects the passes of one frame.
+/// Most GPU passes one frame times with timestamps: the BTF pass plus the shadow passes of
+/// four lights (shadow maps: six cube faces each; volumes: a prepass and two per light), the
+/// environment background.
+pub const MAX_TIMED_PASSES: u32 = 32;
+
+/// How the passes of a frame are timed.
+pub enum Clock<'a> {
+    /// Timestamps written into `query` (two per pass).
+    Timestamps(&'a wgpu::QuerySet),
+    /// Each pass submitted and waited for on its own (the renderer's own encoder only).
+    SubmitEach,
+    /// Not timed (a caller's encoder on an adapter without timestamps).
+    Untimed,
+}
+
+/// When one recorded pass was measured.
+#[derive(Debug, Clone, Copy)]
+enum Time {
+    /// On the CPU, milliseconds.
+    Cpu(f64),
+    /// By timestamps `2k`, `2k + 1`.
+    Gpu(u32),
+    /// Not measured.
+    None,
+}
+
+/// Records the passes of one frame into an encoder.
 pub struct PassTimer<'a> {
     gpu: &'a Gpu,
-    query: Option<wgpu::QuerySet>,
-    capacity: u32,
+    encoder: &'a mut wgpu::CommandEncoder,
+    clock: Clock<'a>,
     names: Vec<String>,
-    cpu_ms: Vec<Option<f64>>,
-    pending: Vec<wgpu::CommandBuffer>,
+    times: Vec<Time>,
+    gpu_passes: u32,
 }
 
 impl<'a> PassTimer<'a> {
-    /// A timer for at most `max_passes` GPU passes.
-    pub fn new(gpu: &'a Gpu, max_passes: u32) -> Self {
-        let query = gpu.timestamps.then(|| {
-            gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("pass timestamps"),
-                ty: wgpu::QueryType::Timestamp,
-                count: 2 * max_passes.max(1),
-            })
-        });
-        PassTimer {
-            gpu,
-            query,
-            capacity: max_passes,
-            names: Vec::new(),
-            cpu_ms: Vec::new(),
-            pending: Vec::new(),
-        }
-    }
-
-    /// How times are measured.
-    pub fn method(&self) -> &'static str {
-        if self.query.is_some() { "gpu-timestamps" } else { "cpu" }
+    /// A timer encoding into `encoder`, timing with `clock`.
+    pub fn new(gpu: &'a Gpu, encoder: &'a mut wgpu::CommandEncoder, clock: Clock<'a>) -> Self {
+        PassTimer { gpu, encoder, clock, names: Vec::new(), times: Vec::new(), gpu_passes: 0 }
     }
 
     /// Records CPU work as a pass.
     pub fn cpu(&mut self, name: &str, ms: f64) {
         self.names.push(name.into());
-        self.cpu_ms.push(Some(ms));
+        self.times.push(Time::Cpu(ms));
+    }
+
+    /// The encoder, for work outside timed passes (copies).
+    pub fn encoder(&mut self) -> &mut wgpu::CommandEncoder {
+        self.encoder
     }
 
     /// Encodes one render pass through `f`, which must pass the given timestamp writes to
@@ -53,82 +68,89 @@ impl<'a> PassTimer<'a> {
         name: &str,
         f: impl FnOnce(&mut wgpu::CommandEncoder, Option<wgpu::RenderPassTimestampWrites>),
     ) -> Result<()> {
-        let gpu_index = self.cpu_ms.iter().filter(|m| m.is_none()).count() as u32;
-        let mut enc = self
-            .gpu
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(name) });
-        match &self.query {
-            Some(q) if gpu_index < self.capacity => {
+        let time = match &self.clock {
+            Clock::Timestamps(query) => {
+                let k = self.gpu_passes;
+                assert!(k < MAX_TIMED_PASSES, "a frame has at most {MAX_TIMED_PASSES} passes");
+                self.gpu_passes += 1;
                 f(
-                    &mut enc,
+                    self.encoder,
                     Some(wgpu::RenderPassTimestampWrites {
-                        query_set: q,
-                        beginning_of_pass_write_index: Some(2 * gpu_index),
-                        end_of_pass_write_index: Some(2 * gpu_index + 1),
+                        query_set: query,
+                        beginning_of_pass_write_index: Some(2 * k),
+                        end_of_pass_write_index: Some(2 * k + 1),
                     }),
                 );
-                self.pending.push(enc.finish());
-                self.cpu_ms.push(None);
+                Time::Gpu(k)
             }
-            _ => {
+            Clock::SubmitEach => {
                 let t = Instant::now();
-                f(&mut enc, None);
-                self.gpu.queue.submit([enc.finish()]);
+                f(self.encoder, None);
+                let label = wgpu::CommandEncoderDescriptor { label: Some("frame") };
+                let next = self.gpu.device.create_command_encoder(&label);
+                let done = std::mem::replace(&mut *self.encoder, next);
+                self.gpu.queue.submit([done.finish()]);
                 self.gpu.wait()?;
-                self.cpu_ms.push(Some(t.elapsed().as_secs_f64() * 1e3));
+                Time::Cpu(t.elapsed().as_secs_f64() * 1e3)
             }
-        }
+            Clock::Untimed => {
+                f(self.encoder, None);
+                Time::None
+            }
+        };
         self.names.push(name.into());
+        self.times.push(time);
         Ok(())
     }
 
-    /// Submits what is pending, waits, and returns the pass times.
-    pub fn finish(self) -> Result<Vec<PassStat>> {
-        let n_gpu = self.cpu_ms.iter().filter(|m| m.is_none()).count() as u32;
+    /// Ends the frame's record: with timestamps, resolves them into `resolve` and copies
+    /// them to `read` (both at least `16 ·` [`MAX_TIMED_PASSES`] bytes) in the encoder.
+    pub fn finish(self, buffers: Option<(&wgpu::Buffer, &wgpu::Buffer)>) -> PassRecord {
+        if let (Clock::Timestamps(query), Some((resolve, read)), true) =
+            (&self.clock, buffers, self.gpu_passes > 0)
+        {
+            let n = self.gpu_passes;
+            self.encoder.resolve_query_set(query, 0..2 * n, resolve, 0);
+            self.encoder.copy_buffer_to_buffer(resolve, 0, read, 0, 16 * n as u64);
+        }
+        PassRecord { names: self.names, times: self.times, gpu_passes: self.gpu_passes }
+    }
+}
+
+/// The passes of an encoded frame, with the GPU times still on the device.
+#[derive(Debug, Clone, Default)]
+pub struct PassRecord {
+    names: Vec<String>,
+    times: Vec<Time>,
+    gpu_passes: u32,
+}
+
+impl PassRecord {
+    /// The pass times, reading the timestamps from `read` (mapped: this waits for the frame's
+    /// submission to finish). Untimed passes are reported as `NaN` ms.
+    pub fn stats(&self, gpu: &Gpu, read: Option<&wgpu::Buffer>) -> Result<Vec<PassStat>> {
         let mut gpu_ms = Vec::new();
-        if let (Some(q), true) = (&self.query, n_gpu > 0) {
-            let size = 16 * n_gpu as u64;
-            let resolve = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("timestamps"),
-                size,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            });
-            let read = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("timestamps readback"),
-                size,
-                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                mapped_at_creation: false,
-            });
-            let mut enc = self.gpu.device.create_command_encoder(&Default::default());
-            enc.resolve_query_set(q, 0..2 * n_gpu, &resolve, 0);
-            enc.copy_buffer_to_buffer(&resolve, 0, &read, 0, size);
-            let mut cmds = self.pending;
-            cmds.push(enc.finish());
-            self.gpu.queue.submit(cmds);
-            let raw = self.gpu.read_buffer(&read)?;
-            let ticks: &[u64] = bytemuck::cast_slice(&raw);
-            let period_ns = self.gpu.queue.get_timestamp_period() as f64;
+        if let (Some(read), true) = (read, self.gpu_passes > 0) {
+            let raw = gpu.read_buffer(read)?;
+            let ticks: &[u64] = bytemuck::cast_slice(&raw[..16 * self.gpu_passes as usize]);
+            let period_ns = gpu.queue.get_timestamp_period() as f64;
             gpu_ms = ticks
                 .chunks_exact(2)
                 .map(|t| t[1].saturating_sub(t[0]) as f64 * period_ns * 1e-6)
                 .collect();
-        } else if !self.pending.is_empty() {
-            self.gpu.queue.submit(self.pending);
-            self.gpu.wait()?;
         }
-        let mut it = gpu_ms.into_iter();
-        self.names
-            .into_iter()
-            .zip(self.cpu_ms)
-            .map(|(name, cpu)| {
-                let ms = match cpu {
-                    Some(ms) => ms,
-                    None => it.next().ok_or_else(|| Error::Gpu("missing timestamp".into()))?,
-                };
-                Ok(PassStat { name, ms })
+        Ok(self
+            .names
+            .iter()
+            .zip(&self.times)
+            .map(|(name, time)| PassStat {
+                name: name.clone(),
+                ms: match *time {
+                    Time::Cpu(ms) => ms,
+                    Time::Gpu(k) => gpu_ms.get(k as usize).copied().unwrap_or(f64::NAN),
+                    Time::None => f64::NAN,
+                },
             })
-            .collect()
+            .collect())
     }
 }

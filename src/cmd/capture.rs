@@ -2,11 +2,10 @@
 //! capture's ground truth (`score`). Arguments are validated here; the work is in
 //! `btf_capture::capture`.
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use btf_capture::capture::rectify::Grid;
 use btf_capture::capture::{self as cap, CaptureLayout, Filter, ProcessOptions, Roi, score};
 use btf_core::store::BtfStore;
-use btf_core::zarr::DType;
 use std::path::PathBuf;
 
 /// `btf capture` subcommands.
@@ -21,13 +20,52 @@ pub enum CaptureCmd {
     RegistrationSweep(crate::cmd::registration_sweep::SweepArgs),
 }
 
+crate::args::choices! {
+    /// `btf capture process --filter`: how a texel is resampled from a raw image.
+    FilterChoice {
+        /// A box over the texel's footprint in the raw image.
+        Footprint = "footprint",
+        /// Bilinear at the texel's centre.
+        Bilinear = "bilinear",
+    }
+}
+
+crate::args::choices! {
+    /// `btf capture process --fallback`.
+    FallbackChoice {
+        /// Register from the nominal pose.
+        Nominal = "nominal",
+    }
+}
+
+crate::args::choices! {
+    /// `btf capture process --registration`.
+    RegistrationChoice {
+        /// Point markers.
+        Markers = "markers",
+        /// Point markers plus border-line samples (experimental: biased in some views, see
+        /// btf-capture/README.md).
+        MarkersLines = "markers+lines",
+    }
+}
+
+crate::args::choices! {
+    /// `btf capture process --light-correction`.
+    LightCorrection {
+        /// Scale by cos θ_l / cos θ_l' for the registered plate tilt.
+        Cosine = "cosine",
+        /// No correction.
+        None = "none",
+    }
+}
+
 /// Arguments of `btf capture process`.
 #[derive(clap::Args)]
 pub struct ProcessArgs {
     /// Folder with capture.toml and the raw images.
     raw_dir: PathBuf,
     /// Output BTF store.
-    #[arg(short = 'o', long)]
+    #[arg(short = 'o', long = "out", alias = "output")]
     output: PathBuf,
     /// Texels per side of the normtextures.
     #[arg(long, default_value_t = 256)]
@@ -42,26 +80,24 @@ pub struct ProcessArgs {
     /// Edge-blend width in output texels (default: size/16).
     #[arg(long)]
     blend_width: Option<usize>,
-    /// Resampling filter: footprint (box over the texel's footprint) or bilinear.
+    /// Resampling filter.
     #[arg(long, default_value = "footprint")]
-    filter: String,
-    /// `nominal`: register slots whose markers fail from the nominal pose, with a warning.
+    filter: FilterChoice,
+    /// Register slots whose markers fail from the nominal pose, with a warning.
     #[arg(long)]
-    fallback: Option<String>,
+    fallback: Option<FallbackChoice>,
     /// Keep the images of an interrupted run.
     #[arg(long)]
     resume: bool,
-    /// Registration features: `markers` (point markers) or `markers+lines` (plus border-line
-    /// samples; experimental: biased in some views, see btf-capture/README.md).
+    /// Registration features.
     #[arg(long, default_value = "markers")]
-    registration: String,
-    /// Store element type (f16|f32).
+    registration: RegistrationChoice,
+    /// Store element type.
     #[arg(long, default_value = "f32")]
-    dtype: String,
-    /// Light-incidence correction: `cosine` (scale by cos θ_l / cos θ_l' for the
-    /// registered plate tilt) or `none`.
+    dtype: crate::args::Dtype,
+    /// Light-incidence correction for the registered plate tilt.
     #[arg(long, default_value = "cosine")]
-    light_correction: String,
+    light_correction: LightCorrection,
     /// Print a JSON summary on standard output.
     #[arg(long)]
     json: bool,
@@ -81,6 +117,9 @@ pub struct ScoreArgs {
     /// Write score.json and filters.md into this folder.
     #[arg(long)]
     report: Option<PathBuf>,
+    /// Print one JSON object (the keys of score.json) instead of the table.
+    #[arg(long)]
+    json: bool,
     /// Also score against the nominal-direction (orthographic) truth, which charges the
     /// set-up's perspective (doubles the truth's cost).
     #[arg(long)]
@@ -108,28 +147,12 @@ fn parse_roi(s: &str) -> Result<Roi> {
 }
 
 fn process(a: ProcessArgs) -> Result<()> {
-    let filter = Filter::from_name(&a.filter)
+    let filter = Filter::from_name(a.filter.as_str())
         .with_context(|| format!("--filter '{}' is not footprint or bilinear", a.filter))?;
-    let fallback_nominal = match a.fallback.as_deref() {
-        None => false,
-        Some("nominal") => true,
-        Some(o) => bail!("--fallback '{o}': only 'nominal' is supported"),
-    };
-    let dtype = match a.dtype.as_str() {
-        "f16" => DType::F16,
-        "f32" => DType::F32,
-        o => bail!("--dtype '{o}' is not f16 or f32"),
-    };
-    let use_lines = match a.registration.as_str() {
-        "markers+lines" => true,
-        "markers" => false,
-        o => bail!("--registration '{o}' is not markers+lines or markers"),
-    };
-    let correct_light_incidence = match a.light_correction.as_str() {
-        "cosine" => true,
-        "none" => false,
-        o => bail!("--light-correction '{o}' is not cosine or none"),
-    };
+    let fallback_nominal = a.fallback == Some(FallbackChoice::Nominal);
+    let dtype = a.dtype.dtype();
+    let use_lines = a.registration == RegistrationChoice::MarkersLines;
+    let correct_light_incidence = a.light_correction == LightCorrection::Cosine;
     let mut opt = ProcessOptions {
         size: a.size,
         rectified_size: a.rectified_size,
@@ -277,14 +300,92 @@ fn score_cmd(a: ScoreArgs) -> Result<()> {
         let md = format!(
             "# Capture score: {}\n\nmean reprojection {:.4} texel, max {:.4} texel (texel = {:.4} mm); rel. RMSE {:.5}\n\n{}",
             a.store.display(),
-            s.mean_reprojection_px,
-            s.max_reprojection_px,
+            s.mean_reprojection_texels,
+            s.max_reprojection_texels,
             s.texel_mm,
             s.rel_rmse,
             score::filter_table_markdown(&s.filters)
         );
         btf_core::fs::write_atomic(&dir.join("filters.md"), md.as_bytes())?;
     }
-    crate::guard::outln!("{json}");
+    if a.json {
+        crate::guard::outln!("{json}");
+    } else {
+        crate::guard::outln!("{}", score_table(&s, &a));
+    }
     Ok(())
+}
+
+/// The score as a human-readable table (all lengths in texels of the store).
+fn score_table(s: &score::Score, a: &ScoreArgs) -> String {
+    let mut t = format!(
+        "capture score of {} against {}\n  texel              {:.4} mm, light-incidence correction {}\n  \
+         reprojection       mean {:.4} texel, max {:.4} texel\n  rel. RMSE          {:.5}",
+        a.store.display(),
+        a.truth.display(),
+        s.texel_mm,
+        if s.light_incidence_correction { "on" } else { "off" },
+        s.mean_reprojection_texels,
+        s.max_reprojection_texels,
+        s.rel_rmse
+    );
+    if let Some(n) = s.rel_rmse_nominal {
+        t += &format!(" (nominal-direction truth: {n:.5})");
+    }
+    let fallback = if s.fallback_views.is_empty() {
+        "none".to_string()
+    } else {
+        s.fallback_views.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(", ")
+    };
+    t += &format!("\n  fallback views     {fallback}\n\n  view θ   rel. RMSE");
+    if !s.rel_rmse_nominal_by_theta.is_empty() {
+        t += "   nominal";
+    }
+    for (i, [theta, rel]) in s.rel_rmse_by_theta.iter().enumerate() {
+        t += &format!("\n  {theta:5.1}°   {rel:9.5}");
+        if let Some([_, n]) = s.rel_rmse_nominal_by_theta.get(i) {
+            t += &format!("   {n:7.5}");
+        }
+    }
+    if !s.filters.is_empty() {
+        t += &format!("\n\n{}", score::filter_table_markdown(&s.filters).trim_end());
+    }
+    t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_score_table_names_one_unit_and_every_ring() {
+        let s = score::Score {
+            mean_reprojection_texels: 0.0123,
+            max_reprojection_texels: 0.0456,
+            rel_rmse: 0.019,
+            rel_rmse_nominal: Some(0.048),
+            texel_mm: 4.6,
+            per_view: vec![],
+            rel_rmse_by_theta: vec![[0.0, 0.01], [45.0, 0.02]],
+            rel_rmse_nominal_by_theta: vec![[0.0, 0.03], [45.0, 0.05]],
+            light_incidence_correction: true,
+            fallback_views: vec![3],
+            filters: vec![],
+        };
+        let a = ScoreArgs {
+            store: "m.btf".into(),
+            truth: "raw".into(),
+            compare_filters: false,
+            report: None,
+            json: false,
+            nominal: true,
+        };
+        let t = score_table(&s, &a);
+        assert!(t.contains("mean 0.0123 texel, max 0.0456 texel"), "{t}");
+        assert!(!t.contains("px"), "one unit, texels: {t}");
+        assert!(t.contains(" 45.0°     0.02000   0.05000"), "{t}");
+        assert!(
+            t.contains("fallback views     3") && t.contains("nominal-direction truth: 0.04800")
+        );
+    }
 }

@@ -19,11 +19,11 @@ pub struct CompressArgs {
     #[arg(short = 'c', long, default_value_t = 16)]
     components: usize,
     /// Output eigen store.
-    #[arg(short = 'o', long)]
+    #[arg(short = 'o', long = "out", alias = "output")]
     output: Option<PathBuf>,
-    /// Storage of the eigentextures: f16 or u8.
-    #[arg(long, default_value = "f16")]
-    quantize: String,
+    /// Storage of the eigentextures.
+    #[arg(long, alias = "quantize", default_value = "f16")]
+    quantization: crate::args::Quantization,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
@@ -40,7 +40,7 @@ pub struct CompressArgs {
 
 /// Runs `btf compress`.
 pub fn run(a: CompressArgs) -> Result<()> {
-    let quantization: Quantization = a.quantize.parse()?;
+    let quantization: Quantization = a.quantization.quantization();
     let input =
         BtfStore::open(&a.input).with_context(|| format!("cannot open {}", a.input.display()))?;
     if let Some(cs) = a.sweep {
@@ -63,11 +63,12 @@ pub fn run(a: CompressArgs) -> Result<()> {
         outln!("{}", serde_json::to_string_pretty(&r)?);
     } else {
         outln!(
-            "compressed {} slots × {} lights to {} components ({}) in {:.2} s",
+            "compressed {} slots × {} lights to {} components ({}) into {} in {:.2} s",
             r.slots.len(),
             input.meta().n_lights(),
             r.components,
             r.quantization.name(),
+            output.display(),
             r.seconds
         );
         outln!(

@@ -16,11 +16,11 @@ use std::time::Instant;
 #[derive(clap::Args)]
 pub struct DemoArgs {
     /// Output folder.
-    #[arg(short = 'o', long, default_value = "demo-out")]
+    #[arg(short = 'o', long, alias = "output", default_value = "demo-out")]
     out: PathBuf,
-    /// Material kind (lambert, corduroy, knit, woven, wallpaper, stone).
+    /// Material kind.
     #[arg(long, default_value = "corduroy")]
-    kind: String,
+    kind: crate::args::Material,
     /// Texels per side of the material.
     #[arg(long, default_value_t = 64)]
     size: usize,
@@ -64,7 +64,7 @@ fn stage(
 /// Runs `btf demo`.
 pub fn run(a: DemoArgs) -> Result<()> {
     crate::guard::output_folder(&a.out, "demo", a.fresh, &crate::guard::report_output)?;
-    let kind = datasets::MaterialKind::from_name(&a.kind)?;
+    let kind = datasets::MaterialKind::from_name(a.kind.as_str())?;
     let (btf_path, eig_path) = (a.out.join("material.btf"), a.out.join("material.eig"));
     let mut stages = Vec::new();
     let mut report = String::new();

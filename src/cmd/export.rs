@@ -3,31 +3,60 @@
 //! `pvf` writes an eigen store as a Bonn PVF file; `exr` writes one slot of an eigen store
 //! (mean and eigentextures) as a multi-layer OpenEXR for any image tool.
 
+use crate::guard::outln;
 use anyhow::{Context, Result, bail};
-use btf_capture::bonn::export::{ImageEncoding, export_pvf, export_ubo2003};
+use btf_capture::bonn::export::{ImageEncoding, export_pvf, export_ubo2003_with_progress};
 use btf_core::eigen::EigenStore;
 use btf_core::store::BtfStore;
 use std::path::{Path, PathBuf};
+
+crate::args::choices! {
+    /// `btf export --format`.
+    ExportFormat {
+        /// One view slot of a BTF store as a `lights × (h·w·3)` float32 NumPy array (`--slot`).
+        Npy = "npy",
+        /// A BTF store as a Bonn UBO2003 image folder (`--image`, `--name`).
+        Ubo2003 = "ubo2003",
+        /// An eigen store as a Bonn PVF file.
+        Pvf = "pvf",
+        /// One view slot of an eigen store (mean, eigentextures) as multi-layer EXR (`--slot`).
+        Exr = "exr",
+    }
+}
+
+crate::args::choices! {
+    /// `btf export --image`: image encoding of a ubo2003 folder.
+    ImageChoice {
+        /// 8-bit PNG (values scaled to the peak).
+        Png = "png",
+        /// 16-bit PNG (values scaled to the peak).
+        Png16 = "png16",
+        /// JPEG, quality 95.
+        Jpg = "jpg",
+        /// Linear float EXR (no scaling).
+        Exr = "exr",
+    }
+}
 
 /// Arguments of `btf export`.
 #[derive(clap::Args)]
 pub struct ExportArgs {
     /// Input store (a BTF store for npy/ubo2003, an eigen store for pvf/exr).
     input: PathBuf,
-    /// View slot to export (npy, exr).
-    #[arg(long)]
+    /// View slot to export (required by npy and exr).
+    #[arg(long, required_if_eq_any([("format", "npy"), ("format", "exr")]))]
     slot: Option<usize>,
-    /// Output format (npy|ubo2003|pvf|exr).
+    /// Output format.
     #[arg(long, default_value = "npy")]
-    format: String,
-    /// Image encoding of a ubo2003 folder (png|png16|jpg|exr).
+    format: ExportFormat,
+    /// Image encoding of a ubo2003 folder.
     #[arg(long, default_value = "png16")]
-    image: String,
+    image: ImageChoice,
     /// Material name at the start of ubo2003 file names.
     #[arg(long, default_value = "material")]
     name: String,
     /// Output file (or folder for ubo2003).
-    #[arg(short = 'o', long)]
+    #[arg(short = 'o', long = "out", alias = "output")]
     output: PathBuf,
 }
 
@@ -128,8 +157,17 @@ pub fn run(a: ExportArgs) -> Result<()> {
     match a.format.as_str() {
         "npy" => {
             let store = open_btf(&a.input)?;
-            let slot = store.read_slot(slot_arg(&a, store.meta().n_views())?)?;
-            write_npy(&a.output, slot.n_lights, slot.texel_values, &slot.data)
+            let j = slot_arg(&a, store.meta().n_views())?;
+            let slot = store.read_slot(j)?;
+            write_npy(&a.output, slot.n_lights, slot.texel_values, &slot.data)?;
+            outln!(
+                "wrote view slot {j} of {} ({} lights × {} values, float32) to {}",
+                a.input.display(),
+                slot.n_lights,
+                slot.texel_values,
+                a.output.display()
+            );
+            Ok(())
         }
         "ubo2003" => {
             let enc = match a.image.as_str() {
@@ -140,8 +178,10 @@ pub fn run(a: ExportArgs) -> Result<()> {
                 o => bail!("--image '{o}' is not png, png16, jpg or exr"),
             };
             let store = open_btf(&a.input)?;
-            let scale = export_ubo2003(&store, &a.output, &a.name, enc)
-                .with_context(|| format!("cannot export to {}", a.output.display()))?;
+            let scale = crate::progress::counted("export", |p| {
+                export_ubo2003_with_progress(&store, &a.output, &a.name, enc, p)
+            })
+            .with_context(|| format!("cannot export to {}", a.output.display()))?;
             let m = store.meta();
             crate::guard::outln!(
                 "wrote {} images to {} (scale {scale}, in btf-export.json)",
@@ -153,17 +193,36 @@ pub fn run(a: ExportArgs) -> Result<()> {
         "pvf" => {
             let store = open_eigen(&a.input)?;
             export_pvf(&store, &a.output)
-                .with_context(|| format!("cannot write {}", a.output.display()))
+                .with_context(|| format!("cannot write {}", a.output.display()))?;
+            let m = store.meta();
+            outln!(
+                "wrote {} ({} view slots × {} components) as PVF to {}",
+                a.input.display(),
+                m.btf.n_views(),
+                m.components,
+                a.output.display()
+            );
+            Ok(())
         }
         "exr" => {
             let store = open_eigen(&a.input)?;
             let m = &store.meta().btf;
-            let s = store.read_slot(slot_arg(&a, m.n_views())?)?;
+            let j = slot_arg(&a, m.n_views())?;
+            let s = store.read_slot(j)?;
             let mut layers = vec![("mean".to_string(), s.mean.clone())];
             for k in 0..s.components {
                 layers.push((format!("eigen{k:02}"), s.basis_row(k).to_vec()));
             }
-            write_layers_exr(&a.output, m.width, m.height, &layers)
+            write_layers_exr(&a.output, m.width, m.height, &layers)?;
+            outln!(
+                "wrote view slot {j} of {} (mean + {} eigentextures, {}×{}) to {}",
+                a.input.display(),
+                s.components,
+                m.width,
+                m.height,
+                a.output.display()
+            );
+            Ok(())
         }
         o => bail!("unsupported export format '{o}' (npy, ubo2003, pvf, exr)"),
     }

@@ -2,10 +2,9 @@
 //! zip) of per-(view, light) images; `ubo2014` reads the binary `.btf` files (FMF, DFMF, PVF,
 //! BDI) into a BTF store, or a PVF file straight into an eigen store with `--eigen`.
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use btf_capture::bonn::{ubo2003, ubo2014};
 use btf_core::eigen::Quantization;
-use btf_core::zarr::DType;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -24,11 +23,11 @@ pub struct Ubo2003Args {
     /// Folder (searched recursively) or zip of JPEG/PNG/BMP/HDR/EXR images.
     input: PathBuf,
     /// Output BTF store.
-    #[arg(short = 'o', long)]
+    #[arg(short = 'o', long = "out", alias = "output")]
     output: PathBuf,
-    /// Element type of the store (f16|f32).
+    /// Element type of the store.
     #[arg(long, default_value = "f32")]
-    dtype: String,
+    dtype: crate::args::Dtype,
 }
 
 /// Arguments of `btf import ubo2014`.
@@ -37,28 +36,20 @@ pub struct Ubo2014Args {
     /// The `.btf` file.
     input: PathBuf,
     /// Output store (a BTF store, or an eigen store with `--eigen`).
-    #[arg(short = 'o', long)]
+    #[arg(short = 'o', long = "out", alias = "output")]
     output: PathBuf,
     /// Write a PVF file's per-view eigentextures straight into an eigen store.
     #[arg(long)]
     eigen: bool,
-    /// Eigentexture storage for `--eigen` (f16|u8).
-    #[arg(long, default_value = "f16")]
-    quantization: String,
-    /// Element type of a BTF store (f16|f32).
+    /// Eigentexture storage for `--eigen`.
+    #[arg(long, alias = "quantize", default_value = "f16")]
+    quantization: crate::args::Quantization,
+    /// Element type of a BTF store.
     #[arg(long, default_value = "f32")]
-    dtype: String,
+    dtype: crate::args::Dtype,
     /// Memory for BDI view buffers, MiB (BDI is read once per group of views that fits).
     #[arg(long, default_value_t = 1024)]
     memory_mib: u64,
-}
-
-fn dtype(s: &str) -> Result<DType> {
-    match s {
-        "f16" => Ok(DType::F16),
-        "f32" => Ok(DType::F32),
-        o => bail!("--dtype '{o}' is not f16 or f32"),
-    }
 }
 
 /// Runs `btf import`.
@@ -67,10 +58,12 @@ pub fn run(cmd: ImportCmd) -> Result<()> {
     match cmd {
         ImportCmd::Ubo2003(a) => {
             crate::guard::refuse_overlap(&[("-o", &a.output)], &[("input", &a.input)])?;
-            let dtype = dtype(&a.dtype)?;
+            let dtype = a.dtype.dtype();
             let rep = crate::guard::no_partial_on_error(&a.output, || {
-                ubo2003::import(&a.input, &a.output, dtype)
-                    .with_context(|| format!("cannot import {}", a.input.display()))
+                crate::progress::counted("import", |p| {
+                    ubo2003::import_with_progress(&a.input, &a.output, dtype, p)
+                })
+                .with_context(|| format!("cannot import {}", a.input.display()))
             })?;
             crate::guard::outln!(
                 "imported {} images ({} views x {} lights, {}x{} texels, scale {}) into {} in {:.2} s",
@@ -88,13 +81,13 @@ pub fn run(cmd: ImportCmd) -> Result<()> {
             crate::guard::refuse_overlap(&[("-o", &a.output)], &[("input", &a.input)])?;
             let rep = crate::guard::no_partial_on_error(&a.output, || {
                 if a.eigen {
-                    let q: Quantization = a.quantization.parse()?;
+                    let q: Quantization = a.quantization.quantization();
                     ubo2014::import_pvf_to_eigen(&a.input, &a.output, q)
                 } else {
                     ubo2014::import_to_store(
                         &a.input,
                         &a.output,
-                        dtype(&a.dtype)?,
+                        a.dtype.dtype(),
                         a.memory_mib << 20,
                     )
                 }

@@ -7,6 +7,7 @@ pub mod export;
 pub mod garment;
 pub mod import;
 pub mod inspect;
+pub mod knit;
 pub mod reconstruct;
 pub mod registration_sweep;
 pub mod relight;

@@ -27,7 +27,7 @@ use std::path::{Path, PathBuf};
 #[derive(clap::Args)]
 pub struct SweepArgs {
     /// Output folder for registration.md, .csv and .png.
-    #[arg(short = 'o', long)]
+    #[arg(short = 'o', long, alias = "output")]
     out: PathBuf,
     /// Camera resolutions `WxH,WxH,…`.
     #[arg(long, default_value = "320x240,480x360,1280x960")]

@@ -34,7 +34,7 @@ pub struct RelightArgs {
     #[arg(long)]
     pub eigen: Option<usize>,
     /// Output folder.
-    #[arg(short, long)]
+    #[arg(short = 'o', long = "out", alias = "output")]
     pub output: PathBuf,
     /// Also write linear EXR frames.
     #[arg(long)]

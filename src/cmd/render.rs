@@ -13,7 +13,7 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub scene: crate::args::SceneArgs,
     /// Output PNG (sRGB, exposure applied).
-    #[arg(short, long)]
+    #[arg(short = 'o', long = "out", alias = "output")]
     pub output: PathBuf,
     /// Also write the linear HDR image as EXR.
     #[arg(long)]
@@ -73,7 +73,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         }
     };
     let options = RenderOptions { count_reads: args.count_reads, baseline, ..Default::default() };
-    let renderer = Renderer::new(&gpu, &scene, options)
+    let mut renderer = Renderer::new(&gpu, &scene, options)
         .with_context(|| format!("preparing {}", args.scene.scene.display()))?;
     let mut frame = renderer.render(&gpu)?;
     for _ in 1..args.repeat {

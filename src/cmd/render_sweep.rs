@@ -20,11 +20,12 @@ pub struct RenderSweepArgs {
     #[command(flatten)]
     pub scene: crate::args::SceneArgs,
     /// Output folder.
-    #[arg(short, long)]
+    #[arg(short = 'o', long = "out", alias = "output")]
     pub output: PathBuf,
-    /// Component counts.
-    #[arg(long, value_delimiter = ',', default_value = "4,8,16,32")]
-    pub components: Vec<usize>,
+    /// Component counts (default 4,8,16,32 up to what the scene's stores hold, with a note
+    /// for those left out; a count given here that a store does not hold is an error).
+    #[arg(short = 'c', long, value_delimiter = ',')]
+    pub components: Option<Vec<usize>>,
     /// Timed repeats per setting (median reported).
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=100))]
     pub repeat: u32,
@@ -33,16 +34,57 @@ pub struct RenderSweepArgs {
 /// Runs `btf render-sweep`.
 pub fn run(a: RenderSweepArgs) -> Result<()> {
     let scene = a.scene.load()?;
-    anyhow::ensure!(
-        !a.components.is_empty() && !a.components.contains(&0),
-        "--components needs counts ≥ 1"
-    );
     crate::guard::refuse_scene_overlap(&[("-o", &a.output)], &a.scene.scene, &scene, &[])?;
+    let components = components_to_sweep(&scene, a.components.as_deref())?;
     let gpu = Gpu::new().context("creating a headless GPU device")?;
-    let md = sweep_into(&gpu, &scene, &a.components, a.repeat as usize, &a.output)?;
+    let md = sweep_into(&gpu, &scene, &components, a.repeat as usize, &a.output)?;
     crate::guard::outln!("{md}");
     crate::guard::outln!("written to {}", a.output.join("render-cost.md").display());
     Ok(())
+}
+
+/// The component counts of the sweep: those asked for, each of which every material's eigen
+/// store must hold (an error naming the store otherwise: a count cannot be honoured by
+/// rendering fewer), or by default 4, 8, 16, 32 up to the smallest store's count (that
+/// count alone when it is below 4), with a note on standard error for those left out.
+pub fn components_to_sweep(scene: &Scene, asked: Option<&[usize]>) -> Result<Vec<usize>> {
+    let mut stored: Option<(usize, &Path)> = None;
+    for m in &scene.materials {
+        let eig = btf_core::eigen::EigenStore::open(&m.store)
+            .with_context(|| format!("cannot open material store {}", m.store.display()))?;
+        let c = eig.meta().components;
+        if stored.is_none_or(|(s, _)| c < s) {
+            stored = Some((c, &m.store));
+        }
+    }
+    let Some((stored, store)) = stored else { anyhow::bail!("the scene has no [[materials]]") };
+    match asked {
+        Some(cs) => {
+            anyhow::ensure!(!cs.is_empty() && !cs.contains(&0), "--components needs counts ≥ 1");
+            if let Some(&c) = cs.iter().find(|&&c| c > stored) {
+                anyhow::bail!(
+                    "--components {c}: {} holds only {stored} components per view slot; give \
+                     counts ≤ {stored} (or compress the material with -c {c})",
+                    store.display()
+                );
+            }
+            Ok(cs.to_vec())
+        }
+        None => {
+            let (mut kept, left): (Vec<usize>, Vec<usize>) =
+                [4, 8, 16, 32].into_iter().partition(|&c| c <= stored);
+            if kept.is_empty() {
+                kept.push(stored);
+            }
+            if !left.is_empty() {
+                eprintln!(
+                    "note: components {left:?} left out of the default sweep: {} holds {stored}",
+                    store.display()
+                );
+            }
+            Ok(kept)
+        }
+    }
 }
 
 /// Runs the sweep on `scene` and writes `render-cost.{csv,md,png}`, `cost-vs-components.png`

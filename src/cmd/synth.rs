@@ -7,7 +7,80 @@ use clap::{Args, Subcommand};
 use datasets::material::preview::write_contact_sheet;
 use datasets::{EnvKind, EnvParams, GenerateOptions, MaterialKind, MaterialSpec};
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use yarn_ref::btf::{YarnBtfOptions, YarnBtfSpec, generate_yarn_btf};
+
+use crate::args::{Dtype, Material, choices};
+use crate::cmd::knit;
+use crate::guard;
+
+choices! {
+    /// What `btf synth material --kind` makes.
+    SynthKind {
+        /// Flat Lambertian with a patterned albedo (the analytic validation case).
+        Lambert = "lambert",
+        /// Rounded wales with a sheen pile (anisotropic).
+        Corduroy = "corduroy",
+        /// Stockinette knit of yarn tubes (height field).
+        Knit = "knit",
+        /// Plain weave of two yarn colours.
+        Woven = "woven",
+        /// Embossed glossy paint.
+        Wallpaper = "wallpaper",
+        /// Fractal stone relief.
+        Stone = "stone",
+        /// A knit patch of explicit fibers, path traced (see `--chart`, `--yarn`).
+        Yarn = "yarn",
+    }
+}
+
+choices! {
+    /// How a yarn BTF is rendered.
+    YarnMethod {
+        /// The fiber-level path-traced reference (`yarn-ref`).
+        Reference = "reference",
+    }
+}
+
+choices! {
+    /// `btf synth env --kind`.
+    EnvChoice {
+        /// Preetham daylight sky with the sun disc and a diffuse ground.
+        Sky = "sky",
+        /// Dark photo studio with four soft boxes.
+        Studio = "studio",
+        /// A room with a window, a ceiling lamp and walls.
+        Interior = "interior",
+    }
+}
+
+choices! {
+    /// `btf synth mesh --kind`.
+    MeshChoice {
+        /// 1 × 1 m square in the xy plane, normal +z.
+        Plane = "plane",
+        /// UV sphere of radius 0.5 m.
+        Sphere = "sphere",
+        /// 1 × 1 m cloth dropped over a sphere.
+        Drape = "drape",
+        /// 1.2 × 1.5 m curtain with pleats.
+        Curtain = "curtain",
+        /// Torso and two sleeves with folds.
+        Shirt = "shirt",
+        /// Hip part and two legs with folds.
+        Trousers = "trousers",
+    }
+}
+
+choices! {
+    /// `btf synth mesh --resolution`.
+    MeshResolution {
+        /// About 900 vertices.
+        Low = "low",
+        /// About 9000 vertices.
+        High = "high",
+    }
+}
 
 /// What to synthesise.
 #[derive(Subcommand)]
@@ -27,9 +100,27 @@ pub enum SynthCmd {
 /// `btf synth material`.
 #[derive(Args)]
 pub struct MaterialArgs {
-    /// lambert, corduroy, knit, woven, wallpaper or stone.
+    /// The material.
     #[arg(long)]
-    pub kind: String,
+    pub kind: SynthKind,
+    /// yarn: built-in chart name or chart file.
+    #[arg(long)]
+    pub chart: Option<String>,
+    /// yarn: yarn preset name or yarn TOML file.
+    #[arg(long)]
+    pub yarn: Option<String>,
+    /// yarn: how the BTF is rendered (reference).
+    #[arg(long, default_value = "reference")]
+    pub method: YarnMethod,
+    /// yarn: jittered samples per texel (default 16).
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// yarn: stitches W,C of the periodic patch (default one chart repeat).
+    #[arg(long)]
+    pub stitches: Option<String>,
+    /// yarn: lit vertices per path (default 8; 1 = direct lighting).
+    #[arg(long)]
+    pub bounces: Option<u32>,
     /// Texels per side.
     #[arg(long, default_value_t = 64)]
     pub size: usize,
@@ -42,8 +133,11 @@ pub struct MaterialArgs {
     /// Base albedo as linear R,G,B in [0, 1].
     #[arg(long)]
     pub albedo: Option<String>,
-    /// Store values as f16 instead of f32.
-    #[arg(long)]
+    /// Element type of the store.
+    #[arg(long, default_value = "f32")]
+    pub dtype: Dtype,
+    /// Old spelling of `--dtype f16` (hidden).
+    #[arg(long, hide = true, conflicts_with = "dtype")]
     pub f16: bool,
     /// Keep the images of an interrupted run.
     #[arg(long)]
@@ -52,16 +146,16 @@ pub struct MaterialArgs {
     #[arg(long, value_name = "DIR")]
     pub preview: Option<PathBuf>,
     /// Output BTF store.
-    #[arg(short, long)]
+    #[arg(short = 'o', long = "out", alias = "output")]
     pub output: PathBuf,
 }
 
 /// `btf synth env`.
 #[derive(Args)]
 pub struct EnvArgs {
-    /// sky, studio or interior.
+    /// The environment.
     #[arg(long)]
-    pub kind: String,
+    pub kind: EnvChoice,
     /// Sun elevation above the horizon, degrees.
     #[arg(long, default_value_t = 35.0)]
     pub sun_elevation: f64,
@@ -75,30 +169,30 @@ pub struct EnvArgs {
     #[arg(long, default_value_t = 1024)]
     pub width: usize,
     /// Output EXR file.
-    #[arg(short, long)]
+    #[arg(short = 'o', long = "out", alias = "output")]
     pub output: PathBuf,
 }
 
 /// `btf synth mesh`.
 #[derive(Args)]
 pub struct MeshArgs {
-    /// plane, sphere, drape, curtain, shirt or trousers.
+    /// The mesh.
     #[arg(long)]
-    pub kind: String,
-    /// low (~900 vertices) or high (~9000 vertices).
+    pub kind: MeshChoice,
+    /// Tessellation.
     #[arg(long, default_value = "low")]
-    pub resolution: String,
+    pub resolution: MeshResolution,
     /// Output OBJ file.
-    #[arg(short, long)]
+    #[arg(short = 'o', long = "out", alias = "output")]
     pub output: PathBuf,
 }
 
 /// `btf synth capture`.
 #[derive(Args)]
 pub struct CaptureArgs {
-    /// Material kind on the plate (lambert, corduroy, knit, woven, wallpaper, stone).
+    /// Material kind on the plate.
     #[arg(long)]
-    pub material: String,
+    pub material: Material,
     /// Texels per side of the material.
     #[arg(long, default_value_t = 64)]
     pub size: usize,
@@ -128,7 +222,7 @@ pub struct CaptureArgs {
     #[arg(long, default_value_t = 1)]
     pub supersample: usize,
     /// Output folder of raw images, capture.toml and truth.toml.
-    #[arg(long)]
+    #[arg(short = 'o', long, alias = "output")]
     pub out: PathBuf,
 }
 
@@ -156,12 +250,28 @@ fn parse_rgb(s: &str) -> Result<[f64; 3]> {
 }
 
 fn material(a: MaterialArgs) -> Result<()> {
-    let kind = MaterialKind::from_name(&a.kind)?;
+    if a.kind == SynthKind::Yarn {
+        synth_yarn_material(&a, show_progress())?;
+        if let Some(dir) = a.preview {
+            let store = btf_core::store::BtfStore::open(&a.output)?;
+            eprintln!("preview -> {}", write_contact_sheet(&store, &dir, "yarn")?.display());
+        }
+        return Ok(());
+    }
+    if a.chart.is_some()
+        || a.yarn.is_some()
+        || a.spp.is_some()
+        || a.stitches.is_some()
+        || a.bounces.is_some()
+    {
+        bail!("--chart, --yarn, --spp, --stitches and --bounces are for --kind yarn");
+    }
+    let kind = MaterialKind::from_name(a.kind.as_str())?;
     let mut spec = MaterialSpec::new(kind, a.size);
     spec.sampling = datasets::capture::parse_sampling(&a.sampling)?;
     spec.seed = a.seed;
     spec.albedo = a.albedo.as_deref().map(parse_rgb).transpose()?;
-    let dtype = if a.f16 { btf_core::zarr::DType::F16 } else { btf_core::zarr::DType::F32 };
+    let dtype = if a.f16 { btf_core::zarr::DType::F16 } else { a.dtype.dtype() };
     let opts = GenerateOptions { resume: a.resume, progress: show_progress(), dtype };
     let r = datasets::generate(&spec, &a.output, &opts)
         .with_context(|| format!("synthesising {} into {}", a.kind, a.output.display()))?;
@@ -184,7 +294,7 @@ fn material(a: MaterialArgs) -> Result<()> {
 }
 
 fn env(a: EnvArgs) -> Result<()> {
-    let kind = EnvKind::from_name(&a.kind)?;
+    let kind = EnvKind::from_name(a.kind.as_str())?;
     let params = EnvParams {
         sun_elevation_deg: a.sun_elevation,
         sun_azimuth_deg: a.sun_azimuth,
@@ -206,8 +316,8 @@ fn env(a: EnvArgs) -> Result<()> {
 }
 
 fn mesh(a: MeshArgs) -> Result<()> {
-    let kind = datasets::MeshKind::from_name(&a.kind)?;
-    let res = datasets::Resolution::from_name(&a.resolution)?;
+    let kind = datasets::MeshKind::from_name(a.kind.as_str())?;
+    let res = datasets::Resolution::from_name(a.resolution.as_str())?;
     crate::guard::check_file(&a.output, btf_core::fs::TEXT)?;
     let t0 = std::time::Instant::now();
     let mesh = datasets::synth_mesh(kind, res)?;
@@ -226,7 +336,7 @@ fn mesh(a: MeshArgs) -> Result<()> {
 }
 
 fn capture(a: CaptureArgs) -> Result<()> {
-    let kind = MaterialKind::from_name(&a.material)?;
+    let kind = MaterialKind::from_name(a.material.as_str())?;
     let mut material = MaterialSpec::new(kind, a.size);
     material.sampling = datasets::capture::parse_sampling(&a.sampling)?;
     material.seed = a.material_seed;
@@ -247,6 +357,56 @@ fn capture(a: CaptureArgs) -> Result<()> {
         r.images_skipped,
         r.seconds,
         a.out.display()
+    );
+    Ok(())
+}
+
+/// `btf synth material --kind yarn`: the yarn BTF of DESIGN §4.2.
+fn synth_yarn_material(a: &MaterialArgs, progress: bool) -> Result<()> {
+    let chart_name = a.chart.as_deref().unwrap_or("stockinette");
+    let yarn_name = a.yarn.as_deref().unwrap_or("cotton-2ply");
+    let mut inputs: Vec<(&str, &Path)> = Vec::new();
+    if Path::new(chart_name).is_file() {
+        inputs.push(("chart", Path::new(chart_name)));
+    }
+    if Path::new(yarn_name).is_file() {
+        inputs.push(("yarn", Path::new(yarn_name)));
+    }
+    guard::refuse_overlap(&[("output", &a.output)], &inputs)?;
+    let chart = knit::load_chart(chart_name)?;
+    let params = knit::load_yarn(yarn_name)?;
+    let mut spec = YarnBtfSpec::new(chart, chart_name, params, a.size);
+    spec.sampling = datasets::capture::parse_sampling(&a.sampling)?;
+    spec.stitches = knit::stitches(&a.stitches)?;
+    spec.seed = a.seed;
+    spec.method = a.method.as_str().to_owned();
+    if let Some(n) = a.spp {
+        spec.spp = n;
+    }
+    if let Some(b) = a.bounces {
+        spec.bounces = b;
+    }
+    if let Some(c) = knit::rgb(&a.albedo, "--albedo")? {
+        spec.color = c.map(|x| x as f32);
+    }
+    let dtype = if a.f16 { btf_core::zarr::DType::F16 } else { a.dtype.dtype() };
+    let opts = YarnBtfOptions { resume: a.resume, progress, dtype };
+    let r = generate_yarn_btf(&spec, &a.output, &opts)
+        .with_context(|| format!("synthesising yarn {} into {}", chart_name, a.output.display()))?;
+    eprintln!(
+        "yarn {} in {} {}² ({}, {} spp): {} fibers, {} images written, {} kept, {:.1} s, {:.2} Mrays/s, τ₁ {} -> {}",
+        spec.chart.name,
+        spec.params.name,
+        a.size,
+        a.sampling,
+        spec.spp,
+        r.fibers,
+        r.images_written,
+        r.images_skipped,
+        r.seconds,
+        r.rays as f64 / r.seconds.max(1e-9) * 1e-6,
+        r.tau1.map_or("n/a".into(), |t| format!("{t:.3}")),
+        a.output.display()
     );
     Ok(())
 }

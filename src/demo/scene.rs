@@ -175,7 +175,7 @@ pub fn run(out: &Path, width: u32, stage: &mut StageFn<'_>) -> Result<String> {
             Box::new(|| {
                 let scene = Scene::load(&scene_path)
                     .with_context(|| format!("loading {}", scene_path.display()))?;
-                let renderer = Renderer::new(&gpu, &scene, RenderOptions::default())?;
+                let mut renderer = Renderer::new(&gpu, &scene, RenderOptions::default())?;
                 let frame = renderer.render(&gpu)?;
                 anyhow::ensure!(frame.all_finite(), "the render has non-finite pixels");
                 frame.write_png(&png, scene.output.exposure)?;

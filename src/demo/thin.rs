@@ -25,7 +25,7 @@ use std::path::{Path, PathBuf};
 #[derive(clap::Args)]
 pub struct DemoArgs {
     /// Output folder.
-    #[arg(short = 'o', long, default_value = "thin-demo")]
+    #[arg(short = 'o', long, alias = "output", default_value = "thin-demo")]
     out: PathBuf,
     /// Light positions on the orbit (frames).
     #[arg(long, default_value_t = 12)]
@@ -42,7 +42,7 @@ pub struct DemoArgs {
     /// Curtain material: `woven` (datasets mesostructure BTF, synthesised and compressed;
     /// the uncompressed store is removed afterwards) or `weave-lambert` (a Lambertian
     /// basket weave written straight into an eigen store, in milliseconds).
-    #[arg(long, default_value = "woven")]
+    #[arg(long, default_value = "woven", value_parser = ["woven", "weave-lambert"])]
     material: String,
     /// Optical thickness τ₁ of the curtain.
     #[arg(long, default_value_t = 0.6)]
@@ -242,7 +242,7 @@ fn alpha_map(gpu: &Gpu, r: &mut Renderer) -> Result<(Vec<f64>, Vec<bool>)> {
     r.set_show_environment(false)?;
     let dark = r.render(gpu)?;
     r.set_show_environment(true)?;
-    let bg = r.environment_background().context("the demo scene shows its environment")?;
+    let bg = r.environment_background(gpu)?.context("the demo scene shows its environment")?;
     let alpha: Vec<f64> = (0..bg.len())
         .map(|i| if bg[i] > 1e-4 { (with.rgb[i] - dark.rgb[i]) as f64 / bg[i] as f64 } else { 1.0 })
         .collect();

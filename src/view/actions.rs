@@ -87,7 +87,7 @@ pub const KEYS: &[(&str, &str)] = &[
     ("right drag", "move the light(s)"),
     ("middle / shift+left drag", "pan"),
     ("wheel", "zoom"),
-    ("[ ] or ← →", "rotate the environment 15°"),
+    ("[ ] or Left/Right arrow", "rotate the environment 15°"),
     ("e / f", "next environment / fabric"),
     ("+ / -", "exposure ×1.25 / ÷1.25"),
     ("s t b v", "shadows, terminator α, blending, evaluation"),

@@ -1,7 +1,16 @@
 //! The window of `btf view`: a winit event loop (X11), a wgpu surface on an adapter that
-//! can present to it, the frame drawn by [`Present`] beside the egui panel, and mouse and
-//! key input turned into [`Viewer`] changes. Frames are rendered only when something
-//! changed; the panel is repainted on input.
+//! can present to it, the frame — rendered into a texture on the same device, never read
+//! back — drawn by [`Present`] beside the egui panel, and mouse and key input turned into
+//! [`Viewer`] changes. Frames are rendered only when something
+//! changed, at the size of the area the panel leaves free (in physical pixels, so a
+//! 1280 × 800 window shows a frame rendered for it, not a scaled-up scene-size one); the
+//! panel is repainted on input.
+//!
+//! A drag (orbit, light, pan) lives from a button press over the frame to the release of
+//! that button. The release ends it wherever it happens — over the panel (where egui takes
+//! the event), outside the window, or never seen because the window lost focus or the
+//! cursor left it — so motion without a button held can never keep orbiting ([`DragState`],
+//! tested).
 
 use super::ViewArgs;
 use super::actions::{self, Action};
@@ -46,6 +55,53 @@ enum Drag {
     Pan,
 }
 
+/// The drag in progress: which kind, started by which button, and the last cursor position.
+#[derive(Debug, Default)]
+struct DragState {
+    active: Option<(Drag, MouseButton, PhysicalPosition<f64>)>,
+}
+
+impl DragState {
+    /// A button went down (`over_frame`: not on the panel) or up.
+    fn button(
+        &mut self,
+        pressed: bool,
+        button: MouseButton,
+        shift: bool,
+        at: PhysicalPosition<f64>,
+        over_frame: bool,
+    ) {
+        if !pressed {
+            // Any release ends the drag: a second button released while the first is held
+            // ends it too, which is harmless, and a release is never missed.
+            self.active = None;
+            return;
+        }
+        let kind = match button {
+            MouseButton::Left if shift => Some(Drag::Pan),
+            MouseButton::Left => Some(Drag::Orbit),
+            MouseButton::Right => Some(Drag::Light),
+            MouseButton::Middle => Some(Drag::Pan),
+            _ => None,
+        };
+        if let (Some(k), true, None) = (kind, over_frame, self.active) {
+            self.active = Some((k, button, at));
+        }
+    }
+
+    /// The cursor moved: the drag's kind and motion in pixels, when a drag is on.
+    fn moved(&mut self, to: PhysicalPosition<f64>) -> Option<(Drag, f32, f32)> {
+        let (kind, button, from) = self.active?;
+        self.active = Some((kind, button, to));
+        Some((kind, (to.x - from.x) as f32, (to.y - from.y) as f32))
+    }
+
+    /// Focus lost or cursor gone: the release may never arrive.
+    fn cancel(&mut self) {
+        self.active = None;
+    }
+}
+
 struct Running {
     window: Arc<Window>,
     surface: wgpu::Surface<'static>,
@@ -58,11 +114,12 @@ struct Running {
     egui_state: egui_winit::State,
     egui_renderer: egui_wgpu::Renderer,
     log: LatencyLog,
-    drag: Option<(Drag, PhysicalPosition<f64>)>,
+    drag: DragState,
     cursor: PhysicalPosition<f64>,
     modifiers: ModifiersState,
     show_panel: bool,
     frame_rect: Rect,
+    frame_area: Rect,
     shots: u32,
     shot_dir: PathBuf,
     print_log: bool,
@@ -106,6 +163,13 @@ impl ApplicationHandler for App {
                 }
                 return;
             }
+            // Seen before egui, which may consume them: a drag must end whoever takes the
+            // release (see `DragState`).
+            WindowEvent::MouseInput { state: ElementState::Released, button, .. } => {
+                r.drag.button(false, *button, false, r.cursor, false);
+            }
+            WindowEvent::Focused(false) | WindowEvent::CursorLeft { .. } => r.drag.cancel(),
+            WindowEvent::CursorMoved { position, .. } => r.cursor = *position,
             _ => {}
         }
         let response = r.egui_state.on_window_event(&r.window, &event);
@@ -129,13 +193,23 @@ fn surface_format(caps: &wgpu::SurfaceCapabilities) -> Result<wgpu::TextureForma
         .ok_or_else(|| anyhow!("the window surface offers no format"))
 }
 
+/// The frame area the window opens with, in points: `--width`/`--height` as given, else the
+/// scene's frame scaled up (aspect kept) to fill about 960 × 720 — the scene's size is the
+/// size of its still renders, often small, and the frame follows the window from then on.
+fn initial_area(width: u32, height: u32, explicit: bool) -> (f64, f64) {
+    let (w, h) = (width.max(1) as f64, height.max(1) as f64);
+    let s = if explicit { 1.0 } else { (960.0 / w).min(720.0 / h).max(1.0) };
+    ((w * s).round(), (h * s).round())
+}
+
 impl Running {
     fn new(event_loop: &ActiveEventLoop, args: &ViewArgs, scene: Scene) -> Result<Running> {
-        let (fw, fh) = (scene.output.width, scene.output.height);
+        let explicit = args.width.is_some() || args.height.is_some();
+        let (fw, fh) = initial_area(scene.output.width, scene.output.height, explicit);
         let title = format!("btf view — {}", args.scene.display());
-        let attrs = Window::default_attributes().with_title(title).with_inner_size(
-            LogicalSize::new(fw as f64 + panel::WIDTH_PT as f64, fh.max(480) as f64),
-        );
+        let attrs = Window::default_attributes()
+            .with_title(title)
+            .with_inner_size(LogicalSize::new(fw + panel::WIDTH_PT as f64, fh));
         let window = Arc::new(event_loop.create_window(attrs).context("creating the window")?);
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
         desc.backends = wgpu::Backends::PRIMARY;
@@ -165,7 +239,12 @@ impl Running {
         let present = Present::new(&gpu, format);
         let info = &gpu.info;
         let adapter_name = format!("{} ({:?}), {format:?}", info.name, info.backend);
-        let viewer = Viewer::new(&gpu, scene, args.env.clone());
+        let viewer = Viewer::new(
+            &gpu,
+            scene,
+            args.env.clone(),
+            args.env_exposure == super::EnvExposure::Auto,
+        );
         crate::guard::outln!("window {} adapter {adapter_name}", u64::from(window.id()));
         Ok(Running {
             window,
@@ -179,30 +258,44 @@ impl Running {
             egui_state,
             egui_renderer,
             log: LatencyLog::default(),
-            drag: None,
+            drag: DragState::default(),
             cursor: PhysicalPosition::new(0.0, 0.0),
             modifiers: ModifiersState::empty(),
             show_panel: !args.no_panel,
             frame_rect: Rect { x: 0.0, y: 0.0, w: 0.0, h: 0.0 },
+            frame_area: Rect { x: 0.0, y: 0.0, w: 0.0, h: 0.0 },
             shots: 0,
             shot_dir: args.shots.clone(),
             print_log: args.log,
         })
     }
 
-    /// Renders a frame when the state changed and uploads it for presenting.
+    /// Renders at the size of the frame area of the last layout (the whole window before
+    /// the first); a layout that changes it asks for another frame.
+    fn sync_size(&mut self) {
+        let area = if self.frame_area.w > 0.0 {
+            self.frame_area
+        } else {
+            Rect { x: 0.0, y: 0.0, w: self.config.width as f32, h: self.config.height as f32 }
+        };
+        self.viewer.set_size(&self.gpu, area.w.round() as u32, area.h.round() as u32);
+    }
+
+    /// Renders a frame into the shown texture when the state changed (no read-back).
     fn render_pending(&mut self) {
         if let Some(lat) = self.viewer.update(&self.gpu) {
             self.log.record(lat);
-            if let Some(f) = &self.viewer.frame {
-                self.present.upload(&self.gpu, f);
+            if let Some(s) = &self.viewer.shown {
+                self.present.show(&self.gpu, s);
             }
             if self.print_log {
                 let env = &self.viewer.env;
                 crate::guard::outln!(
-                    "frame {} change={:?} update_ms={:.2} render_ms={:.2} env={:?} \
+                    "frame {} size={}x{} change={:?} update_ms={:.2} render_ms={:.2} env={:?} \
                      env_rotation_deg={} env_lighting={} env_error={:?} errors={}",
                     self.viewer.frames,
+                    self.viewer.size().0,
+                    self.viewer.size().1,
                     lat.change,
                     lat.update_ms,
                     lat.render_ms,
@@ -217,6 +310,7 @@ impl Running {
     }
 
     fn redraw(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
+        self.sync_size();
         self.render_pending();
         let raw = self.egui_state.take_egui_input(&self.window);
         let mut actions = Vec::new();
@@ -232,12 +326,12 @@ impl Running {
         } = full;
         self.egui_state.handle_platform_output(&self.window, platform_output);
         let ppp = pixels_per_point;
-        let area_px = Rect {
-            x: area.min.x * ppp,
-            y: area.min.y * ppp,
-            w: area.width() * ppp,
-            h: area.height() * ppp,
-        };
+        // Whole pixels, so the frame rendered at the area's size is shown texel for pixel.
+        let (x0, y0) = ((area.min.x * ppp).ceil(), (area.min.y * ppp).ceil());
+        let (x1, y1) = ((area.max.x * ppp).floor(), (area.max.y * ppp).floor());
+        let area_px = Rect { x: x0, y: y0, w: (x1 - x0).max(1.0), h: (y1 - y0).max(1.0) };
+        let resized = area_px != self.frame_area;
+        self.frame_area = area_px;
         let (fw, fh) = self.viewer.size();
         let rect = letterbox(area_px, fw, fh);
         if rect != self.frame_rect && self.print_log {
@@ -262,7 +356,7 @@ impl Running {
         for a in actions {
             self.act(event_loop, a);
         }
-        if self.viewer.needs_frame() || retry {
+        if self.viewer.needs_frame() || retry || resized {
             self.window.request_redraw();
         }
         Ok(())
@@ -342,6 +436,7 @@ impl Running {
 
     /// Writes the frame of the current state (pending changes rendered first).
     fn screenshot(&mut self) {
+        self.sync_size();
         self.render_pending();
         // The next free number: a screenshot never replaces an earlier session's.
         let mut path;
@@ -352,7 +447,7 @@ impl Running {
                 break;
             }
         }
-        match self.viewer.save_frame(&path) {
+        match self.viewer.save_frame(&self.gpu, &path) {
             Ok(()) => crate::guard::outln!("screenshot {}", path.display()),
             Err(e) => self.viewer.errors.push(format!("{e:#}")),
         }
@@ -361,29 +456,27 @@ impl Running {
     fn input(&mut self, event_loop: &ActiveEventLoop, event: &WindowEvent) {
         match event {
             WindowEvent::ModifiersChanged(m) => self.modifiers = m.state(),
-            WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
+            // A key held while the window gains focus comes again as a synthetic press (winit):
+            // not a key stroke, so no action (it took a second screenshot when focus arrived
+            // while `p` was down).
+            WindowEvent::KeyboardInput { event, is_synthetic: false, .. }
+                if event.state == ElementState::Pressed =>
+            {
                 if let Some(a) = actions::for_key(&event.logical_key) {
                     self.act(event_loop, a);
                 }
             }
             WindowEvent::MouseInput { state, button, .. } => {
-                let kind = match button {
-                    MouseButton::Left if self.modifiers.shift_key() => Some(Drag::Pan),
-                    MouseButton::Left => Some(Drag::Orbit),
-                    MouseButton::Right => Some(Drag::Light),
-                    MouseButton::Middle => Some(Drag::Pan),
-                    _ => None,
-                };
-                self.drag = match (state, kind) {
-                    (ElementState::Pressed, Some(k)) => Some((k, self.cursor)),
-                    _ => None,
-                };
+                let (x, y) = (self.cursor.x as f32, self.cursor.y as f32);
+                let r = self.frame_rect;
+                let over_frame = x >= r.x && x < r.x + r.w && y >= r.y && y < r.y + r.h;
+                let shift = self.modifiers.shift_key();
+                let pressed = *state == ElementState::Pressed;
+                self.drag.button(pressed, *button, shift, self.cursor, over_frame);
             }
             WindowEvent::CursorMoved { position, .. } => {
                 self.cursor = *position;
-                if let Some((kind, from)) = self.drag {
-                    let (dx, dy) = ((position.x - from.x) as f32, (position.y - from.y) as f32);
-                    self.drag = Some((kind, *position));
+                if let Some((kind, dx, dy)) = self.drag.moved(*position) {
                     self.dragged(kind, dx, dy);
                 }
             }
@@ -404,11 +497,52 @@ impl Running {
             Drag::Orbit => self.viewer.drag_camera(dx, dy),
             Drag::Light => self.viewer.drag_lights(dx, dy),
             Drag::Pan => {
-                // Frame pixels per window pixel, so the garment follows the cursor.
+                // Frame pixels per window pixel (1 once the frame has the area's size), so
+                // the garment follows the cursor.
                 let s = self.viewer.size().1 as f32 / self.frame_rect.h.max(1.0);
                 self.viewer.pan(dx * s, dy * s);
             }
         }
         self.window.request_redraw();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn at(x: f64, y: f64) -> PhysicalPosition<f64> {
+        PhysicalPosition::new(x, y)
+    }
+
+    #[test]
+    fn the_window_opens_at_a_useful_size() {
+        assert_eq!(initial_area(320, 240, false), (960.0, 720.0));
+        assert_eq!(initial_area(96, 72, false), (960.0, 720.0));
+        assert_eq!(initial_area(1920, 1080, false), (1920.0, 1080.0)); // never shrunk
+        assert_eq!(initial_area(320, 240, true), (320.0, 240.0));
+    }
+
+    #[test]
+    fn motion_without_a_button_never_orbits() {
+        let mut d = DragState::default();
+        // a press over the frame starts an orbit; motion turns by the cursor's motion
+        d.button(true, MouseButton::Left, false, at(10.0, 10.0), true);
+        assert_eq!(d.moved(at(13.0, 14.0)), Some((Drag::Orbit, 3.0, 4.0)));
+        // the release, taken by egui over the panel, still reaches the drag first
+        d.button(false, MouseButton::Left, false, at(300.0, 14.0), false);
+        assert_eq!(d.moved(at(320.0, 20.0)), None);
+        // a press on the panel starts nothing
+        d.button(true, MouseButton::Left, false, at(5.0, 5.0), false);
+        assert_eq!(d.moved(at(6.0, 6.0)), None);
+        // focus lost mid-drag (the release goes to another window)
+        d.button(true, MouseButton::Right, false, at(50.0, 50.0), true);
+        assert_eq!(d.moved(at(52.0, 50.0)), Some((Drag::Light, 2.0, 0.0)));
+        d.cancel();
+        assert_eq!(d.moved(at(60.0, 50.0)), None);
+        // a second button pressed during a drag does not switch its kind; shift+left pans
+        d.button(true, MouseButton::Left, true, at(0.0, 0.0), true);
+        d.button(true, MouseButton::Right, false, at(0.0, 0.0), true);
+        assert_eq!(d.moved(at(1.0, 0.0)), Some((Drag::Pan, 1.0, 0.0)));
     }
 }

@@ -31,10 +31,16 @@ pub struct ViewArgs {
     /// Environment map (equirectangular EXR/HDR) offered in the panel; repeatable.
     #[arg(long)]
     pub env: Vec<PathBuf>,
-    /// Frame width (overrides the scene).
+    /// Exposure of each `--env` map's light: `auto` scales it to the horizontal irradiance
+    /// of the scene's own environment (so a dim studio and a bright sky light the garment
+    /// alike), `fixed` keeps the scene's factor for every map.
+    #[arg(long, value_enum, default_value_t = EnvExposure::Auto)]
+    pub env_exposure: EnvExposure,
+    /// Frame width: of the turntable frames, and of the frame area the window opens with
+    /// (the window shows frames at its own size after that). Overrides the scene.
     #[arg(long)]
     pub width: Option<u32>,
-    /// Frame height (overrides the scene).
+    /// Frame height (as `--width`). Overrides the scene.
     #[arg(long)]
     pub height: Option<u32>,
     /// Folder for screenshots (`p` / F12 write `shot-NNNN.png`).
@@ -50,7 +56,7 @@ pub struct ViewArgs {
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=3600))]
     pub turntable: Option<u32>,
     /// Output folder of `--turntable`.
-    #[arg(short, long)]
+    #[arg(short = 'o', long = "out", alias = "output")]
     pub output: Option<PathBuf>,
     /// Keep turntable frames that already exist (continue an interrupted export).
     #[arg(long)]
@@ -58,6 +64,15 @@ pub struct ViewArgs {
     /// Headless: time N interactions of each kind and print the latency table.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=10000))]
     pub bench: Option<u32>,
+}
+
+/// How the viewer lights the garment with a map chosen in the panel.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EnvExposure {
+    /// Same horizontal irradiance as the scene's environment.
+    Auto,
+    /// The scene's exposure factor for every map.
+    Fixed,
 }
 
 /// Runs `btf view`.

@@ -1,12 +1,13 @@
-//! Shows a rendered [`Frame`] on the window surface: uploads its linear RGB as an
-//! `Rgba32Float` texture and draws it with exposure and sRGB encoding (`present.wgsl`),
-//! letterboxed into the area the panel leaves free. DESIGN.md §3: values stay linear until
-//! this last step, as in the PNG writer.
+//! Shows the rendered frame on the window surface: samples the linear HDR texture the
+//! renderer encoded the frame into ([`super::state::Shown`], no read-back to the CPU) and
+//! draws it with exposure and sRGB encoding (`present.wgsl`), letterboxed into the area
+//! the panel leaves free. DESIGN.md §3: values stay linear until this last step, as in the
+//! PNG writer.
 //!
-//! On lavapipe the renderer's read-back and this upload are memory copies (1.2 MB at
-//! 320×240), far below the BTF pass; on a discrete GPU they cost a bus round trip, which
-//! keeps `btf-render`'s one `render → Frame` entry point unchanged for the viewer.
+//! [`Present::upload`] is the former path — a read-back [`Frame`] uploaded as an
+//! `Rgba32Float` texture — kept for `btf view --bench`, which times both in one run.
 
+use super::state::Shown;
 use btf_render::Frame;
 use btf_render::Gpu;
 use wgpu::util::DeviceExt;
@@ -27,7 +28,16 @@ pub struct Present {
     layout: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
     encode_srgb: bool,
-    texture: Option<(wgpu::Texture, wgpu::BindGroup)>,
+    /// The texture drawn: the shown frame's (and its generation), or an uploaded frame's.
+    texture: Option<(Source, wgpu::BindGroup)>,
+}
+
+/// Where the presented texture comes from.
+enum Source {
+    /// The renderer's target of this generation.
+    Shown(u64),
+    /// A frame uploaded from the CPU.
+    Uploaded(wgpu::Texture),
 }
 
 /// A viewport rectangle in physical pixels.
@@ -121,11 +131,37 @@ impl Present {
         Present { pipeline, layout, params, encode_srgb: !format.is_srgb(), texture: None }
     }
 
-    /// Uploads `frame` (re-using the texture while the size stays).
+    fn bind(&self, gpu: &Gpu, view: &wgpu::TextureView) -> wgpu::BindGroup {
+        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("present"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(view),
+                },
+                wgpu::BindGroupEntry { binding: 1, resource: self.params.as_entire_binding() },
+            ],
+        })
+    }
+
+    /// Presents the renderer's shown texture (rebinding only when it was made anew).
+    pub fn show(&mut self, gpu: &Gpu, shown: &Shown) {
+        if let Some((Source::Shown(g), _)) = &self.texture
+            && *g == shown.generation
+        {
+            return;
+        }
+        let group = self.bind(gpu, &shown.view);
+        self.texture = Some((Source::Shown(shown.generation), group));
+    }
+
+    /// Uploads a read-back `frame` and presents it (re-using the texture while the size
+    /// stays): the path the viewer took before it presented the renderer's texture.
     pub fn upload(&mut self, gpu: &Gpu, frame: &Frame) {
         let size =
             wgpu::Extent3d { width: frame.width, height: frame.height, depth_or_array_layers: 1 };
-        let fits = self.texture.as_ref().is_some_and(|(t, _)| t.size() == size);
+        let fits = matches!(&self.texture, Some((Source::Uploaded(t), _)) if t.size() == size);
         if !fits {
             let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("shown frame"),
@@ -138,22 +174,14 @@ impl Present {
                 view_formats: &[],
             });
             let view = texture.create_view(&Default::default());
-            let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("present"),
-                layout: &self.layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::TextureView(&view),
-                    },
-                    wgpu::BindGroupEntry { binding: 1, resource: self.params.as_entire_binding() },
-                ],
-            });
-            self.texture = Some((texture, group));
+            let group = self.bind(gpu, &view);
+            self.texture = Some((Source::Uploaded(texture), group));
         }
         let rgba: Vec<f32> =
             frame.rgb.chunks_exact(3).flat_map(|p| [p[0], p[1], p[2], 1.0]).collect();
-        let (texture, _) = self.texture.as_ref().expect("texture just made");
+        let Some((Source::Uploaded(texture), _)) = &self.texture else {
+            unreachable!("an uploaded texture was just made")
+        };
         gpu.queue.write_texture(
             texture.as_image_copy(),
             bytemuck::cast_slice(&rgba),
@@ -166,7 +194,7 @@ impl Present {
         );
     }
 
-    /// Draws the uploaded frame into `viewport` of the pass (nothing before an upload).
+    /// Draws the frame into `viewport` of the pass (nothing before one is shown).
     pub fn draw(&self, gpu: &Gpu, pass: &mut wgpu::RenderPass<'_>, exposure: f32, viewport: Rect) {
         let Some((_, group)) = &self.texture else { return };
         if viewport.w < 1.0 || viewport.h < 1.0 {

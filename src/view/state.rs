@@ -11,7 +11,10 @@
 //! | fabric, evaluation, blending, components, shadow technique | a new renderer |
 //! | exposure | none (applied when the frame is shown) |
 //!
-//! The window (`app.rs`), the turntable export and the latency benchmark all drive this.
+//! A frame is encoded straight into the texture the window samples ([`Shown`],
+//! `Renderer::encode`): nothing is read back to the CPU to show it; screenshots and the
+//! turntable read that texture back when they save it. The window (`app.rs`), the
+//! turntable export and the latency benchmark all drive this.
 
 use super::camera::{self, Orbit};
 use super::env::{self, Environments};
@@ -19,7 +22,7 @@ use anyhow::Result;
 use btf_core::InterpMode;
 use btf_core::eigen::EigenStore;
 use btf_render::scene::{Effects, Evaluation, Light, Shadows};
-use btf_render::{Frame, Gpu, RenderOptions, Renderer, Scene};
+use btf_render::{Frame, Gpu, RenderOptions, Renderer, Scene, Stats};
 use std::path::{Path, PathBuf};
 
 /// What a frame was rendered for (the latency figures are kept per kind).
@@ -60,7 +63,7 @@ pub struct Latency {
     pub change: Change,
     /// Work before rendering (renderer updates, rebuilds, environment weights).
     pub update_ms: f64,
-    /// Rendering and read-back of the frame.
+    /// Rendering the frame into the shown texture, until the GPU has finished it.
     pub render_ms: f64,
 }
 
@@ -69,6 +72,61 @@ impl Latency {
     pub fn total_ms(&self) -> f64 {
         self.update_ms + self.render_ms
     }
+}
+
+/// The texture the renderer draws the shown frame into (linear HDR, the renderer's target
+/// format), sampled by the window's present pass, and the frame's pass times.
+pub struct Shown {
+    /// `width × height`, `Renderer::target_format`.
+    pub texture: wgpu::Texture,
+    /// Its view.
+    pub view: wgpu::TextureView,
+    /// Passes and times of the frame in it.
+    pub stats: Stats,
+    /// Changes whenever the texture is made anew (the present pass rebinds then).
+    pub generation: u64,
+}
+
+impl Shown {
+    /// `slot`'s texture when it fits `renderer`'s frames, else a new one.
+    fn ensure<'a>(slot: &'a mut Option<Shown>, gpu: &Gpu, renderer: &Renderer) -> &'a mut Shown {
+        let (size, format) = (renderer.size(), renderer.target_format());
+        let fits = slot.as_ref().is_some_and(|s| {
+            (s.texture.width(), s.texture.height()) == size && s.texture.format() == format
+        });
+        if !fits {
+            let generation = slot.as_ref().map_or(0, |s| s.generation + 1);
+            let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("shown frame"),
+                size: wgpu::Extent3d { width: size.0, height: size.1, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            });
+            let view = texture.create_view(&Default::default());
+            *slot = Some(Shown { texture, view, stats: Stats::default(), generation });
+        }
+        slot.as_mut().expect("just made")
+    }
+}
+
+/// Encodes a frame of `renderer` into the shown texture, submits it and reads its pass
+/// times (which waits for the GPU); the frame itself stays on the GPU.
+fn draw_frame(gpu: &Gpu, renderer: &mut Renderer, slot: &mut Option<Shown>) -> Result<()> {
+    let t = std::time::Instant::now();
+    let shown = Shown::ensure(slot, gpu, renderer);
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    renderer.encode(gpu, &mut encoder, &shown.view)?;
+    let commands = gpu.scoped("encoding the frame", || encoder.finish())?;
+    gpu.queue.submit([commands]);
+    shown.stats = renderer.last_stats(gpu)?;
+    shown.stats.frame_ms = t.elapsed().as_secs_f64() * 1e3;
+    Ok(())
 }
 
 /// The viewer's state.
@@ -87,8 +145,8 @@ pub struct Viewer {
     /// Environments and their rotation.
     pub env: Environments,
     renderer: Option<Renderer>,
-    /// The last frame rendered.
-    pub frame: Option<Frame>,
+    /// The last frame rendered, on the GPU.
+    pub shown: Option<Shown>,
     /// Problems to show in the panel (bad files, refused settings).
     pub errors: Vec<String>,
     /// The last interaction's cost.
@@ -105,16 +163,16 @@ pub struct Viewer {
 
 impl Viewer {
     /// Builds the renderer for `scene`; a failure is kept as a panel error, not returned.
-    pub fn new(gpu: &Gpu, scene: Scene, env_files: Vec<PathBuf>) -> Viewer {
+    pub fn new(gpu: &Gpu, scene: Scene, env_files: Vec<PathBuf>, auto_exposure: bool) -> Viewer {
         let mut v = Viewer {
             orbit: Orbit::new(&scene.camera),
             lights: scene.lights.clone(),
             effects: scene.effects.clone(),
             exposure: scene.output.exposure,
             fabric: 0,
-            env: Environments::new(env_files),
+            env: Environments::new(env_files, &scene, auto_exposure),
             renderer: None,
-            frame: None,
+            shown: None,
             errors: Vec::new(),
             last: None,
             frames: 0,
@@ -166,6 +224,24 @@ impl Viewer {
     /// Image size of the frames.
     pub fn size(&self) -> (u32, u32) {
         (self.base.output.width, self.base.output.height)
+    }
+
+    /// Renders the next frames at `width × height` (the window's frame area): the camera's
+    /// aspect follows; nothing else is recomputed. A size the device refuses keeps the old
+    /// one and goes to the panel's errors.
+    pub fn set_size(&mut self, gpu: &Gpu, width: u32, height: u32) {
+        let (width, height) = (width.max(1), height.max(1));
+        if (width, height) == self.size() {
+            return;
+        }
+        if let Some(r) = self.renderer.as_mut()
+            && let Err(e) = r.set_size(gpu, width, height)
+        {
+            self.errors.push(format!("frame size {width} × {height}: {e}"));
+            return;
+        }
+        (self.base.output.width, self.base.output.height) = (width, height);
+        self.mark(Change::Camera);
     }
 
     /// True when a frame is waiting to be rendered.
@@ -251,13 +327,18 @@ impl Viewer {
         let Some(path) = self.env.files.get(i).cloned() else { return };
         let Some(r) = self.renderer.as_mut() else { return };
         self.env.selected = Some(i);
-        let (res, ms) = env::timed(|| env::swap(r, gpu, &path));
+        let (environments, base) = (&mut self.env, &self.base);
+        let (res, ms) =
+            env::timed(|| env::swap(r, gpu, &path, |map| environments.exposure_for(base, map)));
         self.env.load_ms = ms;
         match res {
-            Ok(lit) => {
+            Ok((lit, f)) => {
                 self.env.current = Some(i);
                 self.env.lighting = lit;
                 self.env.error = None;
+                if let (true, Some(f)) = (lit, f) {
+                    self.env.light_exposure = f;
+                }
             }
             Err(e) => self.env.error = Some(e),
         }
@@ -337,18 +418,23 @@ impl Viewer {
     pub fn update(&mut self, gpu: &Gpu) -> Option<Latency> {
         let change = self.pending.take()?;
         let (_, update_ms) = env::timed(|| self.apply(gpu, change));
-        let r = self.renderer.as_ref()?;
-        let (frame, render_ms) = env::timed(|| r.render(gpu));
-        match frame {
-            Ok(f) => {
-                self.frame = Some(f);
-                self.frames += 1;
-            }
+        let r = self.renderer.as_mut()?;
+        let (drawn, render_ms) = env::timed(|| draw_frame(gpu, r, &mut self.shown));
+        match drawn {
+            Ok(()) => self.frames += 1,
             Err(e) => self.errors.push(format!("render: {e}")),
         }
         let lat = Latency { change, update_ms, render_ms };
         self.last = Some(lat);
         Some(lat)
+    }
+
+    /// Applies what changed without rendering a frame (the benchmark renders it the former
+    /// way, read back, to compare).
+    pub fn update_state_only(&mut self, gpu: &Gpu) {
+        if let Some(change) = self.pending.take() {
+            self.apply(gpu, change);
+        }
     }
 
     fn apply(&mut self, gpu: &Gpu, change: Change) {
@@ -373,10 +459,24 @@ impl Viewer {
         }
     }
 
+    /// The last frame, read back from the shown texture.
+    pub fn read_frame(&self, gpu: &Gpu) -> Result<Frame> {
+        let Some(s) = &self.shown else { anyhow::bail!("no frame rendered yet") };
+        Ok(Frame::read(gpu, &s.texture, s.stats.clone())?)
+    }
+
     /// Writes the last frame as an sRGB PNG (exposure applied, written atomically).
-    pub fn save_frame(&self, path: &Path) -> Result<()> {
-        let Some(f) = &self.frame else { anyhow::bail!("no frame rendered yet") };
+    pub fn save_frame(&self, gpu: &Gpu, path: &Path) -> Result<()> {
+        let f = self.read_frame(gpu)?;
         let (w, h) = (f.width as usize, f.height as usize);
         Ok(btf_image::write::write_png_linear(path, w, h, &f.rgb, self.exposure)?)
+    }
+
+    /// Renders the current state the way the viewer did before it presented the GPU
+    /// texture: into the renderer's own target, read back as a [`Frame`] (for the
+    /// benchmark's comparison).
+    pub fn render_read_back(&mut self, gpu: &Gpu) -> Result<Frame> {
+        let Some(r) = self.renderer.as_mut() else { anyhow::bail!("no renderer") };
+        Ok(r.render(gpu)?)
     }
 }

@@ -6,10 +6,14 @@
 //!   frame `i` renders. PNGs are written atomically; `--resume` keeps finished frames.
 //! - the interaction-latency benchmark (`--bench N`): `N` camera moves, light moves,
 //!   environment rotations and environment swaps, interleaved in one run, each timed from
-//!   the change to the frame read back; medians and ratios to the camera move.
+//!   the change to the frame finished on the GPU; medians and ratios to the camera move.
+//!   Then the cost of presenting a frame, with and without a read-back, interleaved: the
+//!   window's path (encode into the texture the present pass samples) against the former
+//!   one (render → `Frame` on the CPU → upload → present), each into an offscreen surface.
 
 use super::ViewArgs;
 use super::camera::turn_light;
+use super::present::{Present, Rect};
 use super::state::{Change, Latency, Viewer};
 use crate::progress;
 use anyhow::{Context, Result, bail};
@@ -18,7 +22,8 @@ use std::path::Path;
 
 fn start(args: &ViewArgs, scene: Scene) -> Result<(Gpu, Viewer)> {
     let gpu = Gpu::new().context("creating a headless GPU device")?;
-    let mut v = Viewer::new(&gpu, scene, args.env.clone());
+    let mut v =
+        Viewer::new(&gpu, scene, args.env.clone(), args.env_exposure == super::EnvExposure::Auto);
     v.update(&gpu);
     if let Some(e) = v.errors.first() {
         bail!("{}: {e}", args.scene.display());
@@ -57,7 +62,7 @@ pub fn export(args: &ViewArgs, scene: Scene, n: u32, out: &Path) -> Result<()> {
         if let Some(e) = v.errors.last() {
             bail!("turntable frame {i} ({angle_deg}°): {e}");
         }
-        v.save_frame(&path)?;
+        v.save_frame(&gpu, &path)?;
         bar.inc(1);
     }
     bar.finish_and_clear();
@@ -135,6 +140,76 @@ pub fn bench(args: &ViewArgs, scene: Scene, n: u32) -> Result<()> {
         "environment lighting of the garment: {}",
         if v.env.lighting { "on" } else { "off (no environment light in this renderer/scene)" }
     );
+    let (shown, read_back) = present_costs(&gpu, &mut v, n.max(5))?;
+    let (w, h) = v.size();
+    crate::guard::outln!(
+        "presented frame ({w} × {h}, camera moves, median of {}): {shown:.2} ms without a \
+         read-back, {read_back:.2} ms with one (render → Frame → upload), ratio {:.2}",
+        n.max(5),
+        read_back / shown
+    );
     crate::guard::outln!("[{}]", json.join(","));
     Ok(())
+}
+
+/// Median milliseconds from a camera move to a frame presented into an offscreen surface
+/// and finished, over `n` frames each way, interleaved: `(without, with)` a read-back.
+fn present_costs(gpu: &Gpu, v: &mut Viewer, n: u32) -> Result<(f64, f64)> {
+    let (w, h) = v.size();
+    let format = wgpu::TextureFormat::Rgba8Unorm;
+    let surface =
+        gpu.target("offscreen surface", (w, h), 1, format, wgpu::TextureUsages::RENDER_ATTACHMENT);
+    let surface = surface.create_view(&Default::default());
+    let (mut direct, mut uploaded) = (Present::new(gpu, format), Present::new(gpu, format));
+    let viewport = Rect { x: 0.0, y: 0.0, w: w as f32, h: h as f32 };
+    let exposure = v.exposure;
+    let present = |p: &Present| -> Result<()> {
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("present (bench)"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &surface,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            p.draw(gpu, &mut pass, exposure, viewport);
+        }
+        gpu.queue.submit([enc.finish()]);
+        Ok(gpu.wait()?)
+    };
+    let (mut without, mut with) = (Vec::new(), Vec::new());
+    for i in 0..=n {
+        v.drag_camera(10.0, 0.0);
+        let t = std::time::Instant::now();
+        v.update(gpu).context("no frame rendered")?;
+        let shown = v.shown.as_ref().context("no frame shown")?;
+        direct.show(gpu, shown);
+        present(&direct)?;
+        let ms_without = t.elapsed().as_secs_f64() * 1e3;
+        v.drag_camera(10.0, 0.0);
+        let t = std::time::Instant::now();
+        v.update_state_only(gpu);
+        let frame = v.render_read_back(gpu)?;
+        uploaded.upload(gpu, &frame);
+        present(&uploaded)?;
+        let ms_with = t.elapsed().as_secs_f64() * 1e3;
+        if i > 0 {
+            without.push(ms_without);
+            with.push(ms_with);
+        }
+    }
+    if let Some(e) = v.errors.last() {
+        bail!("{e}");
+    }
+    Ok((median(without), median(with)))
 }

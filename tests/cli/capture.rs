@@ -37,7 +37,7 @@ fn process(d: &Dir, raw: &str, out: &str, extra: &[&str]) -> Value {
 }
 
 fn score(d: &Dir, store: &str, raw: &str, extra: &[&str]) -> Value {
-    let mut args = vec!["capture", "score", store, "--truth", raw];
+    let mut args = vec!["capture", "score", store, "--truth", raw, "--json"];
     args.extend_from_slice(extra);
     serde_json::from_str(&d.ok(&args)).unwrap()
 }
@@ -57,8 +57,10 @@ fn process_and_score_meet_the_accuracy_bounds() {
     let s = score(&d, "m.btf", "raw", &["--compare-filters", "--report", "rep", "--nominal"]);
     // A texel is ~4.6 mm here, ~4.4 px in the frontal view: registration is good to a few
     // hundredths of a pixel, so well below the 0.1 / 0.5 texel bounds set at 256².
-    let (mean, max) =
-        (s["mean_reprojection_px"].as_f64().unwrap(), s["max_reprojection_px"].as_f64().unwrap());
+    let (mean, max) = (
+        s["mean_reprojection_texels"].as_f64().unwrap(),
+        s["max_reprojection_texels"].as_f64().unwrap(),
+    );
     assert!(mean < 0.1 && max < 0.5, "reprojection mean {mean}, max {max} texel");
     // Against the measurable truth (texel-averaged BTF from the true camera position),
     // measured 0.0190: what is left is the camera's blur (a pixel is ~¼ texel) and sensor

@@ -67,7 +67,7 @@ fn reconstruct_at_a_sample_direction_gives_the_normtexture() {
     write_test_btf(&d.path("m.btf"), 5);
     d.ok(&["compress", "m.btf", "-c", "6", "-o", "m.eig"]);
     // View slot 3 = (40°, 120°); light 5 = (40°, 240°).
-    d.ok(&[
+    let out = d.ok(&[
         "reconstruct",
         "m.eig",
         "--view",
@@ -79,6 +79,9 @@ fn reconstruct_at_a_sample_direction_gives_the_normtexture() {
         "--png",
         "t.png",
     ]);
+    // One line says what was written where.
+    assert_eq!(out.lines().count(), 1, "{out}");
+    assert!(out.contains("5×5") && out.contains("t.exr") && out.contains("t.png"), "{out}");
     let (w, h, px) = read_exr(&d.path("t.exr"));
     assert_eq!((w, h), (5, 5));
     let expect: Vec<f32> = (0..75).map(|t| value(3, 5, t)).collect();
@@ -90,9 +93,93 @@ fn reconstruct_at_a_sample_direction_gives_the_normtexture() {
     let (_, _, mid) = read_exr(&d.path("u.exr"));
     let expect: Vec<f32> = (0..75).map(|t| 0.5 * (value(3, 5, t) + value(3, 6, t))).collect();
     assert!(btf_core::metrics::rel_rmse(&expect, &mid) < 1e-3);
-    // Below the horizon a light contributes nothing.
-    d.ok(&["reconstruct", "m.eig", "--view", "0,0", "--light", "95,0", "-o", "z.exr"]);
-    assert!(read_exr(&d.path("z.exr")).2.iter().all(|&v| v == 0.0));
+}
+
+#[test]
+fn reconstruct_refuses_what_the_store_did_not_measure_unless_clamped() {
+    let d = Dir::new();
+    write_test_btf(&d.path("m.btf"), 5);
+    d.ok(&["compress", "m.btf", "-c", "6", "-o", "m.eig"]);
+    // Below the horizon: refused, the angle named, nothing written.
+    let err = d.fails(&["reconstruct", "m.eig", "--view", "0,0", "--light", "95,0", "-o", "z.exr"]);
+    assert!(err.contains("--light θ = 95°") && err.contains("below the horizon"), "{err}");
+    let err = d.fails(&["reconstruct", "m.eig", "--view", "91,0", "--light", "0,0", "-o", "z.exr"]);
+    assert!(err.contains("--view θ = 91°"), "{err}");
+    // Beyond the sampled range (the rings stop at 40°): refused, with the range and the way out.
+    let err =
+        d.fails(&["reconstruct", "m.eig", "--view", "40,120", "--light", "60,240", "-o", "z.exr"]);
+    assert!(err.contains("θ = 60°") && err.contains("up to θ = 40°") && err.contains("--clamp"));
+    assert!(!d.path("z.exr").exists());
+    // --clamp: exactly the texture at the largest sampled θ (same φ), with a warning.
+    let o = d.btf(&[
+        "reconstruct",
+        "m.eig",
+        "--view",
+        "40,120",
+        "--light",
+        "60,240",
+        "--clamp",
+        "-o",
+        "c.exr",
+    ]);
+    assert!(o.status.success());
+    let warning = String::from_utf8_lossy(&o.stderr);
+    assert!(warning.contains("θ = 60°") && warning.contains("clamped to θ = 40°"), "{warning}");
+    d.ok(&["reconstruct", "m.eig", "--view", "40,120", "--light", "40,240", "-o", "t.exr"]);
+    assert_eq!(read_exr(&d.path("c.exr")).2, read_exr(&d.path("t.exr")).2);
+}
+
+#[test]
+fn closed_choices_list_their_values_and_old_spellings_still_work() {
+    let d = Dir::new();
+    write_test_btf(&d.path("m.btf"), 4);
+    for (args, value) in [
+        (&["compress", "m.btf", "-o", "x.eig", "--quantization", "f8"][..], "f8"),
+        (&["export", "m.btf", "--format", "png", "-o", "x"][..], "png"),
+        (&["synth", "material", "--kind", "velvet", "-o", "v.btf"][..], "velvet"),
+        (
+            &[
+                "reconstruct",
+                "m.eig",
+                "--view",
+                "0,0",
+                "--light",
+                "0,0",
+                "--blend",
+                "six",
+                "-o",
+                "x.exr",
+            ][..],
+            "six",
+        ),
+    ] {
+        let err = d.fails(args);
+        assert!(
+            err.contains(&format!("invalid value '{value}'")) && err.contains("possible values"),
+            "btf {args:?}: {err}"
+        );
+    }
+    // Hidden aliases: --quantize and --output (the old spellings).
+    d.ok(&["compress", "m.btf", "-c", "2", "--quantize", "u8", "--output", "m.eig"]);
+    let e: Value = serde_json::from_str(&d.ok(&["inspect", "m.eig", "--json"])).unwrap();
+    assert_eq!(e["dtype"], "u8");
+}
+
+#[test]
+fn export_says_what_it_wrote_where() {
+    let d = Dir::new();
+    write_test_btf(&d.path("m.btf"), 4);
+    d.ok(&["compress", "m.btf", "-c", "3", "-o", "m.eig"]);
+    let out = d.ok(&["export", "m.btf", "--format", "npy", "--slot", "2", "-o", "s.npy"]);
+    assert!(out.contains("view slot 2") && out.contains("7 lights × 48 values"), "{out}");
+    assert!(out.contains("s.npy"), "{out}");
+    let out = d.ok(&["export", "m.eig", "--format", "exr", "--slot", "1", "-o", "s.exr"]);
+    assert!(out.contains("mean + 3 eigentextures") && out.contains("s.exr"), "{out}");
+    let out = d.ok(&["export", "m.eig", "--format", "pvf", "-o", "m.pvf"]);
+    assert!(out.contains("7 view slots × 3 components") && out.contains("m.pvf"), "{out}");
+    // exr without --slot: clap names the missing option.
+    let err = d.fails(&["export", "m.eig", "--format", "exr", "-o", "t.exr"]);
+    assert!(err.contains("--slot"), "{err}");
 }
 
 #[test]
@@ -227,6 +314,6 @@ fn missing_and_wrong_kind_inputs_give_clear_errors() {
     write_test_btf(&d.path("m.btf"), 4);
     let err = d.fails(&["reconstruct", "m.btf", "--view", "0,0", "--light", "0,0", "-o", "x.exr"]);
     assert!(err.contains("not an eigen store"), "{err}");
-    let err = d.fails(&["compress", "m.btf", "-o", "x.eig", "--quantize", "f8"]);
+    let err = d.fails(&["compress", "m.btf", "-o", "x.eig", "--quantization", "f8"]);
     assert!(err.contains("f8"), "{err}");
 }

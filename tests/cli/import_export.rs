@@ -98,3 +98,44 @@ fn import_errors_name_the_file_and_field() {
     let e = d.fails(&["export", "m.btf", "--format", "npy", "-o", "m.npy"]);
     assert!(e.contains("--slot"), "{e}");
 }
+
+/// `btf import ubo2003` and `btf export --format ubo2003` draw a progress bar on a terminal
+/// (a pseudo-terminal from `script`), and none under `BTF_NO_PROGRESS=1` or when standard
+/// error is a pipe.
+#[test]
+fn ubo2003_import_and_export_show_progress_only_on_a_terminal() {
+    if std::process::Command::new("script").arg("--version").output().is_err() {
+        eprintln!("skipped: no `script` (util-linux) to make a terminal");
+        return;
+    }
+    let d = Dir::new();
+    write_test_btf(&d.path("m.btf"), 4);
+    let bin = env!("CARGO_BIN_EXE_btf");
+    let on_terminal = |cmd: &str, quiet: bool| {
+        let mut c = std::process::Command::new("script");
+        c.args(["-qec", &format!("{bin} {cmd}"), "/dev/null"]).current_dir(d.tmp.path());
+        c.env_remove("BTF_NO_PROGRESS");
+        if quiet {
+            c.env("BTF_NO_PROGRESS", "1");
+        }
+        let o = c.output().expect("script runs");
+        assert!(o.status.success(), "{cmd}: {}", String::from_utf8_lossy(&o.stdout));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    // 7 views × 7 lights = 49 images: the bar counts them.
+    let tty = on_terminal("export m.btf --format ubo2003 -o ex", false);
+    assert!(tty.contains("export [") && tty.contains("/49"), "{tty}");
+    let tty = on_terminal("import ubo2003 ex -o back.btf", false);
+    assert!(tty.contains("import [") && tty.contains("/49"), "{tty}");
+    let quiet = on_terminal("export m.btf --format ubo2003 -o ex", true);
+    assert!(!quiet.contains("/49") && quiet.contains("wrote 49 images"), "{quiet}");
+    // Standard error a pipe: no bar even without BTF_NO_PROGRESS.
+    let o = std::process::Command::new(bin)
+        .args(["import", "ubo2003", "ex", "-o", "back2.btf"])
+        .current_dir(d.tmp.path())
+        .env_remove("BTF_NO_PROGRESS")
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    assert!(o.stderr.is_empty(), "{}", String::from_utf8_lossy(&o.stderr));
+}

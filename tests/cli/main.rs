@@ -1,7 +1,8 @@
 //! End-to-end tests of the `btf` binary, one module per area, run in temporary folders
 //! through the small harness of [`common`] (ripgrep's habit): the commands and their
 //! contracts ([`commands`]), synthesis, capture processing, import/export, rendering,
-//! relighting, thin cloth, the demo, the viewer under Xvfb, and the hostile suite of issue
+//! relighting, thin cloth, the demo, the viewer under Xvfb, ARCHITECTURE.md's equation index
+//! against the code ([`docs`]), and the hostile suite of issue
 //! #26 ([`hostile`]: what a command may never do to files, whatever the input).
 
 mod common;
@@ -9,8 +10,10 @@ mod common;
 mod capture;
 mod commands;
 mod demo;
+mod docs;
 mod hostile;
 mod import_export;
+mod knit;
 mod relight;
 mod render;
 mod synth;

@@ -52,12 +52,3 @@ impl From<btf_core::Error> for Error {
         }
     }
 }
-
-/// Refuses a non-finite value, naming `what`.
-pub(crate) fn finite(value: f64, what: impl FnOnce() -> String) -> Result<f64> {
-    if value.is_finite() {
-        Ok(value)
-    } else {
-        Err(Error::Invalid(format!("{} is {value} (must be finite)", what())))
-    }
-}

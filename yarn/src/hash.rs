@@ -57,6 +57,18 @@ impl KeyRng {
         unit_f64(self.next_u64())
     }
 
+    /// Two uniform numbers.
+    #[inline]
+    pub fn uniform2(&mut self) -> [f64; 2] {
+        [self.uniform(), self.uniform()]
+    }
+
+    /// Three uniform numbers.
+    #[inline]
+    pub fn uniform3(&mut self) -> [f64; 3] {
+        [self.uniform(), self.uniform(), self.uniform()]
+    }
+
     /// A standard normal number (Box–Muller, the cosine branch; `1 − u` keeps the
     /// logarithm finite).
     pub fn normal(&mut self) -> f64 {

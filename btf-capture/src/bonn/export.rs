@@ -148,6 +148,17 @@ fn encode_image(
 /// Writes a BTF store as a UBO2003-style folder at `dir` with file names `NAME_NNNNN_…`.
 /// Returns the scale written to the sidecar.
 pub fn export_ubo2003(store: &BtfStore, dir: &Path, name: &str, enc: ImageEncoding) -> Result<f32> {
+    export_ubo2003_with_progress(store, dir, name, enc, &|_, _| {})
+}
+
+/// [`export_ubo2003`], calling `progress(done, total)` after each image written.
+pub fn export_ubo2003_with_progress(
+    store: &BtfStore,
+    dir: &Path,
+    name: &str,
+    enc: ImageEncoding,
+    progress: &dyn Fn(usize, usize),
+) -> Result<f32> {
     let m = store.meta();
     let scale = if enc == ImageEncoding::Exr {
         1.0
@@ -188,7 +199,7 @@ pub fn export_ubo2003(store: &BtfStore, dir: &Path, name: &str, enc: ImageEncodi
         })?;
         std::fs::remove_dir_all(&tmp).map_err(|e| Error::io(&tmp, e))?;
     }
-    let written = write_folder(store, &tmp, name, enc, scale);
+    let written = write_folder(store, &tmp, name, enc, scale, progress);
     if let Err(e) = written {
         // A refusal or a failed write leaves nothing behind.
         let _ = std::fs::remove_dir_all(&tmp);
@@ -227,8 +238,10 @@ fn write_folder(
     name: &str,
     enc: ImageEncoding,
     scale: f32,
+    progress: &dyn Fn(usize, usize),
 ) -> Result<()> {
     let m = store.meta();
+    let total = m.n_views() * m.n_lights();
     let mut running = 0;
     for v in 0..m.n_views() {
         let vd = m.view_sampling.direction(v);
@@ -245,6 +258,7 @@ fn write_folder(
             );
             encode_image(&sub.join(file), m.width, m.height, &store.read_image(v, l)?, scale, enc)?;
             running += 1;
+            progress(running, total);
         }
     }
     let side = json!({"scale": scale, "encoding": format!("{enc:?}"), "note": "linear value = decoded value x scale",

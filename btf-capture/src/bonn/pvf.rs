@@ -17,7 +17,7 @@ use super::header::{
     Header, MetaData, read_header, read_sampling, read_side, read_signature, write_header,
 };
 use crate::{Error, Result};
-use std::io::{BufWriter, Read, Seek, Write};
+use std::io::{Read, Seek, Write};
 use std::path::{Path, PathBuf};
 
 /// The magic number of the legacy PVF layout.
@@ -169,12 +169,11 @@ impl<R: Read + Seek> PvfReader<R> {
     }
 }
 
-/// Writes a PVF file slot by slot into `NAME.partial`, renamed on [`PvfWriter::finish`].
+/// Writes a PVF file slot by slot through one [`btf_core::fs::AtomicFile`], moved into
+/// place by [`PvfWriter::finish`]; a writer dropped before that removes its temporary, so a
+/// failed export leaves nothing behind.
 pub struct PvfWriter {
-    /// `None` once [`PvfWriter::finish`] has taken it; a writer dropped before that removes
-    /// its temporary file, so a failed export leaves nothing behind.
-    out: Option<BufWriter<std::fs::File>>,
-    tmp: PathBuf,
+    out: btf_core::fs::AtomicFile,
     path: PathBuf,
     header: Header,
     left: usize,
@@ -183,18 +182,13 @@ pub struct PvfWriter {
 impl PvfWriter {
     /// Starts a file with `header` (signature `!PVF06FC` or `!PVF06FCR`) and `components`.
     pub fn create(path: &Path, header: Header, components: usize) -> Result<Self> {
-        let tmp = path.with_file_name(format!(
-            "{}.partial",
-            path.file_name().unwrap_or_default().to_string_lossy()
-        ));
-        let f = std::fs::File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
-        let mut out = BufWriter::new(f);
-        let io = |e| Error::io(&tmp, e);
+        let mut out = btf_core::fs::AtomicFile::create(path)?;
+        let io = |e| Error::io(path, e);
         write_header(&mut out, &header).map_err(io)?;
         put_u32(&mut out, components as u32).map_err(io)?;
         put_u32(&mut out, header.views.len() as u32).map_err(io)?;
         let left = header.views.len();
-        Ok(PvfWriter { out: Some(out), tmp: tmp.clone(), path: path.to_owned(), header, left })
+        Ok(PvfWriter { out, path: path.to_owned(), header, left })
     }
 
     /// Appends the next slot (file order = the header's view order), as `f32`.
@@ -226,8 +220,8 @@ impl PvfWriter {
                 ));
             }
         }
-        let io = |e| Error::io(&self.tmp, e);
-        let out = self.out.as_mut().expect("a writer before finish");
+        let io = |e| Error::io(&self.path, e);
+        let out = &mut self.out;
         out.write_all(&[4]).map_err(io)?;
         for v in [p, nw, dim] {
             put_u32(out, v as u32).map_err(io)?;
@@ -240,7 +234,7 @@ impl PvfWriter {
     }
 
     /// Checks every slot was written, flushes and moves the file into place.
-    pub fn finish(mut self) -> Result<()> {
+    pub fn finish(self) -> Result<()> {
         if self.left != 0 {
             return Err(Error::invalid(
                 &self.path.display().to_string(),
@@ -248,18 +242,6 @@ impl PvfWriter {
                 format!("{} slots never written", self.left),
             ));
         }
-        let out = self.out.take().expect("a writer before finish");
-        let f = out.into_inner().map_err(|e| Error::io(&self.tmp, e.into_error()))?;
-        f.sync_all().map_err(|e| Error::io(&self.tmp, e))?;
-        std::fs::rename(&self.tmp, &self.path).map_err(|e| Error::io(&self.path, e))
-    }
-}
-
-impl Drop for PvfWriter {
-    fn drop(&mut self) {
-        // Dropped unfinished (an error, a refusal) or after a failed finish: no leftover.
-        if self.out.take().is_some() || self.tmp.exists() {
-            let _ = std::fs::remove_file(&self.tmp);
-        }
+        Ok(self.out.commit(true)?)
     }
 }

@@ -182,7 +182,7 @@ pub fn decode_image(bytes: &[u8], name: &str) -> Result<(usize, usize, Vec<f32>)
     let mut rd =
         image::ImageReader::new(Cursor::new(bytes)).with_guessed_format().map_err(|e| bad(&e))?;
     rd.limits(image::Limits::default());
-    let img = crate::decode::decode_image(rd, name)?;
+    let img = crate::decode::decode_image(rd, name, bytes.len() as u64)?;
     let (w, h) = (img.width() as usize, img.height() as usize);
     use image::DynamicImage as D;
     let px: Vec<f32> = match &img {
@@ -226,6 +226,16 @@ pub struct Ubo2003Report {
 
 /// Imports a folder or zip of UBO2003 images at `src` into a BTF store at `out`.
 pub fn import(src: &Path, out: &Path, dtype: DType) -> Result<Ubo2003Report> {
+    import_with_progress(src, out, dtype, &|_, _| {})
+}
+
+/// [`import`], calling `progress(done, total)` after each image stored.
+pub fn import_with_progress(
+    src: &Path,
+    out: &Path,
+    dtype: DType,
+    progress: &dyn Fn(usize, usize),
+) -> Result<Ubo2003Report> {
     let (mut source, names, scale) = Source::open(src)?;
     let src_name = src.display().to_string();
     if names.is_empty() {
@@ -303,6 +313,7 @@ pub fn import(src: &Path, out: &Path, dtype: DType) -> Result<Ubo2003Report> {
             px.iter_mut().for_each(|v| *v *= scale);
         }
         writer.write_image(i / nl, i % nl, &px)?;
+        progress(i + 1, slot_of.len());
     }
     writer.finish()?;
     Ok(Ubo2003Report {
@@ -315,6 +326,18 @@ pub fn import(src: &Path, out: &Path, dtype: DType) -> Result<Ubo2003Report> {
 
 #[cfg(test)]
 mod tests {
+    /// The `ubo2003_image` fuzz target's finding (fuzz/regressions/ubo2003_image-oom-jpeg.bin,
+    /// first byte 0 picked `.jpg`): 219 bytes of JPEG claiming a 570 MB image, which the
+    /// decoder allocated and the conversion to `f32` then doubled past 1 GiB.
+    #[test]
+    fn a_tiny_jpeg_claiming_a_huge_image_is_refused_by_its_header() {
+        let bytes = include_bytes!("../../../fuzz/regressions/ubo2003_image-oom-jpeg.bin");
+        let e = super::decode_image(&bytes[1..], "a.jpg").unwrap_err();
+        assert!(matches!(e, crate::Error::Limit { .. }), "{e}");
+        let e = e.to_string();
+        assert!(e.contains("a.jpg") && e.contains("pixels per byte"), "{e}");
+    }
+
     use super::*;
 
     #[test]

@@ -61,7 +61,8 @@ pub fn read(path: &Path, bits: u32) -> Result<RawImage> {
         .map_err(|e| Error::io(path, e))?
         .with_guessed_format()
         .map_err(|e| Error::io(path, e))?;
-    let img = crate::decode::decode_image(reader, &path.display().to_string())?;
+    let len = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
+    let img = crate::decode::decode_image(reader, &path.display().to_string(), len)?;
     let (width, height) = (img.width() as usize, img.height() as usize);
     let rgb = match img {
         image::DynamicImage::ImageRgb16(_)
@@ -126,6 +127,52 @@ mod tests {
         std::fs::write(&path, b"\x89PNG\r\n\x1a\nnot really").unwrap();
         let e = read(&path, 12).unwrap_err().to_string();
         assert!(e.contains("broken.png"), "{e}");
+    }
+
+    /// The `raw_image` fuzz target's finding (fuzz/regressions/raw_image-oom-block.bin: its
+    /// first byte picked `.exr`): 569 bytes of EXR whose header implies a 1.4 GB block,
+    /// which the `exr` crate allocated before reading it. Refused from the header now.
+    #[test]
+    fn an_exr_implying_a_gigabyte_block_is_refused_by_its_header() {
+        let bytes = include_bytes!("../../../fuzz/regressions/raw_image-oom-block.bin");
+        let dir = tempfile::tempdir().unwrap();
+        let exr = dir.path().join("block.exr");
+        std::fs::write(&exr, &bytes[1..]).unwrap();
+        for e in [dimensions(&exr).unwrap_err(), read(&exr, 12).unwrap_err()] {
+            assert!(matches!(e, Error::Limit { .. }), "{e}");
+            let e = e.to_string();
+            assert!(e.contains("block.exr") && e.contains("bytes per block"), "{e}");
+        }
+    }
+
+    /// The `raw_image` fuzz target's second finding (fuzz/regressions/raw_image-oom-png.bin:
+    /// 72 bytes of PNG asking for a 1.6 GB 16-bit buffer, within the pixel limit; the fuzz
+    /// build skips PNG checksums, so here the same claim is made with valid ones: 16384² RGBA
+    /// at 16 bits, 2 GiB).
+    #[test]
+    fn a_png_asking_for_a_gigabyte_buffer_is_refused_by_its_header() {
+        let dir = tempfile::tempdir().unwrap();
+        let png = dir.path().join("buffer.png");
+        std::fs::write(&png, crate::decode::crafted::png_claiming_as(16384, 16384, 16, 6)).unwrap();
+        let e = read(&png, 12).unwrap_err();
+        assert!(matches!(e, Error::Limit { .. }), "{e}");
+        let e = e.to_string();
+        // Refused by the pixels-per-byte bound (a 16384² claim in 57 bytes); the 512 MiB
+        // buffer bound is the second line of defence for files large enough to pass it.
+        assert!(e.contains("buffer.png") && e.contains("pixels per byte"), "{e}");
+    }
+
+    /// The `raw_image` fuzz target's third finding (fuzz/regressions/raw_image-b44-overflow.bin):
+    /// a B44-compressed EXR whose block overflows the `exr` crate's B44 arithmetic (a panic
+    /// in builds with overflow checks, such as this test's). Refused from the header.
+    #[test]
+    fn a_b44_exr_is_refused_before_its_decoder_runs() {
+        let bytes = include_bytes!("../../../fuzz/regressions/raw_image-b44-overflow.bin");
+        let dir = tempfile::tempdir().unwrap();
+        let exr = dir.path().join("b44.exr");
+        std::fs::write(&exr, &bytes[1..]).unwrap();
+        let e = read(&exr, 12).unwrap_err().to_string();
+        assert!(e.contains("b44.exr") && e.contains("B44"), "{e}");
     }
 
     #[test]

@@ -14,7 +14,7 @@
 //! residuals together (H&Z eq. 4.8); line samples further than `4 · 1.4826 · MAD` from
 //! the fit are dropped and the fit repeated.
 
-use super::homography::{self, LineMatch, PointMatch};
+use super::homography::{self, LineMatch, PointMatch, apply};
 use super::layout::CaptureLayout;
 use super::markers::{self, Detection, Gray, Miss};
 use super::pose::{self, Pose, Prior};
@@ -80,6 +80,13 @@ pub struct RegisterOptions {
     /// matched to their neighbours' blobs can agree under one homography, for a plate
     /// that would have to sit some 20 mm off (seen at θ_v = 75° with 3°/3 mm errors).
     pub pose_limit_sigmas: f64,
+    /// Largest predicted uncertainty (3 σ, pixels) of the registration over the sample
+    /// square (a 5 × 5 grid), propagated from the marker residuals through the homography
+    /// fit ([`grid_uncertainty_px`]); beyond it the registration is refused. Markers that
+    /// agree within the consensus tolerance but all sit on one side of the sample (the rest
+    /// outside the image at a grazing view) fix the homography poorly where the sample is:
+    /// seen at θ_v = 75° with 3° / 3 mm pose errors, registered 5.6 and 24 px off.
+    pub max_uncertainty_px: f64,
 }
 
 impl Default for RegisterOptions {
@@ -92,6 +99,7 @@ impl Default for RegisterOptions {
             pose_margin_mm: 4.0,
             pose_search: true,
             pose_limit_sigmas: 5.0,
+            max_uncertainty_px: 0.5,
         }
     }
 }
@@ -228,17 +236,80 @@ pub fn register(
     }
     let pts = markers::corrected_matches(&h, marks, radius, &found);
     let rms = |e: Vec<f64>| (e.iter().map(|x| x * x).sum::<f64>() / e.len().max(1) as f64).sqrt();
+    let marker_rms = rms(pts.iter().map(|m| homography::point_error(&h, m)).collect());
+    let half = plate.sample_mm / 2.0;
+    let uncertainty = grid_uncertainty_px(&h, &pts, marker_rms.max(NOISE_FLOOR_PX), half);
+    // NaN (a degenerate fit) is refused too.
+    if uncertainty.is_nan() || uncertainty > opt.max_uncertainty_px {
+        let used: Vec<String> = pts.iter().map(|m| format!("{:?}", m.plate_mm)).collect();
+        return Err(format!(
+            "the {} markers that agree ({} mm; residual {marker_rms:.2} px) fix the sample's \
+             registration only to ±{uncertainty:.2} px (3 σ), beyond {} px: they do not \
+             surround the sample well enough",
+            pts.len(),
+            used.join(", "),
+            opt.max_uncertainty_px
+        ));
+    }
     Ok(Registration {
         view,
         homography: to_rows(&h),
         markers_found: found_count,
         markers_used: pts.len(),
         line_samples: lines.len(),
-        marker_rms_px: rms(pts.iter().map(|m| homography::point_error(&h, m)).collect()),
+        marker_rms_px: marker_rms,
         line_rms_px: rms(lines.iter().map(|l| homography::line_error(&h, l)).collect()),
         fallback_nominal: false,
         missed: missed_text(&found),
     })
+}
+
+/// The smallest marker residual assumed when propagating uncertainty (pixels): the
+/// detector's noise at grazing views, so that 4 markers fitted exactly still carry some.
+const NOISE_FLOOR_PX: f64 = 0.1;
+
+/// The 3 σ uncertainty (pixels) of where `h` puts the points of a 5 × 5 grid on the square
+/// `±half` mm, when each marker position in `pts` is uncertain by `sigma_px` per axis:
+/// `Cov(h) = σ² (JᵀJ)⁻¹` for the Jacobian `J` of the projected markers with respect to the
+/// eight free entries of `h` (`h₃₃` fixed), propagated to each grid point by its own
+/// Jacobian (first order, numerical derivatives with steps relative to each entry).
+/// Infinite when the markers do not determine `h`.
+pub fn grid_uncertainty_px(h: &Matrix3<f64>, pts: &[PointMatch], sigma_px: f64, half: f64) -> f64 {
+    let h = h / h[(2, 2)];
+    let scale = h.norm();
+    let jacobian = |p: [f64; 2]| -> nalgebra::SMatrix<f64, 2, 8> {
+        let mut j = nalgebra::SMatrix::<f64, 2, 8>::zeros();
+        for k in 0..8 {
+            let (r, c) = (k / 3, k % 3);
+            // Columns in units of each entry's own size, so that JᵀJ is well conditioned
+            // (the product with the grid's Jacobian below does not depend on the units).
+            let unit = h[(r, c)].abs().max(1e-3 * scale);
+            let step = 1e-6 * unit;
+            let (mut hp, mut hm) = (h, h);
+            hp[(r, c)] += step;
+            hm[(r, c)] -= step;
+            let (a, b) = (apply(&hp, p), apply(&hm, p));
+            j[(0, k)] = (a[0] - b[0]) / 2e-6;
+            j[(1, k)] = (a[1] - b[1]) / 2e-6;
+        }
+        j
+    };
+    let mut jtj = nalgebra::SMatrix::<f64, 8, 8>::zeros();
+    for m in pts {
+        let j = jacobian(m.plate_mm);
+        jtj += j.transpose() * j;
+    }
+    let Some(cov) = jtj.try_inverse() else { return f64::INFINITY };
+    let mut worst = 0.0f64;
+    for i in 0..5 {
+        for k in 0..5 {
+            let p = [half * (i as f64 / 2.0 - 1.0), half * (k as f64 / 2.0 - 1.0)];
+            let j = jacobian(p);
+            let var = (j * cov * j.transpose()).trace();
+            worst = worst.max(if var >= 0.0 { var.sqrt() } else { f64::INFINITY });
+        }
+    }
+    3.0 * sigma_px * worst
 }
 
 /// The pose search, when the markers found around the nominal pose (and the plate-height
@@ -456,6 +527,34 @@ mod tests {
         let all = found(&(0..9).collect::<Vec<_>>());
         let kept = best_detections(&MARKS, all, |_| unreachable!("no search needed"));
         assert_eq!(rank(&MARKS, &kept), (true, 9));
+    }
+
+    #[test]
+    fn markers_on_one_side_of_the_sample_leave_it_uncertain() {
+        // A mild perspective view of the plate at 3 px/mm; the 9 markers of the standard
+        // plate surround the ±40 mm sample, the 5 towards its +x corner do not.
+        let h = Matrix3::new(3.0, 0.2, 640.0, -0.1, 2.4, 480.0, 1e-4, 8e-4, 1.0);
+        let marks = [
+            [-60.0, -60.0],
+            [0.0, -60.0],
+            [60.0, -60.0],
+            [60.0, 0.0],
+            [60.0, 60.0],
+            [0.0, 60.0],
+            [-60.0, 60.0],
+            [-60.0, 0.0],
+            [30.0, 60.0],
+        ];
+        let pts: Vec<PointMatch> =
+            marks.iter().map(|&m| PointMatch { plate_mm: m, image_px: apply(&h, m) }).collect();
+        let all = grid_uncertainty_px(&h, &pts, 0.1, 40.0);
+        let side: Vec<PointMatch> = [1, 2, 3, 4, 8].iter().map(|&k| pts[k]).collect();
+        let one_sided = grid_uncertainty_px(&h, &side, 0.1, 40.0);
+        eprintln!("3σ over the sample: all 9 markers {all:.3} px, 5 on one side {one_sided:.3} px");
+        assert!(all < 0.5 && one_sided > 4.0 * all, "{all} vs {one_sided}");
+        // Halving the noise halves the uncertainty (first order); 3 markers cannot fix h.
+        assert!((grid_uncertainty_px(&h, &pts, 0.05, 40.0) / all - 0.5).abs() < 1e-6);
+        assert!(grid_uncertainty_px(&h, &pts[..3], 0.1, 40.0) > 1e3);
     }
 
     #[test]

@@ -168,9 +168,9 @@ pub struct FilterRow {
 #[derive(Debug, Clone, Serialize)]
 pub struct Score {
     /// Mean reprojection error, in texels of the store.
-    pub mean_reprojection_px: f64,
+    pub mean_reprojection_texels: f64,
     /// Maximum reprojection error, in texels of the store.
-    pub max_reprojection_px: f64,
+    pub max_reprojection_texels: f64,
     /// Relative RMSE of the normtextures against the measurable truth.
     pub rel_rmse: f64,
     /// Relative RMSE against the nominal-direction truth (only when asked for).
@@ -307,8 +307,8 @@ pub fn score(
         }
     }
     Ok(Score {
-        mean_reprojection_px: sum / count.max(1) as f64,
-        max_reprojection_px: max,
+        mean_reprojection_texels: sum / count.max(1) as f64,
+        max_reprojection_texels: max,
         rel_rmse,
         rel_rmse_nominal: rel_nominal,
         texel_mm: grid.texel_mm,

@@ -1,8 +1,19 @@
 //! AVX-512 versions of the kernels in `kernels.rs` (the same sums, eight `f64` lanes per
-//! register, fused multiply-adds); callers check the CPU feature at run time.
+//! register, fused multiply-adds: the lane model of `lanes.rs`, bit for bit); callers
+//! check the CPU feature at run time.
 
 use super::{LANES, TB, Texel};
 use std::arch::x86_64::*;
+
+/// The eight lanes summed in the order every path uses ([`super::lanes::reduce8`]).
+#[target_feature(enable = "avx512f")]
+#[inline]
+fn reduce8(v: __m512d) -> f64 {
+    let mut s = [0f64; 8];
+    // SAFETY: `s` holds eight values.
+    unsafe { _mm512_storeu_pd(s.as_mut_ptr(), v) };
+    super::lanes::reduce8(s)
+}
 
 /// 16 stored values from `p` as `f32` (`vcvtph2ps` for `f16`, exact). Safety: AVX-512F
 /// present, `p` valid for 16 reads.
@@ -113,7 +124,7 @@ fn load_with_stats<T: Texel>(
         }
     }
     let mut rest = super::LoadStats {
-        energy: _mm512_reduce_add_pd(e),
+        energy: reduce8(e),
         peak: _mm512_reduce_max_ps(p),
         finite: _mm512_reduce_add_ps(bad) == 0.0,
     };
@@ -278,7 +289,7 @@ pub(super) unsafe fn tile32<const S: usize>(
         for s in 0..S {
             let (lo, hi) = widen16(v[r][s]);
             // SAFETY: r < 4, s < S (the caller's extents).
-            unsafe { *out.add(r * ldo + s) += _mm512_reduce_add_pd(_mm512_add_pd(lo, hi)) };
+            unsafe { *out.add(r * ldo + s) += reduce8(_mm512_add_pd(lo, hi)) };
         }
     }
 }

@@ -3,13 +3,14 @@
 //! stored basis's `SSᵀ` and (for 8-bit storage) the correction `E·Yᵀ`, in `f64` tiles of
 //! 5 × 5 (or 4 × 5) outputs, narrower at the edge and triangular on a symmetric diagonal.
 
+use super::{Block, LANES, SUB_BLOCK, TB, lanes, runnable};
 #[cfg(target_arch = "x86_64")]
-use super::avx512;
-use super::{Block, LANES, SUB_BLOCK, TB, has_avx512};
+use super::{avx2, avx512};
+use crate::simd::Isa;
 
 /// What one tile of [`DotAcc`] computes of its `ta × 5` outputs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Tile {
+pub(super) enum Tile {
     /// All of them.
     Full,
     /// Those with `s ≥ r` (a diagonal tile of a symmetric product): 15 of 25.
@@ -65,17 +66,17 @@ impl DotAcc {
 
     /// Adds the products of one block of columns.
     pub fn add(&mut self, a: &Block, b: &Block) {
-        self.add_with(a, b, has_avx512());
+        self.add_with(a, b, Isa::active());
     }
 
-    /// [`DotAcc::add`] with the kernel chosen by the caller.
-    pub(crate) fn add_with(&mut self, a: &Block, b: &Block, simd: bool) {
+    /// [`DotAcc::add`] on the path `isa`.
+    pub(crate) fn add_with(&mut self, a: &Block, b: &Block, isa: Isa) {
         assert_eq!((a.rows, b.rows), (self.a_rows, self.b_rows), "blocks of other shapes");
         assert_eq!(a.stride, b.stride, "blocks of different widths");
         let (w, ta) = (a.stride, self.ta);
         assert!(a.data.len() >= a.rows.div_ceil(ta) * ta * w, "block a lacks padding rows");
         assert!(b.data.len() >= b.rows.div_ceil(TB) * TB * w, "block b lacks padding rows");
-        let simd = simd && has_avx512();
+        let isa = runnable(isa);
         let per_tile = ta * TB * LANES;
         // Sub-blocks of columns small enough for a tile's `A` rows to stay in L1.
         for k0 in (0..w).step_by(SUB_BLOCK) {
@@ -84,10 +85,14 @@ impl DotAcc {
             for (&(i0, j0, kind), acc) in tiles {
                 let ra = &a.data[i0 * w..(i0 + ta) * w];
                 let rb = &b.data[j0 * w..(j0 + TB) * w];
-                if simd {
-                    tile_simd(ta, kind, ra, rb, w, cols, acc);
-                } else {
-                    tile_portable(ta, kind, ra, rb, w, cols, acc);
+                match isa {
+                    #[cfg(target_arch = "x86_64")]
+                    Isa::Avx512 => tile_avx512(ta, kind, ra, rb, w, cols, acc),
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: AVX2, FMA and F16C checked (`runnable`); the kernel is safe code.
+                    Isa::Avx2 => unsafe { avx2::tile(ta, kind, ra, rb, w, cols, acc) },
+                    Isa::Scalar => lanes::tile::<false>(ta, kind, ra, rb, w, cols, acc),
+                    _ => lanes::tile::<true>(ta, kind, ra, rb, w, cols, acc),
                 }
             }
         }
@@ -113,37 +118,10 @@ impl DotAcc {
     }
 }
 
-/// `acc[(r·5 + s)·8 + l] += Σ_k a_r[8k + l]·b_s[8k + l]` over columns `k0..k1` of the `ta`
-/// rows of `a` and the 5 of `b` (rows `w` apart), for the outputs `kind` names.
-fn tile_portable(
-    ta: usize,
-    kind: Tile,
-    a: &[f64],
-    b: &[f64],
-    w: usize,
-    (k0, k1): (usize, usize),
-    acc: &mut [f64],
-) {
-    for r in 0..ta {
-        let (s_lo, s_hi) = match kind {
-            Tile::Full => (0, TB),
-            Tile::Upper => (r, TB),
-            Tile::Narrow(s) => (0, s),
-        };
-        for s in s_lo..s_hi {
-            let v = &mut acc[(r * TB + s) * LANES..(r * TB + s + 1) * LANES];
-            for k in (k0..k1).step_by(LANES) {
-                let (ar, bs) = (&a[r * w + k..r * w + k + LANES], &b[s * w + k..s * w + k + LANES]);
-                for l in 0..LANES {
-                    v[l] += ar[l] * bs[l];
-                }
-            }
-        }
-    }
-}
-
-/// [`tile_portable`] with AVX-512 (checked by the caller's caller), one instance per shape.
-fn tile_simd(
+/// `lanes::tile` with AVX-512 intrinsics (checked by the caller's caller), one instance per
+/// shape.
+#[cfg(target_arch = "x86_64")]
+fn tile_avx512(
     ta: usize,
     kind: Tile,
     a: &[f64],
@@ -155,7 +133,6 @@ fn tile_simd(
     assert!(a.len() >= ta * w && b.len() >= TB * w && w.is_multiple_of(LANES));
     assert!(cols.0 <= cols.1 && cols.1 <= w && cols.0.is_multiple_of(LANES));
     assert!(acc.len() >= ta * TB * LANES && (ta == 4 || ta == TB));
-    #[cfg(target_arch = "x86_64")]
     {
         let (a, b, acc) = (a.as_ptr(), b.as_ptr(), acc.as_mut_ptr());
         // SAFETY: the caller checked AVX-512F at run time; the slices hold ta (4 or 5) and 5
@@ -177,9 +154,5 @@ fn tile_simd(
                 (_, Tile::Narrow(_)) => avx512::tile::<TB, 4>(a, b, w, cols, acc),
             }
         }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        tile_portable(ta, kind, a, b, w, cols, acc)
     }
 }

@@ -4,7 +4,8 @@
 //! `f64`, the error `E = S − B` in `f32` and the running largest and smallest entry of `B`,
 //! in one pass over the row instead of five.
 
-use super::has_avx512;
+use super::runnable;
+use crate::simd::Isa;
 use half::f16;
 use half::slice::HalfFloatSliceExt;
 
@@ -19,21 +20,11 @@ pub fn round_to_f16(
     (hi, lo): (&mut f64, &mut f64),
     narrow: &mut [f32],
 ) {
-    round_to_f16_with(b, halves, stored, err, (hi, lo), narrow, has_avx512() && has_f16c());
+    round_to_f16_with(b, halves, stored, err, (hi, lo), narrow, Isa::active());
 }
 
-fn has_f16c() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("f16c")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
-}
-
-/// [`round_to_f16`] with the kernel chosen by the caller.
+/// [`round_to_f16`] on the path `isa` (all paths give the same bits: every step is a
+/// correctly rounded conversion, or exact).
 pub(crate) fn round_to_f16_with(
     b: &[f64],
     halves: &mut [f16],
@@ -41,20 +32,34 @@ pub(crate) fn round_to_f16_with(
     err: &mut [f32],
     (hi, lo): (&mut f64, &mut f64),
     narrow: &mut [f32],
-    simd: bool,
+    isa: Isa,
 ) {
     let w = b.len();
     assert!(halves.len() >= w && stored.len() >= w && err.len() >= w && narrow.len() >= w);
     let (halves, stored, err) = (&mut halves[..w], &mut stored[..w], &mut err[..w]);
-    if simd && has_avx512() && has_f16c() {
+    match runnable(isa) {
         #[cfg(target_arch = "x86_64")]
-        // SAFETY: AVX-512F and F16C were detected at run time; the function is safe code.
-        unsafe {
-            super::avx512::round_to_f16(b, halves, stored, err, (hi, lo))
-        };
+        // SAFETY: AVX-512F and F16C checked (`runnable`); the function is safe code.
+        Isa::Avx512 => unsafe { super::avx512::round_to_f16(b, halves, stored, err, (hi, lo)) },
         #[cfg(target_arch = "x86_64")]
-        return;
+        // SAFETY: AVX2, FMA and F16C checked (`runnable`); the function is safe code.
+        Isa::Avx2 => unsafe { super::avx2::round_to_f16(b, halves, stored, err, (hi, lo), narrow) },
+        _ => round_portable(b, halves, stored, err, (hi, lo), narrow),
     }
+}
+
+/// The portable rounding (scalar, AVX2 and NEON paths): the `half` crate's slice
+/// conversions (F16C or the ARM half-precision instructions where the CPU has them).
+#[inline(always)]
+pub(super) fn round_portable(
+    b: &[f64],
+    halves: &mut [f16],
+    stored: &mut [f64],
+    err: &mut [f32],
+    (hi, lo): (&mut f64, &mut f64),
+    narrow: &mut [f32],
+) {
+    let w = b.len();
     let narrow = &mut narrow[..w];
     narrow.iter_mut().zip(b).for_each(|(o, &v)| *o = v as f32);
     halves.convert_from_f32_slice(narrow);
@@ -73,7 +78,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn both_kernels_round_alike_down_to_subnormals_and_ties() {
+    fn every_path_rounds_alike_down_to_subnormals_and_ties() {
         // 45 values (five groups of 8 and a tail of 5): ordinary, f16-subnormal, exact
         // f16 ties (1 + 2⁻¹¹ rounds to even 1), and values that f32 rounding moves.
         let mut b: Vec<f64> = (0..45).map(|i| ((i * 37 % 91) as f64 / 91.0 - 0.4) * 0.9).collect();
@@ -81,16 +86,19 @@ mod tests {
         b[9] = 3.1e-7;
         b[17] = -6.0e-8;
         b[30] = 1.0 + 2f64.powi(-11) + 2f64.powi(-40);
-        let run = |simd: bool| {
+        let run = |isa: Isa| {
             let mut h = vec![f16::ZERO; 45];
             let (mut s, mut e, mut n) = (vec![0.0; 45], vec![0f32; 45], vec![0f32; 45]);
             let (mut hi, mut lo) = (0.0, 0.0);
-            round_to_f16_with(&b, &mut h, &mut s, &mut e, (&mut hi, &mut lo), &mut n, simd);
+            round_to_f16_with(&b, &mut h, &mut s, &mut e, (&mut hi, &mut lo), &mut n, isa);
             (h, s, e, hi, lo)
         };
-        let (p, v) = (run(false), run(true));
-        assert_eq!(p.0, v.0);
-        assert_eq!((p.1.clone(), p.2.clone(), p.3, p.4), (v.1, v.2, v.3, v.4));
+        let p = run(Isa::Scalar);
+        for isa in Isa::supported_all() {
+            let v = run(isa);
+            assert_eq!(p.0, v.0, "{isa}");
+            assert_eq!((p.1.clone(), p.2.clone(), p.3, p.4), (v.1, v.2, v.3, v.4), "{isa}");
+        }
         assert_eq!(p.0[3], f16::ONE, "a tie rounds to even");
         for t in 0..45 {
             assert_eq!(p.1[t], p.0[t].to_f64());

@@ -22,9 +22,10 @@
 
 use super::{BLOCK, centred_coef, finish_symmetric};
 use crate::kernels::{
-    Block, Block32, CrossAcc32, DotAcc, LIFT_COMPONENTS, Texel, lift_rows32, prefetch_rows,
-    round_to_f16,
+    Block, Block32, CrossAcc32, DotAcc, LIFT_COMPONENTS, Texel, lift_rows32_with, prefetch_rows,
+    round_to_f16_with,
 };
+use crate::simd::Isa;
 use half::f16;
 use half::slice::HalfFloatSliceExt;
 
@@ -61,11 +62,11 @@ pub(super) struct Fused {
 pub(super) fn lift_store_f16<T: Texel>(
     x: &[&[T]],
     m: usize,
-    lift: &mut [f64],
-    c: usize,
+    (lift, c): (&mut [f64], usize),
     effective: usize,
     mut raw: Vec<u8>,
     blocks: &mut Blocks,
+    isa: Isa,
 ) -> Fused {
     let n = x.len();
     let cp = c.div_ceil(LIFT_COMPONENTS) * LIFT_COMPONENTS;
@@ -90,26 +91,27 @@ pub(super) fn lift_store_f16<T: Texel>(
         // The images themselves, widened exactly to f32: the lift's coefficients are
         // centred (each column sums to zero over the images), so B = coefᵀX = coefᵀY, and
         // the row-centring of the cross terms below removes the shift by the first image.
-        y32.widen_from(x, c0, w);
+        y32.widen_from_with(x, c0, w, isa);
         let ws = y32.stride;
         prefetch_rows(x, c0 + w, BLOCK);
-        lift_rows32(y32, &coef, cp, lifted, ws, 0);
+        lift_rows32_with(y32, &coef, cp, lifted, ws, 0, isa);
         sb.shape(c, w);
         e32.shape(c, w);
         for k in 0..c {
             // f64 → f32 → f16 at unit scale, back to f64 exactly: the stored value, its
             // error and the row's extremes (used for k < effective only).
-            round_to_f16(
+            round_to_f16_with(
                 &lifted[k * ws..k * ws + w],
                 &mut halves[k * m + c0..k * m + c0 + w],
                 sb.row_mut(k),
                 e32.row_mut(k),
                 (&mut hi[k], &mut lo[k]),
                 &mut narrow,
+                isa,
             );
         }
-        cross_acc.add(e32, y32);
-        bgram_acc.add(sb, sb);
+        cross_acc.add_with(e32, y32, isa);
+        bgram_acc.add_with(sb, sb, isa);
     }
     let mut cross = vec![0f64; c * n];
     cross_acc.finish(&mut cross, n);

@@ -1,4 +1,4 @@
-//! The gather of eq. 10 (Sattler et al. 2003, §5.3) organised for speed: the sums of
+//! The gather of [S03 eq. 10] (§5.3) organised for speed: the sums of
 //! [`Radiances::gather_reference`], bit for bit, for all frames of a mesh.
 //!
 //! A vertex's front frame `(T, B, N)` and back frame `(T, B, −N)` (two-sided cloth, as

@@ -1,5 +1,5 @@
 //! The gathers of `[S03 eq. 10]`: the radiances `g_i` arriving at every vertex side
-//! through every measured light direction, and from them `γ*` and `U` (eq. 10–12).
+//! through every measured light direction, and from them `γ*` and `U` ([S03 eq. 10–12]).
 //!
 //! Per hemicube frame (a vertex side), the radiance arriving "through" every measured light
 //! direction `i` is `g_i = Σ_p h_i(p) · V(p) · L_env(R_δ · world(p)) · dω_p` (eq. 10's
@@ -109,7 +109,7 @@ impl Radiances {
         gamma_star_of(&self.g[f * 3 * self.lights..][..3 * self.lights], p, j, out);
     }
 
-    /// The whole of `U` (eq. 12) as one product `G · P`: row `(frame, channel)`, column
+    /// The whole of `U` ([S03 eq. 12]) as one product `G · P`: row `(frame, channel)`, column
     /// `(slot, [mean, bias, components])`.
     pub fn full_u(&self, p: &CoefficientMatrix) -> Vec<f32> {
         let rows = self.frames * 3;

@@ -1,5 +1,5 @@
 //! A bounding-volume hierarchy over the mesh triangles for the occlusion rays of the
-//! visibility maps (Sattler et al. 2003, §5.2: `V(x, p_α)` of eq. 9).
+//! visibility maps ([S03 §5.2]: `V(x, p_α)` of [S03 eq. 9]).
 //!
 //! Built top-down by the binned surface-area heuristic over triangle centroids (the median
 //! of the longest axis where no bin boundary splits a set; leaves of at most [`LEAF_SIZE`]

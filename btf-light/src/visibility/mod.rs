@@ -1,6 +1,6 @@
 //! Per-vertex visibility maps (Sattler et al. 2003, §5.2): for every vertex side, which
 //! pixels of its tangent-space hemicube see the environment past the whole mesh — the
-//! factor `V(x, p_α)` of eq. 9 that gives macroscopic self-shadowing.
+//! factor `V(x, p_α)` of [S03 eq. 9] that gives macroscopic self-shadowing.
 //!
 //! Definition: one any-hit ray per hemicube pixel centre against the mesh
 //! ([`VisibilityMaps::compute_ray_cast`], a [`Bvh`] query per ray). The fast path

@@ -1,5 +1,5 @@
 //! Visibility of one hemicube by projecting the mesh onto it (Sattler et al. 2003, §5.2:
-//! the `V(x, p_α)` of eq. 9), with the answer of one ray per pixel centre.
+//! the `V(x, p_α)` of [S03 eq. 9]), with the answer of one ray per pixel centre.
 //!
 //! Per frame (vertex side) the BVH is walked nearest child first. A node whose box lies
 //! below the cone of the lowest pixel rays around the ray origin (`z < 0.9 · min_p(d_z /

@@ -1,5 +1,5 @@
 //! Eight hemicube pixel rays at a time for the rasteriser of [`super::raster`] (Sattler et
-//! al. 2003, §5.2: the `V(x, p_α)` of eq. 9): the reference's any-hit tests — the slab test
+//! al. 2003, §5.2: the `V(x, p_α)` of [S03 eq. 9]): the reference's any-hit tests — the slab test
 //! of a BVH box and the Möller–Trumbore test of [`super::bvh`] — evaluated for eight
 //! rays in lanes ("an octet"), plus a packet traversal of a BVH subtree with up to
 //! [`PACKET`] rays that visits each node once for all the rays still open, nearer child

@@ -68,16 +68,21 @@ pub fn curtain((nu, nv): (usize, usize)) -> Mesh {
     m
 }
 
-/// A tube around the axis from `base` along unit `axis` (length `len`), radius
-/// `radius(s, t)` at angle `2πs` and fraction `t` of the length; `side` is the unit vector
-/// at `s = 0`. UVs: `u` = arc length around (m) + `u0`, `v` = distance along the axis (m).
+/// The axis of a [`tube`]: from `base` along unit `dir` for `len`; `side` is the unit
+/// vector at angle 0.
+struct TubeAxis {
+    base: V3,
+    dir: V3,
+    side: V3,
+    len: f64,
+}
+
+/// A tube around `axis`, radius `radius(s, t)` at angle `2πs` and fraction `t` of the
+/// length. UVs: `u` = arc length around (m) + `u0`, `v` = distance along the axis (m).
 fn tube(
     m: &mut Mesh,
     (nu, nv): (usize, usize),
-    base: V3,
-    axis: V3,
-    side: V3,
-    len: f64,
+    TubeAxis { base, dir: axis, side, len }: TubeAxis,
     u0: f64,
     radius: impl Fn(f64, f64) -> f64,
 ) {
@@ -101,7 +106,9 @@ fn tube(
 pub fn shirt(high: bool) -> Mesh {
     let (torso, sleeve) = if high { ((96, 51), (48, 41)) } else { ((32, 16), (12, 13)) };
     let mut m = Mesh::default();
-    tube(&mut m, torso, [0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0], 0.72, 0.0, |s, t| {
+    let torso_axis =
+        TubeAxis { base: [0.0; 3], dir: [0.0, 0.0, 1.0], side: [1.0, 0.0, 0.0], len: 0.72 };
+    tube(&mut m, torso, torso_axis, 0.0, |s, t| {
         let phi = 2.0 * PI * s;
         let (a, b) = (0.19, 0.12);
         let ellipse = a * b / ((b * phi.cos()).powi(2) + (a * phi.sin()).powi(2)).sqrt();
@@ -118,7 +125,8 @@ pub fn shirt(high: bool) -> Mesh {
         let len = 0.58;
         let base = add(shoulder, scale(axis, -len));
         let side_vec = normalize_or(cross(axis, [0.0, 1.0, 0.0]), [0.0, 0.0, 1.0]);
-        tube(&mut m, sleeve, base, axis, side_vec, len, 2.0 + side, |s, t| {
+        let sleeve_axis = TubeAxis { base, dir: axis, side: side_vec, len };
+        tube(&mut m, sleeve, sleeve_axis, 2.0 + side, |s, t| {
             let r = 0.05 + 0.025 * t;
             r * (1.0
                 + 0.07 * (28.0 * t + 2.0 * PI * s).sin() * (1.0 - t)
@@ -134,7 +142,9 @@ pub fn shirt(high: bool) -> Mesh {
 pub fn trousers(high: bool) -> Mesh {
     let (hip, leg) = if high { ((96, 31), (72, 40)) } else { ((32, 8), (24, 12)) };
     let mut m = Mesh::default();
-    tube(&mut m, hip, [0.0, 0.0, 0.7], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0], 0.3, 0.0, |s, t| {
+    let hip_axis =
+        TubeAxis { base: [0.0, 0.0, 0.7], dir: [0.0, 0.0, 1.0], side: [1.0, 0.0, 0.0], len: 0.3 };
+    tube(&mut m, hip, hip_axis, 0.0, |s, t| {
         let phi = 2.0 * PI * s;
         let (a, b) = (0.2 - 0.02 * t, 0.14 - 0.02 * t);
         let ellipse = a * b / ((b * phi.cos()).powi(2) + (a * phi.sin()).powi(2)).sqrt();
@@ -144,10 +154,12 @@ pub fn trousers(high: bool) -> Mesh {
         tube(
             &mut m,
             leg,
-            [side * 0.1, 0.0, 0.0],
-            [0.0, 0.0, 1.0],
-            [1.0, 0.0, 0.0],
-            0.8,
+            TubeAxis {
+                base: [side * 0.1, 0.0, 0.0],
+                dir: [0.0, 0.0, 1.0],
+                side: [1.0, 0.0, 0.0],
+                len: 0.8,
+            },
             2.0 + k as f64,
             |s, t| {
                 let phi = 2.0 * PI * s;

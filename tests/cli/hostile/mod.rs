@@ -6,7 +6,8 @@
 //! the toolkit did not make ([`replace`]), leftovers after a refusal ([`leftovers`]),
 //! non-finite values ([`nonfinite`]), extreme finite values ([`extreme`]), panics
 //! ([`panics`]), a full disk ([`disk_full`]), resumes of another job ([`resume`]) and
-//! `kill -9` in the middle of a write ([`kill`]). Each test asserts what survives
+//! `kill -9` in the middle of a write ([`kill`]); the knit commands under all of them
+//! ([`knit`]). Each test asserts what survives
 //! (a snapshot of the input's bytes) and what the message names.
 
 use crate::common;
@@ -15,6 +16,7 @@ mod claims;
 mod disk_full;
 mod extreme;
 mod kill;
+mod knit;
 mod leftovers;
 mod nonfinite;
 mod overlap;

@@ -174,7 +174,7 @@ impl GaussianLobe {
         // Work in the lower tail for accuracy (mirror when the interval lies above 0).
         let (a2, b2, sign) = if a > 0.0 { (-b, -a, -1.0) } else { (a, b, 1.0) };
         let (ca, cb) = (norm_cdf(a2), norm_cdf(b2));
-        if !(cb - ca > 1e-300) {
+        if cb - ca <= 1e-300 || (cb - ca).is_nan() {
             return sample_cos2(u);
         }
         let x = norm_inv(ca + u * (cb - ca)).clamp(a2, b2);
@@ -186,7 +186,7 @@ impl GaussianLobe {
         let (mu, sigma, a, b) = self.truncated(to);
         let (a2, b2) = if a > 0.0 { (-b, -a) } else { (a, b) };
         let z = norm_cdf(b2) - norm_cdf(a2);
-        if !(z > 1e-300) {
+        if z <= 1e-300 || z.is_nan() {
             return pdf_cos2(ti);
         }
         if !(-FRAC_PI_2..=FRAC_PI_2).contains(&ti) {

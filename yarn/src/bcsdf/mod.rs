@@ -28,7 +28,7 @@ pub mod models;
 pub use ambient::AmbientTable;
 pub use azimuthal::Azimuthal;
 pub use longitudinal::{Longitudinal, Normalization};
-pub use models::{HuangParams, KhungurnParams, SimpleParams};
+pub use models::{HuangParams, KhungurnParams, RtShape, SimpleParams};
 
 use crate::frame::Frame;
 use crate::vec3::{self, V3};

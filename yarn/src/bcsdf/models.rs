@@ -49,14 +49,8 @@ pub struct KhungurnParams {
     pub a_tt: [f64; 3],
     /// Diffuse colour.
     pub kd: [f64; 3],
-    /// R width β_R (radians).
-    pub beta_r: f64,
-    /// TT width β_TT (radians).
-    pub beta_tt: f64,
-    /// TT azimuthal width γ_TT (radians).
-    pub gamma_tt: f64,
-    /// Cuticle tilt α (radians).
-    pub tilt: f64,
+    /// Widths and tilt of the R and TT lobes.
+    pub shape: RtShape,
     /// Normalisation of the Gaussians.
     pub normalization: Normalization,
 }
@@ -67,12 +61,56 @@ impl Default for KhungurnParams {
             a_r: [0.2; 3],
             a_tt: [0.5; 3],
             kd: [0.3; 3],
-            beta_r: 4.0 * DEG,
-            beta_tt: 12.0 * DEG,
-            gamma_tt: 25.0 * DEG,
-            tilt: 5.0 * DEG,
+            shape: RtShape::default(),
             normalization: Normalization::EnergyConserving,
         }
+    }
+}
+
+/// The shape of the R and TT lobes shared by models (b) and (c): Gaussian widths in θ_h,
+/// the von Mises width of TT about φ = π, and the cuticle tilt that shifts R by `−α` and TT
+/// by `+α/2`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RtShape {
+    /// R width β_R (radians).
+    pub beta_r: f64,
+    /// TT width β_TT (radians).
+    pub beta_tt: f64,
+    /// TT azimuthal width γ_TT (radians).
+    pub gamma_tt: f64,
+    /// Cuticle tilt α (radians).
+    pub tilt: f64,
+}
+
+impl Default for RtShape {
+    fn default() -> Self {
+        RtShape { beta_r: 4.0 * DEG, beta_tt: 12.0 * DEG, gamma_tt: 25.0 * DEG, tilt: 5.0 * DEG }
+    }
+}
+
+impl RtShape {
+    /// The R and TT lobes of colours `a_r`, `a_tt` (checked, with the parameter named).
+    fn lobes(&self, a_r: [f64; 3], a_tt: [f64; 3], n: Normalization) -> Result<[Lobe; 2]> {
+        check("beta_r", self.beta_r, DEG, 60.0 * DEG)?;
+        check("beta_tt", self.beta_tt, DEG, 60.0 * DEG)?;
+        check("gamma_tt", self.gamma_tt, 0.5 * DEG, 180.0 * DEG)?;
+        check("tilt", self.tilt, -10.0 * DEG, 10.0 * DEG)?;
+        check_color("a_r", a_r)?;
+        check_color("a_tt", a_tt)?;
+        Ok([
+            Lobe {
+                name: "R",
+                color: a_r,
+                m: gaussian(self.beta_r, -self.tilt, n),
+                n: Azimuthal::Uniform,
+            },
+            Lobe {
+                name: "TT",
+                color: a_tt,
+                m: gaussian(self.beta_tt, 0.5 * self.tilt, n),
+                n: Azimuthal::VonMises(VonMises::new(self.gamma_tt)),
+            },
+        ])
     }
 }
 
@@ -85,27 +123,13 @@ pub struct HuangParams {
     pub a_tt: [f64; 3],
     /// D (diffuse cylinder) colour.
     pub a_d: [f64; 3],
-    /// R width (radians).
-    pub beta_r: f64,
-    /// TT width (radians).
-    pub beta_tt: f64,
-    /// TT azimuthal width (radians).
-    pub gamma_tt: f64,
-    /// Cuticle tilt (radians).
-    pub tilt: f64,
+    /// Widths and tilt of the R and TT lobes.
+    pub shape: RtShape,
 }
 
 impl Default for HuangParams {
     fn default() -> Self {
-        HuangParams {
-            a_r: [0.15; 3],
-            a_tt: [0.45; 3],
-            a_d: [0.4; 3],
-            beta_r: 4.0 * DEG,
-            beta_tt: 12.0 * DEG,
-            gamma_tt: 25.0 * DEG,
-            tilt: 5.0 * DEG,
-        }
+        HuangParams { a_r: [0.15; 3], a_tt: [0.45; 3], a_d: [0.4; 3], shape: RtShape::default() }
     }
 }
 
@@ -160,65 +184,18 @@ impl FiberBcsdf {
 
     /// Model (b): Khungurn R + TT [W19 eq. 6–10] + diffuse.
     pub fn khungurn(p: &KhungurnParams) -> Result<Self> {
-        check_rt(p.beta_r, p.beta_tt, p.gamma_tt, p.tilt)?;
-        check_color("a_r", p.a_r)?;
-        check_color("a_tt", p.a_tt)?;
         check_color("kd", p.kd)?;
-        let n = p.normalization;
-        Ok(FiberBcsdf {
-            lobes: vec![
-                Lobe {
-                    name: "R",
-                    color: p.a_r,
-                    m: gaussian(p.beta_r, -p.tilt, n),
-                    n: Azimuthal::Uniform,
-                },
-                Lobe {
-                    name: "TT",
-                    color: p.a_tt,
-                    m: gaussian(p.beta_tt, 0.5 * p.tilt, n),
-                    n: Azimuthal::VonMises(VonMises::new(p.gamma_tt)),
-                },
-                Lobe {
-                    name: "diffuse",
-                    color: p.kd,
-                    m: Longitudinal::Constant,
-                    n: Azimuthal::Uniform,
-                },
-            ],
-        })
+        let [r, tt] = p.shape.lobes(p.a_r, p.a_tt, p.normalization)?;
+        let diffuse =
+            Lobe { name: "diffuse", color: p.kd, m: Longitudinal::Constant, n: Azimuthal::Uniform };
+        Ok(FiberBcsdf { lobes: vec![r, tt, diffuse] })
     }
 
     /// Model (c): R + TT + D for [H25 eq. 7].
     pub fn huang(p: &HuangParams) -> Result<Self> {
-        check_rt(p.beta_r, p.beta_tt, p.gamma_tt, p.tilt)?;
-        check_color("a_r", p.a_r)?;
-        check_color("a_tt", p.a_tt)?;
         check_color("a_d", p.a_d)?;
-        let n = Normalization::EnergyConserving;
-        Ok(FiberBcsdf {
-            lobes: vec![
-                Lobe {
-                    name: "R",
-                    color: p.a_r,
-                    m: gaussian(p.beta_r, -p.tilt, n),
-                    n: Azimuthal::Uniform,
-                },
-                Lobe {
-                    name: "TT",
-                    color: p.a_tt,
-                    m: gaussian(p.beta_tt, 0.5 * p.tilt, n),
-                    n: Azimuthal::VonMises(VonMises::new(p.gamma_tt)),
-                },
-                Lobe { name: "D", color: p.a_d, m: Longitudinal::Constant, n: Azimuthal::Cylinder },
-            ],
-        })
+        let [r, tt] = p.shape.lobes(p.a_r, p.a_tt, Normalization::EnergyConserving)?;
+        let d = Lobe { name: "D", color: p.a_d, m: Longitudinal::Constant, n: Azimuthal::Cylinder };
+        Ok(FiberBcsdf { lobes: vec![r, tt, d] })
     }
-}
-
-fn check_rt(beta_r: f64, beta_tt: f64, gamma_tt: f64, tilt: f64) -> Result<()> {
-    check("beta_r", beta_r, DEG, 60.0 * DEG)?;
-    check("beta_tt", beta_tt, DEG, 60.0 * DEG)?;
-    check("gamma_tt", gamma_tt, 0.5 * DEG, 180.0 * DEG)?;
-    check("tilt", tilt, -10.0 * DEG, 10.0 * DEG)
 }

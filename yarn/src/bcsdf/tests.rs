@@ -1,3 +1,7 @@
+//! BCSDF checks after Mitsuba's hair tests: white furnace (brute-force 2-D quadrature,
+//! 64 θ_o), reciprocity, sample/pdf/eval consistency, χ² of every sampler, and the ambient
+//! tables of [W19 eq. 8–10] against brute force.
+
 use super::*;
 use crate::hash::KeyRng;
 use crate::quad::GaussLegendre;

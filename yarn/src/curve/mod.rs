@@ -23,7 +23,13 @@
 //! than two and closed curves of fewer than three points. A closed curve of three points
 //! is an ordinary smooth loop. Non-finite values are refused naming the curve and point.
 
+mod basis;
 mod length;
+mod set;
+
+pub(crate) use basis::combine;
+pub use basis::{basis, basis_d1, basis_d2};
+pub use set::YarnSet;
 
 use crate::vec3::{self, V3};
 use crate::{Error, Result};
@@ -82,7 +88,7 @@ impl YarnCurve {
             shift,
             length_wrap: 0.0,
         };
-        c.validate(0).map_err(|e| strip_index(e))?;
+        c.validate(0).map_err(strip_index)?;
         c.set_rest_length_coords();
         Ok(c)
     }
@@ -244,6 +250,17 @@ impl YarnCurve {
         combine(&self.window(s), basis_d2(t))
     }
 
+    /// The point of segment `seg` (virtual index on closed curves) at local `t ∈ [0, 1]`
+    /// (so the two segments meeting at a control point can both be asked there).
+    pub fn segment_point(&self, seg: isize, t: f64) -> V3 {
+        combine(&self.window(seg), basis(t))
+    }
+
+    /// `dC/du` of segment `seg` at local `t`.
+    pub fn segment_derivative(&self, seg: isize, t: f64) -> V3 {
+        combine(&self.window(seg), basis_d1(t))
+    }
+
     /// The length coordinate z(u) (Catmull–Rom of the per-point values).
     pub fn length_coord(&self, u: f64) -> f64 {
         let (s, t) = self.locate(u);
@@ -340,93 +357,6 @@ fn strip_index(e: Error) -> Error {
             1,
         )),
         other => other,
-    }
-}
-
-/// Catmull–Rom weights of `P_{i−1}, P_i, P_{i+1}, P_{i+2}` at `t`.
-#[inline]
-pub fn basis(t: f64) -> [f64; 4] {
-    let (t2, t3) = (t * t, t * t * t);
-    [
-        0.5 * (-t3 + 2.0 * t2 - t),
-        0.5 * (3.0 * t3 - 5.0 * t2 + 2.0),
-        0.5 * (-3.0 * t3 + 4.0 * t2 + t),
-        0.5 * (t3 - t2),
-    ]
-}
-
-/// First derivatives of [`basis`].
-#[inline]
-pub fn basis_d1(t: f64) -> [f64; 4] {
-    let t2 = t * t;
-    [
-        0.5 * (-3.0 * t2 + 4.0 * t - 1.0),
-        0.5 * (9.0 * t2 - 10.0 * t),
-        0.5 * (-9.0 * t2 + 8.0 * t + 1.0),
-        0.5 * (3.0 * t2 - 2.0 * t),
-    ]
-}
-
-/// Second derivatives of [`basis`].
-#[inline]
-pub fn basis_d2(t: f64) -> [f64; 4] {
-    [
-        0.5 * (-6.0 * t + 4.0),
-        0.5 * (18.0 * t - 10.0),
-        0.5 * (-18.0 * t + 8.0),
-        0.5 * (6.0 * t - 2.0),
-    ]
-}
-
-/// `Σ w_j p_j`, computed as `(Σ w_j)·p_1 + Σ w_j (p_j − p_1)`: the derivative weights sum
-/// to zero, so coincident points give an exactly zero derivative (no rounding noise for
-/// the tangent fallback and the arc-length quadrature to chase), and positions lose no
-/// digits far from the origin.
-#[inline]
-pub(crate) fn combine(p: &[V3; 4], w: [f64; 4]) -> V3 {
-    // Position weights sum to 1, derivative weights to 0 (up to rounding).
-    let sum = w[0] + w[1] + w[2] + w[3];
-    let base_weight = if sum.abs() > 0.5 { sum } else { 0.0 };
-    let mut r = vec3::scale(p[1], base_weight);
-    for j in [0, 2, 3] {
-        for a in 0..3 {
-            r[a] += w[j] * (p[j][a] - p[1][a]);
-        }
-    }
-    r
-}
-
-/// A set of yarn curves, optionally periodic with period `[px, py]` (metres) in x and y.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct YarnSet {
-    /// The curves.
-    pub curves: Vec<YarnCurve>,
-    /// The period of a periodic patch (the set is invariant under translation by
-    /// `(px, 0, 0)` and `(0, py, 0)`).
-    pub period: Option<[f64; 2]>,
-}
-
-impl YarnSet {
-    /// A validated set.
-    pub fn new(curves: Vec<YarnCurve>, period: Option<[f64; 2]>) -> Result<Self> {
-        let s = YarnSet { curves, period };
-        s.validate()?;
-        Ok(s)
-    }
-
-    /// Checks every curve (the error names the curve index) and the period.
-    pub fn validate(&self) -> Result<()> {
-        if let Some([px, py]) = self.period
-            && !(px.is_finite() && py.is_finite() && px > 0.0 && py > 0.0)
-        {
-            return Err(Error::Invalid(format!(
-                "yarn set period [{px}, {py}] must be finite and positive"
-            )));
-        }
-        for (i, c) in self.curves.iter().enumerate() {
-            c.validate(i)?;
-        }
-        Ok(())
     }
 }
 

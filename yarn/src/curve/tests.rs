@@ -1,3 +1,6 @@
+//! Curve checks: interpolation, analytic derivatives, arc length and length coordinates,
+//! wrapping of closed and periodic curves, and the hard cases of DESIGN §4.4.
+
 use super::*;
 use crate::vec3::{distance, length};
 

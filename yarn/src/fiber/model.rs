@@ -236,6 +236,19 @@ impl FiberModel<'_> {
         yp.offset(self.fiber_offset(yp.z, ply, fiber))
     }
 
+    /// `fiber_point(curve, frame, fiber, u)` of DESIGN §2.7: the point of fiber `fiber` of ply
+    /// `ply` at curve parameter `u` (the CPU reference a GPU fiber pass is tested against).
+    pub fn fiber_point(
+        &self,
+        curve: &YarnCurve,
+        frames: &CurveFrames,
+        ply: usize,
+        fiber: usize,
+        u: f64,
+    ) -> V3 {
+        self.point(&YarnPoint::at(curve, frames, u), ply, fiber)
+    }
+
     /// A hair's offset at its parameter `t ∈ [0, 1]`: `(z, [a, b])`, the length coordinate
     /// and the `(N, B)` coefficients at that z. `sigma0` is the slot coordinate of the
     /// hair's crossing of `r_0`.

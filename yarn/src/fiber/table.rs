@@ -96,12 +96,14 @@ impl FiberTable {
             let mut ply_fibers: Vec<(FiberRecord, usize)> = (0..n)
                 .map(|i| {
                     let mut rng = KeyRng::new(&[seed, yarn, ply, i as u64, STREAM_FIBER]);
-                    let r = loop {
-                        let r = params.r_max * rng.uniform().sqrt();
+                    // p(0) ≥ 1/2, so acceptance never vanishes; the cap only bounds the loop.
+                    let mut r = 0.0;
+                    for _ in 0..1_000_000 {
+                        r = params.r_max * rng.uniform().sqrt();
                         if rng.uniform() < params.density_p(r) {
-                            break r;
+                            break;
                         }
-                    };
+                    }
                     let theta = std::f64::consts::TAU * rng.uniform();
                     let migration_phase = std::f64::consts::TAU * rng.uniform();
                     (FiberRecord { r, theta, migration_phase, core: false }, i)

@@ -1,3 +1,7 @@
+//! Generator checks: KS of the radii against R·p(R), pitches and ply distance on a straight
+//! yarn, migration bounds and period, flyaway counts (Poisson), thread-count determinism and
+//! exact periodicity of periodic courses.
+
 use super::*;
 use crate::curve::{YarnCurve, YarnSet};
 use crate::frame::CurveFrames;
@@ -205,6 +209,9 @@ fn vanishing_fibers_and_tiny_loops_stay_finite() {
     assert!(fib.points.iter().all(|q| q.iter().all(|x| x.is_finite())));
     assert!(fib.radii.iter().all(|r| *r == 0.0));
     assert_eq!(fib.offsets.len(), fib.fiber_count() + 1);
+    // An empty set gives no fibers (DESIGN §4.4).
+    let empty = generate_fibers(&YarnSet::default(), &[], &GenOptions::default()).unwrap();
+    assert_eq!((empty.fiber_count(), empty.points.len()), (0, 0));
     let mut bad = p.clone();
     bad.fibers_per_ply = 5000;
     let big = GenOptions { max_points: 10_000, ..GenOptions::default() };

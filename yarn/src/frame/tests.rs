@@ -1,3 +1,6 @@
+//! Frame checks: exact anchoring, continuity where the tangent turns through the surface
+//! normal (the step shrinks with the sampling step), closure on loops and periodic courses.
+
 use super::*;
 use crate::vec3::{dot, length};
 

@@ -74,7 +74,7 @@ pub struct YarnParams {
     pub fiber_pitch: f64,
     /// ε of p(R), in `[0, 0.5]`.
     pub density_epsilon: f64,
-    /// β of p(R), ≥ 0.
+    /// β of p(R), in `[0, 100]`.
     pub density_beta: f64,
     /// R_max of p(R) (normalised radius; 1 in all of [Z16]'s fits), > 0.
     pub r_max: f64,
@@ -178,6 +178,9 @@ impl YarnParams {
                 return bad(field, v, "must be finite");
             }
         }
+        if self.density_beta > 100.0 {
+            return bad("density_beta", self.density_beta, "at most 100 (fits are below 1)");
+        }
         if !(0.0..=0.5).contains(&self.density_epsilon) {
             return bad("density_epsilon", self.density_epsilon, "must lie in [0, 0.5]");
         }
@@ -280,7 +283,8 @@ mod tests {
         p.rho_min = p.rho_max;
         p.migration_rate = 0.0;
         p.validate().unwrap();
-        let cases: [(&str, fn(&mut YarnParams)); 6] = [
+        type Edit = fn(&mut YarnParams);
+        let cases: [(&str, Edit); 6] = [
             ("fiber_radius", |p| p.fiber_radius = -1e-6),
             ("ply_count", |p| p.ply_count = 0),
             ("ply_ellipse_n", |p| p.ply_ellipse_n = f64::NAN),

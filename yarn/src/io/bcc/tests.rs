@@ -1,3 +1,5 @@
+//! BCC checks: bit-exact round trip, refusals of hostile headers and curves (named), y-up.
+
 use super::*;
 
 fn sample_set() -> YarnSet {
