@@ -54,7 +54,12 @@ pub fn run(a: GarmentArgs) -> Result<()> {
     let size = Size::from_name(&a.size)?;
     let mut o = GarmentOptions::new(size);
     let m = &mut o.body.measurements;
-    for (v, slot) in [(a.height, &mut m.height_m), (a.chest, &mut m.chest_m), (a.waist, &mut m.waist_m), (a.hip, &mut m.hip_m)] {
+    for (v, slot) in [
+        (a.height, &mut m.height_m),
+        (a.chest, &mut m.chest_m),
+        (a.waist, &mut m.waist_m),
+        (a.hip, &mut m.hip_m),
+    ] {
         if let Some(v) = v {
             *slot = v;
         }
@@ -67,7 +72,8 @@ pub fn run(a: GarmentArgs) -> Result<()> {
     if let Some(p) = &a.body_out {
         outputs.push(("--body-out", p.as_path()));
     }
-    let inputs: Vec<(&str, &std::path::Path)> = a.body.iter().map(|p| ("--body", p.as_path())).collect();
+    let inputs: Vec<(&str, &std::path::Path)> =
+        a.body.iter().map(|p| ("--body", p.as_path())).collect();
     crate::guard::refuse_overlap(&outputs, &inputs)?;
     for (_, p) in &outputs {
         crate::guard::check_file(p, btf_core::fs::TEXT)?;
@@ -75,15 +81,21 @@ pub fn run(a: GarmentArgs) -> Result<()> {
     let t0 = std::time::Instant::now();
     let body_file = match &a.body {
         Some(p) => {
-            let mesh = datasets::read_obj(p).with_context(|| format!("reading --body {}", p.display()))?;
-            Some(Body::from_mesh(mesh, o.body.sdf_step_m).with_context(|| format!("--body {}", p.display()))?)
+            let mesh =
+                datasets::read_obj(p).with_context(|| format!("reading --body {}", p.display()))?;
+            Some(
+                Body::from_mesh(mesh, o.body.sdf_step_m)
+                    .with_context(|| format!("--body {}", p.display()))?,
+            )
         }
         None => None,
     };
     let comment = format!("btf synth garment --kind {} --size {}", a.kind, a.size);
     if a.kind == "body" {
         if a.body.is_some() {
-            bail!("--kind body makes the mannequin; --body is for draping a garment on another body");
+            bail!(
+                "--kind body makes the mannequin; --body is for draping a garment on another body"
+            );
         }
         let body = Body::new(&o.body)?;
         datasets::write_obj_material(&body.mesh, &a.output, &comment, Some("body"))?;
@@ -109,7 +121,12 @@ pub fn run(a: GarmentArgs) -> Result<()> {
     bar.finish_and_clear();
     datasets::write_obj(&g.mesh, &a.output, &comment)?;
     if let Some(p) = &a.body_out {
-        datasets::write_obj_material(&body.mesh, p, &format!("{comment} (its body)"), Some("body"))?;
+        datasets::write_obj_material(
+            &body.mesh,
+            p,
+            &format!("{comment} (its body)"),
+            Some("body"),
+        )?;
     }
     let topo = check::topology(g.mesh.positions.len(), &g.mesh.triangles);
     eprintln!(

@@ -62,9 +62,10 @@ const KINDS: [Change; 5] =
 
 fn timing(ui: &mut egui::Ui, v: &Viewer, log: &LatencyLog) {
     let frame = v.last.map_or("-".to_string(), |l| format!("{:.1} ms", l.total_ms()));
-    let size = v.shown.as_ref().map_or("-".to_string(), |s| {
-        format!("{} x {} px", s.texture.width(), s.texture.height())
-    });
+    let size = v
+        .shown
+        .as_ref()
+        .map_or("-".to_string(), |s| format!("{} x {} px", s.texture.width(), s.texture.height()));
     ui.monospace(format!("frame {frame:>10}")).on_hover_text(
         "time from the last change to the finished frame (work before rendering + rendering)",
     );
@@ -86,7 +87,14 @@ fn timing(ui: &mut egui::Ui, v: &Viewer, log: &LatencyLog) {
         };
         let hover = log.by_kind.get(kind.name()).map_or_else(
             || format!("{}: not done yet", kind.name()),
-            |l| format!("{}: {:.1} ms update + {:.1} ms render", kind.name(), l.update_ms, l.render_ms),
+            |l| {
+                format!(
+                    "{}: {:.1} ms update + {:.1} ms render",
+                    kind.name(),
+                    l.update_ms,
+                    l.render_ms
+                )
+            },
         );
         ui.monospace(line).on_hover_text(hover);
     }

@@ -71,7 +71,9 @@ impl Measurements {
             if v.is_finite() && (lo..=hi).contains(&v) {
                 Ok(())
             } else {
-                Err(Error::Invalid(format!("body {name} (--{name}) = {v} m is outside {lo} … {hi} m")))
+                Err(Error::Invalid(format!(
+                    "body {name} (--{name}) = {v} m is outside {lo} … {hi} m"
+                )))
             }
         };
         check("height", self.height_m, 1.2, 2.2)?;
@@ -281,10 +283,7 @@ impl Mannequin {
         let landmarks = Landmarks {
             neck_base_z,
             neck_radius,
-            shoulder: [
-                [shoulder_half, 0.0, shoulder_z],
-                [-shoulder_half, 0.0, shoulder_z],
-            ],
+            shoulder: [[shoulder_half, 0.0, shoulder_z], [-shoulder_half, 0.0, shoulder_z]],
             armpit_z,
             chest_z,
             waist_z,
@@ -324,7 +323,11 @@ impl Mannequin {
         let [a, b] = self.torso_section(p[2]);
         let z0 = self.sections[0][0];
         let z1 = self.sections[self.sections.len() - 1][0];
-        let torso = smax(smax(ellipse_distance(p[0], p[1], a, b), z0 - p[2], 0.04 * s), p[2] - z1, 0.02 * s);
+        let torso = smax(
+            smax(ellipse_distance(p[0], p[1], a, b), z0 - p[2], 0.04 * s),
+            p[2] - z1,
+            0.02 * s,
+        );
         let neck = tapered_capsule(
             p,
             [0.0, 0.0, l.neck_base_z - 0.04 * s],
@@ -353,7 +356,11 @@ impl Mannequin {
             let shin = tapered_capsule(p, k, an, q1 * 1.02, q2);
             let [f0, f1] = self.feet[i];
             let foot = tapered_capsule(p, f0, f1, 0.033 * s, 0.028 * s);
-            let limb = smin(smin(thigh, shin, 0.03 * s), smin(foot, tapered_capsule(p, an, f0, q2, 0.033 * s), 0.02 * s), 0.03 * s);
+            let limb = smin(
+                smin(thigh, shin, 0.03 * s),
+                smin(foot, tapered_capsule(p, an, f0, q2, 0.033 * s), 0.02 * s),
+                0.03 * s,
+            );
             d = smin(d, limb, 0.03 * s);
         }
         d
@@ -363,10 +370,7 @@ impl Mannequin {
     pub fn bounds(&self) -> (V3, V3) {
         let l = &self.landmarks;
         let reach = l.arm[0][2][0] + 0.2 * l.height / 1.76;
-        (
-            [-reach, -0.35 * l.height / 1.76, -0.02],
-            [reach, 0.3 * l.height / 1.76, l.height + 0.03],
-        )
+        ([-reach, -0.35 * l.height / 1.76, -0.02], [reach, 0.3 * l.height / 1.76, l.height + 0.03])
     }
 }
 
@@ -406,11 +410,7 @@ impl Body {
 fn cylindrical_uvs(mesh: &mut Mesh) {
     let r = 0.15;
     let period = 2.0 * PI * r;
-    mesh.uvs = mesh
-        .positions
-        .iter()
-        .map(|p| [r * (p[0].atan2(-p[1]) + PI), p[2]])
-        .collect();
+    mesh.uvs = mesh.positions.iter().map(|p| [r * (p[0].atan2(-p[1]) + PI), p[2]]).collect();
     mesh.triangle_uvs = mesh.triangles.clone();
     let n = mesh.triangles.len();
     for t in 0..n {

@@ -38,7 +38,12 @@ pub fn topology(n: usize, triangles: &[[u32; 3]]) -> Topology {
         *undirected.entry((a.min(b), a.max(b))).or_default() += c;
     }
     let non_manifold_edges = undirected.values().filter(|&&c| c > 2).count();
-    let misoriented_edges = directed.iter().filter(|&(&(a, b), &c)| a < b && (c > 1 || directed.get(&(b, a)).copied().unwrap_or(0) > 1)).count();
+    let misoriented_edges = directed
+        .iter()
+        .filter(|&(&(a, b), &c)| {
+            a < b && (c > 1 || directed.get(&(b, a)).copied().unwrap_or(0) > 1)
+        })
+        .count();
     // Boundary half-edges a → b with no b → a.
     let mut next: HashMap<u32, Vec<u32>> = HashMap::new();
     for &(a, b) in directed.keys() {
@@ -84,7 +89,9 @@ pub fn topology(n: usize, triangles: &[[u32; 3]]) -> Topology {
         if ts.len() <= 1 {
             continue;
         }
-        let others = |ti: usize| -> Vec<u32> { triangles[ti].iter().copied().filter(|&w| w != v as u32).collect() };
+        let others = |ti: usize| -> Vec<u32> {
+            triangles[ti].iter().copied().filter(|&w| w != v as u32).collect()
+        };
         let mut seen = vec![false; ts.len()];
         let mut stack = vec![0];
         seen[0] = true;
@@ -123,19 +130,35 @@ pub fn topology(n: usize, triangles: &[[u32; 3]]) -> Topology {
         }
     }
     let components = (0..n).filter(|&i| used_v[i] && find(&mut parent, i) == i).count();
-    Topology { boundary_loops: loops, non_manifold_edges, misoriented_edges, non_manifold_vertices, components }
+    Topology {
+        boundary_loops: loops,
+        non_manifold_edges,
+        misoriented_edges,
+        non_manifold_vertices,
+        components,
+    }
 }
 
 /// Smallest signed distance to the body over each triangle's corners, edge midpoints and
 /// centroid (m).
 pub fn min_body_distance(mesh: &Mesh, sdf: &SdfGrid) -> f64 {
-    let bary = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.5, 0.5, 0.0], [0.0, 0.5, 0.5], [0.5, 0.0, 0.5], [1.0 / 3.0; 3]];
+    let bary = [
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [0.5, 0.5, 0.0],
+        [0.0, 0.5, 0.5],
+        [0.5, 0.0, 0.5],
+        [1.0 / 3.0; 3],
+    ];
     mesh.triangles
         .iter()
         .map(|t| {
             let p = t.map(|i| mesh.positions[i as usize]);
             bary.iter()
-                .map(|w| sdf.query(add(add(scale(p[0], w[0]), scale(p[1], w[1])), scale(p[2], w[2]))).0)
+                .map(|w| {
+                    sdf.query(add(add(scale(p[0], w[0]), scale(p[1], w[1])), scale(p[2], w[2]))).0
+                })
                 .fold(f64::INFINITY, f64::min)
         })
         .fold(f64::INFINITY, f64::min)
@@ -169,12 +192,20 @@ pub fn self_intersections(mesh: &Mesh) -> Vec<(u32, u32)> {
         .iter()
         .map(|t| {
             let q = t.map(p);
-            ([0, 1, 2].map(|k| q.iter().map(|v| v[k]).fold(f64::MAX, f64::min)), [0, 1, 2].map(|k| q.iter().map(|v| v[k]).fold(f64::MIN, f64::max)))
+            (
+                [0, 1, 2].map(|k| q.iter().map(|v| v[k]).fold(f64::MAX, f64::min)),
+                [0, 1, 2].map(|k| q.iter().map(|v| v[k]).fold(f64::MIN, f64::max)),
+            )
         })
         .collect();
     let mut order: Vec<usize> = (0..tris.len()).collect();
     let mut nodes: Vec<Node> = Vec::new();
-    fn build(nodes: &mut Vec<Node>, order: &mut [usize], offset: usize, boxes: &[(V3, V3)]) -> usize {
+    fn build(
+        nodes: &mut Vec<Node>,
+        order: &mut [usize],
+        offset: usize,
+        boxes: &[(V3, V3)],
+    ) -> usize {
         let mut lo = [f64::MAX; 3];
         let mut hi = [f64::MIN; 3];
         for &i in order.iter() {
@@ -188,7 +219,10 @@ pub fn self_intersections(mesh: &Mesh) -> Vec<(u32, u32)> {
         if order.len() > 8 {
             let axis = (0..3).max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b]))).unwrap();
             let mid = order.len() / 2;
-            order.select_nth_unstable_by(mid, |&a, &b| (boxes[a].0[axis] + boxes[a].1[axis]).total_cmp(&(boxes[b].0[axis] + boxes[b].1[axis])));
+            order.select_nth_unstable_by(mid, |&a, &b| {
+                (boxes[a].0[axis] + boxes[a].1[axis])
+                    .total_cmp(&(boxes[b].0[axis] + boxes[b].1[axis]))
+            });
             let (l, r) = order.split_at_mut(mid);
             let a = build(nodes, l, offset, boxes);
             let b = build(nodes, r, offset + mid, boxes);
@@ -260,7 +294,8 @@ fn segment_hits(a: V3, b: V3, t: [V3; 3]) -> bool {
 
 /// Whether two triangles intersect (an edge of one crosses the other).
 pub fn triangles_intersect(a: [V3; 3], b: [V3; 3]) -> bool {
-    (0..3).any(|k| segment_hits(a[k], a[(k + 1) % 3], b)) || (0..3).any(|k| segment_hits(b[k], b[(k + 1) % 3], a))
+    (0..3).any(|k| segment_hits(a[k], a[(k + 1) % 3], b))
+        || (0..3).any(|k| segment_hits(b[k], b[(k + 1) % 3], a))
 }
 
 /// Per-triangle `A_3D / A_panel − 1`.
@@ -343,7 +378,10 @@ pub fn grain(mesh: &Mesh, triangle_panel: &[u16]) -> GrainReport {
         if ts.len() != 2 {
             continue;
         }
-        let e3 = normalize_or(sub(mesh.positions[key.1 as usize], mesh.positions[key.0 as usize]), [1.0, 0.0, 0.0]);
+        let e3 = normalize_or(
+            sub(mesh.positions[key.1 as usize], mesh.positions[key.0 as usize]),
+            [1.0, 0.0, 0.0],
+        );
         // Warp angle to the edge in 3-D and in each panel's UV.
         let mut a3 = [0.0; 2];
         let mut a2 = [0.0; 2];
@@ -388,5 +426,11 @@ pub fn grain(mesh: &Mesh, triangle_panel: &[u16]) -> GrainReport {
     };
     let (wm, wa) = stat(&inner);
     let (sm, sa) = stat(&seam);
-    GrainReport { warp_jump_max_deg: wm, warp_jump_mean_deg: wa, seam_frame_max_deg: sm, seam_frame_mean_deg: sa, mirrored }
+    GrainReport {
+        warp_jump_max_deg: wm,
+        warp_jump_mean_deg: wa,
+        seam_frame_max_deg: sm,
+        seam_frame_mean_deg: sa,
+        mirrored,
+    }
 }

@@ -13,14 +13,8 @@ use rayon::prelude::*;
 use std::collections::HashMap;
 
 /// The six tetrahedra of a cube whose corners are numbered by bits `x | y << 1 | z << 2`.
-const KUHN: [[usize; 4]; 6] = [
-    [0, 1, 3, 7],
-    [0, 1, 5, 7],
-    [0, 2, 3, 7],
-    [0, 2, 6, 7],
-    [0, 4, 5, 7],
-    [0, 4, 6, 7],
-];
+const KUHN: [[usize; 4]; 6] =
+    [[0, 1, 3, 7], [0, 1, 5, 7], [0, 2, 3, 7], [0, 2, 6, 7], [0, 4, 5, 7], [0, 4, 6, 7]];
 
 /// Triangles (counter-clockwise from outside) of the zero set of `f` inside the box
 /// `[lo, hi]`, sampled every `h` metres; `f` must be positive on the box's border.
@@ -31,7 +25,9 @@ pub fn marching_tetrahedra(
     h: f64,
 ) -> (Vec<V3>, Vec<[u32; 3]>) {
     let n = [0, 1, 2].map(|k| ((hi[k] - lo[k]) / h).ceil() as usize + 1);
-    let node = |i: usize, j: usize, k: usize| [lo[0] + i as f64 * h, lo[1] + j as f64 * h, lo[2] + k as f64 * h];
+    let node = |i: usize, j: usize, k: usize| {
+        [lo[0] + i as f64 * h, lo[1] + j as f64 * h, lo[2] + k as f64 * h]
+    };
     let idx = |i: usize, j: usize, k: usize| (k * n[1] + j) * n[0] + i;
     let mut values = vec![0.0; n[0] * n[1] * n[2]];
     values.par_chunks_mut(n[0] * n[1]).enumerate().for_each(|(k, slab)| {
@@ -84,7 +80,9 @@ pub fn marching_tetrahedra(
                             };
                             others
                                 .iter()
-                                .map(|&o| vertex(tid[lone], tid[o], tp[lone], tp[o], &mut positions))
+                                .map(|&o| {
+                                    vertex(tid[lone], tid[o], tp[lone], tp[o], &mut positions)
+                                })
                                 .collect()
                         }
                         2 => {
@@ -242,7 +240,8 @@ pub fn flip_edges(positions: &[V3], triangles: &mut [[u32; 3]]) {
             // Keep the winding: t0 = (a, b, c) in some rotation; the new triangles are
             // (c, d, b) and (d, c, a) when t0 runs a → b.
             let runs_ab = (0..3).any(|k| triangles[t0][k] == a && triangles[t0][(k + 1) % 3] == b);
-            let (new0, new1) = if runs_ab { ([c, a, d], [d, b, c]) } else { ([c, b, d], [d, a, c]) };
+            let (new0, new1) =
+                if runs_ab { ([c, a, d], [d, b, c]) } else { ([c, b, d], [d, a, c]) };
             let nn0 = normalize_or(tri_normal(p, new0), [0.0; 3]);
             let nn1 = normalize_or(tri_normal(p, new1), [0.0; 3]);
             if dot(nn0, n0) < 0.5 || dot(nn1, n0) < 0.5 {
@@ -275,14 +274,17 @@ mod tests {
         let f = |p: V3| length(p) - 0.3;
         let (mut pos, mut tris) = marching_tetrahedra(&f, [-0.4; 3], [0.4; 3], 0.05);
         improve(&f, &mut pos, &mut tris, 3, 1e-4);
-        let mut m = crate::Mesh { positions: pos.clone(), triangles: tris.clone(), ..Default::default() };
+        let mut m =
+            crate::Mesh { positions: pos.clone(), triangles: tris.clone(), ..Default::default() };
         m.compute_normals();
         assert_eq!(m.edge_counts(), (0, 0));
         let worst = pos.iter().map(|&p| (length(p) - 0.3).abs()).fold(0.0, f64::max);
         assert!(worst < 1e-5, "off the sphere by {worst}");
         // Outward winding: the enclosed volume is positive and close to 4/3 π r³.
-        let vol: f64 =
-            tris.iter().map(|t| dot(pos[t[0] as usize], cross(pos[t[1] as usize], pos[t[2] as usize])) / 6.0).sum();
+        let vol: f64 = tris
+            .iter()
+            .map(|t| dot(pos[t[0] as usize], cross(pos[t[1] as usize], pos[t[2] as usize])) / 6.0)
+            .sum();
         let exact = 4.0 / 3.0 * std::f64::consts::PI * 0.027;
         assert!((vol / exact - 1.0).abs() < 0.03, "volume {vol} vs {exact}");
         let worst_angle = tris

@@ -55,14 +55,20 @@ pub fn inside_polygon(poly: &[P2], p: P2) -> bool {
 fn segment_distance(p: P2, a: P2, b: P2) -> f64 {
     let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
     let len2 = dx * dx + dy * dy;
-    let t = if len2 > 0.0 { (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0) } else { 0.0 };
+    let t = if len2 > 0.0 {
+        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     ((p[0] - a[0] - t * dx).powi(2) + (p[1] - a[1] - t * dy).powi(2)).sqrt()
 }
 
 /// Signed area of a polygon (positive when counter-clockwise).
 pub fn polygon_area(poly: &[P2]) -> f64 {
     let n = poly.len();
-    0.5 * (0..n).map(|i| poly[i][0] * poly[(i + 1) % n][1] - poly[(i + 1) % n][0] * poly[i][1]).sum::<f64>()
+    0.5 * (0..n)
+        .map(|i| poly[i][0] * poly[(i + 1) % n][1] - poly[(i + 1) % n][0] * poly[i][1])
+        .sum::<f64>()
 }
 
 #[derive(Clone, Copy)]
@@ -106,7 +112,9 @@ impl Delaunay {
             }
         }
         // Fallback: scan (only when the walk leaves the hull, which the super triangle prevents).
-        (0..self.tris.len()).find(|&t| self.tris[t].alive && self.contains(t, p).is_none()).unwrap_or(self.last)
+        (0..self.tris.len())
+            .find(|&t| self.tris[t].alive && self.contains(t, p).is_none())
+            .unwrap_or(self.last)
     }
 
     fn insert(&mut self, pi: u32) {
@@ -176,7 +184,9 @@ impl Delaunay {
 /// interior lattice points of spacing `h`.
 pub fn triangulate(outline: &[P2], h: f64) -> Result<Mesh2> {
     if outline.len() < 3 || !(h.is_finite() && h > 0.0) {
-        return Err(Error::Invalid("mesher: an outline needs 3 points and a positive spacing".into()));
+        return Err(Error::Invalid(
+            "mesher: an outline needs 3 points and a positive spacing".into(),
+        ));
     }
     if polygon_area(outline) <= 0.0 {
         return Err(Error::Invalid("mesher: the outline must run counter-clockwise".into()));
@@ -203,7 +213,8 @@ pub fn triangulate(outline: &[P2], h: f64) -> Result<Mesh2> {
             if !inside_polygon(outline, p) {
                 continue;
             }
-            let near = (0..nb).any(|s| segment_distance(p, outline[s], outline[(s + 1) % nb]) < 0.6 * h);
+            let near =
+                (0..nb).any(|s| segment_distance(p, outline[s], outline[(s + 1) % nb]) < 0.6 * h);
             if !near {
                 pts.push(p);
             }
@@ -217,7 +228,11 @@ pub fn triangulate(outline: &[P2], h: f64) -> Result<Mesh2> {
     all.push([c[0] + r, c[1] - r]);
     all.push([c[0], c[1] + r]);
     let (s0, s1, s2) = (n as u32, n as u32 + 1, n as u32 + 2);
-    let mut d = Delaunay { pts: all, tris: vec![Tri { v: [s0, s1, s2], n: [-1; 3], alive: true }], last: 0 };
+    let mut d = Delaunay {
+        pts: all,
+        tris: vec![Tri { v: [s0, s1, s2], n: [-1; 3], alive: true }],
+        last: 0,
+    };
     for i in 0..n as u32 {
         d.insert(i);
     }
@@ -266,7 +281,10 @@ fn relax(pts: &mut [P2], tris: &[[u32; 3]], outline: usize, h: f64) {
     let near: Vec<bool> = (0..pts.len())
         .map(|i| {
             i >= outline
-                && (0..outline).any(|s| segment_distance(pts[i], outline_pts[s], outline_pts[(s + 1) % outline]) < 1.5 * h)
+                && (0..outline).any(|s| {
+                    segment_distance(pts[i], outline_pts[s], outline_pts[(s + 1) % outline])
+                        < 1.5 * h
+                })
         })
         .collect();
     for _ in 0..4 {
@@ -275,7 +293,9 @@ fn relax(pts: &mut [P2], tris: &[[u32; 3]], outline: usize, h: f64) {
                 continue;
             }
             let k = nbrs[i].len() as f64;
-            let c = nbrs[i].iter().fold([0.0, 0.0], |s, &j| [s[0] + pts[j as usize][0] / k, s[1] + pts[j as usize][1] / k]);
+            let c = nbrs[i].iter().fold([0.0, 0.0], |s, &j| {
+                [s[0] + pts[j as usize][0] / k, s[1] + pts[j as usize][1] / k]
+            });
             let old = pts[i];
             pts[i] = [old[0] + 0.6 * (c[0] - old[0]), old[1] + 0.6 * (c[1] - old[1])];
             let ok = incident[i].iter().all(|&t| {
@@ -315,7 +335,9 @@ pub fn lawson_flips(pts: &[P2], tris: &mut [[u32; 3]]) {
                 continue;
             }
             let (n0, n1) = ([a, dd, c], [dd, b, c]);
-            if orient(p(n0[0]), p(n0[1]), p(n0[2])) <= 0.0 || orient(p(n1[0]), p(n1[1]), p(n1[2])) <= 0.0 {
+            if orient(p(n0[0]), p(n0[1]), p(n0[2])) <= 0.0
+                || orient(p(n1[0]), p(n1[1]), p(n1[2])) <= 0.0
+            {
                 continue;
             }
             tris[t0] = n0;
@@ -340,7 +362,8 @@ pub fn min_angle_deg(m: &Mesh2) -> f64 {
                 .map(|k| {
                     let (a, b, c) = (p[k], p[(k + 1) % 3], p[(k + 2) % 3]);
                     let (u, v) = ([b[0] - a[0], b[1] - a[1]], [c[0] - a[0], c[1] - a[1]]);
-                    let cosv = (u[0] * v[0] + u[1] * v[1]) / ((u[0].hypot(u[1])) * (v[0].hypot(v[1])));
+                    let cosv =
+                        (u[0] * v[0] + u[1] * v[1]) / ((u[0].hypot(u[1])) * (v[0].hypot(v[1])));
                     cosv.clamp(-1.0, 1.0).acos().to_degrees()
                 })
                 .fold(180.0, f64::min)
@@ -366,10 +389,17 @@ mod tests {
         let area: f64 = m
             .triangles
             .iter()
-            .map(|t| orient(m.points[t[0] as usize], m.points[t[1] as usize], m.points[t[2] as usize]) / 2.0)
+            .map(|t| {
+                orient(m.points[t[0] as usize], m.points[t[1] as usize], m.points[t[2] as usize])
+                    / 2.0
+            })
             .sum();
         assert!((area - polygon_area(&outline)).abs() < 1e-9, "covers the polygon: {area}");
-        assert!(m.triangles.iter().all(|t| orient(m.points[t[0] as usize], m.points[t[1] as usize], m.points[t[2] as usize]) > 0.0));
+        assert!(m.triangles.iter().all(|t| orient(
+            m.points[t[0] as usize],
+            m.points[t[1] as usize],
+            m.points[t[2] as usize]
+        ) > 0.0));
         assert!(min_angle_deg(&m) > 25.0, "min angle {}", min_angle_deg(&m));
         // Vertices as expected for an equilateral lattice of spacing h.
         let expect = polygon_area(&outline) / (3f64.sqrt() / 2.0 * h * h);

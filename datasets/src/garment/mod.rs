@@ -10,6 +10,7 @@
 
 pub mod body;
 pub mod check;
+pub mod drape;
 pub mod isosurface;
 pub mod mesher;
 pub mod pattern;
@@ -54,7 +55,12 @@ impl GarmentOptions {
 /// Makes `kind` on the mannequin of `o.body` (or on `body` when given — a mesh read from
 /// a file; the pattern is still drafted for `o.body`'s measurements). Returns the garment
 /// and the body it was draped on.
-pub fn make(kind: GarmentKind, o: &GarmentOptions, body: Option<Body>, progress: &mut sew::Progress<'_>) -> Result<(Garment, Body)> {
+pub fn make(
+    kind: GarmentKind,
+    o: &GarmentOptions,
+    body: Option<Body>,
+    progress: &mut sew::Progress<'_>,
+) -> Result<(Garment, Body)> {
     let man = body::Mannequin::new(&o.body)?;
     let pattern = Pattern::new(kind, &o.body.measurements, &man.landmarks, &o.pattern)?;
     progress("body", 0.0);

@@ -207,14 +207,19 @@ impl Placement {
                     if s <= l || i + 2 == path.len() {
                         let t = (s / l.max(1e-12)).clamp(0.0, 1.5);
                         let c = add(path[i], scale(sub(path[i + 1], path[i]), t));
-                        let sd = normalize_or(add(scale(side[i], 1.0 - t.min(1.0)), scale(side[i + 1], t.min(1.0))), side[i]);
+                        let sd = normalize_or(
+                            add(scale(side[i], 1.0 - t.min(1.0)), scale(side[i + 1], t.min(1.0))),
+                            side[i],
+                        );
                         return add(c, scale(sd, p[0]));
                     }
                     s -= l;
                 }
                 path[0]
             }
-            Placement::Flat { origin, ex, ey } => add(*origin, add(scale(*ex, p[0]), scale(*ey, p[1]))),
+            Placement::Flat { origin, ex, ey } => {
+                add(*origin, add(scale(*ex, p[0]), scale(*ey, p[1])))
+            }
         }
     }
 }
@@ -226,7 +231,10 @@ fn interpolate_semi(semi: &[(f64, [f64; 2])], y: f64) -> [f64; 2] {
     for w in semi.windows(2) {
         if y <= w[1].0 {
             let t = (y - w[0].0) / (w[1].0 - w[0].0);
-            return [w[0].1[0] + (w[1].1[0] - w[0].1[0]) * t, w[0].1[1] + (w[1].1[1] - w[0].1[1]) * t];
+            return [
+                w[0].1[0] + (w[1].1[0] - w[0].1[0]) * t,
+                w[0].1[1] + (w[1].1[1] - w[0].1[1]) * t,
+            ];
         }
     }
     semi[semi.len() - 1].1
@@ -256,7 +264,10 @@ impl Panel {
 
     /// Index of the edge called `name`.
     pub fn edge(&self, name: &str) -> usize {
-        self.edges.iter().position(|e| e.name == name).unwrap_or_else(|| panic!("panel {} has no edge {name}", self.name))
+        self.edges
+            .iter()
+            .position(|e| e.name == name)
+            .unwrap_or_else(|| panic!("panel {} has no edge {name}", self.name))
     }
 }
 
@@ -294,11 +305,12 @@ pub struct Pattern {
 }
 
 fn line(a: P2, b: P2, n: usize) -> Vec<P2> {
-    (0..=n).map(|i| {
-        let t = i as f64 / n as f64;
-        [a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t]
-    })
-    .collect()
+    (0..=n)
+        .map(|i| {
+            let t = i as f64 / n as f64;
+            [a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t]
+        })
+        .collect()
 }
 
 fn bezier(p: [P2; 4], n: usize) -> Vec<P2> {
@@ -346,7 +358,12 @@ fn positive(name: &str, v: Option<f64>) -> Result<Option<f64>> {
 
 impl Pattern {
     /// Drafts the pattern of `kind` for a body with `measurements` and `landmarks`.
-    pub fn new(kind: GarmentKind, m: &Measurements, l: &Landmarks, o: &PatternOptions) -> Result<Pattern> {
+    pub fn new(
+        kind: GarmentKind,
+        m: &Measurements,
+        l: &Landmarks,
+        o: &PatternOptions,
+    ) -> Result<Pattern> {
         m.validate()?;
         positive("--sleeve-length", o.sleeve_length_m)?;
         positive("--length", o.length_m)?;
@@ -383,18 +400,37 @@ fn top(m: &Measurements, l: &Landmarks, o: &PatternOptions, long: bool) -> Resul
     let y_sh = len - drop;
     let y_ap = y_sh - (l.shoulder[0][2] - l.armpit_z + 0.05 * s);
     if len < (l.neck_base_z - l.armpit_z) + 0.12 {
-        return Err(Error::Invalid(format!("--length = {len} m is shorter than the armhole (at least {:.2} m)", l.neck_base_z - l.armpit_z + 0.12)));
+        return Err(Error::Invalid(format!(
+            "--length = {len} m is shorter than the armhole (at least {:.2} m)",
+            l.neck_base_z - l.armpit_z + 0.12
+        )));
     }
     if len > l.neck_base_z - 0.05 {
-        return Err(Error::Invalid(format!("--length = {len} m reaches the floor (at most {:.2} m)", l.neck_base_z - 0.05)));
+        return Err(Error::Invalid(format!(
+            "--length = {len} m reaches the floor (at most {:.2} m)",
+            l.neck_base_z - 0.05
+        )));
     }
     let body_panel = |neck_depth: f64| -> Vec<Edge> {
         let armhole_r = bezier(
-            [[w, y_ap], [shoulder_x + 0.15 * (w - shoulder_x), y_ap + 0.005], [shoulder_x - 0.012 * s, y_ap + 0.45 * (y_sh - y_ap)], [shoulder_x, y_sh]],
+            [
+                [w, y_ap],
+                [shoulder_x + 0.15 * (w - shoulder_x), y_ap + 0.005],
+                [shoulder_x - 0.012 * s, y_ap + 0.45 * (y_sh - y_ap)],
+                [shoulder_x, y_sh],
+            ],
             48,
         );
         let neck = {
-            let half = bezier([[neck_x, len], [neck_x * 0.9, len - 0.75 * neck_depth], [neck_x * 0.45, len - neck_depth], [0.0, len - neck_depth]], 24);
+            let half = bezier(
+                [
+                    [neck_x, len],
+                    [neck_x * 0.9, len - 0.75 * neck_depth],
+                    [neck_x * 0.45, len - neck_depth],
+                    [0.0, len - neck_depth],
+                ],
+                24,
+            );
             let mut pts = half.clone();
             pts.extend(mirror_x(&half).into_iter().skip(1));
             pts
@@ -420,7 +456,12 @@ fn top(m: &Measurements, l: &Landmarks, o: &PatternOptions, long: bool) -> Resul
     if half_b >= armhole_len {
         return Err(Error::Invalid("the armhole is shorter than half the sleeve's width".into()));
     }
-    let cap_half = |cap_h: f64| bezier([[half_b, 0.0], [0.64 * half_b, 0.45 * cap_h], [0.36 * half_b, cap_h], [0.0, cap_h]], 48);
+    let cap_half = |cap_h: f64| {
+        bezier(
+            [[half_b, 0.0], [0.64 * half_b, 0.45 * cap_h], [0.36 * half_b, cap_h], [0.0, cap_h]],
+            48,
+        )
+    };
     let (mut lo, mut hi) = (0.0, armhole_len);
     for _ in 0..60 {
         let mid = 0.5 * (lo + hi);
@@ -441,7 +482,10 @@ fn top(m: &Measurements, l: &Landmarks, o: &PatternOptions, long: bool) -> Resul
         )));
     }
     if sleeve_len < cap_h + 0.03 {
-        return Err(Error::Invalid(format!("--sleeve-length = {sleeve_len} m is shorter than the sleeve cap ({:.2} m)", cap_h + 0.03)));
+        return Err(Error::Invalid(format!(
+            "--sleeve-length = {sleeve_len} m is shorter than the sleeve cap ({:.2} m)",
+            cap_h + 0.03
+        )));
     }
     let under = sleeve_len - cap_h;
     let wrist_r = l.arm_radius[2];
@@ -485,7 +529,8 @@ fn top(m: &Measurements, l: &Landmarks, o: &PatternOptions, long: bool) -> Resul
     for (i, side) in [1.0f64, -1.0].into_iter().enumerate() {
         let [joint, elbow, _] = l.arm[i];
         let down = normalize_or(sub(elbow, joint), [0.0, 0.0, -1.0]);
-        let up_out = normalize_or([-down[2] * side.signum() * side, 0.0, down[0] * side], [0.0, 0.0, 1.0]);
+        let up_out =
+            normalize_or([-down[2] * side.signum() * side, 0.0, down[0] * side], [0.0, 0.0, 1.0]);
         let up_out = if up_out[2] < 0.0 { scale(up_out, -1.0) } else { up_out };
         let r = upper_r + 0.03 * s;
         panels.push(Panel {
@@ -531,7 +576,10 @@ fn skirt(m: &Measurements, l: &Landmarks, o: &PatternOptions) -> Result<Pattern>
     let ease = o.ease_m.unwrap_or(0.03);
     let len = o.length_m.unwrap_or(0.33 * l.height);
     if len > l.waist_z - 0.05 {
-        return Err(Error::Invalid(format!("--length = {len} m reaches the floor (at most {:.2} m)", l.waist_z - 0.05)));
+        return Err(Error::Invalid(format!(
+            "--length = {len} m reaches the floor (at most {:.2} m)",
+            l.waist_z - 0.05
+        )));
     }
     // A cone through the hip girth (plus ease), 12° from the axis; each panel is half its
     // development (an annulus sector), the waist its upper arc.
@@ -543,24 +591,42 @@ fn skirt(m: &Measurements, l: &Landmarks, o: &PatternOptions) -> Result<Pattern>
     let r2 = r1 + len;
     let half_angle = PI * beta.sin() / 2.0;
     let arc = |r: f64, from: f64, to: f64, n: usize| -> Vec<P2> {
-        (0..=n).map(|i| {
-            let a = from + (to - from) * i as f64 / n as f64;
-            [r * a.sin(), r2 - r * a.cos()]
-        })
-        .collect()
+        (0..=n)
+            .map(|i| {
+                let a = from + (to - from) * i as f64 / n as f64;
+                [r * a.sin(), r2 - r * a.cos()]
+            })
+            .collect()
     };
     let edges = vec![
         Edge::new("hem", arc(r2, -half_angle, half_angle, 64)),
-        Edge::new("side_r", line([r2 * half_angle.sin(), r2 - r2 * half_angle.cos()], [r1 * half_angle.sin(), r2 - r1 * half_angle.cos()], 8)),
+        Edge::new(
+            "side_r",
+            line(
+                [r2 * half_angle.sin(), r2 - r2 * half_angle.cos()],
+                [r1 * half_angle.sin(), r2 - r1 * half_angle.cos()],
+                8,
+            ),
+        ),
         Edge::new("waist", arc(r1, half_angle, -half_angle, 64)),
-        Edge::new("side_l", line([-r1 * half_angle.sin(), r2 - r1 * half_angle.cos()], [-r2 * half_angle.sin(), r2 - r2 * half_angle.cos()], 8)),
+        Edge::new(
+            "side_l",
+            line(
+                [-r1 * half_angle.sin(), r2 - r1 * half_angle.cos()],
+                [-r2 * half_angle.sin(), r2 - r2 * half_angle.cos()],
+                8,
+            ),
+        ),
     ];
     let wx = r2 * half_angle.sin();
     let top_y = r2 - r1;
     let hem_z = l.waist_z + 0.01 * s - top_y;
     let gap = 0.025 * s;
     let hip_semi = [l.hip_ab[0] + gap, l.hip_ab[1] + gap];
-    let hem_semi = [(hip_r + (len - drop) * beta.tan()).max(hip_semi[0]), (hip_r + (len - drop) * beta.tan()) * 0.85];
+    let hem_semi = [
+        (hip_r + (len - drop) * beta.tan()).max(hip_semi[0]),
+        (hip_r + (len - drop) * beta.tan()) * 0.85,
+    ];
     let semi = vec![
         (0.0, hem_semi),
         (top_y - drop, hip_semi),
@@ -580,8 +646,17 @@ fn skirt(m: &Measurements, l: &Landmarks, o: &PatternOptions) -> Result<Pattern>
         Panel { name: "back".into(), edges, placement: wrap(PI / 2.0) },
     ];
     let e = |p: usize, name: &str| EdgeRef { panel: p, edge: panels[p].edge(name) };
-    let seams = vec![Seam { a: e(0, "side_r"), b: e(1, "side_l") }, Seam { a: e(0, "side_l"), b: e(1, "side_r") }];
-    Ok(Pattern { kind: GarmentKind::Skirt, panels, seams, openings: vec!["waist", "hem"], pinned_edges: Vec::new() })
+    let seams = vec![
+        Seam { a: e(0, "side_r"), b: e(1, "side_l") },
+        Seam { a: e(0, "side_l"), b: e(1, "side_r") },
+    ];
+    Ok(Pattern {
+        kind: GarmentKind::Skirt,
+        panels,
+        seams,
+        openings: vec!["waist", "hem"],
+        pinned_edges: Vec::new(),
+    })
 }
 
 /// Trousers: front and back of each leg; outseams, inseams, centre front and back.
@@ -592,11 +667,17 @@ fn trousers(m: &Measurements, l: &Landmarks, o: &PatternOptions) -> Result<Patte
     let ankle_z = l.leg[0][2][2];
     let len = o.length_m.unwrap_or(waist_z - ankle_z + 0.01);
     if len > waist_z - 0.01 {
-        return Err(Error::Invalid(format!("--length = {len} m reaches below the floor (at most {:.2} m)", waist_z - 0.01)));
+        return Err(Error::Invalid(format!(
+            "--length = {len} m reaches below the floor (at most {:.2} m)",
+            waist_z - 0.01
+        )));
     }
     let rise = waist_z - l.crotch_z + 0.02 * s;
     if len < rise + 0.1 {
-        return Err(Error::Invalid(format!("--length = {len} m is shorter than the rise ({:.2} m)", rise + 0.1)));
+        return Err(Error::Invalid(format!(
+            "--length = {len} m is shorter than the rise ({:.2} m)",
+            rise + 0.1
+        )));
     }
     let y_c = len - rise;
     let y_w = len;
@@ -611,18 +692,39 @@ fn trousers(m: &Measurements, l: &Landmarks, o: &PatternOptions) -> Result<Patte
     let knee_half = hem_half + 0.012 * s;
     let front = |ext: f64, hip_extra: f64, rise_extra: f64, crotch_drop: f64| -> Vec<Edge> {
         let outseam = bezier(
-            [[crease + hem_half, 0.0], [crease + knee_half, knee_y], [hip_q + hip_extra, y_h - 0.25 * (y_h - y_c)], [waist_q + hip_extra * 0.5, y_w + rise_extra]],
+            [
+                [crease + hem_half, 0.0],
+                [crease + knee_half, knee_y],
+                [hip_q + hip_extra, y_h - 0.25 * (y_h - y_c)],
+                [waist_q + hip_extra * 0.5, y_w + rise_extra],
+            ],
             48,
         );
         let crotch = bezier(
-            [[0.0, y_w + rise_extra], [0.0, y_c + 0.45 * rise], [-0.05 * ext, y_c - crotch_drop + 0.1 * rise], [-ext, y_c - crotch_drop]],
+            [
+                [0.0, y_w + rise_extra],
+                [0.0, y_c + 0.45 * rise],
+                [-0.05 * ext, y_c - crotch_drop + 0.1 * rise],
+                [-ext, y_c - crotch_drop],
+            ],
             32,
         );
-        let inseam = bezier([[-ext, y_c - crotch_drop], [crease - knee_half, knee_y + 0.3 * (y_c - knee_y)], [crease - knee_half, knee_y], [crease - hem_half, 0.0]], 48);
+        let inseam = bezier(
+            [
+                [-ext, y_c - crotch_drop],
+                [crease - knee_half, knee_y + 0.3 * (y_c - knee_y)],
+                [crease - knee_half, knee_y],
+                [crease - hem_half, 0.0],
+            ],
+            48,
+        );
         vec![
             Edge::new("hem", line([crease - hem_half, 0.0], [crease + hem_half, 0.0], 8)),
             Edge::new("outseam", outseam),
-            Edge::new("waist", line([waist_q + hip_extra * 0.5, y_w + rise_extra], [0.0, y_w + rise_extra], 8)),
+            Edge::new(
+                "waist",
+                line([waist_q + hip_extra * 0.5, y_w + rise_extra], [0.0, y_w + rise_extra], 8),
+            ),
             Edge::new("crotch", crotch),
             Edge::new("inseam", inseam),
         ]
@@ -648,7 +750,11 @@ fn trousers(m: &Measurements, l: &Landmarks, o: &PatternOptions) -> Result<Patte
         let leg_axis = normalize_or(sub(hip_joint, ankle), [0.0, 0.0, 1.0]);
         let leg_origin = add(ankle, scale(leg_axis, -(ankle_z - (waist_z - len)) / leg_axis[2]));
         let thigh_r = l.leg_radius[0] + gap;
-        let leg_semi = vec![(0.0, [l.leg_radius[2] + 0.035 * s; 2]), (knee_y, [l.leg_radius[1] + 0.03 * s; 2]), (y_c, [thigh_r, thigh_r])];
+        let leg_semi = vec![
+            (0.0, [l.leg_radius[2] + 0.035 * s; 2]),
+            (knee_y, [l.leg_radius[1] + 0.03 * s; 2]),
+            (y_c, [thigh_r, thigh_r]),
+        ];
         let pelvis_semi = vec![
             (y_c, [l.hip_ab[0] + gap, l.hip_ab[1] + gap]),
             (y_h, [l.hip_ab[0] + gap, l.hip_ab[1] + gap]),
@@ -660,7 +766,10 @@ fn trousers(m: &Measurements, l: &Landmarks, o: &PatternOptions) -> Result<Patte
             let world_x_is_panel_x = (side > 0.0) != is_back;
             let edges = if world_x_is_panel_x { shape.clone() } else { mirror_edges(shape) };
             let xs: Vec<f64> = edges.iter().flat_map(|e| e.points.iter().map(|p| p[0])).collect();
-            let x_range = [xs.iter().copied().fold(f64::MAX, f64::min), xs.iter().copied().fold(f64::MIN, f64::max)];
+            let x_range = [
+                xs.iter().copied().fold(f64::MAX, f64::min),
+                xs.iter().copied().fold(f64::MIN, f64::max),
+            ];
             // Angles: front covers −π … 0 of the leg (inner → outer for the left leg).
             let (leg_phi, pelvis_phi) = match (side > 0.0, is_back) {
                 (true, false) => ([-PI, 0.0], [-PI / 2.0 - 0.15, 0.0]),
@@ -687,11 +796,19 @@ fn trousers(m: &Measurements, l: &Landmarks, o: &PatternOptions) -> Result<Patte
                 phi_range: pelvis_phi,
                 semi: pelvis_semi.clone(),
             };
-            let name = format!("{}_{}", if is_back { "back" } else { "front" }, if side > 0.0 { "l" } else { "r" });
+            let name = format!(
+                "{}_{}",
+                if is_back { "back" } else { "front" },
+                if side > 0.0 { "l" } else { "r" }
+            );
             panels.push(Panel {
                 name,
                 edges,
-                placement: Placement::Blend { lower: Box::new(lower), upper: Box::new(upper), y_blend: [y_c - 0.02, y_h] },
+                placement: Placement::Blend {
+                    lower: Box::new(lower),
+                    upper: Box::new(upper),
+                    y_blend: [y_c - 0.02, y_h],
+                },
             });
         }
     }
@@ -705,7 +822,13 @@ fn trousers(m: &Measurements, l: &Landmarks, o: &PatternOptions) -> Result<Patte
         Seam { a: e(0, "crotch"), b: e(2, "crotch") },
         Seam { a: e(1, "crotch"), b: e(3, "crotch") },
     ];
-    Ok(Pattern { kind: GarmentKind::Trousers, panels, seams, openings: vec!["waist", "left hem", "right hem"], pinned_edges: Vec::new() })
+    Ok(Pattern {
+        kind: GarmentKind::Trousers,
+        panels,
+        seams,
+        openings: vec!["waist", "left hem", "right hem"],
+        pinned_edges: Vec::new(),
+    })
 }
 
 /// A scarf laid over the shoulders round the back of the neck, both ends hanging in front.
@@ -714,7 +837,9 @@ fn scarf(l: &Landmarks, o: &PatternOptions) -> Result<Pattern> {
     let len = o.length_m.unwrap_or(1.5 * s);
     let width = 0.2 * s;
     if len > 2.0 * (l.neck_base_z - 0.1) + 0.6 {
-        return Err(Error::Invalid(format!("--length = {len} m: the scarf's ends would reach the floor")));
+        return Err(Error::Invalid(format!(
+            "--length = {len} m: the scarf's ends would reach the floor"
+        )));
     }
     let edges = vec![
         Edge::new("end_a", line([-width / 2.0, 0.0], [width / 2.0, 0.0], 8)),
@@ -739,7 +864,11 @@ fn scarf(l: &Landmarks, o: &PatternOptions) -> Result<Pattern> {
     side.push([1.0, 0.0, 0.0]);
     for k in 0..=16 {
         let a = PI * k as f64 / 16.0;
-        path.push([xo * a.cos(), back_y * 0.0 + xo * 0.0 + xo * a.sin() * (back_y / xo).max(1.0), z_top]);
+        path.push([
+            xo * a.cos(),
+            back_y * 0.0 + xo * 0.0 + xo * a.sin() * (back_y / xo).max(1.0),
+            z_top,
+        ]);
         side.push([a.cos(), a.sin(), 0.0]);
     }
     path.push([-xo, front_y, z_top - 0.04]);
@@ -747,15 +876,27 @@ fn scarf(l: &Landmarks, o: &PatternOptions) -> Result<Pattern> {
     path.push([-xo, front_y, z_top - hang]);
     side.push([-1.0, 0.0, 0.0]);
     path.dedup();
-    let panels = vec![Panel { name: "scarf".into(), edges, placement: Placement::Path { path, side, y0: 0.0 } }];
-    Ok(Pattern { kind: GarmentKind::Scarf, panels, seams: Vec::new(), openings: vec!["outline"], pinned_edges: Vec::new() })
+    let panels = vec![Panel {
+        name: "scarf".into(),
+        edges,
+        placement: Placement::Path { path, side, y0: 0.0 },
+    }];
+    Ok(Pattern {
+        kind: GarmentKind::Scarf,
+        panels,
+        seams: Vec::new(),
+        openings: vec!["outline"],
+        pinned_edges: Vec::new(),
+    })
 }
 
 /// A curtain panel 1.2 m wide gathered onto a 0.9 m rod, 1.5 m high.
 fn curtain(o: &PatternOptions) -> Result<Pattern> {
     let (w, h) = (1.2, o.length_m.unwrap_or(1.5));
     if h > 4.0 {
-        return Err(Error::Invalid(format!("--length = {h} m: a curtain panel is at most 4 m high")));
+        return Err(Error::Invalid(format!(
+            "--length = {h} m: a curtain panel is at most 4 m high"
+        )));
     }
     let edges = vec![
         Edge::new("hem", line([0.0, 0.0], [w, 0.0], 8)),
@@ -766,7 +907,11 @@ fn curtain(o: &PatternOptions) -> Result<Pattern> {
     let panels = vec![Panel {
         name: "curtain".into(),
         edges,
-        placement: Placement::Flat { origin: [-w / 2.0, 0.0, 0.1], ex: [1.0, 0.0, 0.0], ey: [0.0, 0.0, 1.0] },
+        placement: Placement::Flat {
+            origin: [-w / 2.0, 0.0, 0.1],
+            ex: [1.0, 0.0, 0.0],
+            ey: [0.0, 0.0, 1.0],
+        },
     }];
     Ok(Pattern {
         kind: GarmentKind::Curtain,

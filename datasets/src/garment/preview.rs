@@ -20,7 +20,15 @@ pub struct PreviewItem<'a> {
 }
 
 /// Renders `items` seen from `eye` towards `target` (`+z` up) into a `w × h` PNG.
-pub fn render_png(items: &[PreviewItem], eye: V3, target: V3, fov_y_deg: f64, w: usize, h: usize, path: &Path) -> Result<()> {
+pub fn render_png(
+    items: &[PreviewItem],
+    eye: V3,
+    target: V3,
+    fov_y_deg: f64,
+    w: usize,
+    h: usize,
+    path: &Path,
+) -> Result<()> {
     let fwd = normalize_or(sub(target, eye), [0.0, 1.0, 0.0]);
     let right = normalize_or(cross(fwd, [0.0, 0.0, 1.0]), [1.0, 0.0, 0.0]);
     let up = cross(right, fwd);
@@ -32,7 +40,8 @@ pub fn render_png(items: &[PreviewItem], eye: V3, target: V3, fov_y_deg: f64, w:
     };
     let mut depth = vec![f64::INFINITY; w * h];
     let mut rgb = vec![[0.03f64, 0.03, 0.04]; w * h];
-    let light = normalize_or(sub([eye[0] - 0.8, eye[1] + 0.3, eye[2] + 1.5], target), [0.0, 0.0, 1.0]);
+    let light =
+        normalize_or(sub([eye[0] - 0.8, eye[1] + 0.3, eye[2] + 1.5], target), [0.0, 0.0, 1.0]);
     for it in items {
         let m = it.mesh;
         for (ti, t) in m.triangles.iter().enumerate() {
@@ -43,17 +52,22 @@ pub fn render_png(items: &[PreviewItem], eye: V3, target: V3, fov_y_deg: f64, w:
             let n = t.map(|i| m.normals.get(i as usize).copied().unwrap_or([0.0, 0.0, 1.0]));
             let uv = m.triangle_uvs.get(ti).map(|tu| tu.map(|i| m.uvs[i as usize]));
             let x0 = p.iter().map(|q| q[0]).fold(f64::MAX, f64::min).floor().max(0.0) as usize;
-            let x1 = (p.iter().map(|q| q[0]).fold(f64::MIN, f64::max).ceil() as usize).min(w.saturating_sub(1));
+            let x1 = (p.iter().map(|q| q[0]).fold(f64::MIN, f64::max).ceil() as usize)
+                .min(w.saturating_sub(1));
             let y0 = p.iter().map(|q| q[1]).fold(f64::MAX, f64::min).floor().max(0.0) as usize;
-            let y1 = (p.iter().map(|q| q[1]).fold(f64::MIN, f64::max).ceil() as usize).min(h.saturating_sub(1));
-            let area = (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]);
+            let y1 = (p.iter().map(|q| q[1]).fold(f64::MIN, f64::max).ceil() as usize)
+                .min(h.saturating_sub(1));
+            let area = (p[1][0] - p[0][0]) * (p[2][1] - p[0][1])
+                - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]);
             if area.abs() < 1e-12 {
                 continue;
             }
             for y in y0..=y1 {
                 for x in x0..=x1 {
                     let (px, py) = (x as f64 + 0.5, y as f64 + 0.5);
-                    let e = |a: [f64; 3], b: [f64; 3]| (b[0] - a[0]) * (py - a[1]) - (b[1] - a[1]) * (px - a[0]);
+                    let e = |a: [f64; 3], b: [f64; 3]| {
+                        (b[0] - a[0]) * (py - a[1]) - (b[1] - a[1]) * (px - a[0])
+                    };
                     let l = [e(p[1], p[2]) / area, e(p[2], p[0]) / area, e(p[0], p[1]) / area];
                     if l.iter().any(|&v| v < 0.0) {
                         continue;
@@ -64,7 +78,8 @@ pub fn render_png(items: &[PreviewItem], eye: V3, target: V3, fov_y_deg: f64, w:
                         continue;
                     }
                     depth[cell] = z;
-                    let nrm: V3 = std::array::from_fn(|k| l[0] * n[0][k] + l[1] * n[1][k] + l[2] * n[2][k]);
+                    let nrm: V3 =
+                        std::array::from_fn(|k| l[0] * n[0][k] + l[1] * n[1][k] + l[2] * n[2][k]);
                     let nrm = normalize_or(nrm, [0.0, 0.0, 1.0]);
                     let shade = 0.18 + 0.82 * dot(nrm, light).abs();
                     let mut stripe = 1.0;

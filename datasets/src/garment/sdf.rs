@@ -67,7 +67,9 @@ impl SdfGrid {
     /// `band` of the surface.
     pub fn from_mesh(mesh: &Mesh, step: f64, band: f64) -> Result<SdfGrid> {
         if !(step.is_finite() && step > 0.0 && band.is_finite() && band >= 2.0 * step) {
-            return Err(Error::Invalid(format!("sdf: step {step} and band {band} (need band ≥ 2 step > 0)")));
+            return Err(Error::Invalid(format!(
+                "sdf: step {step} and band {band} (need band ≥ 2 step > 0)"
+            )));
         }
         if mesh.triangles.is_empty() {
             return Err(Error::Invalid("sdf: the mesh has no triangles".into()));
@@ -83,13 +85,17 @@ impl SdfGrid {
         let pad = band + 2.0 * step;
         // An irrational offset keeps sample rows off the vertices of grid-made meshes.
         let origin: V3 = std::array::from_fn(|k| lo[k] - pad + 0.2718281828 * step);
-        let dims: [usize; 3] = std::array::from_fn(|k| ((hi[k] + pad - origin[k]) / step).ceil() as usize + 1);
+        let dims: [usize; 3] =
+            std::array::from_fn(|k| ((hi[k] + pad - origin[k]) / step).ceil() as usize + 1);
         let cells = dims[0] * dims[1] * dims[2];
         if cells > 200_000_000 {
-            return Err(Error::Invalid(format!("sdf: {cells} samples is too many (raise the step)")));
+            return Err(Error::Invalid(format!(
+                "sdf: {cells} samples is too many (raise the step)"
+            )));
         }
         let (nx, ny, nz) = (dims[0], dims[1], dims[2]);
-        let tri: Vec<[V3; 3]> = mesh.triangles.iter().map(|t| t.map(|i| mesh.positions[i as usize])).collect();
+        let tri: Vec<[V3; 3]> =
+            mesh.triangles.iter().map(|t| t.map(|i| mesh.positions[i as usize])).collect();
         // Triangles by the z-planes their band-inflated boxes reach.
         let plane_range = |t: &[V3; 3], inflate: f64| {
             let z0 = t.iter().map(|p| p[2]).fold(f64::MAX, f64::min) - inflate;
@@ -188,7 +194,9 @@ impl SdfGrid {
         let g: V3 = std::array::from_fn(|k| (p[k] - self.origin[k]) / self.step);
         let inside_grid = (0..3).all(|k| g[k] >= 0.0 && g[k] < (self.dims[k] - 1) as f64);
         if !inside_grid {
-            let centre: V3 = std::array::from_fn(|k| self.origin[k] + 0.5 * self.step * (self.dims[k] - 1) as f64);
+            let centre: V3 = std::array::from_fn(|k| {
+                self.origin[k] + 0.5 * self.step * (self.dims[k] - 1) as f64
+            });
             return (self.band, normalize_or(sub(p, centre), [0.0, 0.0, 1.0]));
         }
         let (i, j, k) = (g[0] as usize, g[1] as usize, g[2] as usize);
@@ -253,7 +261,13 @@ mod tests {
     fn sphere_distance_is_exact_in_the_band_and_signed() {
         let m = crate::mesh::shapes::sphere((64, 33));
         let g = SdfGrid::from_mesh(&m, 0.02, 0.08).unwrap();
-        for p in [[0.0, 0.0, 0.0], [0.3, 0.1, -0.2], [0.52, 0.0, 0.0], [0.1, 0.45, 0.1], [0.0, -0.0, 0.56]] {
+        for p in [
+            [0.0, 0.0, 0.0],
+            [0.3, 0.1, -0.2],
+            [0.52, 0.0, 0.0],
+            [0.1, 0.45, 0.1],
+            [0.0, -0.0, 0.56],
+        ] {
             let (d, n) = g.query(p);
             let exact = length(p) - 0.5;
             let want = exact.clamp(-0.08, 0.08);

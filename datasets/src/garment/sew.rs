@@ -13,14 +13,13 @@
 //! flat too).
 
 use super::body::Body;
+use super::drape::{Contact, Link, Xpbd, XpbdParams};
 use super::mesher::{P2, triangulate};
 use super::pattern::{GarmentKind, Pattern};
 use crate::mesh::Mesh;
-use crate::sim::collide::SelfContact;
-use crate::sim::field::ThicknessField;
 use crate::sim::friction::Friction;
 use crate::sim::springs::{LawKind, Spring, SpringLaw};
-use crate::sim::step::{BodyContact, RestReport, SimParams, Simulator};
+use crate::sim::step::RestReport;
 use crate::sim::{Cloth, Collider};
 use crate::vec3::{V3, add, length, scale, sub};
 use crate::{Error, Result};
@@ -73,8 +72,10 @@ pub struct DrapeSettings {
     pub rest_hold_s: f64,
     /// Air viscosity while draping (1/s).
     pub air_viscosity: f64,
-    /// Factor of the stiffness bound of the time step.
-    pub cfl: f64,
+    /// Time over which the seams are pulled shut (simulated s).
+    pub sew_close_s: f64,
+    /// Sub-step of the solver (s).
+    pub substep_s: f64,
 }
 
 impl Default for DrapeSettings {
@@ -85,7 +86,8 @@ impl Default for DrapeSettings {
             rest_ke_per_kg: 1e-5,
             rest_hold_s: 0.1,
             air_viscosity: 4.0,
-            cfl: 0.9,
+            sew_close_s: 0.4,
+            substep_s: 1.0 / 600.0,
         }
     }
 }
@@ -127,14 +129,24 @@ struct Flat {
 
 fn layout(pattern: &Pattern, h: f64) -> Result<Flat> {
     // Points per edge: from its length, partners sharing the larger count.
-    let mut counts: Vec<Vec<usize>> =
-        pattern.panels.iter().map(|p| p.edges.iter().map(|e| ((e.length() / h).round() as usize).max(1)).collect()).collect();
+    let mut counts: Vec<Vec<usize>> = pattern
+        .panels
+        .iter()
+        .map(|p| p.edges.iter().map(|e| ((e.length() / h).round() as usize).max(1)).collect())
+        .collect();
     for s in &pattern.seams {
         let n = counts[s.a.panel][s.a.edge].max(counts[s.b.panel][s.b.edge]);
         counts[s.a.panel][s.a.edge] = n;
         counts[s.b.panel][s.b.edge] = n;
     }
-    let mut f = Flat { uv: Vec::new(), x: Vec::new(), triangles: Vec::new(), triangle_panel: Vec::new(), pairs: Vec::new(), pinned: Vec::new() };
+    let mut f = Flat {
+        uv: Vec::new(),
+        x: Vec::new(),
+        triangles: Vec::new(),
+        triangle_panel: Vec::new(),
+        pairs: Vec::new(),
+        pinned: Vec::new(),
+    };
     let mut edge_ids: Vec<Vec<Vec<u32>>> = Vec::new();
     for (pi, panel) in pattern.panels.iter().enumerate() {
         let mut outline = Vec::new();
@@ -144,7 +156,8 @@ fn layout(pattern: &Pattern, h: f64) -> Result<Flat> {
             let pts = e.resample(counts[pi][ei]);
             outline.extend_from_slice(&pts[..pts.len() - 1]);
         }
-        let m2 = triangulate(&outline, h).map_err(|e| Error::Invalid(format!("panel {}: {e}", panel.name)))?;
+        let m2 = triangulate(&outline, h)
+            .map_err(|e| Error::Invalid(format!("panel {}: {e}", panel.name)))?;
         let base = f.uv.len() as u32;
         let nb = outline.len();
         let ids: Vec<Vec<u32>> = (0..panel.edges.len())
@@ -195,7 +208,13 @@ fn uv_len(uv: &[P2], a: u32, b: u32) -> f64 {
 
 /// The cloth of `triangles` over `n` nodes whose corners have panel coordinates
 /// `uv[tri_uv[t][k]]`: masses, edge springs and bending springs.
-fn build_cloth(n: usize, triangles: &[[u32; 3]], tri_uv: &[[u32; 3]], uv: &[P2], fabric: &Fabric) -> Cloth {
+fn build_cloth(
+    n: usize,
+    triangles: &[[u32; 3]],
+    tri_uv: &[[u32; 3]],
+    uv: &[P2],
+    fabric: &Fabric,
+) -> Cloth {
     let mut mass = vec![0.0; n];
     for (t, tu) in triangles.iter().zip(tri_uv) {
         let [a, b, c] = tu.map(|i| uv[i as usize]);
@@ -229,8 +248,13 @@ fn build_cloth(n: usize, triangles: &[[u32; 3]], tri_uv: &[[u32; 3]], uv: &[P2],
             let (ua, ub, uc) = (tu[k], tu[(k + 1) % 3], tu[(k + 2) % 3]);
             let key = (a.min(b), a.max(b));
             let l = uv_len(uv, ua, ub);
-            let d = [uv[ub as usize][0] - uv[ua as usize][0], uv[ub as usize][1] - uv[ua as usize][1]];
-            let (la, lb) = if a < b { (uv_len(uv, ua, uc), uv_len(uv, ub, uc)) } else { (uv_len(uv, ub, uc), uv_len(uv, ua, uc)) };
+            let d =
+                [uv[ub as usize][0] - uv[ua as usize][0], uv[ub as usize][1] - uv[ua as usize][1]];
+            let (la, lb) = if a < b {
+                (uv_len(uv, ua, uc), uv_len(uv, ub, uc))
+            } else {
+                (uv_len(uv, ub, uc), uv_len(uv, ua, uc))
+            };
             let e = edges.entry(key).or_insert_with(|| {
                 order.push(key);
                 E { len: 0.0, count: 0.0, dir: [0.0; 2], opp: Vec::new() }
@@ -245,27 +269,65 @@ fn build_cloth(n: usize, triangles: &[[u32; 3]], tri_uv: &[[u32; 3]], uv: &[P2],
     for key in &order {
         let e = &edges[key];
         let rest = e.len / e.count;
-        let k = k_scale * (fabric.weft_n_per_m * e.dir[0] * e.dir[0] + fabric.warp_n_per_m * e.dir[1] * e.dir[1]);
+        let k = k_scale
+            * (fabric.weft_n_per_m * e.dir[0] * e.dir[0]
+                + fabric.warp_n_per_m * e.dir[1] * e.dir[1]);
         cloth.springs.push(Spring { a: key.0, b: key.1, rest, k, law: 0 });
         if e.opp.len() == 2 {
             let (c, ac, bc) = e.opp[0];
             let (d, ad, bd) = e.opp[1];
             if c != d {
                 let r = unfolded(rest, ac, bc, ad, bd);
-                cloth.springs.push(Spring { a: c, b: d, rest: r, k: fabric.bend_ratio * k, law: 1 });
+                cloth.springs.push(Spring {
+                    a: c,
+                    b: d,
+                    rest: r,
+                    k: fabric.bend_ratio * k,
+                    law: 1,
+                });
             }
         }
     }
     cloth
 }
 
-/// Contact constants scaled to the mean node mass `m`.
-fn contacts(fabric: &Fabric, m: f64) -> (BodyContact, SelfContact) {
-    let t = fabric.thickness_m;
-    let g = 9.81;
-    let body = BodyContact { field: ThicknessField::new(400.0 * m * g / (t * t), t, 0.1 * t), friction: fabric.friction };
-    let own = SelfContact { field: ThicknessField::new(200.0 * m * g / (t * t), t, 0.1 * t), margin: t, dynamic_friction: 0.3 };
-    (body, own)
+/// The cloth's springs as XPBD links (compliance = 1 / stiffness).
+fn links_of(cloth: &Cloth) -> Vec<Link> {
+    cloth
+        .springs
+        .iter()
+        .map(|s| Link { a: s.a, b: s.b, rest: s.rest, compliance: 1.0 / s.k.max(1e-9) })
+        .collect()
+}
+
+/// Sub-steps until the kinetic energy per kilogram stays below the threshold for the hold
+/// time, or the longest drape is reached; `progress` gets the simulated time.
+fn run_to_rest(sim: &mut Xpbd<'_>, s: &DrapeSettings, progress: &mut dyn FnMut(f64)) -> RestReport {
+    let start = sim.time;
+    let mut quiet_since: Option<f64> = None;
+    let mut r = RestReport::default();
+    while sim.time - start < s.drape_max_s {
+        sim.step();
+        r.steps += 1;
+        let ke = sim.kinetic_energy_per_kg();
+        r.kinetic_energy_per_kg = ke;
+        let t = sim.time - start;
+        if ke < s.rest_ke_per_kg {
+            let since = *quiet_since.get_or_insert(t);
+            if t - since >= s.rest_hold_s {
+                r.settled = true;
+                break;
+            }
+        } else {
+            quiet_since = None;
+        }
+        if r.steps % 64 == 0 {
+            progress(t);
+        }
+    }
+    r.end_time_s = sim.time - start;
+    r.settle_time_s = quiet_since.unwrap_or(r.end_time_s);
+    r
 }
 
 fn push_out(x: &mut [V3], collider: &dyn Collider, clearance: f64) {
@@ -296,59 +358,55 @@ pub fn sew_and_drape(
     let area = pattern.area();
     let h = (2.0 * area / (3f64.sqrt() * vertices as f64)).sqrt();
     let mut flat = layout(&pattern, h)?;
-    let collider: Option<&dyn Collider> = if pattern.kind.on_body() { body.map(|b| &b.sdf as &dyn Collider) } else { None };
+    let collider: Option<&dyn Collider> =
+        if pattern.kind.on_body() { body.map(|b| &b.sdf as &dyn Collider) } else { None };
     if let Some(c) = collider {
         push_out(&mut flat.x, c, 2.0 * fabric.thickness_m);
     }
     let n0 = flat.uv.len();
     let identity: Vec<[u32; 3]> = flat.triangles.clone();
-    let mut cloth = build_cloth(n0, &flat.triangles, &identity, &flat.uv, fabric);
-    let mean_mass = cloth.mass.iter().sum::<f64>() / n0 as f64;
-    let (body_contact, self_contact) = contacts(fabric, mean_mass);
-    // Sewing: seam springs, no gravity, heavy air damping, body contact only.
+    let cloth = build_cloth(n0, &flat.triangles, &identity, &flat.uv, fabric);
+    let contact = Contact {
+        thickness_m: fabric.thickness_m,
+        static_coef: fabric.friction.static_coef,
+        dynamic_coef: fabric.friction.dynamic_coef,
+    };
+    let body_contact = collider.map(|c| (c, contact));
+    // Sewing: seam links whose rest length shrinks from the placed gap to 0 over
+    // `sew_close_s`, no gravity, heavy air damping, the body as collider.
     let mut sewing = RestReport::default();
     let mut gap = 0.0;
     let mut x = flat.x.clone();
+    let dt = settings.substep_s;
     if !flat.pairs.is_empty() {
-        let seam_pull = 60.0 * mean_mass * 9.81;
-        let seam_k = seam_pull / (2.0 * h);
-        cloth.laws.push(SpringLaw {
-            kind: LawKind::Linear,
-            lo: 1.0,
-            hi: 1.0,
-            compression: 0.0,
-            damping: 0.3,
-            max_tension: seam_pull,
-        });
-        let law = (cloth.laws.len() - 1) as u16;
-        for &(a, b) in &flat.pairs {
-            if a != b {
-                cloth.springs.push(Spring { a, b, rest: 0.0, k: seam_k, law });
-            }
+        let mut links = links_of(&cloth);
+        let first_seam = links.len();
+        let pairs: Vec<(u32, u32)> = flat.pairs.iter().copied().filter(|&(a, b)| a != b).collect();
+        let gap0: Vec<f64> =
+            pairs.iter().map(|&(a, b)| length(sub(x[a as usize], x[b as usize]))).collect();
+        for (&(a, b), &g0) in pairs.iter().zip(&gap0) {
+            links.push(Link { a, b, rest: g0, compliance: 0.0 });
         }
-        cloth.finish();
-        let params = SimParams {
-            gravity: [0.0; 3],
-            air_viscosity: 15.0,
-            body: Some(body_contact),
-            self_contact: None,
-            cfl: settings.cfl,
-            ..SimParams::default()
+        let params = XpbdParams { gravity: [0.0; 3], air_viscosity: 20.0, dt };
+        let mut sim = Xpbd::new(x, cloth.mass.clone(), &flat.pinned, links, params, body_contact);
+        let max_gap = |s: &Xpbd| {
+            pairs
+                .iter()
+                .map(|&(a, b)| length(sub(s.x[a as usize], s.x[b as usize])))
+                .fold(0.0, f64::max)
         };
-        let mut sim = Simulator::new(cloth, x, params, collider);
-        let pairs = flat.pairs.clone();
-        let max_gap = |s: &Simulator| pairs.iter().map(|&(a, b)| length(sub(s.x[a as usize], s.x[b as usize]))).fold(0.0, f64::max);
-        let start_gap = max_gap(&sim).max(1e-9);
+        let close_s = settings.sew_close_s;
         let mut steps = 0;
         while sim.time < settings.sew_max_s {
-            let r = sim.step();
+            let f = (1.0 - sim.time / close_s).max(0.0);
+            for (l, &g0) in sim.links[first_seam..].iter_mut().zip(&gap0) {
+                l.rest = f * g0;
+            }
+            sim.step();
             steps += 1;
-            sewing.halvings += r.halvings as usize;
-            sewing.projected += r.projected;
             if steps % 32 == 0 {
-                gap = max_gap(&sim);
-                progress("sewing", (1.0 - gap / start_gap).clamp(0.0, 1.0));
-                if gap < 0.15 * h {
+                progress("sewing", (sim.time / close_s).min(1.0));
+                if sim.time >= close_s && max_gap(&sim) < 0.15 * h {
                     break;
                 }
             }
@@ -358,7 +416,7 @@ pub fn sew_and_drape(
         sewing.end_time_s = sim.time;
         sewing.settle_time_s = sim.time;
         sewing.settled = gap < 0.15 * h;
-        sewing.kinetic_energy_per_kg = sim.kinetic_energy() / sim.total_mass();
+        sewing.kinetic_energy_per_kg = sim.kinetic_energy_per_kg();
         x = sim.x;
     }
     // Weld seam partners (union–find; the smallest id is the root).
@@ -389,16 +447,22 @@ pub fn sew_and_drape(
     }
     let mut xw: Vec<V3> = members
         .iter()
-        .map(|ms| scale(ms.iter().fold([0.0; 3], |s, &i| add(s, x[i as usize])), 1.0 / ms.len() as f64))
+        .map(|ms| {
+            scale(ms.iter().fold([0.0; 3], |s, &i| add(s, x[i as usize])), 1.0 / ms.len() as f64)
+        })
         .collect();
-    let pinned: Vec<bool> = members.iter().map(|ms| ms.iter().any(|&i| flat.pinned[i as usize])).collect();
+    let pinned: Vec<bool> =
+        members.iter().map(|ms| ms.iter().any(|&i| flat.pinned[i as usize])).collect();
     let mut triangles = Vec::new();
     let mut tri_uv = Vec::new();
     let mut triangle_panel = Vec::new();
     for (t, &p) in flat.triangles.iter().zip(&flat.triangle_panel) {
         let w = t.map(|i| new_id[i as usize]);
         if w[0] == w[1] || w[1] == w[2] || w[0] == w[2] {
-            return Err(Error::Invalid("sewing welded a triangle onto itself (a seam is shorter than one mesh step)".into()));
+            return Err(Error::Invalid(
+                "sewing welded a triangle onto itself (a seam is shorter than one mesh step)"
+                    .into(),
+            ));
         }
         triangles.push(w);
         tri_uv.push(*t);
@@ -411,7 +475,8 @@ pub fn sew_and_drape(
     }
     {
         let mut set = std::collections::BTreeSet::new();
-        let pair_set: std::collections::HashSet<u32> = flat.pairs.iter().flat_map(|&(a, b)| [a, b]).collect();
+        let pair_set: std::collections::HashSet<u32> =
+            flat.pairs.iter().flat_map(|&(a, b)| [a, b]).collect();
         for t in &flat.triangles {
             for k in 0..3 {
                 let (a, b) = (t[k], t[(k + 1) % 3]);
@@ -436,27 +501,27 @@ pub fn sew_and_drape(
             }
         }
     }
-    // Drape: gravity, self-collision.
-    let mut cloth = build_cloth(nw, &triangles, &tri_uv, &flat.uv, fabric);
-    cloth.pinned = pinned;
-    cloth.finish();
+    // Drape: gravity, the body, until the kinetic energy stays low.
+    let cloth = build_cloth(nw, &triangles, &tri_uv, &flat.uv, fabric);
     if let Some(c) = collider {
-        push_out(&mut xw, c, 0.5 * fabric.thickness_m);
+        push_out(&mut xw, c, fabric.thickness_m);
     }
-    let params = SimParams {
-        air_viscosity: settings.air_viscosity,
-        body: Some(body_contact),
-        self_contact: Some(self_contact),
-        cfl: settings.cfl,
-        ..SimParams::default()
-    };
-    let mut sim = Simulator::new(cloth, xw, params, collider);
-    let max_s = settings.drape_max_s;
-    let drape = sim.run_to_rest(max_s, settings.rest_ke_per_kg, settings.rest_hold_s, &mut |t| progress("draping", t / max_s));
+    let params =
+        XpbdParams { gravity: [0.0, 0.0, -9.81], air_viscosity: settings.air_viscosity, dt };
+    let mut sim =
+        Xpbd::new(xw, cloth.mass.clone(), &pinned, links_of(&cloth), params, body_contact);
+    let drape =
+        run_to_rest(&mut sim, settings, &mut |t| progress("draping", t / settings.drape_max_s));
     if !sim.x.iter().all(|p| p.iter().all(|c| c.is_finite())) {
         return Err(Error::Invalid(format!("the drape diverged after {} steps", drape.steps)));
     }
-    let mut mesh = Mesh { positions: sim.x, uvs: flat.uv, triangles, triangle_uvs: tri_uv, normals: Vec::new() };
+    let mut mesh = Mesh {
+        positions: sim.x,
+        uvs: flat.uv,
+        triangles,
+        triangle_uvs: tri_uv,
+        normals: Vec::new(),
+    };
     mesh.compute_normals();
     Ok(Garment {
         mesh,

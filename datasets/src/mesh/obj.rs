@@ -16,7 +16,12 @@ pub fn write_obj(mesh: &Mesh, path: &Path, comment: &str) -> Result<()> {
 }
 
 /// [`write_obj`] with every face in material `material` (an OBJ `usemtl` line).
-pub fn write_obj_material(mesh: &Mesh, path: &Path, comment: &str, material: Option<&str>) -> Result<()> {
+pub fn write_obj_material(
+    mesh: &Mesh,
+    path: &Path,
+    comment: &str,
+    material: Option<&str>,
+) -> Result<()> {
     let finite =
         mesh.positions.iter().chain(&mesh.normals).all(|p| p.iter().all(|v| v.is_finite()))
             && mesh.uvs.iter().all(|t| t.iter().all(|v| v.is_finite()));
@@ -82,7 +87,11 @@ pub fn read_obj(path: &Path) -> Result<Mesh> {
             Some("v") => {
                 let v: Vec<f64> = it.take(3).map(|x| x.parse().unwrap_or(f64::NAN)).collect();
                 if v.len() != 3 || !v.iter().all(|x| x.is_finite()) {
-                    return Err(Error::Invalid(format!("{}:{}: bad vertex", path.display(), ln + 1)));
+                    return Err(Error::Invalid(format!(
+                        "{}:{}: bad vertex",
+                        path.display(),
+                        ln + 1
+                    )));
                 }
                 mesh.positions.push([v[0], v[1], v[2]]);
             }

@@ -55,11 +55,14 @@ pub fn candidates(x: &[V3], triangles: &[[u32; 3]], reach: f64) -> Vec<Candidate
     let mean_edge = if triangles.is_empty() {
         reach
     } else {
-        triangles.iter().take(512).map(|&t| {
-            let p = tri_points(x, t);
-            length(sub(p[1], p[0]))
-        })
-        .sum::<f64>()
+        triangles
+            .iter()
+            .take(512)
+            .map(|&t| {
+                let p = tri_points(x, t);
+                length(sub(p[1], p[0]))
+            })
+            .sum::<f64>()
             / triangles.len().min(512) as f64
     };
     let grid = HashGrid::build(&boxes, (2.0 * reach).max(mean_edge));
@@ -182,7 +185,8 @@ mod tests {
             }
         }
         for reach in [0.004, 0.008, 0.015] {
-            let fast: Vec<(u32, u32)> = candidates(&x, &tris, reach).iter().map(|c| (c.node, c.tri)).collect();
+            let fast: Vec<(u32, u32)> =
+                candidates(&x, &tris, reach).iter().map(|c| (c.node, c.tri)).collect();
             let slow = candidates_brute_force(&x, &tris, reach);
             assert_eq!(fast, slow, "reach {reach}");
             assert!(!slow.is_empty());

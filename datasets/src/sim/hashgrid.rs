@@ -14,7 +14,9 @@ pub struct HashGrid {
 }
 
 fn hash(c: [i64; 3], table: usize) -> usize {
-    let h = (c[0].wrapping_mul(73_856_093)) ^ (c[1].wrapping_mul(19_349_663)) ^ (c[2].wrapping_mul(83_492_791));
+    let h = (c[0].wrapping_mul(73_856_093))
+        ^ (c[1].wrapping_mul(19_349_663))
+        ^ (c[2].wrapping_mul(83_492_791));
     (h.rem_euclid(table as i64)) as usize
 }
 

@@ -57,7 +57,15 @@ impl Cloth {
     /// A cloth of `mass.len()` nodes; call [`Cloth::finish`] after adding springs.
     pub fn new(mass: Vec<f64>, triangles: Vec<[u32; 3]>, laws: Vec<SpringLaw>) -> Self {
         let n = mass.len();
-        Cloth { mass, springs: Vec::new(), laws, triangles, pinned: vec![false; n], starts: Vec::new(), incident: Vec::new() }
+        Cloth {
+            mass,
+            springs: Vec::new(),
+            laws,
+            triangles,
+            pinned: vec![false; n],
+            starts: Vec::new(),
+            incident: Vec::new(),
+        }
     }
 
     /// Builds the per-node spring lists (in spring order, so gathers are deterministic).

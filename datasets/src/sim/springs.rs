@@ -98,7 +98,14 @@ mod tests {
     use super::*;
 
     fn law(kind: LawKind) -> SpringLaw {
-        SpringLaw { kind, lo: 0.95, hi: 1.05, compression: 2.0, damping: 0.0, max_tension: f64::INFINITY }
+        SpringLaw {
+            kind,
+            lo: 0.95,
+            hi: 1.05,
+            compression: 2.0,
+            damping: 0.0,
+            max_tension: f64::INFINITY,
+        }
     }
 
     #[test]
@@ -127,6 +134,10 @@ mod tests {
         let th = 1.05 * rest;
         let (f1, _) = l.tension(k, rest, th + 1e-12);
         let c0 = k * th;
-        assert!((f1 - c0 / std::f64::consts::E).abs() < 1e-6 * c0, "jump {f1} vs {}", c0 / std::f64::consts::E);
+        assert!(
+            (f1 - c0 / std::f64::consts::E).abs() < 1e-6 * c0,
+            "jump {f1} vs {}",
+            c0 / std::f64::consts::E
+        );
     }
 }

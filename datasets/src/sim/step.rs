@@ -117,10 +117,24 @@ struct Forces {
 
 impl<'a> Simulator<'a> {
     /// A simulator starting at rest at positions `x`.
-    pub fn new(cloth: Cloth, x: Vec<V3>, params: SimParams, collider: Option<&'a dyn Collider>) -> Self {
+    pub fn new(
+        cloth: Cloth,
+        x: Vec<V3>,
+        params: SimParams,
+        collider: Option<&'a dyn Collider>,
+    ) -> Self {
         let n = x.len();
         assert_eq!(cloth.mass.len(), n, "one mass per node");
-        Simulator { cloth, v: vec![[0.0; 3]; n], x, params, time: 0.0, collider, candidates: Vec::new(), built_at: Vec::new() }
+        Simulator {
+            cloth,
+            v: vec![[0.0; 3]; n],
+            x,
+            params,
+            time: 0.0,
+            collider,
+            candidates: Vec::new(),
+            built_at: Vec::new(),
+        }
     }
 
     /// Total kinetic energy (J), summed in node order.
@@ -141,7 +155,8 @@ impl<'a> Simulator<'a> {
             f64::INFINITY
         };
         if moved > 0.5 * sc.margin {
-            self.candidates = candidates(&self.x, &self.cloth.triangles, sc.field.thickness + sc.margin);
+            self.candidates =
+                candidates(&self.x, &self.cloth.triangles, sc.field.thickness + sc.margin);
             self.built_at = self.x.clone();
         }
     }
@@ -164,7 +179,10 @@ impl<'a> Simulator<'a> {
                 let (ma, mb) = (c.mass[s.a as usize], c.mass[s.b as usize]);
                 let damping = law.damping * 2.0 * (s.k * ma * mb / (ma + mb)).sqrt();
                 let vrel = dot(sub(v[s.b as usize], v[s.a as usize]), dir);
-                (scale(dir, tension + damping * vrel), kt.max(if tension != 0.0 { s.k } else { 0.0 }))
+                (
+                    scale(dir, tension + damping * vrel),
+                    kt.max(if tension != 0.0 { s.k } else { 0.0 }),
+                )
             })
             .collect();
         let p = &self.params;
@@ -277,7 +295,8 @@ impl<'a> Simulator<'a> {
                     if c.pinned[i] {
                         continue;
                     }
-                    let other = (0..3).fold([0.0; 3], |s, k| add(s, scale(vn[t[k] as usize], wts[k])));
+                    let other =
+                        (0..3).fold([0.0; 3], |s, k| add(s, scale(vn[t[k] as usize], wts[k])));
                     let rel = sub(vn[i], other);
                     let fr = Friction { static_coef: 0.0, dynamic_coef: sc.dynamic_friction };
                     let after = fr.apply(rel, nrm, mag, c.mass[i], dt);
@@ -291,7 +310,10 @@ impl<'a> Simulator<'a> {
                     }
                 }
             }
-            xn = (0..n).into_par_iter().map(|i| add(self.x[i], scale(vn[i], dt))).collect::<Vec<V3>>();
+            xn = (0..n)
+                .into_par_iter()
+                .map(|i| add(self.x[i], scale(vn[i], dt)))
+                .collect::<Vec<V3>>();
             if halvings >= self.params.max_halvings || !self.penetrates(&f, &xn) {
                 break;
             }
@@ -347,7 +369,12 @@ impl<'a> Simulator<'a> {
             let tris = &self.cloth.triangles;
             return self.candidates.par_iter().any(|c| {
                 let t = tris[c.tri as usize];
-                crosses(t.map(|k| self.x[k as usize]), self.x[c.node as usize], t.map(|k| xn[k as usize]), xn[c.node as usize])
+                crosses(
+                    t.map(|k| self.x[k as usize]),
+                    self.x[c.node as usize],
+                    t.map(|k| xn[k as usize]),
+                    xn[c.node as usize],
+                )
             });
         }
         false
@@ -355,7 +382,13 @@ impl<'a> Simulator<'a> {
 
     /// Steps until the kinetic energy per kilogram stays below `ke_per_kg` for `hold_s`
     /// of simulated time, or `max_time_s` is reached; `progress` gets the simulated time.
-    pub fn run_to_rest(&mut self, max_time_s: f64, ke_per_kg: f64, hold_s: f64, progress: &mut dyn FnMut(f64)) -> RestReport {
+    pub fn run_to_rest(
+        &mut self,
+        max_time_s: f64,
+        ke_per_kg: f64,
+        hold_s: f64,
+        progress: &mut dyn FnMut(f64),
+    ) -> RestReport {
         let mass = self.total_mass();
         let start = self.time;
         let mut quiet_since: Option<f64> = None;
