@@ -2,20 +2,53 @@
 //! mannequin by cloth simulation (`datasets::garment`), or the mannequin itself
 //! (`--kind body`), written as OBJ through the atomic writer.
 
+use crate::args::choices;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use datasets::garment::{Body, GarmentKind, GarmentOptions, Size, check};
 use std::path::PathBuf;
 
+choices! {
+    /// `btf synth garment --kind`.
+    GarmentChoice {
+        /// Short-sleeved T-shirt: front, back, two sleeves.
+        Tshirt = "tshirt",
+        /// Long-sleeved shirt.
+        Shirt = "shirt",
+        /// Trousers: front and back of each leg.
+        Trousers = "trousers",
+        /// A-line skirt: front and back.
+        Skirt = "skirt",
+        /// Scarf laid round the neck.
+        Scarf = "scarf",
+        /// Curtain panel hanging from a rod (no body).
+        Curtain = "curtain",
+        /// The mannequin alone (closed mesh).
+        Body = "body",
+    }
+}
+
+choices! {
+    /// `btf synth garment --size`.
+    SizeChoice {
+        /// Small (1.68 m, chest 0.90 m).
+        S = "S",
+        /// Medium (1.76 m, chest 0.98 m).
+        M = "M",
+        /// Large (1.84 m, chest 1.07 m).
+        L = "L",
+    }
+}
+
 /// `btf synth garment`.
 #[derive(Args)]
 pub struct GarmentArgs {
-    /// tshirt, shirt, trousers, skirt, scarf, curtain, or body (the mannequin alone).
+    /// The garment, or `body` for the mannequin alone.
     #[arg(long)]
-    pub kind: String,
-    /// S, M or L.
+    pub kind: GarmentChoice,
+    /// Body size.
     #[arg(long, default_value = "M")]
-    pub size: String,
+    pub size: SizeChoice,
     /// Body height (m), overriding the size's.
     #[arg(long)]
     pub height: Option<f64>,
@@ -45,13 +78,13 @@ pub struct GarmentArgs {
     #[arg(long, value_name = "FILE")]
     pub body_out: Option<PathBuf>,
     /// Output OBJ file.
-    #[arg(short, long)]
+    #[arg(short = 'o', long = "out", alias = "output")]
     pub output: PathBuf,
 }
 
 /// Runs `btf synth garment`.
 pub fn run(a: GarmentArgs) -> Result<()> {
-    let size = Size::from_name(&a.size)?;
+    let size = Size::from_name(a.size.as_str())?;
     let mut o = GarmentOptions::new(size);
     let m = &mut o.body.measurements;
     for (v, slot) in [
@@ -68,7 +101,7 @@ pub fn run(a: GarmentArgs) -> Result<()> {
     o.vertices = a.vertices;
     o.pattern.sleeve_length_m = a.sleeve_length;
     o.pattern.length_m = a.length;
-    let mut outputs: Vec<(&str, &std::path::Path)> = vec![("--output", a.output.as_path())];
+    let mut outputs: Vec<(&str, &std::path::Path)> = vec![("--out", a.output.as_path())];
     if let Some(p) = &a.body_out {
         outputs.push(("--body-out", p.as_path()));
     }
@@ -91,7 +124,7 @@ pub fn run(a: GarmentArgs) -> Result<()> {
         None => None,
     };
     let comment = format!("btf synth garment --kind {} --size {}", a.kind, a.size);
-    if a.kind == "body" {
+    if a.kind == GarmentChoice::Body {
         if a.body.is_some() {
             bail!(
                 "--kind body makes the mannequin; --body is for draping a garment on another body"
@@ -109,7 +142,10 @@ pub fn run(a: GarmentArgs) -> Result<()> {
         );
         return Ok(());
     }
-    let kind = GarmentKind::from_name(&a.kind)?;
+    let kind = GarmentKind::from_name(a.kind.as_str())?;
+    if a.sleeve_length.is_some() && !matches!(kind, GarmentKind::TShirt | GarmentKind::Shirt) {
+        bail!("--sleeve-length is for --kind tshirt or shirt, not {}", a.kind);
+    }
     let bar = crate::progress::bar(1000, "garment");
     if !crate::progress::enabled() {
         bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());

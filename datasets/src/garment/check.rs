@@ -164,6 +164,11 @@ pub fn min_body_distance(mesh: &Mesh, sdf: &SdfGrid) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
+/// Smallest signed distance of the mesh's vertices to the body (m).
+pub fn min_vertex_distance(mesh: &Mesh, sdf: &SdfGrid) -> f64 {
+    mesh.positions.iter().map(|&p| sdf.query(p).0).fold(f64::INFINITY, f64::min)
+}
+
 /// Smallest triangle angle (degrees) and area (m²).
 pub fn worst_triangle(mesh: &Mesh) -> (f64, f64) {
     let mut angle = 180.0f64;

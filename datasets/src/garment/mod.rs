@@ -17,6 +17,8 @@ pub mod pattern;
 pub mod preview;
 pub mod sdf;
 pub mod sew;
+#[cfg(test)]
+mod tests;
 
 pub use body::{Body, BodyParams, Measurements, Size};
 pub use pattern::{GarmentKind, Pattern, PatternOptions};

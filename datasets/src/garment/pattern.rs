@@ -529,8 +529,7 @@ fn top(m: &Measurements, l: &Landmarks, o: &PatternOptions, long: bool) -> Resul
     for (i, side) in [1.0f64, -1.0].into_iter().enumerate() {
         let [joint, elbow, _] = l.arm[i];
         let down = normalize_or(sub(elbow, joint), [0.0, 0.0, -1.0]);
-        let up_out =
-            normalize_or([-down[2] * side, 0.0, down[0] * side], [0.0, 0.0, 1.0]);
+        let up_out = normalize_or([-down[2] * side, 0.0, down[0] * side], [0.0, 0.0, 1.0]);
         let up_out = if up_out[2] < 0.0 { scale(up_out, -1.0) } else { up_out };
         let r = upper_r + 0.03 * s;
         panels.push(Panel {

@@ -81,7 +81,7 @@ pub struct DrapeSettings {
 impl Default for DrapeSettings {
     fn default() -> Self {
         DrapeSettings {
-            sew_max_s: 1.0,
+            sew_max_s: 2.0,
             drape_max_s: 4.0,
             rest_ke_per_kg: 1e-5,
             rest_hold_s: 0.1,
