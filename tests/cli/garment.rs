@@ -114,8 +114,11 @@ fn garment_refuses_bad_parameters_naming_them() {
     assert!(with(&["--sleeve-length", "2.5"]).contains("--sleeve-length"));
     assert!(with(&["--sleeve-length=-0.2"]).contains("--sleeve-length"));
     assert!(with(&["--length", "3"]).contains("--length"));
-    assert!(with(&["--vertices", "10"]).contains("--vertices"));
     assert!(with(&["--size", "XL"]).contains("--size"));
+    assert!(
+        d.fails(&["synth", "garment", "--kind", "skirt", "--vertices", "10", "-o", "g.obj"])
+            .contains("--vertices")
+    );
     assert!(d.fails(&["synth", "garment", "--kind", "dress", "-o", "g.obj"]).contains("--kind"));
     assert!(
         d.fails(&["synth", "garment", "--kind", "skirt", "--sleeve-length", "0.3", "-o", "g.obj"])

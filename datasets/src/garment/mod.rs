@@ -2,7 +2,9 @@
 //! ([`body`]), flat sewing-pattern panels with a grain ([`pattern`]), triangulated evenly
 //! in 2-D so that the panel coordinates are the UVs in metres ([`mesher`]), placed around
 //! the body, pulled together by seam springs until they merge into one manifold mesh and
-//! draped under gravity by the cloth simulation of [`crate::sim`] ([`sew`]); [`check`]
+//! draped under gravity by the XPBD solver of [`drape`] ([`sew`]; the draft used the explicit
+//! mass–spring simulation of [`crate::sim`], whose ~50 µs time step made a garment take
+//! minutes — it stays for the knit animation); [`check`]
 //! measures what the tests assert (openings, penetration, self-intersection, strain, grain).
 //!
 //! One call makes a garment on its mannequin: [`draped`] (`kind`, `size`) for the demo,

@@ -367,10 +367,10 @@ impl Pattern {
         m.validate()?;
         positive("--sleeve-length", o.sleeve_length_m)?;
         positive("--length", o.length_m)?;
-        if let Some(e) = o.ease_m {
-            if !(e.is_finite() && (0.0..=0.5).contains(&e)) {
-                return Err(Error::Invalid(format!("ease = {e} m must be within 0 … 0.5 m")));
-            }
+        if let Some(e) = o.ease_m
+            && !(e.is_finite() && (0.0..=0.5).contains(&e))
+        {
+            return Err(Error::Invalid(format!("ease = {e} m must be within 0 … 0.5 m")));
         }
         match kind {
             GarmentKind::TShirt => top(m, l, o, false),

@@ -171,7 +171,7 @@ impl SdfGrid {
             for j in 0..ny {
                 let xs = &mut crossings[j];
                 xs.sort_by(f64::total_cmp);
-                let usable = xs.len() % 2 == 0;
+                let usable = xs.len().is_multiple_of(2);
                 for i in 0..nx {
                     let x = origin[0] + i as f64 * step;
                     let before = xs.partition_point(|&c| c < x);
