@@ -10,9 +10,11 @@
 pub mod capture;
 pub mod env;
 pub mod error;
+pub mod garment;
 pub mod material;
 pub mod mesh;
 pub mod noise;
+pub mod sim;
 pub mod vec3;
 
 pub use env::{EnvKind, EnvParams, synth_env};
@@ -20,4 +22,4 @@ pub use error::{Error, Result};
 pub use material::{
     GenerateOptions, GenerateReport, Material, MaterialKind, MaterialParams, MaterialSpec, generate,
 };
-pub use mesh::{Mesh, MeshKind, Resolution, synth_mesh, write_obj};
+pub use mesh::{Mesh, MeshKind, Resolution, read_obj, synth_mesh, write_obj, write_obj_material};

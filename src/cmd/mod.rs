@@ -4,6 +4,7 @@ pub mod capture;
 pub mod compress;
 pub mod demo;
 pub mod export;
+pub mod garment;
 pub mod import;
 pub mod inspect;
 pub mod knit;

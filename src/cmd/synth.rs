@@ -93,6 +93,8 @@ pub enum SynthCmd {
     Mesh(MeshArgs),
     /// Raw images of the sample on its holder plate from a virtual gonioreflectometer.
     Capture(CaptureArgs),
+    /// A garment sewn from pattern panels and draped on a mannequin (or the mannequin).
+    Garment(super::garment::GarmentArgs),
 }
 
 /// `btf synth material`.
@@ -231,6 +233,7 @@ pub fn run(cmd: SynthCmd) -> Result<()> {
         SynthCmd::Env(a) => env(a),
         SynthCmd::Mesh(a) => mesh(a),
         SynthCmd::Capture(a) => capture(a),
+        SynthCmd::Garment(a) => super::garment::run(a),
     }
 }
 

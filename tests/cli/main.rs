@@ -11,6 +11,7 @@ mod capture;
 mod commands;
 mod demo;
 mod docs;
+mod garment;
 mod hostile;
 mod import_export;
 mod knit;

@@ -15,7 +15,7 @@ pub mod cloth;
 pub mod obj;
 pub mod shapes;
 
-pub use obj::write_obj;
+pub use obj::{read_obj, write_obj, write_obj_material};
 
 use crate::vec3::{V3, cross, length, normalize_or, sub};
 use crate::{Error, Result};

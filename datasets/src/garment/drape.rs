@@ -1,0 +1,221 @@
+//! The garment's cloth solver: extended position-based dynamics (XPBD, Macklin, Müller &
+//! Chentanez 2016) with small sub-steps (Macklin et al. 2019), one Gauss–Seidel sweep per
+//! sub-step. It computes, from panel-rest lengths, the positions the cloth takes under
+//! gravity, seam pulls and contact with the body.
+//!
+//! Each constraint `C(x) = |x_a − x_b| − r` with compliance `α` (m/N, the inverse of the
+//! spring stiffness) moves its ends by `Δλ = −(C + α̃ λ)/(w_a + w_b + α̃)`, `α̃ = α / Δt²`
+//! [XPBD eq. 18]; with one iteration per sub-step `λ` starts at 0, so
+//! `Δλ = −C/(w_a + w_b + α̃)`. Contact with the body is a projection onto the offset surface
+//! `d = T` (the cloth's half-thickness `T`) after every sweep, with Coulomb friction on the
+//! sub-step's tangential displacement (static when it is below `μ_s` times the
+//! penetration, else reduced by `μ_k` times it). Velocities are `(x_new − x_old)/Δt`,
+//! damped by `exp(−c Δt)` (air viscosity `c`).
+//!
+//! Why not the draft's explicit mass–spring integrator ([`crate::sim`]): its time step is
+//! bounded by `√(m/k)` of the contact field and the membrane, about 50 µs at every
+//! resolution, so a 3 s drape at 10 000 vertices took several minutes (2 000 vertices had
+//! not finished sewing after two). XPBD is unconditionally stable; 600 sub-steps per
+//! simulated second suffice at 40 000 vertices. The sweep is sequential in a fixed
+//! constraint order, so results are bit-identical from run to run.
+
+use crate::sim::Collider;
+use crate::vec3::{V3, add, dot, length, scale, sub};
+
+/// A distance constraint between two nodes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Link {
+    /// First node.
+    pub a: u32,
+    /// Second node.
+    pub b: u32,
+    /// Rest length (m).
+    pub rest: f64,
+    /// Compliance `α` (m/N); 0 is inextensible.
+    pub compliance: f64,
+}
+
+/// Contact with the body.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Contact {
+    /// Distance from the body surface the cloth's mid-surface keeps (m).
+    pub thickness_m: f64,
+    /// Static friction coefficient.
+    pub static_coef: f64,
+    /// Dynamic friction coefficient.
+    pub dynamic_coef: f64,
+}
+
+/// Constants of a run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct XpbdParams {
+    /// Gravity (m/s²).
+    pub gravity: V3,
+    /// Air viscosity (1/s).
+    pub air_viscosity: f64,
+    /// Sub-step (s).
+    pub dt: f64,
+}
+
+/// Positions and velocities of the cloth, advanced by [`Xpbd::step`].
+pub struct Xpbd<'a> {
+    /// Positions (m).
+    pub x: Vec<V3>,
+    /// Velocities (m/s).
+    pub v: Vec<V3>,
+    /// Inverse masses (1/kg), 0 for pinned nodes.
+    pub inv_mass: Vec<f64>,
+    /// Masses (kg).
+    pub mass: Vec<f64>,
+    /// Constraints, in sweep order.
+    pub links: Vec<Link>,
+    /// Simulated time (s).
+    pub time: f64,
+    params: XpbdParams,
+    body: Option<(&'a dyn Collider, Contact)>,
+    pred: Vec<V3>,
+}
+
+impl<'a> Xpbd<'a> {
+    /// A cloth at rest at `x` with node masses `mass`; `pinned` nodes do not move.
+    pub fn new(
+        x: Vec<V3>,
+        mass: Vec<f64>,
+        pinned: &[bool],
+        links: Vec<Link>,
+        params: XpbdParams,
+        body: Option<(&'a dyn Collider, Contact)>,
+    ) -> Self {
+        let inv_mass = mass
+            .iter()
+            .zip(pinned)
+            .map(|(&m, &p)| if p || m <= 0.0 { 0.0 } else { 1.0 / m })
+            .collect();
+        let n = x.len();
+        Xpbd {
+            pred: x.clone(),
+            x,
+            v: vec![[0.0; 3]; n],
+            inv_mass,
+            mass,
+            links,
+            time: 0.0,
+            params,
+            body,
+        }
+    }
+
+    /// Changes the constants (gravity, damping, sub-step) between phases.
+    pub fn set_params(&mut self, params: XpbdParams) {
+        self.params = params;
+    }
+
+    /// Kinetic energy per kilogram of the moving nodes (J/kg).
+    pub fn kinetic_energy_per_kg(&self) -> f64 {
+        let (mut e, mut m) = (0.0, 0.0);
+        for i in 0..self.x.len() {
+            if self.inv_mass[i] > 0.0 {
+                e += 0.5 * self.mass[i] * dot(self.v[i], self.v[i]);
+                m += self.mass[i];
+            }
+        }
+        if m > 0.0 { e / m } else { 0.0 }
+    }
+
+    /// One sub-step: predict, one sweep over the links, contact, velocities.
+    pub fn step(&mut self) {
+        let p = self.params;
+        let dt = p.dt;
+        let damp = (-p.air_viscosity * dt).exp();
+        for i in 0..self.x.len() {
+            if self.inv_mass[i] == 0.0 {
+                self.pred[i] = self.x[i];
+                continue;
+            }
+            let v = scale(add(self.v[i], scale(p.gravity, dt)), damp);
+            self.pred[i] = add(self.x[i], scale(v, dt));
+        }
+        let inv_dt2 = 1.0 / (dt * dt);
+        for l in &self.links {
+            let (a, b) = (l.a as usize, l.b as usize);
+            let w = self.inv_mass[a] + self.inv_mass[b];
+            if w == 0.0 {
+                continue;
+            }
+            let d = sub(self.pred[b], self.pred[a]);
+            let len = length(d);
+            if len < 1e-15 {
+                continue;
+            }
+            let c = len - l.rest;
+            let dl = -c / (w + l.compliance * inv_dt2);
+            let g = scale(d, dl / len);
+            self.pred[a] = sub(self.pred[a], scale(g, self.inv_mass[a]));
+            self.pred[b] = add(self.pred[b], scale(g, self.inv_mass[b]));
+        }
+        if let Some((col, ct)) = self.body {
+            for i in 0..self.x.len() {
+                if self.inv_mass[i] == 0.0 {
+                    continue;
+                }
+                let (d, n) = col.query(self.pred[i]);
+                if d >= ct.thickness_m {
+                    continue;
+                }
+                let depth = ct.thickness_m - d;
+                let mut q = add(self.pred[i], scale(n, depth));
+                let moved = sub(q, self.x[i]);
+                let tangential = sub(moved, scale(n, dot(moved, n)));
+                let t = length(tangential);
+                if t < ct.static_coef * depth {
+                    q = sub(q, tangential);
+                } else if t > 0.0 {
+                    q = sub(q, scale(tangential, (ct.dynamic_coef * depth / t).min(1.0)));
+                }
+                self.pred[i] = q;
+            }
+        }
+        for i in 0..self.x.len() {
+            self.v[i] = scale(sub(self.pred[i], self.x[i]), 1.0 / dt);
+            self.x[i] = self.pred[i];
+        }
+        self.time += dt;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A chain of 20 nodes hanging from a pinned end comes to rest with the links at
+    /// their stretched length: link `k` from the bottom carries the weight `k m g`, so with
+    /// compliance `α` it is `r + α k m g` long (exact for the equilibrium of XPBD, whose
+    /// fixed point is the spring equilibrium).
+    #[test]
+    fn hanging_chain_stretches_by_its_compliance() {
+        let n = 20;
+        let (m, r, alpha) = (0.01, 0.05, 0.02);
+        let x: Vec<V3> = (0..n).map(|i| [0.0, 0.0, -(i as f64) * r]).collect();
+        let mut pinned = vec![false; n];
+        pinned[0] = true;
+        let links = (0..n - 1)
+            .map(|i| Link { a: i as u32, b: i as u32 + 1, rest: r, compliance: alpha })
+            .collect();
+        let params = XpbdParams { gravity: [0.0, 0.0, -9.81], air_viscosity: 5.0, dt: 1e-3 };
+        let mut s = Xpbd::new(x, vec![m; n], &pinned, links, params, None);
+        for _ in 0..20_000 {
+            s.step();
+        }
+        assert!(s.kinetic_energy_per_kg() < 1e-8, "at rest");
+        for i in 0..n - 1 {
+            let below = (n - 1 - i) as f64;
+            let expect = r + alpha * below * m * 9.81;
+            let got = length(sub(s.x[i + 1], s.x[i]));
+            // One sweep per sub-step leaves a residual of order (α̃ / w)·… — 1 % here.
+            assert!(
+                (got - expect).abs() < 0.01 * (expect - r) + 1e-6,
+                "link {i}: {got} vs {expect}"
+            );
+        }
+    }
+}

@@ -1,0 +1,545 @@
+//! From pattern to draped garment: the panels are triangulated evenly at the spacing that
+//! gives the requested vertex count (seam partners sampled with the same number of points),
+//! placed around the body, pulled together by seam springs (rest length 0, a capped
+//! pull) with the body as collider, welded into one mesh once the seams have closed (one
+//! position per seam point, the UVs kept per panel so a seam keeps its UV discontinuity),
+//! and draped under gravity with friction and self-collision until the kinetic energy stays
+//! below a threshold.
+//!
+//! Springs come from the 2-D panels: every mesh edge with its length in the panel as rest
+//! length and a stiffness interpolated between warp (panel `y`) and weft (panel `x`) by its
+//! direction; every pair of triangles sharing an edge gets a bending spring between the
+//! two opposite corners, its rest length that of the pair unfolded flat (so seams rest
+//! flat too).
+
+use super::body::Body;
+use super::drape::{Contact, Link, Xpbd, XpbdParams};
+use super::mesher::{P2, triangulate};
+use super::pattern::{GarmentKind, Pattern};
+use crate::mesh::Mesh;
+use crate::sim::friction::Friction;
+use crate::sim::springs::{LawKind, Spring, SpringLaw};
+use crate::sim::step::RestReport;
+use crate::sim::{Cloth, Collider};
+use crate::vec3::{V3, add, length, scale, sub};
+use crate::{Error, Result};
+use std::collections::HashMap;
+
+/// Mechanical properties of the fabric.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fabric {
+    /// Areal density (kg/m²).
+    pub density_kg_m2: f64,
+    /// Membrane stiffness along the warp (panel `y`), N/m.
+    pub warp_n_per_m: f64,
+    /// Membrane stiffness along the weft (panel `x`), N/m.
+    pub weft_n_per_m: f64,
+    /// Bending springs' stiffness as a fraction of the membrane's.
+    pub bend_ratio: f64,
+    /// Half-width of the slack interval (fraction of the rest length).
+    pub slack: f64,
+    /// Half-thickness of the cloth: the reach of the contact fields (m).
+    pub thickness_m: f64,
+    /// Friction against the body.
+    pub friction: Friction,
+}
+
+impl Default for Fabric {
+    /// A cotton jersey: 160 g/m², 400 / 250 N/m, 1 % slack, 3 mm half-thickness.
+    fn default() -> Self {
+        Fabric {
+            density_kg_m2: 0.16,
+            warp_n_per_m: 400.0,
+            weft_n_per_m: 250.0,
+            bend_ratio: 0.02,
+            slack: 0.01,
+            thickness_m: 0.003,
+            friction: Friction { static_coef: 0.6, dynamic_coef: 0.4 },
+        }
+    }
+}
+
+/// How long to simulate and when the drape counts as at rest.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DrapeSettings {
+    /// Longest sewing phase (simulated s).
+    pub sew_max_s: f64,
+    /// Longest drape (simulated s).
+    pub drape_max_s: f64,
+    /// Rest: kinetic energy per kilogram below this (J/kg) …
+    pub rest_ke_per_kg: f64,
+    /// … for this long (simulated s).
+    pub rest_hold_s: f64,
+    /// Air viscosity while draping (1/s).
+    pub air_viscosity: f64,
+    /// Time over which the seams are pulled shut (simulated s).
+    pub sew_close_s: f64,
+    /// Sub-step of the solver (s).
+    pub substep_s: f64,
+}
+
+impl Default for DrapeSettings {
+    fn default() -> Self {
+        DrapeSettings {
+            sew_max_s: 2.0,
+            drape_max_s: 4.0,
+            rest_ke_per_kg: 1e-5,
+            rest_hold_s: 0.1,
+            air_viscosity: 4.0,
+            sew_close_s: 0.4,
+            substep_s: 1.0 / 600.0,
+        }
+    }
+}
+
+/// A sewn, draped garment.
+#[derive(Debug, Clone)]
+pub struct Garment {
+    /// The mesh: welded positions, per-panel UVs (metres of fabric).
+    pub mesh: Mesh,
+    /// The pattern it was sewn from.
+    pub pattern: Pattern,
+    /// Panel of each triangle.
+    pub triangle_panel: Vec<u16>,
+    /// Seam edges of the welded mesh (position index pairs).
+    pub seam_edges: Vec<[u32; 2]>,
+    /// Spacing of the panels' triangulation (m).
+    pub spacing_m: f64,
+    /// The fabric.
+    pub fabric: Fabric,
+    /// The sewing phase.
+    pub sewing: RestReport,
+    /// Largest distance between seam partners when they were welded (m).
+    pub seam_gap_at_weld_m: f64,
+    /// The drape.
+    pub drape: RestReport,
+}
+
+/// Panels triangulated and laid out as one unwelded vertex set.
+struct Flat {
+    uv: Vec<P2>,
+    x: Vec<V3>,
+    triangles: Vec<[u32; 3]>,
+    triangle_panel: Vec<u16>,
+    /// Seam partner pairs (unwelded vertex ids).
+    pairs: Vec<(u32, u32)>,
+    /// Pinned vertices.
+    pinned: Vec<bool>,
+}
+
+fn layout(pattern: &Pattern, h: f64) -> Result<Flat> {
+    // Points per edge: from its length, partners sharing the larger count.
+    let mut counts: Vec<Vec<usize>> = pattern
+        .panels
+        .iter()
+        .map(|p| p.edges.iter().map(|e| ((e.length() / h).round() as usize).max(1)).collect())
+        .collect();
+    for s in &pattern.seams {
+        let n = counts[s.a.panel][s.a.edge].max(counts[s.b.panel][s.b.edge]);
+        counts[s.a.panel][s.a.edge] = n;
+        counts[s.b.panel][s.b.edge] = n;
+    }
+    let mut f = Flat {
+        uv: Vec::new(),
+        x: Vec::new(),
+        triangles: Vec::new(),
+        triangle_panel: Vec::new(),
+        pairs: Vec::new(),
+        pinned: Vec::new(),
+    };
+    let mut edge_ids: Vec<Vec<Vec<u32>>> = Vec::new();
+    for (pi, panel) in pattern.panels.iter().enumerate() {
+        let mut outline = Vec::new();
+        let mut starts = Vec::new();
+        for (ei, e) in panel.edges.iter().enumerate() {
+            starts.push(outline.len());
+            let pts = e.resample(counts[pi][ei]);
+            outline.extend_from_slice(&pts[..pts.len() - 1]);
+        }
+        let m2 = triangulate(&outline, h)
+            .map_err(|e| Error::Invalid(format!("panel {}: {e}", panel.name)))?;
+        let base = f.uv.len() as u32;
+        let nb = outline.len();
+        let ids: Vec<Vec<u32>> = (0..panel.edges.len())
+            .map(|ei| (0..=counts[pi][ei]).map(|k| base + ((starts[ei] + k) % nb) as u32).collect())
+            .collect();
+        edge_ids.push(ids);
+        for &p in &m2.points {
+            f.uv.push(p);
+            f.x.push(panel.placement.place(p));
+            f.pinned.push(false);
+        }
+        for t in &m2.triangles {
+            f.triangles.push(t.map(|v| v + base));
+            f.triangle_panel.push(pi as u16);
+        }
+    }
+    for s in &pattern.seams {
+        let a = &edge_ids[s.a.panel][s.a.edge];
+        let b = &edge_ids[s.b.panel][s.b.edge];
+        let n = a.len();
+        for i in 0..n {
+            f.pairs.push((a[i], b[n - 1 - i]));
+        }
+    }
+    for e in &pattern.pinned_edges {
+        for &v in &edge_ids[e.panel][e.edge] {
+            f.pinned[v as usize] = true;
+        }
+    }
+    Ok(f)
+}
+
+/// Rest length of the spring between the corners opposite a shared edge `(a, b)`, with the
+/// two triangles unfolded flat; `la_c` … are the edges' lengths in their panels.
+fn unfolded(ab: f64, ac: f64, bc: f64, ad: f64, bd: f64) -> f64 {
+    // a at the origin, b on +x; c above, d below.
+    let cx = (ac * ac - bc * bc + ab * ab) / (2.0 * ab);
+    let cy = (ac * ac - cx * cx).max(0.0).sqrt();
+    let dx = (ad * ad - bd * bd + ab * ab) / (2.0 * ab);
+    let dy = -(ad * ad - dx * dx).max(0.0).sqrt();
+    (cx - dx).hypot(cy - dy)
+}
+
+fn uv_len(uv: &[P2], a: u32, b: u32) -> f64 {
+    let (p, q) = (uv[a as usize], uv[b as usize]);
+    (q[0] - p[0]).hypot(q[1] - p[1])
+}
+
+/// The cloth of `triangles` over `n` nodes whose corners have panel coordinates
+/// `uv[tri_uv[t][k]]`: masses, edge springs and bending springs.
+fn build_cloth(
+    n: usize,
+    triangles: &[[u32; 3]],
+    tri_uv: &[[u32; 3]],
+    uv: &[P2],
+    fabric: &Fabric,
+) -> Cloth {
+    let mut mass = vec![0.0; n];
+    for (t, tu) in triangles.iter().zip(tri_uv) {
+        let [a, b, c] = tu.map(|i| uv[i as usize]);
+        let area = 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])).abs();
+        for &v in t {
+            mass[v as usize] += fabric.density_kg_m2 * area / 3.0;
+        }
+    }
+    let edge_law = SpringLaw {
+        kind: LawKind::Exponential,
+        lo: 1.0 - fabric.slack,
+        hi: 1.0 + fabric.slack,
+        compression: 1.0,
+        damping: 0.08,
+        max_tension: f64::INFINITY,
+    };
+    let bend_law = SpringLaw { lo: 1.0, hi: 1.0, kind: LawKind::Linear, ..edge_law };
+    let mut cloth = Cloth::new(mass, triangles.to_vec(), vec![edge_law, bend_law]);
+    // Edges: (min, max) → (uv length sum, count, uv direction, opposite corners).
+    struct E {
+        len: f64,
+        count: f64,
+        dir: [f64; 2],
+        opp: Vec<(u32, f64, f64)>,
+    }
+    let mut edges: HashMap<(u32, u32), E> = HashMap::new();
+    let mut order = Vec::new();
+    for (t, tu) in triangles.iter().zip(tri_uv) {
+        for k in 0..3 {
+            let (a, b, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+            let (ua, ub, uc) = (tu[k], tu[(k + 1) % 3], tu[(k + 2) % 3]);
+            let key = (a.min(b), a.max(b));
+            let l = uv_len(uv, ua, ub);
+            let d =
+                [uv[ub as usize][0] - uv[ua as usize][0], uv[ub as usize][1] - uv[ua as usize][1]];
+            let (la, lb) = if a < b {
+                (uv_len(uv, ua, uc), uv_len(uv, ub, uc))
+            } else {
+                (uv_len(uv, ub, uc), uv_len(uv, ua, uc))
+            };
+            let e = edges.entry(key).or_insert_with(|| {
+                order.push(key);
+                E { len: 0.0, count: 0.0, dir: [0.0; 2], opp: Vec::new() }
+            });
+            e.len += l;
+            e.count += 1.0;
+            e.dir = [d[0] / l.max(1e-12), d[1] / l.max(1e-12)];
+            e.opp.push((c, la, lb));
+        }
+    }
+    let k_scale = 3f64.sqrt() / 2.0;
+    for key in &order {
+        let e = &edges[key];
+        let rest = e.len / e.count;
+        let k = k_scale
+            * (fabric.weft_n_per_m * e.dir[0] * e.dir[0]
+                + fabric.warp_n_per_m * e.dir[1] * e.dir[1]);
+        cloth.springs.push(Spring { a: key.0, b: key.1, rest, k, law: 0 });
+        if e.opp.len() == 2 {
+            let (c, ac, bc) = e.opp[0];
+            let (d, ad, bd) = e.opp[1];
+            if c != d {
+                let r = unfolded(rest, ac, bc, ad, bd);
+                cloth.springs.push(Spring {
+                    a: c,
+                    b: d,
+                    rest: r,
+                    k: fabric.bend_ratio * k,
+                    law: 1,
+                });
+            }
+        }
+    }
+    cloth
+}
+
+/// The cloth's springs as XPBD links (compliance = 1 / stiffness).
+fn links_of(cloth: &Cloth) -> Vec<Link> {
+    cloth
+        .springs
+        .iter()
+        .map(|s| Link { a: s.a, b: s.b, rest: s.rest, compliance: 1.0 / s.k.max(1e-9) })
+        .collect()
+}
+
+/// Sub-steps until the kinetic energy per kilogram stays below the threshold for the hold
+/// time, or the longest drape is reached; `progress` gets the simulated time.
+fn run_to_rest(sim: &mut Xpbd<'_>, s: &DrapeSettings, progress: &mut dyn FnMut(f64)) -> RestReport {
+    let start = sim.time;
+    let mut quiet_since: Option<f64> = None;
+    let mut r = RestReport::default();
+    while sim.time - start < s.drape_max_s {
+        sim.step();
+        r.steps += 1;
+        let ke = sim.kinetic_energy_per_kg();
+        r.kinetic_energy_per_kg = ke;
+        let t = sim.time - start;
+        if ke < s.rest_ke_per_kg {
+            let since = *quiet_since.get_or_insert(t);
+            if t - since >= s.rest_hold_s {
+                r.settled = true;
+                break;
+            }
+        } else {
+            quiet_since = None;
+        }
+        if r.steps % 64 == 0 {
+            progress(t);
+        }
+    }
+    r.end_time_s = sim.time - start;
+    r.settle_time_s = quiet_since.unwrap_or(r.end_time_s);
+    r
+}
+
+fn push_out(x: &mut [V3], collider: &dyn Collider, clearance: f64) {
+    for p in x.iter_mut() {
+        let (d, n) = collider.query(*p);
+        if d < clearance {
+            *p = add(*p, scale(n, clearance - d));
+        }
+    }
+}
+
+/// Progress callback: `(stage, fraction done)`.
+pub type Progress<'a> = dyn FnMut(&str, f64) + 'a;
+
+/// Sews and drapes `pattern` on `body` (or, for a curtain, alone) at about `vertices`
+/// vertices.
+pub fn sew_and_drape(
+    pattern: Pattern,
+    body: Option<&Body>,
+    vertices: usize,
+    fabric: &Fabric,
+    settings: &DrapeSettings,
+    progress: &mut Progress<'_>,
+) -> Result<Garment> {
+    if !(200..=400_000).contains(&vertices) {
+        return Err(Error::Invalid(format!("--vertices = {vertices} is outside 200 … 400000")));
+    }
+    let area = pattern.area();
+    let h = (2.0 * area / (3f64.sqrt() * vertices as f64)).sqrt();
+    let mut flat = layout(&pattern, h)?;
+    let collider: Option<&dyn Collider> =
+        if pattern.kind.on_body() { body.map(|b| &b.sdf as &dyn Collider) } else { None };
+    if let Some(c) = collider {
+        push_out(&mut flat.x, c, 2.0 * fabric.thickness_m);
+    }
+    let n0 = flat.uv.len();
+    let identity: Vec<[u32; 3]> = flat.triangles.clone();
+    let cloth = build_cloth(n0, &flat.triangles, &identity, &flat.uv, fabric);
+    let contact = Contact {
+        thickness_m: fabric.thickness_m,
+        static_coef: fabric.friction.static_coef,
+        dynamic_coef: fabric.friction.dynamic_coef,
+    };
+    let body_contact = collider.map(|c| (c, contact));
+    // Sewing: seam links whose rest length shrinks from the placed gap to 0 over
+    // `sew_close_s`, no gravity, heavy air damping, the body as collider.
+    let mut sewing = RestReport::default();
+    let mut gap = 0.0;
+    let mut x = flat.x.clone();
+    let dt = settings.substep_s;
+    if !flat.pairs.is_empty() {
+        let mut links = links_of(&cloth);
+        let first_seam = links.len();
+        let pairs: Vec<(u32, u32)> = flat.pairs.iter().copied().filter(|&(a, b)| a != b).collect();
+        let gap0: Vec<f64> =
+            pairs.iter().map(|&(a, b)| length(sub(x[a as usize], x[b as usize]))).collect();
+        for (&(a, b), &g0) in pairs.iter().zip(&gap0) {
+            links.push(Link { a, b, rest: g0, compliance: 0.0 });
+        }
+        let params = XpbdParams { gravity: [0.0; 3], air_viscosity: 20.0, dt };
+        let mut sim = Xpbd::new(x, cloth.mass.clone(), &flat.pinned, links, params, body_contact);
+        let max_gap = |s: &Xpbd| {
+            pairs
+                .iter()
+                .map(|&(a, b)| length(sub(s.x[a as usize], s.x[b as usize])))
+                .fold(0.0, f64::max)
+        };
+        let close_s = settings.sew_close_s;
+        let mut steps = 0;
+        while sim.time < settings.sew_max_s {
+            let f = (1.0 - sim.time / close_s).max(0.0);
+            for (l, &g0) in sim.links[first_seam..].iter_mut().zip(&gap0) {
+                l.rest = f * g0;
+            }
+            sim.step();
+            steps += 1;
+            if steps % 32 == 0 {
+                progress("sewing", (sim.time / close_s).min(1.0));
+                if sim.time >= close_s && max_gap(&sim) < 0.15 * h {
+                    break;
+                }
+            }
+        }
+        gap = max_gap(&sim);
+        sewing.steps = steps;
+        sewing.end_time_s = sim.time;
+        sewing.settle_time_s = sim.time;
+        sewing.settled = gap < 0.15 * h;
+        sewing.kinetic_energy_per_kg = sim.kinetic_energy_per_kg();
+        x = sim.x;
+    }
+    // Weld seam partners (union–find; the smallest id is the root).
+    let mut parent: Vec<u32> = (0..n0 as u32).collect();
+    fn root(p: &mut [u32], mut i: u32) -> u32 {
+        while p[i as usize] != i {
+            p[i as usize] = p[p[i as usize] as usize];
+            i = p[i as usize];
+        }
+        i
+    }
+    for &(a, b) in &flat.pairs {
+        let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+        if ra != rb {
+            parent[ra.max(rb) as usize] = ra.min(rb);
+        }
+    }
+    let mut new_id = vec![u32::MAX; n0];
+    let mut members: Vec<Vec<u32>> = Vec::new();
+    for i in 0..n0 as u32 {
+        let r = root(&mut parent, i);
+        if new_id[r as usize] == u32::MAX {
+            new_id[r as usize] = members.len() as u32;
+            members.push(Vec::new());
+        }
+        new_id[i as usize] = new_id[r as usize];
+        members[new_id[i as usize] as usize].push(i);
+    }
+    let mut xw: Vec<V3> = members
+        .iter()
+        .map(|ms| {
+            scale(ms.iter().fold([0.0; 3], |s, &i| add(s, x[i as usize])), 1.0 / ms.len() as f64)
+        })
+        .collect();
+    let pinned: Vec<bool> =
+        members.iter().map(|ms| ms.iter().any(|&i| flat.pinned[i as usize])).collect();
+    let mut triangles = Vec::new();
+    let mut tri_uv = Vec::new();
+    let mut triangle_panel = Vec::new();
+    for (t, &p) in flat.triangles.iter().zip(&flat.triangle_panel) {
+        let w = t.map(|i| new_id[i as usize]);
+        if w[0] == w[1] || w[1] == w[2] || w[0] == w[2] {
+            return Err(Error::Invalid(
+                "sewing welded a triangle onto itself (a seam is shorter than one mesh step)"
+                    .into(),
+            ));
+        }
+        triangles.push(w);
+        tri_uv.push(*t);
+        triangle_panel.push(p);
+    }
+    let nw = xw.len();
+    let mut seam_edges: Vec<[u32; 2]> = Vec::new();
+    for s in &pattern.seams {
+        let _ = s;
+    }
+    {
+        let mut set = std::collections::BTreeSet::new();
+        let pair_set: std::collections::HashSet<u32> =
+            flat.pairs.iter().flat_map(|&(a, b)| [a, b]).collect();
+        for t in &flat.triangles {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                if pair_set.contains(&a) && pair_set.contains(&b) {
+                    let (wa, wb) = (new_id[a as usize], new_id[b as usize]);
+                    // A seam edge is one that two different triangles' edges welded onto.
+                    set.insert([wa.min(wb), wa.max(wb)]);
+                }
+            }
+        }
+        // Keep only edges used by triangles of two different panels or twice by one panel.
+        let mut uses: HashMap<[u32; 2], Vec<u16>> = HashMap::new();
+        for (t, &p) in triangles.iter().zip(&triangle_panel) {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                uses.entry([a.min(b), a.max(b)]).or_default().push(p);
+            }
+        }
+        for e in set {
+            if uses.get(&e).is_some_and(|u| u.len() == 2) {
+                seam_edges.push(e);
+            }
+        }
+    }
+    // Drape: gravity, the body, until the kinetic energy stays low.
+    let cloth = build_cloth(nw, &triangles, &tri_uv, &flat.uv, fabric);
+    if let Some(c) = collider {
+        push_out(&mut xw, c, fabric.thickness_m);
+    }
+    let params =
+        XpbdParams { gravity: [0.0, 0.0, -9.81], air_viscosity: settings.air_viscosity, dt };
+    let mut sim =
+        Xpbd::new(xw, cloth.mass.clone(), &pinned, links_of(&cloth), params, body_contact);
+    let drape =
+        run_to_rest(&mut sim, settings, &mut |t| progress("draping", t / settings.drape_max_s));
+    if !sim.x.iter().all(|p| p.iter().all(|c| c.is_finite())) {
+        return Err(Error::Invalid(format!("the drape diverged after {} steps", drape.steps)));
+    }
+    let mut mesh = Mesh {
+        positions: sim.x,
+        uvs: flat.uv,
+        triangles,
+        triangle_uvs: tri_uv,
+        ..Default::default()
+    };
+    mesh.compute_normals();
+    Ok(Garment {
+        mesh,
+        pattern,
+        triangle_panel,
+        seam_edges,
+        spacing_m: h,
+        fabric: *fabric,
+        sewing,
+        seam_gap_at_weld_m: gap,
+        drape,
+    })
+}
+
+/// Default vertex count for `kind` in tests and the demo.
+pub fn default_vertices(kind: GarmentKind) -> usize {
+    match kind {
+        GarmentKind::Scarf => 3000,
+        _ => 10_000,
+    }
+}

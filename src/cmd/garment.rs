@@ -1,0 +1,184 @@
+//! `btf synth garment`: a garment sewn from pattern panels and draped on a parametric
+//! mannequin by cloth simulation (`datasets::garment`), or the mannequin itself
+//! (`--kind body`), written as OBJ through the atomic writer.
+
+use crate::args::choices;
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use datasets::garment::{Body, GarmentKind, GarmentOptions, Size, check};
+use std::path::PathBuf;
+
+choices! {
+    /// `btf synth garment --kind`.
+    GarmentChoice {
+        /// Short-sleeved T-shirt: front, back, two sleeves.
+        Tshirt = "tshirt",
+        /// Long-sleeved shirt.
+        Shirt = "shirt",
+        /// Trousers: front and back of each leg.
+        Trousers = "trousers",
+        /// A-line skirt: front and back.
+        Skirt = "skirt",
+        /// Scarf laid round the neck.
+        Scarf = "scarf",
+        /// Curtain panel hanging from a rod (no body).
+        Curtain = "curtain",
+        /// The mannequin alone (closed mesh).
+        Body = "body",
+    }
+}
+
+choices! {
+    /// `btf synth garment --size`.
+    SizeChoice {
+        /// Small (1.68 m, chest 0.90 m).
+        S = "S",
+        /// Medium (1.76 m, chest 0.98 m).
+        M = "M",
+        /// Large (1.84 m, chest 1.07 m).
+        L = "L",
+    }
+}
+
+/// `btf synth garment`.
+#[derive(Args)]
+pub struct GarmentArgs {
+    /// The garment, or `body` for the mannequin alone.
+    #[arg(long)]
+    pub kind: GarmentChoice,
+    /// Body size.
+    #[arg(long, default_value = "M")]
+    pub size: SizeChoice,
+    /// Body height (m), overriding the size's.
+    #[arg(long)]
+    pub height: Option<f64>,
+    /// Chest girth (m), overriding the size's.
+    #[arg(long)]
+    pub chest: Option<f64>,
+    /// Waist girth (m), overriding the size's.
+    #[arg(long)]
+    pub waist: Option<f64>,
+    /// Hip girth (m), overriding the size's.
+    #[arg(long)]
+    pub hip: Option<f64>,
+    /// Drape on this closed OBJ body instead of the mannequin (the pattern is still drafted
+    /// for the size's measurements).
+    #[arg(long, value_name = "FILE")]
+    pub body: Option<PathBuf>,
+    /// Target vertex count of the garment.
+    #[arg(long, default_value_t = 10_000)]
+    pub vertices: usize,
+    /// Sleeve length from the shoulder point (m).
+    #[arg(long)]
+    pub sleeve_length: Option<f64>,
+    /// Garment length (m).
+    #[arg(long)]
+    pub length: Option<f64>,
+    /// Also write the body the garment was draped on (OBJ, material `body`).
+    #[arg(long, value_name = "FILE")]
+    pub body_out: Option<PathBuf>,
+    /// Output OBJ file.
+    #[arg(short = 'o', long = "out", alias = "output")]
+    pub output: PathBuf,
+}
+
+/// Runs `btf synth garment`.
+pub fn run(a: GarmentArgs) -> Result<()> {
+    let size = Size::from_name(a.size.as_str())?;
+    let mut o = GarmentOptions::new(size);
+    let m = &mut o.body.measurements;
+    for (v, slot) in [
+        (a.height, &mut m.height_m),
+        (a.chest, &mut m.chest_m),
+        (a.waist, &mut m.waist_m),
+        (a.hip, &mut m.hip_m),
+    ] {
+        if let Some(v) = v {
+            *slot = v;
+        }
+    }
+    m.validate()?;
+    o.vertices = a.vertices;
+    o.pattern.sleeve_length_m = a.sleeve_length;
+    o.pattern.length_m = a.length;
+    let mut outputs: Vec<(&str, &std::path::Path)> = vec![("--out", a.output.as_path())];
+    if let Some(p) = &a.body_out {
+        outputs.push(("--body-out", p.as_path()));
+    }
+    let inputs: Vec<(&str, &std::path::Path)> =
+        a.body.iter().map(|p| ("--body", p.as_path())).collect();
+    crate::guard::refuse_overlap(&outputs, &inputs)?;
+    for (_, p) in &outputs {
+        crate::guard::check_file(p, btf_core::fs::TEXT)?;
+    }
+    let t0 = std::time::Instant::now();
+    let body_file = match &a.body {
+        Some(p) => {
+            let mesh =
+                datasets::read_obj(p).with_context(|| format!("reading --body {}", p.display()))?;
+            Some(
+                Body::from_mesh(mesh, o.body.sdf_step_m)
+                    .with_context(|| format!("--body {}", p.display()))?,
+            )
+        }
+        None => None,
+    };
+    let comment = format!("btf synth garment --kind {} --size {}", a.kind, a.size);
+    if a.kind == GarmentChoice::Body {
+        if a.body.is_some() {
+            bail!(
+                "--kind body makes the mannequin; --body is for draping a garment on another body"
+            );
+        }
+        let body = Body::new(&o.body)?;
+        datasets::write_obj_material(&body.mesh, &a.output, &comment, Some("body"))?;
+        eprintln!(
+            "body ({}): {} vertices, {} triangles, {:.2} s -> {}",
+            a.size,
+            body.mesh.positions.len(),
+            body.mesh.triangles.len(),
+            t0.elapsed().as_secs_f64(),
+            a.output.display()
+        );
+        return Ok(());
+    }
+    let kind = GarmentKind::from_name(a.kind.as_str())?;
+    if a.sleeve_length.is_some() && !matches!(kind, GarmentKind::TShirt | GarmentKind::Shirt) {
+        bail!("--sleeve-length is for --kind tshirt or shirt, not {}", a.kind);
+    }
+    let bar = crate::progress::bar(1000, "garment");
+    if !crate::progress::enabled() {
+        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
+    let (g, body) = datasets::garment::make(kind, &o, body_file, &mut |stage, f| {
+        bar.set_message(stage.to_owned());
+        bar.set_position((f.clamp(0.0, 1.0) * 1000.0) as u64);
+    })?;
+    bar.finish_and_clear();
+    datasets::write_obj(&g.mesh, &a.output, &comment)?;
+    if let Some(p) = &a.body_out {
+        datasets::write_obj_material(
+            &body.mesh,
+            p,
+            &format!("{comment} (its body)"),
+            Some("body"),
+        )?;
+    }
+    let topo = check::topology(g.mesh.positions.len(), &g.mesh.triangles);
+    eprintln!(
+        "{} ({}): {} vertices, {} triangles, {} openings, seams closed to {:.1} mm, rest {} after {:.2} s simulated ({} steps), min body distance {:.1} mm, {:.1} s -> {}",
+        a.kind,
+        a.size,
+        g.mesh.positions.len(),
+        g.mesh.triangles.len(),
+        topo.boundary_loops.len(),
+        1e3 * g.seam_gap_at_weld_m,
+        if g.drape.settled { "reached" } else { "NOT reached" },
+        g.drape.settle_time_s,
+        g.sewing.steps + g.drape.steps,
+        1e3 * check::min_body_distance(&g.mesh, &body.sdf),
+        t0.elapsed().as_secs_f64(),
+        a.output.display()
+    );
+    Ok(())
+}
