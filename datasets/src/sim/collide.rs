@@ -189,7 +189,9 @@ mod tests {
                 candidates(&x, &tris, reach).iter().map(|c| (c.node, c.tri)).collect();
             let slow = candidates_brute_force(&x, &tris, reach);
             assert_eq!(fast, slow, "reach {reach}");
-            assert!(!slow.is_empty());
+            // the layers are 6 mm apart (± 8 mm of crumple): the wider reaches meet the
+            // other sheet, the narrowest may not
+            assert!(reach < 0.008 || !slow.is_empty(), "reach {reach}: no pair to compare");
         }
     }
 }
