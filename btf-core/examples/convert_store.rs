@@ -1,19 +1,26 @@
 //! Rewrites a BTF store with another element type, e.g. the `f32` benchmark store as `f16`
 //! (half the bytes; the natural type of HDR normtextures): `cargo run --release -p btf-core
-//! --example convert_store -- IN.btf OUT.btf f16`. Values are rounded to nearest; one beyond
-//! the `f16` range is refused with its image named (the writer's check).
+//! --example convert_store -- IN.btf OUT.btf f16 [none|zstd]`. Values are rounded to nearest;
+//! one beyond the `f16` range is refused with its image named (the writer's check). The
+//! optional last argument chooses the chunks' codec (default zstd, as every writer): `none`
+//! writes the uncompressed layout the PCA maps in place (BENCHMARKS.md, issue #24/#25).
 
 use btf_core::store::{BtfStore, BtfWriter};
-use btf_core::zarr::DType;
+use btf_core::zarr::{Compression, DType};
 use rayon::prelude::*;
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
-    if args.len() != 4 {
-        return Err("usage: convert_store IN.btf OUT.btf f16|f32".into());
+    if !(4..=5).contains(&args.len()) {
+        return Err("usage: convert_store IN.btf OUT.btf f16|f32 [none|zstd]".into());
     }
+    let compression = match args.get(4).map(String::as_str) {
+        None | Some("zstd") => Compression::DEFAULT_ZSTD,
+        Some("none") => Compression::None,
+        Some(o) => return Err(format!("codec '{o}' is not none or zstd").into()),
+    };
     let dtype = match args[3].as_str() {
         "f16" => DType::F16,
         "f32" => DType::F32,
@@ -21,7 +28,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let input = BtfStore::open(Path::new(&args[1]))?;
     let meta = input.meta().clone();
-    let mut writer = BtfWriter::create(Path::new(&args[2]), meta.clone(), dtype, true)?;
+    let (out, job) = (Path::new(&args[2]), serde_json::Value::Null);
+    let mut writer =
+        BtfWriter::create_compressed(out, meta.clone(), dtype, true, job, compression)?;
     let mut provenance = meta.provenance.clone();
     provenance["converted_from"] =
         serde_json::json!({"path": args[1], "dtype": format!("{:?}", input.dtype())});
