@@ -16,6 +16,10 @@ pub struct Gpu {
     pub info: wgpu::AdapterInfo,
     /// True when GPU timestamp queries are available (per-pass timing).
     pub timestamps: bool,
+    /// Bytes mapped back to the CPU so far ([`Gpu::read_buffer`], which every read-back
+    /// goes through): lets the viewer show, and its tests prove, that presenting a frame
+    /// reads nothing back.
+    read_back: std::sync::atomic::AtomicU64,
 }
 
 /// What to do when no adapter can render (the CPU Vulkan driver is a package away).
@@ -107,7 +111,8 @@ impl Gpu {
         let (device, queue) = pollster::block_on(adapter.request_device(&desc))
             .map_err(|e| Error::Gpu(format!("request_device: {e}")))?;
         let timestamps = required_features.contains(wgpu::Features::TIMESTAMP_QUERY);
-        Ok(Gpu { device, queue, info: adapter.get_info(), timestamps })
+        let read_back = Default::default();
+        Ok(Gpu { device, queue, info: adapter.get_info(), timestamps, read_back })
     }
 
     /// For tests: a device, or `None` (with a message) when no adapter exists. With
@@ -182,8 +187,14 @@ impl Gpu {
             .map_err(|e| Error::Gpu(format!("poll: {e}")))
     }
 
+    /// Bytes read back to the CPU by this device so far.
+    pub fn read_back_bytes(&self) -> u64 {
+        self.read_back.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
     /// Maps `buffer` (MAP_READ) and copies its bytes out.
     pub fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
+        self.read_back.fetch_add(buffer.size(), std::sync::atomic::Ordering::Relaxed);
         let (tx, rx) = mpsc::channel();
         buffer.map_async(wgpu::MapMode::Read, .., move |r| {
             let _ = tx.send(r);

@@ -292,7 +292,8 @@ impl Running {
                 let env = &self.viewer.env;
                 crate::guard::outln!(
                     "frame {} size={}x{} change={:?} update_ms={:.2} render_ms={:.2} env={:?} \
-                     env_rotation_deg={} env_lighting={} env_error={:?} errors={}",
+                     env_rotation_deg={} env_lighting={} env_error={:?} errors={} \
+                     read_back_bytes={}",
                     self.viewer.frames,
                     self.viewer.size().0,
                     self.viewer.size().1,
@@ -303,7 +304,8 @@ impl Running {
                     env.rotation_deg,
                     env.lighting,
                     env.error,
-                    self.viewer.errors.len()
+                    self.viewer.errors.len(),
+                    self.gpu.read_back_bytes()
                 );
             }
         }

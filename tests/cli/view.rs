@@ -174,6 +174,14 @@ struct Viewer {
     child: Child,
     lines: Receiver<String>,
     display: String,
+    /// The last `frame …` line [`settle`] saw.
+    last_frame: std::cell::RefCell<String>,
+}
+
+/// The cumulative `read_back_bytes=N` of a `frame …` log line.
+fn read_back_bytes(frame_line: &str) -> u64 {
+    let field = frame_line.split(' ').find_map(|t| t.strip_prefix("read_back_bytes="));
+    field.unwrap_or_else(|| panic!("no read_back_bytes in {frame_line:?}")).parse().unwrap()
 }
 
 impl Viewer {
@@ -205,7 +213,7 @@ impl Viewer {
                 }
             }
         });
-        Viewer { child, lines, display: display.to_string() }
+        Viewer { child, lines, display: display.to_string(), last_frame: Default::default() }
     }
 
     /// The next line containing `pat` (panics after `secs`).
@@ -269,6 +277,7 @@ fn settle(v: &Viewer) -> Option<(String, String, Vec<f32>)> {
                 first = l.clone();
             }
             size = l.split(' ').nth(2).unwrap_or_default().to_string();
+            *v.last_frame.borrow_mut() = l.clone();
         }
         if !window.is_empty()
             && layout.len() == 4
@@ -601,6 +610,22 @@ fn window_presents_what_btf_render_renders() {
     eprintln!("{test}: {w}×{h} frame presented vs btf render: rel. RMSE {e:.2e}");
     assert!(rendered.coverage() > 0.1, "the garment covers {:.3}", rendered.coverage());
     assert!(e <= 1e-3, "presented frame vs btf render: rel. RMSE {e:.2e}");
+    // Presenting reads nothing back: over five camera moves, the bytes mapped to the CPU grow
+    // by the pass timestamps at most (a few hundred bytes a frame when the adapter has them),
+    // not by a frame (w × h × 16 bytes).
+    let before = read_back_bytes(&v.last_frame.borrow());
+    let (cx, cy) = ((r[2] / 2).to_string(), (r[3] / 2).to_string());
+    v.xdotool(&["mousemove", "--window", &window, &cx, &cy]);
+    let mut after = before;
+    for k in 1..=5 {
+        let x = (r[2] / 2 + 10 * k).to_string();
+        v.xdotool(&["mousedown", "1", "mousemove", "--window", &window, &x, &cy, "mouseup", "1"]);
+        after = read_back_bytes(&v.wait_for("change=Camera", 20));
+    }
+    let frame_bytes = (r[2] * r[3] * 16) as u64;
+    eprintln!("{test}: {} bytes read back over 5 presented frames", after - before);
+    assert!(after - before < 5 * 4096, "read back {} bytes over 5 frames", after - before);
+    assert!(after - before < frame_bytes / 10, "a frame is {frame_bytes} bytes");
     let _ = v.child.kill();
     let _ = v.child.wait();
 }
