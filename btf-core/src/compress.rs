@@ -309,13 +309,13 @@ mod tests {
         let big = BtfStore::open(&p).unwrap();
         let e = compress(&big, &dir.path().join("b.eig"), params, &|| {}).unwrap_err();
         assert!(matches!(e, Error::Corrupt { .. }), "{e}");
-        assert!(e.to_string().contains("normtextures/c/0/0/0/0/0"), "{e}");
+        assert!(e.to_string().contains("normtextures/c.0.0.0.0.0"), "{e}");
         // An eigen store claiming the same: the whole-store check names a chunk.
         crate::store::claim_texels(&eig, 8192, 8192);
         let e = crate::eigen::EigenStore::open(&eig).unwrap().check_chunks().unwrap_err();
         assert!(matches!(e, Error::Corrupt { .. }), "{e}");
         let e = e.to_string();
-        assert!(e.contains("mean/c/0/0/0/0") && e.contains("view slot 0"), "{e}");
+        assert!(e.contains("mean/c.0.0.0.0") && e.contains("view slot 0"), "{e}");
         assert!(crate::eigen::EigenStore::open(&eig).unwrap().read_slot(0).is_err());
     }
 
@@ -338,7 +338,7 @@ mod tests {
             assert_eq!(fresh.stored.weights, reused.stored.weights);
         }
         // A NaN with a valid checksum at view 3, light 2, value 17 (texel y=1, x=1, green).
-        let chunk = p.join("normtextures/c/3/2/0/0/0");
+        let chunk = p.join("normtextures/c.3.2.0.0.0");
         let mut raw = std::fs::read(&chunk).unwrap();
         raw.truncate(36 * 4);
         raw[17 * 4..18 * 4].copy_from_slice(&f32::NAN.to_le_bytes());
@@ -398,13 +398,13 @@ mod tests {
             assert_eq!(sa.basis, sb.basis, "slot {v}");
         }
         // A chunk cut short is refused before mapping, with its file, slot and light.
-        let chunk = p32.join("normtextures/c/2/1/0/0/0");
+        let chunk = p32.join("normtextures/c.2.1.0.0.0");
         let bytes = std::fs::read(&chunk).unwrap();
         std::fs::write(&chunk, &bytes[..bytes.len() - 6]).unwrap();
         let f = BtfStore::open(&p32).unwrap();
         let msg = compress(&f, &dir.path().join("g.eig"), params, &|| {}).unwrap_err().to_string();
         assert!(
-            msg.contains("view slot 2, light 1") && msg.contains("bytes") && msg.contains("c/2/1"),
+            msg.contains("view slot 2, light 1") && msg.contains("bytes") && msg.contains("c.2.1"),
             "{msg}"
         );
         assert!(!dir.path().join("g.eig").exists());

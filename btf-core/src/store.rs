@@ -771,7 +771,7 @@ mod tests {
         for e in [s.read_slot(1).unwrap_err(), s.read_image(1, 2).unwrap_err()] {
             assert!(matches!(e, Error::Corrupt { .. }), "{e}");
             let e = e.to_string();
-            assert!(e.contains("normtextures/c/1/") && e.contains("view slot 1"), "{e}");
+            assert!(e.contains("normtextures/c.1.") && e.contains("view slot 1"), "{e}");
             assert!(e.contains("claims 805306368"), "{e}");
         }
         // Compressed chunks are decoded, never mapped.
@@ -924,7 +924,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("m.btf");
         write_store(&p, 1.0);
-        let chunk = p.join("normtextures/c/2/1/0/0/0");
+        let chunk = p.join("normtextures/c.2.1.0.0.0");
         let mut b = fs::read(&chunk).unwrap();
         b[10] ^= 1;
         fs::write(&chunk, b).unwrap();

@@ -17,7 +17,9 @@ fuzz_target!(|data: &[u8]| {
         let _ = std::fs::write(dir.join("normtextures/zarr.json"), a);
     }
     if let Some(c) = p[2] {
+        // both chunk key layouts: `/` (before issue #25) and `.` (since)
         let _ = std::fs::write(dir.join("normtextures/c/0/0/0/0/0"), c);
+        let _ = std::fs::write(dir.join("normtextures/c.0.0.0.0.0"), c);
     }
     let Ok(s) = BtfStore::open(&dir) else { return };
     let _ = s.read_image(0, 0);

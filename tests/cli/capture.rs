@@ -265,14 +265,19 @@ fn an_interrupted_run_resumes() {
     let partial = d.path("m.btf.partial");
     copy_dir(&d.path("m.btf"), &partial);
     std::fs::write(partial.join("zarr.json"), record).unwrap();
-    let chunks = partial.join("normtextures/c/2");
-    std::fs::remove_dir_all(&chunks).unwrap();
+    // view slot 2's chunks (`c.2.L.0.0.0`) are gone
+    for e in std::fs::read_dir(partial.join("normtextures")).unwrap() {
+        let e = e.unwrap();
+        if e.file_name().to_string_lossy().starts_with("c.2.") {
+            std::fs::remove_file(e.path()).unwrap();
+        }
+    }
     std::fs::remove_dir_all(partial.join("registration/view_0002")).unwrap();
-    let before = std::fs::read(d.path("m.btf/normtextures/c/2/3/0/0/0")).unwrap();
+    let before = std::fs::read(d.path("m.btf/normtextures/c.2.3.0.0.0")).unwrap();
     std::fs::remove_dir_all(d.path("m.btf")).unwrap();
     let p = process(&d, "raw", "m.btf", &["--resume"]);
     assert_eq!((p["images_written"].as_u64(), p["images_kept"].as_u64()), (Some(5), Some(20)));
-    assert_eq!(std::fs::read(d.path("m.btf/normtextures/c/2/3/0/0/0")).unwrap(), before);
+    assert_eq!(std::fs::read(d.path("m.btf/normtextures/c.2.3.0.0.0")).unwrap(), before);
     no_store_left(&d, "m.btf.partial");
 }
 

@@ -207,7 +207,7 @@ fn export_npy_matches_the_store() {
 fn corrupt_input_is_named_and_leaves_no_output() {
     let d = Dir::new();
     write_test_btf(&d.path("m.btf"), 4);
-    let chunk = d.path("m.btf/normtextures/c/4/2/0/0/0");
+    let chunk = d.path("m.btf/normtextures/c.4.2.0.0.0");
     let mut b = std::fs::read(&chunk).unwrap();
     b[17] ^= 0x40;
     std::fs::write(&chunk, &b).unwrap();
@@ -215,7 +215,7 @@ fn corrupt_input_is_named_and_leaves_no_output() {
     assert!(
         err.contains("view slot 4, light 2")
             && err.contains("checksum")
-            && err.contains("c/4/2/0/0/0"),
+            && err.contains("c.4.2.0.0.0"),
         "{err}"
     );
     assert!(!d.path("m.eig").exists());
@@ -236,7 +236,7 @@ fn interrupted_compression_resumes_and_keeps_previous_output() {
     let d = Dir::new();
     write_test_btf(&d.path("m.btf"), 4);
     d.ok(&["compress", "m.btf", "-c", "2", "-o", "m.eig"]);
-    let before = std::fs::read(d.path("m.eig/eigentextures/c/0/0/0/0/0")).unwrap();
+    let before = std::fs::read(d.path("m.eig/eigentextures/c.0.0.0.0.0")).unwrap();
     // Simulate an interruption: a second run to the same output whose partial store has
     // only some slots (copy the finished store's arrays, drop slots 3..7). A partial
     // records the job that began it from the first instant, as a killed run leaves it.
@@ -253,7 +253,7 @@ fn interrupted_compression_resumes_and_keeps_previous_output() {
     let record = serde_json::json!({ "store": "eigen", "meta": meta, "job": { "input": input } });
     btf_core::zarr::write_group(&partial, &serde_json::json!({ "partial_job": record })).unwrap();
     for v in 3..7 {
-        std::fs::remove_file(partial.join(format!("eigenvalues/c/{v}/0"))).unwrap();
+        std::fs::remove_file(partial.join(format!("eigenvalues/c.{v}.0"))).unwrap();
     }
     assert!(!std::fs::read_to_string(d.path("m.eig/zarr.json")).unwrap().is_empty());
     let v: Value = serde_json::from_str(
@@ -262,7 +262,7 @@ fn interrupted_compression_resumes_and_keeps_previous_output() {
     .unwrap();
     assert_eq!(v["resumed_slots"].as_u64(), Some(3));
     assert!(!partial.exists());
-    assert_eq!(std::fs::read(d.path("m.eig/eigentextures/c/0/0/0/0/0")).unwrap(), before);
+    assert_eq!(std::fs::read(d.path("m.eig/eigentextures/c.0.0.0.0.0")).unwrap(), before);
 }
 
 fn copy_dir(from: &std::path::Path, to: &std::path::Path) {

@@ -18,7 +18,7 @@ fn poison(chunk: &Path, value: f32) {
 #[test]
 fn nan_in_an_eigen_mean_is_refused_by_every_reader() {
     let d = fixture();
-    poison(&d.path("B.eig/mean/c/0/0/0/0"), f32::NAN);
+    poison(&d.path("B.eig/mean/c.0.0.0.0"), f32::NAN);
     let cases: &[&[&str]] = &[
         &["export", "B.eig", "--format", "exr", "--slot", "0", "-o", "o.exr"],
         &["export", "B.eig", "--format", "pvf", "-o", "o.pvf"],
@@ -42,7 +42,7 @@ fn nan_in_an_eigen_mean_is_refused_by_every_reader() {
 #[test]
 fn nan_in_a_btf_image_is_refused_naming_slot_and_light() {
     let d = fixture();
-    poison(&d.path("A.btf/normtextures/c/1/2/0/0/0"), f32::INFINITY);
+    poison(&d.path("A.btf/normtextures/c.1.2.0.0.0"), f32::INFINITY);
     for args in [
         &["compress", "A.btf", "-c", "2", "-o", "C.eig"][..],
         &["export", "A.btf", "--format", "npy", "--slot", "1", "-o", "o.npy"],

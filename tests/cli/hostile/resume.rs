@@ -46,7 +46,7 @@ fn synth_material_resume_refuses_another_kind() {
         "-o",
         "M.btf",
     ];
-    let killed = kill_when(d.tmp.path(), &args, &d.path("M.btf.partial/normtextures/c/0"));
+    let killed = kill_when(d.tmp.path(), &args, &d.path("M.btf.partial/normtextures/c.0.0.0.0.0"));
     assert!(killed, "the run ended before it could be interrupted");
     assert!(d.path("M.btf.partial").is_dir());
     let err = d.fails(&[
@@ -94,7 +94,7 @@ fn compress_resume_refuses_another_input_and_sweeps_temporaries() {
     let err = d.fails(&["compress", "A.btf", "-c", "3", "--resume", "-o", "O.eig"]);
     assert!(err.contains("meta.components"), "{err}");
     // The same job resumes; a temporary file a killed writer left is swept at commit.
-    let tmp = d.path("O.eig.partial/mean/c/0/0/0/.0.tmp-99999");
+    let tmp = d.path("O.eig.partial/mean/.c.0.0.0.0.tmp-99999");
     std::fs::create_dir_all(tmp.parent().unwrap()).unwrap();
     std::fs::write(&tmp, "half a chunk").unwrap();
     d.ok(&["compress", "A.btf", "-c", "2", "--resume", "-o", "O.eig"]);
