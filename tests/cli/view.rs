@@ -41,39 +41,10 @@ fn garment_scene(d: &Dir) -> PathBuf {
     d.ok(&["synth", "mesh", "--kind", "shirt", "-o", "shirt.obj"]);
     d.ok(&["synth", "env", "--kind", "sky", "--width", "64", "-o", "sky.exr"]);
     d.ok(&["synth", "env", "--kind", "studio", "--width", "64", "-o", "studio.exr"]);
-    let scene = r#"
-[output]
-width = 320
-height = 240
-exposure = 1.5
-background = [0.1, 0.0, 0.1]
-
-[[meshes]]
-path = "shirt.obj"
-
-[[materials]]
-store = "m.eig"
-uv_scale = 6.0
-
-[camera]
-eye = [0.3, -1.5, 0.5]
-target = [0.0, 0.0, 0.36]
-up = [0.0, 0.0, 1.0]
-fov_y_deg = 38.0
-
-[[lights]]
-kind = "point"
-position = [-0.9, -1.6, 1.5]
-intensity = [12.0, 12.0, 12.0]
-
-[[lights]]
-kind = "environment"
-path = "studio.exr"
-exposure = 0.5
-visibility_res = 8
-eigenweightsets = { rotations = 12, components = 4 }
-cache_dir = "cache"
-"#;
+    let studio = "[[lights]]\nkind = \"environment\"\npath = \"studio.exr\"\nexposure = 0.5\n\
+                  visibility_res = 8\neigenweightsets = { rotations = 12, components = 4 }\n\
+                  cache_dir = \"cache\"\n";
+    let scene = shirt_scene(320, 240, [0.3, -1.5, 0.5], [-0.9, -1.6, 1.5], 12.0, studio);
     let path = d.path("scene.toml");
     std::fs::write(&path, scene).unwrap();
     path
@@ -450,20 +421,14 @@ fn bench_reports_latency_per_interaction() {
     assert!((rows[0]["ratio_to_camera"].as_f64().unwrap() - 1.0).abs() < 1e-9);
 }
 
-/// The scene of [`turntable_frames_are_btf_render_frames`] with the camera, the point light
-/// and the environment turned by `deg` (0 or 90) about the vertical through the target.
-fn turned_scene(deg: u32) -> String {
-    let (eye, light, rotation) = match deg {
-        0 => ([0.3, -1.5, 0.5], [-0.9, -1.6, 1.5], 240.0),
-        // (x, y) − pivot turned by +90° about +z: (x, y) → (−y, x)
-        90 => ([1.5, 0.3, 0.5], [1.6, -0.9, 1.5], 330.0),
-        _ => unreachable!(),
-    };
+/// The shirt in `m.eig` on the purple background at exposure 1.5, seen from `eye` (target
+/// at chest height), with a point light at `light` and the lights in `more`.
+fn shirt_scene(w: u32, h: u32, eye: [f32; 3], light: [f32; 3], power: f32, more: &str) -> String {
     format!(
         r#"
 [output]
-width = 96
-height = 72
+width = {w}
+height = {h}
 exposure = 1.5
 background = [0.1, 0.0, 0.1]
 
@@ -483,17 +448,26 @@ fov_y_deg = 38.0
 [[lights]]
 kind = "point"
 position = {light:?}
-intensity = [6.0, 6.0, 6.0]
+intensity = [{power:?}, {power:?}, {power:?}]
 
-[[lights]]
-kind = "environment"
-path = "sky.exr"
-exposure = 0.014
-rotation_deg = {rotation:?}
-visibility_res = 8
-cache_dir = "cache"
-"#
+{more}"#
     )
+}
+
+/// The scene of [`turntable_frames_are_btf_render_frames`] with the camera, the point light
+/// and the environment turned by `deg` (0 or 90) about the vertical through the target.
+fn turned_scene(deg: u32) -> String {
+    let (eye, light, rotation) = match deg {
+        0 => ([0.3, -1.5, 0.5], [-0.9, -1.6, 1.5], 240.0),
+        // (x, y) − pivot turned by +90° about +z: (x, y) → (−y, x)
+        90 => ([1.5, 0.3, 0.5], [1.6, -0.9, 1.5], 330.0),
+        _ => unreachable!(),
+    };
+    let sky = format!(
+        "[[lights]]\nkind = \"environment\"\npath = \"sky.exr\"\nexposure = 0.014\n\
+         rotation_deg = {rotation:?}\nvisibility_res = 8\ncache_dir = \"cache\"\n"
+    );
+    shirt_scene(96, 72, eye, light, 6.0, &sky)
 }
 
 /// Root-mean-square difference of two images over the root-mean-square of the first (8-bit
