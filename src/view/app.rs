@@ -292,7 +292,7 @@ impl Running {
                 let env = &self.viewer.env;
                 crate::guard::outln!(
                     "frame {} size={}x{} change={:?} update_ms={:.2} render_ms={:.2} env={:?} \
-                     env_rotation_deg={} env_lighting={} env_error={:?} errors={} \
+                     env_rotation_deg={} env_lighting={} env_f={} env_error={:?} errors={} \
                      read_back_bytes={}",
                     self.viewer.frames,
                     self.viewer.size().0,
@@ -303,6 +303,7 @@ impl Running {
                     env.current,
                     env.rotation_deg,
                     env.lighting,
+                    env.light_exposure,
                     env.error,
                     self.viewer.errors.len(),
                     self.gpu.read_back_bytes()

@@ -87,6 +87,16 @@ impl Shot {
         let (a, b) = (self.mask(), other.mask());
         a.iter().zip(&b).filter(|(x, y)| x != y).count() as f64 / a.len() as f64
     }
+    /// Mean level (0–255, over channels) of the garment's pixels.
+    fn garment_mean(&self) -> f64 {
+        let m = self.mask();
+        let (mut sum, mut n) = (0u64, 0u64);
+        for (i, _) in m.iter().enumerate().filter(|(_, g)| **g) {
+            sum += (0..3).map(|k| self.rgb[3 * i + k] as u64).sum::<u64>();
+            n += 3;
+        }
+        sum as f64 / n.max(1) as f64
+    }
     /// Mean absolute difference (0–255) over pixels of the garment in both images.
     fn shading_difference(&self, other: &Shot) -> f64 {
         let (a, b) = (self.mask(), other.mask());
@@ -323,6 +333,17 @@ fn window_draws_turns_lights_and_closes() {
     assert!(line.contains("env=Some(1)") && line.contains("env_error=None"), "{line}");
     assert!(line.contains("env_lighting=true"), "swap did not reach the environment light: {line}");
     let before = v.shot(&d);
+    // Auto-exposure: the sky is lit at the factor that gives a horizontal surface the
+    // studio's irradiance at the scene's 0.5, f = 0.5 · E_h(studio) / E_h(sky), so the
+    // garment keeps its brightness (within a factor 2 of the studio-lit frame: the maps'
+    // light comes from other directions) instead of following the maps' scales.
+    let f: f64 = line.split(' ').find_map(|t| t.strip_prefix("env_f=")).unwrap().parse().unwrap();
+    let unit = |m: &str| btf_image::EnvMap::load(&d.path(m)).unwrap().unit_irradiance_exposure();
+    let expect = 0.5 * unit("sky.exr") / unit("studio.exr");
+    assert!((f / expect - 1.0).abs() < 1e-5, "sky's light factor {f}, expected {expect}");
+    let (b0, b1) = (relit.garment_mean(), before.garment_mean());
+    eprintln!("garment mean level: studio {b0:.1}, sky {b1:.1} (env_f {f})");
+    assert!(b1 / b0 > 0.5 && b1 / b0 < 2.0 && b1 < 230.0, "studio {b0:.1} → sky {b1:.1}");
     for _ in 0..4 {
         v.xdotool(&["key", "bracketright"]);
     }

@@ -149,7 +149,7 @@ fn garment_skirt() {
 /// Known failure: the trousers' legs pass through each other at the crotch (29 triangle
 /// pairs at 1 500 vertices) — the XPBD solver has no cloth–cloth contact yet.
 #[test]
-#[ignore]
+#[ignore = "known failure (issue #22): the XPBD drape has no cloth–cloth contact, the legs cross at the crotch"]
 fn garment_trousers_do_not_self_intersect() {
     let g = garment(GarmentKind::Trousers);
     assert_eq!(check::self_intersections(&g.mesh).len(), 0);

@@ -1,5 +1,10 @@
-//! Development pictures (ignored in CI): `cargo test -p datasets --test garment_preview --
-//! --ignored` writes software-rasterised previews to `$GARMENT_PREVIEW_DIR` (default /tmp).
+//! Development pictures of the mannequin and the draped garments: software-rasterised
+//! previews (front and back) and the garment OBJ, with the checks' figures printed.
+//! `cargo run --release -p datasets --example garment_preview` writes them to
+//! `$GARMENT_PREVIEW_DIR` (default /tmp); `GARMENT_KINDS=tshirt,trousers`,
+//! `GARMENT_VERTICES` (default 2000) and `GARMENT_DRAPE_S` choose what is draped. (The
+//! garments' properties are asserted by `datasets::garment` tests and `tests/cli/garment.rs`;
+//! this only makes pictures.)
 
 use datasets::garment::body::{Body, BodyParams, Size};
 use datasets::garment::preview::{PreviewItem, render_png};
@@ -9,8 +14,6 @@ fn out(name: &str) -> PathBuf {
     PathBuf::from(std::env::var("GARMENT_PREVIEW_DIR").unwrap_or_else(|_| "/tmp".into())).join(name)
 }
 
-#[test]
-#[ignore]
 fn preview_body() {
     let t = std::time::Instant::now();
     let body = Body::new(&BodyParams::new(Size::M)).unwrap();
@@ -94,9 +97,8 @@ fn preview_garment(kind: &str, vertices: usize) {
     datasets::write_obj(&g.mesh, &out(&format!("{name}.obj")), name).unwrap();
 }
 
-#[test]
-#[ignore]
-fn preview_garments() {
+fn main() {
+    preview_body();
     let kinds = std::env::var("GARMENT_KINDS").unwrap_or_else(|_| "tshirt".into());
     let n: usize =
         std::env::var("GARMENT_VERTICES").ok().and_then(|v| v.parse().ok()).unwrap_or(2000);
