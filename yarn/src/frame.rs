@@ -98,6 +98,26 @@ fn anchor(r: V3, t: V3, s: Option<V3>, theta_ref: f64) -> (V3, f64, V3) {
     (n, theta, r)
 }
 
+/// A read-only view of [`CurveFrames`]' table: samples `k = 0..=M` at `u_k =
+/// k/samples_per_segment`.
+#[derive(Debug, Clone, Copy)]
+pub struct FrameTable<'a> {
+    /// Table steps per curve segment.
+    pub samples_per_segment: usize,
+    /// The curve is closed (the table covers one period).
+    pub closed: bool,
+    /// Holonomy angle spread over a closed curve with no anchor (0 otherwise).
+    pub holonomy: f64,
+    /// Curve points at the samples.
+    pub x: &'a [V3],
+    /// Frames at the samples.
+    pub frames: &'a [Frame],
+    /// Unwrapped anchoring angle at the samples.
+    pub theta: &'a [f64],
+    /// Carried rotation-minimising normal at the samples.
+    pub carry: &'a [V3],
+}
+
 /// The tabulated frames of one curve.
 #[derive(Debug, Clone)]
 pub struct CurveFrames {
@@ -196,6 +216,20 @@ impl CurveFrames {
             frames,
             theta,
             carry,
+        }
+    }
+
+    /// The table behind [`Self::frame_at`], for renderers that evaluate frames themselves
+    /// (the GPU fiber passes of `yarn-render` upload it and repeat `frame_at` in WGSL).
+    pub fn table(&self) -> FrameTable<'_> {
+        FrameTable {
+            samples_per_segment: self.samples_per_segment,
+            closed: self.closed,
+            holonomy: self.holonomy,
+            x: &self.x,
+            frames: &self.frames,
+            theta: &self.theta,
+            carry: &self.carry,
         }
     }
 

@@ -1,0 +1,75 @@
+//! CPU = GPU fiber positions: `fiber_expand` read back against
+//! `yarn::fiber::FiberModel::fiber_point` (DESIGN §2.5: 1e-5 of the yarn radius in f32).
+
+use crate::common::{cotton, crane_patch, open_wave};
+use btf_render::Gpu;
+use yarn::fiber::{EffectiveTwist, FiberModel, FiberTable, PeriodKind};
+use yarn::{CurveFrames, YarnSet};
+use yarn_render::passes::expand::{ExpandPass, all_instances};
+use yarn_render::{PackOptions, PackedYarns, YarnBuffers};
+
+/// Largest distance GPU − CPU over every fiber of every segment at `n_sub` steps, in units
+/// of the yarn radius; also the number of loop slots the compared points crossed.
+fn worst_error(gpu: &Gpu, set: &YarnSet, n_sub: u32) -> (f64, usize) {
+    let p = cotton();
+    let opts = PackOptions { seed: 7, frame_samples_per_segment: 4 };
+    let packed = PackedYarns::new(set, std::slice::from_ref(&p), &opts).unwrap();
+    let data = YarnBuffers::new(gpu, &packed).unwrap();
+    let pass = ExpandPass::new(gpu, &data).unwrap();
+    let inst = all_instances(&packed);
+    let pts = pass.read(gpu, &data, &inst, n_sub, true).unwrap();
+    let mut worst: f64 = 0.0;
+    let mut loops = std::collections::BTreeSet::new();
+    let models: Vec<_> = set
+        .curves
+        .iter()
+        .enumerate()
+        .map(|(ci, c)| {
+            let table = FiberTable::new(&p, opts.seed, ci as u64);
+            let twist = EffectiveTwist::for_curve(&p, c);
+            (table, twist, CurveFrames::new(c, opts.frame_samples_per_segment))
+        })
+        .collect();
+    for (i, &[seg, pf]) in inst.iter().enumerate() {
+        let s = &packed.segments[seg as usize];
+        let (ci, si) = (s.ids[0] as usize, s.ids[1] as usize);
+        let (table, twist, frames) = &models[ci];
+        let model = FiberModel { params: &p, table, twist: *twist };
+        let (ply, f) = ((pf >> 16) as usize, (pf & 0xffff) as usize);
+        for k in 0..=n_sub as usize {
+            let u = si as f64 + k as f64 / n_sub as f64;
+            let q = model.fiber_point(&set.curves[ci], frames, ply, f, u);
+            let g = pts[i * (n_sub as usize + 1) + k];
+            let d =
+                (0..3).map(|a| (g[a] as f64 + packed.origin[a] - q[a]).powi(2)).sum::<f64>().sqrt();
+            worst = worst.max(d / p.yarn_radius());
+            let z = set.curves[ci].length_coord(u);
+            let slot = model.slot_coord(z, ply, f).floor() as i64;
+            if matches!(model.period_kind(ply, f, slot), PeriodKind::Loop { .. }) {
+                loops.insert((ci, ply, f, slot));
+            }
+        }
+    }
+    (worst, loops.len())
+}
+
+#[test]
+fn gpu_fibers_equal_the_cpu_generator_to_1e_5_of_the_yarn_radius() {
+    let Some(gpu) = Gpu::for_tests("gpu_fibers_equal_the_cpu_generator") else { return };
+    // Closed periodic courses (whole turns per wrap, slot keys reduced per wrap).
+    let (err, loops) = worst_error(&gpu, &crane_patch(2, 2), 6);
+    eprintln!("Crane patch 2×2: worst |GPU − CPU| = {err:.2e} yarn radii, {loops} loop slots");
+    assert!(loops >= 5, "the comparison must cross loop slots (hash on the GPU): {loops}");
+    assert!(err < 1e-5, "{err:e}");
+    // An open yarn anchored to surface normals.
+    let (err, loops) = worst_error(&gpu, &open_wave(), 8);
+    eprintln!("open wave: worst |GPU − CPU| = {err:.2e} yarn radii, {loops} loop slots");
+    assert!(err < 1e-5, "{err:e}");
+}
+
+#[test]
+fn every_wgsl_file_is_valid() {
+    for (name, src) in [("fiber_expand", yarn_render::passes::expand::source())] {
+        btf_render::gpu::validate_wgsl(name, &src).unwrap();
+    }
+}

@@ -1,0 +1,5 @@
+//! GPU tests of the fiber passes (lavapipe in CI; skipped without an adapter unless
+//! `BTF_REQUIRE_GPU=1`).
+
+mod common;
+mod expand;
