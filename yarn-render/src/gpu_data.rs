@@ -41,7 +41,7 @@ impl YarnBuffers {
     /// Uploads `packed`. An empty set still gets (one-record) buffers, so passes bind.
     pub fn new(gpu: &Gpu, packed: &PackedYarns) -> Result<Self> {
         let dev = &gpu.device;
-        let max = dev.limits().max_storage_buffer_binding_size as u64;
+        let max = dev.limits().max_storage_buffer_binding_size;
         let mut bytes = 0;
         let mut buffers = Vec::new();
         let mut make = |label: &str, data: &[u8], record: usize| -> Result<()> {

@@ -114,7 +114,7 @@ impl ExpandPass {
         let per = n_sub as u64 + 1;
         let total = instances.len() as u64 * per;
         let bytes = total.max(1) * 16;
-        if bytes > dev.limits().max_storage_buffer_binding_size as u64 {
+        if bytes > dev.limits().max_storage_buffer_binding_size {
             return Err(Error::Limit(format!(
                 "fiber_expand: {} instances × {per} points need {bytes} bytes, above the \
                  storage-buffer binding limit",
