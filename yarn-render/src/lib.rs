@@ -9,6 +9,11 @@
 //! | [`pack`] | `YarnSet` + `YarnParams` → segment, curve, frame-sample and fiber-table records, phases reduced in f64 | [W19 §3.1, §5] |
 //! | [`gpu_data`] | those records in storage buffers, bind group 0 of every fiber pass | — |
 //! | [`passes::expand`] | `fiber_expand`: fiber points of listed instances into a buffer | [W19 eq. 1–2], DESIGN §2.4 item 4 |
+//! | [`passes::lod`] | `fiber_lod`: conservative culling, λ, instance list, indirect arguments | [W19 eq. 4], DESIGN §2.3 items 7–8 |
+//! | [`passes::draw`] | `fiber_draw`: vertex-pulled camera-facing strips, fiber BCSDF, MSAA | [W19 §5, eq. 5–6], [H25 eq. 7] |
+//! | [`bcsdf`] | `yarn::bcsdf::FiberBcsdf` lobes packed for the shader | [W19 eq. 5–6] |
+//! | [`view`] | camera, lights, frustum planes in f64 about the origin | — |
+//! | [`renderer`] | `FiberRenderer`: the passes of one frame, stats | [W19 §3.3, §5] |
 //!
 //! The WGSL generator (`shaders/fiber_gen.wgsl`) mirrors `yarn::fiber::FiberModel`
 //! function for function; `tests/gpu.rs` holds the two to 1e-5 of the yarn radius.
@@ -17,17 +22,34 @@
 // Citation keys such as `[W19 eq. 4]` are not intra-doc links.
 #![allow(rustdoc::broken_intra_doc_links)]
 
+pub mod bcsdf;
 pub mod error;
 pub mod gpu_data;
 pub mod pack;
 pub mod passes;
+pub mod renderer;
+pub mod view;
 
 pub use error::{Error, Result};
 pub use gpu_data::YarnBuffers;
 pub use pack::{PackOptions, PackedYarns};
+pub use renderer::{FiberImage, FiberRenderer, FiberSettings, FiberStats};
+pub use view::{FiberCamera, FiberLight};
 
 /// The generator WGSL every fiber pass starts with.
 pub const FIBER_GEN_WGSL: &str = include_str!("shaders/fiber_gen.wgsl");
+
+/// The frame's view (camera, LoD settings, lights) the LoD and draw passes share.
+pub const FIBER_VIEW_WGSL: &str = include_str!("shaders/fiber_view.wgsl");
+
+/// Every WGSL program of the crate, assembled as the passes compile it: `(name, source)`.
+pub fn wgsl_programs() -> Vec<(&'static str, String)> {
+    vec![
+        ("fiber_expand", passes::expand::source()),
+        ("fiber_lod", passes::lod::source()),
+        ("fiber_draw", passes::draw::source()),
+    ]
+}
 
 /// `FIBER_GEN_WGSL` followed by a pass's own WGSL.
 pub fn with_generator(pass: &str) -> String {

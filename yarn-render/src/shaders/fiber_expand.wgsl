@@ -24,7 +24,7 @@ fn expand(@builtin(global_invocation_id) gid: vec3<u32>,
     let inst = instances[idx / per];
     let k = idx % per;
     let t = f32(k) / f32(per - 1u);
-    let ply = inst.y >> 16u;
+    let ply = (inst.y >> 16u) & 0xffu;
     let fib = inst.y & 0xffffu;
     let loops = ep.counts.z != 0u;
     switch ep.counts.w {

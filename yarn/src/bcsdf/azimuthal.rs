@@ -73,6 +73,12 @@ impl VonMises {
         (self.kappa * ((d - PI).cos() - 1.0)).exp() / self.norm
     }
 
+    /// The normalisation `∫ exp(κ(cos(x − π) − 1)) dx` over one turn (the density is the
+    /// exponential divided by it).
+    pub fn norm(&self) -> f64 {
+        self.norm
+    }
+
     fn cdf_at(&self, x: f64) -> f64 {
         let h = TAU / CELLS as f64;
         let k = (((x + PI) / h).floor() as usize).min(CELLS - 1);

@@ -150,6 +150,13 @@ impl GaussianLobe {
         q
     }
 
+    /// The scaling `q` at its 256 nodes (cell centres of `[−π/2, π/2]`, Catmull–Rom between
+    /// them, clamped to the outer nodes): what a GPU shader needs to evaluate the lobe as
+    /// [`Self::eval`] does (all ones in the paper's normalisation).
+    pub fn q_nodes(&self) -> &[f64] {
+        &self.q
+    }
+
     fn q_at(&self, theta: f64) -> f64 {
         interp(theta).iter().map(|&(k, w)| self.q[k] * w).sum()
     }

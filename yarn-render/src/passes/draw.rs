@@ -1,0 +1,161 @@
+//! `fiber_draw` (render, vertex pulling, one indirect draw): the instances `fiber_lod`
+//! listed, each a camera-facing triangle strip evaluated by the WGSL generator ([W19 §5]'s
+//! tessellation + geometry shaders, DESIGN §2.4 item 2), shaded with the fiber BCSDF of
+//! `yarn::bcsdf` under point and directional lights, into a linear `Rgba32Float` target
+//! (`Rgba16Float` under MSAA) with MSAA and alpha-to-coverage for strips narrower than the minimum width.
+
+use crate::gpu_data::YarnBuffers;
+use crate::{Error, Result};
+use btf_render::Gpu;
+
+const WGSL: &str = include_str!("../shaders/fiber_draw.wgsl");
+
+/// The colour target format at `samples` per pixel: `Rgba32Float`, or `Rgba16Float` under
+/// MSAA (WebGPU guarantees multisampling of the 16-bit format only; btf-render does the
+/// same).
+pub fn color_format(samples: u32) -> wgpu::TextureFormat {
+    if samples > 1 { wgpu::TextureFormat::Rgba16Float } else { wgpu::TextureFormat::Rgba32Float }
+}
+/// The depth format.
+pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// The pass's WGSL (generator and view in front).
+pub fn source() -> String {
+    format!("{}\n{}\n{WGSL}", crate::FIBER_GEN_WGSL, crate::FIBER_VIEW_WGSL)
+}
+
+/// The compiled pass.
+pub struct DrawPass {
+    pipeline: wgpu::RenderPipeline,
+    /// Layout of group 1 (view, instances, lobes, q nodes).
+    pub layout: wgpu::BindGroupLayout,
+    /// MSAA samples.
+    pub samples: u32,
+}
+
+impl DrawPass {
+    /// Compiles the pass at `samples` per pixel (1 or 4).
+    pub fn new(gpu: &Gpu, data: &YarnBuffers, samples: u32) -> Result<Self> {
+        if samples != 1 && samples != 4 {
+            return Err(Error::Invalid(format!("fiber_draw: MSAA {samples} (1 or 4)")));
+        }
+        let dev = &gpu.device;
+        let buf = |binding, visibility, ty| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility,
+            ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None },
+            count: None,
+        };
+        let vf = wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT;
+        let ro = wgpu::BufferBindingType::Storage { read_only: true };
+        let layout = dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("fiber_draw"),
+            entries: &[
+                buf(0, vf, wgpu::BufferBindingType::Uniform),
+                buf(1, wgpu::ShaderStages::VERTEX, ro),
+                buf(2, wgpu::ShaderStages::FRAGMENT, ro),
+                buf(3, wgpu::ShaderStages::FRAGMENT, ro),
+            ],
+        });
+        let src = source();
+        let pipeline = gpu
+            .scoped("fiber_draw pipeline", || {
+                let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some("fiber_draw.wgsl"),
+                    source: wgpu::ShaderSource::Wgsl(src.into()),
+                });
+                let pl = dev.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: Some("fiber_draw"),
+                    bind_group_layouts: &[Some(&data.layout), Some(&layout)],
+                    immediate_size: 0,
+                });
+                dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some("fiber_draw"),
+                    layout: Some(&pl),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some("vs_main"),
+                        compilation_options: Default::default(),
+                        buffers: &[],
+                    },
+                    primitive: wgpu::PrimitiveState {
+                        topology: wgpu::PrimitiveTopology::TriangleStrip,
+                        cull_mode: None,
+                        ..Default::default()
+                    },
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: DEPTH,
+                        depth_write_enabled: Some(true),
+                        depth_compare: Some(wgpu::CompareFunction::Less),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
+                    multisample: wgpu::MultisampleState {
+                        count: samples,
+                        mask: !0,
+                        alpha_to_coverage_enabled: samples > 1,
+                    },
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some("fs_main"),
+                        compilation_options: Default::default(),
+                        targets: &[Some(wgpu::ColorTargetState {
+                            format: color_format(samples),
+                            blend: None,
+                            write_mask: wgpu::ColorWrites::ALL,
+                        })],
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+            })
+            .map_err(|e| Error::Gpu(e.to_string()))?;
+        Ok(DrawPass { pipeline, layout, samples })
+    }
+
+    /// Records the draw into `color`/`depth` (cleared to `clear`), reading the instance
+    /// count from `args` at offset 0.
+    pub fn encode(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        data: &YarnBuffers,
+        group1: &wgpu::BindGroup,
+        args: &wgpu::Buffer,
+        targets: (&wgpu::TextureView, Option<&wgpu::TextureView>, &wgpu::TextureView),
+        clear: [f64; 4],
+    ) {
+        let (color, resolve, depth) = targets;
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("fiber_draw"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: color,
+                depth_slice: None,
+                resolve_target: resolve,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color {
+                        r: clear[0],
+                        g: clear[1],
+                        b: clear[2],
+                        a: clear[3],
+                    }),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Discard,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &data.bind_group, &[]);
+        pass.set_bind_group(1, group1, &[]);
+        pass.draw_indirect(args, 0);
+    }
+}

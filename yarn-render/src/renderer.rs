@@ -1,0 +1,305 @@
+//! `FiberRenderer`: the real-time fiber renderer of [W19] as wgpu passes — `fiber_lod`
+//! (cull, λ of [W19 eq. 4], instance list, indirect arguments) then `fiber_draw` (vertex
+//! pulling of the generator, fiber BCSDF, MSAA) — for a camera and delta lights, returning
+//! the linear-RGB frame and what was drawn. Fibers are generated every frame from the
+//! packed control points; nothing per fiber point is ever stored ([W19 §5]).
+//!
+//! Not yet here (issue #19, DESIGN §2.4): core fibers with their texture, the self-shadow
+//! volume, ambient occlusion and the yarn shadow map (the precomputation is the
+//! `yarn-precompute` crate), environment light, hair flyaways on the GPU. Without the core
+//! texture LoD simply drops the innermost fibers; [`FiberSettings::n_max`] = all and
+//! `lod_px ≤ 0` draw every fiber (the full-detail mode the CPU reference is compared with).
+
+use crate::bcsdf;
+use crate::gpu_data::YarnBuffers;
+use crate::pack::PackedYarns;
+use crate::passes::draw::{DEPTH, DrawPass, color_format};
+use crate::passes::lod::{DrawArgsRaw, LodPass};
+use crate::view::{FiberCamera, FiberLight, ViewRaw, ViewSetup, lights_raw, to_cols};
+use crate::{Error, Result};
+use btf_render::Gpu;
+use wgpu::util::DeviceExt;
+use yarn::bcsdf::FiberBcsdf;
+
+/// Accuracy/time knobs of a fiber frame (DESIGN §2.5's sweep).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FiberSettings {
+    /// Fibers per ply at λ = 1 (`u32::MAX`: all of the table).
+    pub n_max: u32,
+    /// Subdivisions per segment at λ = 1 (≤ 255).
+    pub n_sub: u32,
+    /// LoD threshold ω^LoD in pixels (≤ 0: LoD off, every segment at λ = 1).
+    pub lod_px: f32,
+    /// Conservative frustum culling.
+    pub cull: bool,
+    /// Loop flyaways.
+    pub loops: bool,
+    /// Multiply the BCSDF by the yarn colour.
+    pub tint: bool,
+    /// MSAA samples (1 or 4).
+    pub msaa: u32,
+    /// Strips narrower than this (pixels) are widened to it with their coverage as alpha.
+    pub min_strip_px: f32,
+    /// Most fiber instances one frame may list (8 bytes each).
+    pub capacity: u32,
+}
+
+impl Default for FiberSettings {
+    fn default() -> Self {
+        FiberSettings {
+            n_max: u32::MAX,
+            n_sub: 8,
+            lod_px: 1.0,
+            cull: true,
+            loops: true,
+            tint: true,
+            msaa: 4,
+            min_strip_px: 1.0,
+            capacity: 1 << 24,
+        }
+    }
+}
+
+/// What one frame drew.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct FiberStats {
+    /// Yarn segments packed.
+    pub segments: u32,
+    /// Segments culled.
+    pub culled: u32,
+    /// Fiber instances drawn.
+    pub instances: u32,
+    /// Instances beyond the capacity (not drawn).
+    pub overflow: u32,
+    /// Triangles submitted (`instances · 2·n_sub`, degenerate ones included).
+    pub triangles: u64,
+    /// GPU bytes of the packed yarn data (per-control-point memory).
+    pub yarn_bytes: u64,
+}
+
+/// A rendered frame: linear RGB + coverage, rows top to bottom.
+#[derive(Debug, Clone)]
+pub struct FiberImage {
+    /// Width (px).
+    pub width: u32,
+    /// Height (px).
+    pub height: u32,
+    /// RGBA per pixel.
+    pub pixels: Vec<[f32; 4]>,
+    /// What was drawn.
+    pub stats: FiberStats,
+}
+
+/// The renderer of one packed yarn set.
+pub struct FiberRenderer {
+    data: YarnBuffers,
+    lod: LodPass,
+    draw: DrawPass,
+    settings: FiberSettings,
+    origin: [f64; 3],
+    centre: [f64; 3],
+    radius: f64,
+    lobe_count: u32,
+    lobes: wgpu::Buffer,
+    q_nodes: wgpu::Buffer,
+    instances: wgpu::Buffer,
+    args: wgpu::Buffer,
+    capacity: u32,
+}
+
+fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry { binding, resource: buffer.as_entire_binding() }
+}
+
+impl FiberRenderer {
+    /// Uploads `packed` and compiles the passes.
+    pub fn new(
+        gpu: &Gpu,
+        packed: &PackedYarns,
+        bcsdf: &FiberBcsdf,
+        settings: FiberSettings,
+    ) -> Result<Self> {
+        if settings.n_sub == 0 || settings.n_sub > 255 {
+            return Err(Error::Invalid(format!("n_sub {} (must be 1..=255)", settings.n_sub)));
+        }
+        if settings.n_max == 0 {
+            return Err(Error::Invalid("n_max 0 (at least one fiber per ply)".into()));
+        }
+        if !settings.min_strip_px.is_finite() || settings.min_strip_px < 0.0 {
+            return Err(Error::Invalid(format!("min_strip_px {}", settings.min_strip_px)));
+        }
+        let dev = &gpu.device;
+        let data = YarnBuffers::new(gpu, packed)?;
+        let lod = LodPass::new(gpu, &data)?;
+        let draw = DrawPass::new(gpu, &data, settings.msaa)?;
+        let (lobes, q) = bcsdf::pack(bcsdf)?;
+        let max_binding = dev.limits().max_storage_buffer_binding_size;
+        let capacity = (settings.capacity.max(1) as u64).min(max_binding / 8) as u32;
+        let (lo, hi) = packed.bounds;
+        let (centre, radius) = if packed.segments.is_empty() {
+            ([0.0; 3], 1.0)
+        } else {
+            let c = [0, 1, 2].map(|a| 0.5 * (lo[a] + hi[a]) - packed.origin[a]);
+            let r = (0..3).map(|a| (hi[a] - lo[a]).powi(2)).sum::<f64>().sqrt() * 0.5;
+            (c, r + packed.max_reach)
+        };
+        let storage = |label, contents: &[u8]| {
+            dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+        };
+        Ok(FiberRenderer {
+            lobes: storage("fiber lobes", bytemuck::cast_slice(&lobes)),
+            q_nodes: storage("fiber q nodes", bytemuck::cast_slice(&q)),
+            instances: dev.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("fiber instances"),
+                size: capacity as u64 * 8,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            }),
+            args: dev.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("fiber draw args"),
+                size: size_of::<DrawArgsRaw>() as u64,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::INDIRECT
+                    | wgpu::BufferUsages::COPY_DST
+                    | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }),
+            lobe_count: lobes.len() as u32,
+            data,
+            lod,
+            draw,
+            settings,
+            origin: packed.origin,
+            centre,
+            radius,
+            capacity,
+        })
+    }
+
+    /// The settings in use.
+    pub fn settings(&self) -> &FiberSettings {
+        &self.settings
+    }
+
+    /// The frame uniform for `cam` and `lights` at `size`.
+    pub fn view_raw(
+        &self,
+        cam: &FiberCamera,
+        lights: &[FiberLight],
+        size: (u32, u32),
+    ) -> Result<ViewRaw> {
+        let setup = ViewSetup::new(cam, self.origin, self.centre, self.radius, size)?;
+        let s = &self.settings;
+        let flags = s.cull as u32 | (s.loops as u32) << 1 | (s.tint as u32) << 2;
+        let f3 = |v: nalgebra::Vector3<f64>, w: f32| [v.x as f32, v.y as f32, v.z as f32, w];
+        Ok(ViewRaw {
+            view_proj: to_cols(&setup.view_proj),
+            eye: f3(setup.eye, if setup.orthographic { 0.0 } else { 1.0 }),
+            forward: f3(setup.forward, 0.0),
+            viewport: [size.0 as f32, size.1 as f32, setup.px_per_metre as f32, s.lod_px],
+            planes: setup.planes().map(|p| p.map(|x| x as f32)),
+            lod: [s.n_max, s.n_sub, flags, self.capacity],
+            counts: [lights.len() as u32, self.lobe_count, self.data.segment_count, 0],
+            strip: [s.min_strip_px, 0.0, 0.0, 0.0],
+            lights: lights_raw(lights, self.origin)?,
+        })
+    }
+
+    /// Renders one `width × height` frame over a background of `clear` (linear RGBA).
+    pub fn render(
+        &self,
+        gpu: &Gpu,
+        cam: &FiberCamera,
+        lights: &[FiberLight],
+        (width, height): (u32, u32),
+        clear: [f64; 4],
+    ) -> Result<FiberImage> {
+        gpu.check_frame(width, height, self.settings.msaa)?;
+        let dev = &gpu.device;
+        let raw = self.view_raw(cam, lights, (width, height))?;
+        let ubuf = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("fiber view"),
+            contents: bytemuck::bytes_of(&raw),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let g_lod = dev.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("fiber_lod"),
+            layout: &self.lod.layout,
+            entries: &[entry(0, &ubuf), entry(1, &self.instances), entry(2, &self.args)],
+        });
+        let g_draw = dev.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("fiber_draw"),
+            layout: &self.draw.layout,
+            entries: &[
+                entry(0, &ubuf),
+                entry(1, &self.instances),
+                entry(2, &self.lobes),
+                entry(3, &self.q_nodes),
+            ],
+        });
+        let samples = self.settings.msaa;
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+        let format = color_format(samples);
+        let resolved = gpu.target("fiber colour", (width, height), 1, format, usage);
+        let msaa = (samples > 1).then(|| {
+            gpu.target(
+                "fiber colour msaa",
+                (width, height),
+                samples,
+                format,
+                wgpu::TextureUsages::RENDER_ATTACHMENT,
+            )
+        });
+        let depth = gpu.target(
+            "fiber depth",
+            (width, height),
+            samples,
+            DEPTH,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        );
+        let rv = resolved.create_view(&Default::default());
+        let mv = msaa.as_ref().map(|t| t.create_view(&Default::default()));
+        let dv = depth.create_view(&Default::default());
+        let readback = dev.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("fiber args read-back"),
+            size: size_of::<DrawArgsRaw>() as u64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        gpu.scoped("fiber frame", || {
+            let mut enc = dev.create_command_encoder(&Default::default());
+            self.lod.encode(gpu, &mut enc, &self.data, &g_lod, &self.args, self.settings.n_sub);
+            let targets = match &mv {
+                Some(m) => (m, Some(&rv), &dv),
+                None => (&rv, None, &dv),
+            };
+            self.draw.encode(&mut enc, &self.data, &g_draw, &self.args, targets, clear);
+            enc.copy_buffer_to_buffer(&self.args, 0, &readback, 0, readback.size());
+            gpu.queue.submit([enc.finish()]);
+        })?;
+        let args: DrawArgsRaw = *bytemuck::from_bytes(&gpu.read_buffer(&readback)?);
+        let pixels = if samples > 1 {
+            let bytes = gpu.read_texture(&resolved, 8)?;
+            bytemuck::cast_slice::<u8, [half::f16; 4]>(&bytes)
+                .iter()
+                .map(|p| p.map(f32::from))
+                .collect()
+        } else {
+            let bytes = gpu.read_texture(&resolved, 16)?;
+            bytemuck::cast_slice::<u8, [f32; 4]>(&bytes).to_vec()
+        };
+        let stats = FiberStats {
+            segments: self.data.segment_count,
+            culled: args.culled,
+            instances: args.instance_count,
+            overflow: args.overflow,
+            triangles: args.instance_count as u64 * 2 * self.settings.n_sub as u64,
+            yarn_bytes: self.data.bytes,
+        };
+        Ok(FiberImage { width, height, pixels, stats })
+    }
+}
