@@ -27,3 +27,30 @@ pub fn open_wave() -> YarnSet {
     let c = YarnCurve::open(pts).unwrap().with_normals(normals).unwrap();
     YarnSet::new(vec![c], None).unwrap()
 }
+
+/// One fiber of radius 0.3 mm on the axis (1 µm from it) of an open yarn bent gently in
+/// the plane z = 0, 8 mm long; no flyaways, no migration. (Wound about the axis, the
+/// fiber's far side would shadow its near side.)
+pub fn single_fiber_yarn() -> (YarnSet, YarnParams) {
+    let mut p = cotton();
+    p.name = "one fiber".into();
+    p.ply_count = 1;
+    p.fibers_per_ply = 1;
+    p.ply_center_distance = 0.0;
+    p.ply_ellipse_n = 1e-6;
+    p.ply_ellipse_b = 1e-6;
+    p.fiber_pitch = 6e-3;
+    p.ply_pitch = 6e-3;
+    p.rho_min = 1.0;
+    p.rho_max = 1.0;
+    p.migration_rate = 0.0;
+    p.fiber_radius = 3e-4;
+    p.hair_density = 0.0;
+    p.loop_density = 0.0;
+    p.core_fraction = 0.0;
+    p.density_epsilon = 0.5;
+    let pts: Vec<[f64; 3]> =
+        (0..9).map(|i| [i as f64 * 1e-3, 0.6e-3 * (i as f64 * 0.5).sin(), 0.0]).collect();
+    let c = YarnCurve::open(pts).unwrap();
+    (YarnSet::new(vec![c], None).unwrap(), p)
+}

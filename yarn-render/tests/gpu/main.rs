@@ -3,3 +3,4 @@
 
 mod common;
 mod expand;
+mod reference;
