@@ -3,4 +3,5 @@
 
 mod common;
 mod expand;
+mod lod;
 mod reference;
