@@ -2,6 +2,7 @@
 //! `BTF_REQUIRE_GPU=1`).
 
 mod common;
+mod coherence;
 mod expand;
 mod lod;
 mod reference;
