@@ -6,7 +6,9 @@ use btf_render::Gpu;
 use yarn::bcsdf::{FiberBcsdf, KhungurnParams};
 use yarn::knit::crane::CraneKnit;
 use yarn::{YarnParams, YarnSet};
-use yarn_render::{FiberCamera, FiberLight, FiberRenderer, FiberSettings, PackOptions, PackedYarns};
+use yarn_render::{
+    FiberCamera, FiberLight, FiberRenderer, FiberSettings, PackOptions, PackedYarns,
+};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
@@ -35,7 +37,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut rgb = image::RgbImage::new(img.width, img.height);
     for (i, px) in img.pixels.iter().enumerate() {
         let tm = |x: f32| ((x / (1.0 + x)).powf(1.0 / 2.2) * 255.0).round() as u8;
-        rgb.put_pixel(i as u32 % img.width, i as u32 / img.width, image::Rgb([tm(px[0]), tm(px[1]), tm(px[2])]));
+        rgb.put_pixel(
+            i as u32 % img.width,
+            i as u32 / img.width,
+            image::Rgb([tm(px[0]), tm(px[1]), tm(px[2])]),
+        );
     }
     std::fs::create_dir_all(&out)?;
     rgb.save(out.join("fiber_preview.png"))?;

@@ -40,7 +40,7 @@ pub struct SegmentRaw {
     pub n: [[f32; 4]; 4],
     /// `frac(z_1/α_ply')`, `frac(z_1/α')`, `frac(s_r·z_1/α')` (slot phase), unused.
     pub phase: [f32; 4],
-    /// Curve index, segment index within the curve, slot base `floor(s_r·z_1/α')` (i32
+    /// Curve record (one per curve and tile), segment index within the curve, slot base `floor(s_r·z_1/α')` (i32
     /// bits), flags (bit 0: the curve has normals).
     pub ids: [u32; 4],
     /// Linear RGB of `P_1` and `P_2`: the CPU generator colours a point by its nearest
@@ -96,11 +96,16 @@ pub struct PackOptions {
     pub seed: u64,
     /// Frame-table samples per segment.
     pub frame_samples_per_segment: usize,
+    /// Copies of a periodic set `[nx, ny]` (odd, centred on the original): a 3 × 3
+    /// neighbourhood is what a periodic patch needs around its period (DESIGN §4.2); the
+    /// copies share the original's fiber tables, so their fibers are the same fibers.
+    /// `[1, 1]` for a set without a period.
+    pub tiles: [u32; 2],
 }
 
 impl Default for PackOptions {
     fn default() -> Self {
-        PackOptions { seed: 1, frame_samples_per_segment: 4 }
+        PackOptions { seed: 1, frame_samples_per_segment: 4, tiles: [1, 1] }
     }
 }
 
@@ -168,13 +173,36 @@ impl PackedYarns {
                 opts.frame_samples_per_segment
             )));
         }
+        let [nx, ny] = opts.tiles;
+        if nx % 2 == 0 || ny % 2 == 0 || nx > 9 || ny > 9 {
+            return Err(Error::Invalid(format!("tiles {nx} × {ny} (odd, at most 9)")));
+        }
+        let period = match (set.period, nx * ny) {
+            (_, 1) => [0.0; 2],
+            (Some(p), _) => p,
+            (None, _) => {
+                return Err(Error::Invalid(format!(
+                    "tiles {nx} × {ny} for a yarn set without a period"
+                )));
+            }
+        };
+        let offsets: Vec<[f64; 3]> = (0..ny as i64)
+            .flat_map(|j| {
+                (0..nx as i64).map(move |i| {
+                    let (di, dj) = (i - nx as i64 / 2, j - ny as i64 / 2);
+                    [di as f64 * period[0], dj as f64 * period[1], 0.0]
+                })
+            })
+            .collect();
         let mut lo = [f64::INFINITY; 3];
         let mut hi = [f64::NEG_INFINITY; 3];
         for c in &set.curves {
             for p in &c.points {
-                for a in 0..3 {
-                    lo[a] = lo[a].min(p[a]);
-                    hi[a] = hi[a].max(p[a]);
+                for off in &offsets {
+                    for a in 0..3 {
+                        lo[a] = lo[a].min(p[a] + off[a]);
+                        hi[a] = hi[a].max(p[a] + off[a]);
+                    }
                 }
             }
         }
@@ -243,21 +271,33 @@ impl PackedYarns {
                 ))
             })?;
             out.max_reach = out.max_reach.max(flyaway_reach(p));
-            out.pack_curve(ci, curve, p, id, opts)?;
+            let table = FiberTable::new(p, opts.seed, ci as u64);
+            let first_fiber = out.fibers.len() as u32;
+            out.fibers.extend(table.fibers.iter().map(|f| {
+                [f.r as f32, f.theta as f32, f.migration_phase as f32, f.core as u32 as f32]
+            }));
+            // Offset 0 (the original) first, so curve `ci`'s records come first per tile.
+            for off in &offsets {
+                out.pack_curve(ci, curve, p, id, first_fiber, *off, opts)?;
+            }
         }
         Ok(out)
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn pack_curve(
         &mut self,
         ci: usize,
         curve: &YarnCurve,
         p: &YarnParams,
         params_id: u32,
+        first_fiber: u32,
+        offset: [f64; 3],
         opts: &PackOptions,
     ) -> Result<()> {
         let twist = EffectiveTwist::for_curve(p, curve);
-        let table = FiberTable::new(p, opts.seed, ci as u64);
+        // Positions of this copy are relative to origin − offset.
+        let org = [0, 1, 2].map(|a| self.origin[a] - offset[a]);
         let frames = CurveFrames::new(curve, opts.frame_samples_per_segment);
         let ft = frames.table();
         let slot_rate = if twist.migration_rate > 0.0 { twist.migration_rate } else { 1.0 };
@@ -269,12 +309,7 @@ impl PackedYarns {
                 twist.migration_rate as f32,
                 slot_rate as f32,
             ],
-            ids: [
-                params_id,
-                self.fibers.len() as u32,
-                self.samples.len() as u32,
-                ft.samples_per_segment as u32,
-            ],
+            ids: [params_id, first_fiber, self.samples.len() as u32, ft.samples_per_segment as u32],
             keys: {
                 let h = hash_keys(&[opts.seed, ci as u64]);
                 [twist.slots_per_wrap.unwrap_or(0) as u32, h as u32, (h >> 32) as u32, segs as u32]
@@ -287,18 +322,10 @@ impl PackedYarns {
         self.curves.push(curve_raw);
         for k in 0..ft.x.len() {
             self.samples.push(SampleRaw {
-                x: f4(sub(ft.x[k], self.origin), ft.theta[k]),
+                x: f4(sub(ft.x[k], org), ft.theta[k]),
                 t: f4(ft.frames[k].t, 0.0),
                 carry: f4(ft.carry[k], 0.0),
             });
-        }
-        for f in &table.fibers {
-            self.fibers.push([
-                f.r as f32,
-                f.theta as f32,
-                f.migration_phase as f32,
-                if f.core { 1.0 } else { 0.0 },
-            ]);
         }
         let has_normals = curve.normals.is_some();
         let n_cp = curve.points.len() as isize;
@@ -307,7 +334,7 @@ impl PackedYarns {
             let mut seg = SegmentRaw::default();
             for (j, d) in [-1isize, 0, 1, 2].into_iter().enumerate() {
                 let z = curve.length_coord_at(s + d) - z1;
-                seg.p[j] = f4(sub(curve.control_point(s + d), self.origin), z);
+                seg.p[j] = f4(sub(curve.control_point(s + d), org), z);
                 if let Some(normals) = &curve.normals {
                     let k = if curve.closed {
                         (s + d).rem_euclid(n_cp)
@@ -332,7 +359,8 @@ impl PackedYarns {
                 frac(slot) as f32,
                 0.0,
             ];
-            seg.ids = [ci as u32, s as u32, (base as i32) as u32, has_normals as u32];
+            seg.ids =
+                [self.curves.len() as u32 - 1, s as u32, (base as i32) as u32, has_normals as u32];
             let c1 = curve.colors[s as usize % curve.points.len()];
             let c2 = curve.colors[(s as usize + 1) % curve.points.len()];
             seg.color = [[c1[0], c1[1], c1[2], 1.0], [c2[0], c2[1], c2[2], 1.0]];

@@ -204,7 +204,7 @@ impl FiberRenderer {
             planes: setup.planes().map(|p| p.map(|x| x as f32)),
             lod: [s.n_max, s.n_sub, flags, self.capacity],
             counts: [lights.len() as u32, self.lobe_count, self.data.segment_count, 0],
-            strip: [s.min_strip_px, 0.0, 0.0, 0.0],
+            strip: [s.min_strip_px, s.msaa as f32, 0.0, 0.0],
             lights: lights_raw(lights, self.origin)?,
         })
     }

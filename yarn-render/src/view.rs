@@ -8,30 +8,52 @@
 use crate::{Error, Result};
 use nalgebra::{Matrix4, Vector3, Vector4};
 
-/// A pinhole or orthographic camera (metres, z-up world).
+/// A camera of the fiber renderer (metres, z-up world).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FiberCamera {
-    /// Eye position.
-    pub eye: [f64; 3],
-    /// Point looked at.
-    pub target: [f64; 3],
-    /// Up vector (need not be orthogonal to the view direction).
-    pub up: [f64; 3],
-    /// Perspective vertical field of view (degrees), or `None` for orthographic.
-    pub fov_y_deg: Option<f64>,
-    /// Orthographic frame height (metres).
-    pub ortho_height: f64,
+pub enum FiberCamera {
+    /// Pinhole (or orthographic when `fov_y_deg` is `None`) at `eye` looking at `target`.
+    Look {
+        /// Eye position.
+        eye: [f64; 3],
+        /// Point looked at.
+        target: [f64; 3],
+        /// Up vector (need not be orthogonal to the view direction).
+        up: [f64; 3],
+        /// Vertical field of view (degrees); `None`: orthographic.
+        fov_y_deg: Option<f64>,
+        /// Orthographic frame height (metres).
+        ortho_height: f64,
+    },
+    /// The yarn BTF's oblique orthographic camera (DESIGN §4.2, `yarn_ref::Camera::oblique`):
+    /// a world point maps to where its view ray crosses `z = z_ref`,
+    /// `(p.xy − v.xy/v.z·(p.z − z_ref))`, so pixel centres are texel centres for every view;
+    /// pixel `(i, j)` covers `origin + extent·(i, j)/(w, h)` (row 0 at the smallest y).
+    Oblique {
+        /// Unit direction towards the viewer (`v.z > 0`).
+        view: [f64; 3],
+        /// Height of the reference plane.
+        z_ref: f64,
+        /// Corner of the imaged rectangle on the plane.
+        origin: [f64; 2],
+        /// Size of that rectangle.
+        extent: [f64; 2],
+    },
 }
 
 impl FiberCamera {
     /// A perspective camera.
     pub fn perspective(eye: [f64; 3], target: [f64; 3], up: [f64; 3], fov_y_deg: f64) -> Self {
-        FiberCamera { eye, target, up, fov_y_deg: Some(fov_y_deg), ortho_height: 0.0 }
+        FiberCamera::Look { eye, target, up, fov_y_deg: Some(fov_y_deg), ortho_height: 0.0 }
     }
 
     /// An orthographic camera whose frame is `height` metres tall.
     pub fn orthographic(eye: [f64; 3], target: [f64; 3], up: [f64; 3], height: f64) -> Self {
-        FiberCamera { eye, target, up, fov_y_deg: None, ortho_height: height }
+        FiberCamera::Look { eye, target, up, fov_y_deg: None, ortho_height: height }
+    }
+
+    /// The oblique BTF camera (see [`FiberCamera::Oblique`]).
+    pub fn oblique(view: [f64; 3], z_ref: f64, origin: [f64; 2], extent: [f64; 2]) -> Self {
+        FiberCamera::Oblique { view, z_ref, origin, extent }
     }
 }
 
@@ -85,7 +107,7 @@ pub struct ViewRaw {
     pub lod: [u32; 4],
     /// Lights, lobes, segments, unused.
     pub counts: [u32; 4],
-    /// Minimum strip width (px), unused ×3.
+    /// Minimum strip width (px), MSAA samples, unused ×2.
     pub strip: [f32; 4],
     /// Lights.
     pub lights: [LightRaw; MAX_LIGHTS],
@@ -116,18 +138,26 @@ impl ViewSetup {
         radius: f64,
         (width, height): (u32, u32),
     ) -> Result<Self> {
+        if width == 0 || height == 0 {
+            return Err(Error::Invalid(format!("fiber frame of {width} × {height} pixels")));
+        }
+        let (eye, target, up, fov_y_deg, ortho_height) = match *cam {
+            FiberCamera::Look { eye, target, up, fov_y_deg, ortho_height } => {
+                (eye, target, up, fov_y_deg, ortho_height)
+            }
+            FiberCamera::Oblique { view, z_ref, origin: o, extent } => {
+                return Self::oblique(view, z_ref, o, extent, origin, centre, radius, width);
+            }
+        };
         let rel = |p: [f64; 3]| Vector3::new(p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]);
-        let eye = rel(cam.eye);
-        let target = rel(cam.target);
+        let eye = rel(eye);
+        let target = rel(target);
         let fwd = target - eye;
         if !(fwd.norm() > 0.0 && fwd.iter().all(|x| x.is_finite())) {
             return Err(Error::Invalid("fiber camera: eye and target coincide".into()));
         }
-        if width == 0 || height == 0 {
-            return Err(Error::Invalid(format!("fiber frame of {width} × {height} pixels")));
-        }
         let f = fwd.normalize();
-        let mut up = Vector3::new(cam.up[0], cam.up[1], cam.up[2]);
+        let mut up = Vector3::new(up[0], up[1], up[2]);
         if up.cross(&f).norm() < 1e-9 {
             up = if f.z.abs() < 0.9 { Vector3::z() } else { Vector3::x() };
         }
@@ -145,7 +175,7 @@ impl ViewSetup {
         let dist = (c - eye).dot(&f);
         let radius = radius.max(1e-9);
         let far = dist + radius * 1.05;
-        let (proj, px_per_metre, orthographic) = match cam.fov_y_deg {
+        let (proj, px_per_metre, orthographic) = match fov_y_deg {
             Some(fov) => {
                 if !(fov > 0.0 && fov < 179.0) {
                     return Err(Error::Invalid(format!("fiber camera: fov_y_deg {fov}")));
@@ -162,7 +192,7 @@ impl ViewSetup {
                 (p, 0.5 * height as f64 * fy, false)
             }
             None => {
-                let h = cam.ortho_height;
+                let h = ortho_height;
                 if !(h > 0.0 && h.is_finite()) {
                     return Err(Error::Invalid(format!("fiber camera: ortho_height {h}")));
                 }
@@ -179,6 +209,54 @@ impl ViewSetup {
             }
         };
         Ok(ViewSetup { view_proj: proj * view, eye, forward: f, px_per_metre, orthographic })
+    }
+
+    /// The oblique camera's matrix: clip x, y from the reference-plane entry, depth from
+    /// `(z_top − p.z)/v.z` over the scene's height range (all affine in `p`).
+    #[allow(clippy::too_many_arguments)]
+    fn oblique(
+        view: [f64; 3],
+        z_ref: f64,
+        o: [f64; 2],
+        extent: [f64; 2],
+        origin: [f64; 3],
+        centre: [f64; 3],
+        radius: f64,
+        width: u32,
+    ) -> Result<Self> {
+        let n = (view[0] * view[0] + view[1] * view[1] + view[2] * view[2]).sqrt();
+        if !(n > 0.0 && view[2] / n >= 1.7e-3) {
+            return Err(Error::Invalid(format!(
+                "oblique fiber camera: view {view:?} at or below the horizon"
+            )));
+        }
+        if !(extent.iter().all(|e| *e > 0.0 && e.is_finite()) && z_ref.is_finite()) {
+            return Err(Error::Invalid(format!("oblique fiber camera: extent {extent:?}")));
+        }
+        let v = Vector3::new(view[0] / n, view[1] / n, view[2] / n);
+        // Origin-relative: p_world = p + origin.
+        let (ax, ay) = (v.x / v.z, v.y / v.z);
+        let zr = z_ref - origin[2];
+        let (ox, oy) = (o[0] - origin[0], o[1] - origin[1]);
+        // Depth: 0 at the top of the scene, 1 at its bottom (with margin).
+        let r = radius.max(1e-9) * 1.05;
+        let (z_top, z_bot) = (centre[2] + r, centre[2] - r);
+        let span = (z_top - z_bot) / v.z;
+        let (sx, sy) = (2.0 / extent[0], 2.0 / extent[1]);
+        #[rustfmt::skip]
+        let m = Matrix4::new(
+            sx, 0.0, -sx * ax, sx * (ax * zr - ox) - 1.0,
+            0.0, -sy, sy * ay, -sy * (ay * zr - oy) + 1.0,
+            0.0, 0.0, -1.0 / (v.z * span), z_top / (v.z * span),
+            0.0, 0.0, 0.0, 1.0,
+        );
+        Ok(ViewSetup {
+            view_proj: m,
+            eye: v * 1e3,
+            forward: -v,
+            px_per_metre: width as f64 / extent[0],
+            orthographic: true,
+        })
     }
 
     /// The six frustum planes `(n, w)`, inside where `n·p + w ≥ 0`, with unit `n`.

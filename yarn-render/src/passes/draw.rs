@@ -2,7 +2,8 @@
 //! listed, each a camera-facing triangle strip evaluated by the WGSL generator ([W19 §5]'s
 //! tessellation + geometry shaders, DESIGN §2.4 item 2), shaded with the fiber BCSDF of
 //! `yarn::bcsdf` under point and directional lights, into a linear `Rgba32Float` target
-//! (`Rgba16Float` under MSAA) with MSAA and alpha-to-coverage for strips narrower than the minimum width.
+//! (`Rgba16Float` under MSAA) with MSAA; strips narrower than the minimum width keep their coverage fraction of the
+//! samples through a hashed sample mask (see the WGSL).
 
 use crate::gpu_data::YarnBuffers;
 use crate::{Error, Result};
@@ -93,7 +94,7 @@ impl DrawPass {
                     multisample: wgpu::MultisampleState {
                         count: samples,
                         mask: !0,
-                        alpha_to_coverage_enabled: samples > 1,
+                        alpha_to_coverage_enabled: false,
                     },
                     fragment: Some(wgpu::FragmentState {
                         module: &module,

@@ -3,9 +3,12 @@
 // subdivisions collapses onto its last point. Each vertex evaluates the generator
 // (fiber_point, the function fiber_expand writes) and is pushed ± half the fiber width
 // along T × (eye − p): the camera-facing strip [W19 §5] made by the geometry shader there.
-// A strip narrower than `view.strip.x` pixels is widened to it and its coverage carried as
-// alpha (alpha-to-coverage under MSAA), so sub-pixel fibers keep their mean coverage
-// instead of aliasing away. The fragment shader evaluates the fiber BCSDF of yarn::bcsdf
+// A strip narrower than `view.strip.x` pixels is widened to it and keeps only its coverage
+// fraction of the MSAA samples: a sample mask of round(coverage·samples + u) samples,
+// chosen with u and a rotation hashed from (fiber, pixel). Alpha-to-coverage would
+// pick the same samples for every fiber of equal alpha (overlapping fibers would cover
+// the union of one), and would store the alpha too, counting coverage twice; hashed masks
+// make overlapping sub-pixel fibers cover independent samples, as real ones do. The fragment shader evaluates the fiber BCSDF of yarn::bcsdf
 // (any lobe sum: simple [W19 eq. 5] + diffuse, Khungurn R + TT [W19 eq. 6] + diffuse,
 // R + TT + D [H25 eq. 7]) for each light, as the CPU reference does at a fiber hit: the
 // fiber scatters as a line, so the radiance does not depend on where across its width it
@@ -36,6 +39,12 @@ struct VertexOut {
     @location(2) color: vec3<f32>,
     // Coverage of a widened strip (1 when the fiber is at least the minimum width).
     @location(3) coverage: f32,
+    @location(4) @interpolate(flat) instance: u32,
+}
+
+struct FragmentOut {
+    @location(0) color: vec4<f32>,
+    @builtin(sample_mask) mask: u32,
 }
 
 fn view_dir(p: vec3<f32>) -> vec3<f32> {
@@ -85,6 +94,9 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     out.tangent = tan;
     out.color = select(s.color[0].rgb, s.color[1].rgb, t >= 0.5);
     out.coverage = coverage;
+    // The fiber's identity, not its place in the list: culling and LoD reorder the list,
+    // and the sample mask must not change with it.
+    out.instance = pcg(seg) ^ (rec.y & 0xffffffu);
     return out;
 }
 
@@ -149,8 +161,33 @@ fn bcsdf_cos(wi: vec3<f32>, wo: vec3<f32>, tan: vec3<f32>) -> vec3<f32> {
     return f * sqrt(max(1.0 - si * si, 0.0));
 }
 
+fn pcg(v: u32) -> u32 {
+    let state = v * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+// The samples a fragment of coverage `c` keeps (all when c ≥ 1).
+fn coverage_mask(c: f32, instance: u32, pixel: vec2<u32>) -> u32 {
+    if c >= 1.0 {
+        return 0xffffffffu;
+    }
+    let n = max(view.strip.y, 1.0);
+    let h = pcg(instance ^ pcg(pixel.x ^ pcg(pixel.y)));
+    let u = f32(h & 0xffffu) / 65536.0;
+    let k = u32(clamp(floor(c * n + u), 0.0, n));
+    if k == 0u {
+        return 0u;
+    }
+    let ni = u32(n);
+    let bits = (1u << k) - 1u;
+    let rot = (h >> 16u) % ni;
+    let full = (1u << ni) - 1u;
+    return ((bits << rot) | (bits >> (ni - rot))) & full;
+}
+
 @fragment
-fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
+fn fs_main(in: VertexOut) -> FragmentOut {
     let tan = normalize_or(in.tangent, vec3<f32>(1.0, 0.0, 0.0));
     let wo = view_dir(in.axis);
     var l = vec3<f32>(0.0);
@@ -169,5 +206,8 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     if (view.lod.z & 4u) != 0u {
         l *= in.color;
     }
-    return vec4<f32>(l, in.coverage);
+    var out: FragmentOut;
+    out.color = vec4<f32>(l, 1.0);
+    out.mask = coverage_mask(in.coverage, in.instance, vec2<u32>(in.clip.xy));
+    return out;
 }

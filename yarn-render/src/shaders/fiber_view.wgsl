@@ -25,7 +25,8 @@ struct View {
     lod: vec4<u32>,
     // Lights in use, lobes in use, unused, unused.
     counts: vec4<u32>,
-    // Smallest strip width (px) before coverage becomes alpha, ambient radiance scale, unused.
+    // Smallest strip width (px) before coverage becomes a sample mask, MSAA samples,
+    // unused ×2.
     strip: vec4<f32>,
     lights: array<Light, 8>,
 }

@@ -7,7 +7,9 @@ use crate::common::{cotton, open_wave};
 use btf_render::Gpu;
 use yarn::bcsdf::{FiberBcsdf, SimpleParams};
 use yarn::{YarnCurve, YarnSet};
-use yarn_render::{FiberCamera, FiberLight, FiberRenderer, FiberSettings, PackOptions, PackedYarns};
+use yarn_render::{
+    FiberCamera, FiberLight, FiberRenderer, FiberSettings, PackOptions, PackedYarns,
+};
 
 /// Rotation by `angle` about the unit `axis`, then translation by `t`.
 fn rigid(axis: [f64; 3], angle: f64, t: [f64; 3]) -> impl Fn([f64; 3], bool) -> [f64; 3] {

@@ -12,7 +12,7 @@ use yarn_render::{PackOptions, PackedYarns, YarnBuffers};
 /// of the yarn radius; also the number of loop slots the compared points crossed.
 fn worst_error(gpu: &Gpu, set: &YarnSet, n_sub: u32) -> (f64, usize) {
     let p = cotton();
-    let opts = PackOptions { seed: 7, frame_samples_per_segment: 4 };
+    let opts = PackOptions { seed: 7, frame_samples_per_segment: 4, tiles: [1, 1] };
     let packed = PackedYarns::new(set, std::slice::from_ref(&p), &opts).unwrap();
     let data = YarnBuffers::new(gpu, &packed).unwrap();
     let pass = ExpandPass::new(gpu, &data).unwrap();

@@ -7,7 +7,9 @@ use btf_render::Gpu;
 use yarn::bcsdf::{FiberBcsdf, KhungurnParams};
 use yarn_render::passes::lod::{counts, lambda};
 use yarn_render::view::ViewSetup;
-use yarn_render::{FiberCamera, FiberLight, FiberRenderer, FiberSettings, PackOptions, PackedYarns};
+use yarn_render::{
+    FiberCamera, FiberLight, FiberRenderer, FiberSettings, PackOptions, PackedYarns,
+};
 
 #[test]
 fn lambda_is_continuous_at_both_thresholds_and_monotone() {
@@ -44,7 +46,12 @@ fn setup() -> (PackedYarns, FiberBcsdf) {
 fn camera(packed: &PackedYarns, dist: f64) -> FiberCamera {
     let (lo, hi) = packed.bounds;
     let c = [0, 1, 2].map(|a| 0.5 * (lo[a] + hi[a]));
-    FiberCamera::perspective([c[0] + 0.2 * dist, c[1] - dist, c[2] + dist], c, [0.0, 0.0, 1.0], 30.0)
+    FiberCamera::perspective(
+        [c[0] + 0.2 * dist, c[1] - dist, c[2] + dist],
+        c,
+        [0.0, 0.0, 1.0],
+        30.0,
+    )
 }
 
 const LIGHT: [FiberLight; 1] =
@@ -65,14 +72,15 @@ fn gpu_fiber_counts_follow_the_lod_formula() {
         let raw = r.view_raw(&cam, &LIGHT, size).unwrap();
         let (lo, hi) = packed.bounds;
         let centre = [0, 1, 2].map(|a| 0.5 * (lo[a] + hi[a]) - packed.origin[a]);
-        let radius = (0..3).map(|a| (hi[a] - lo[a]).powi(2)).sum::<f64>().sqrt() * 0.5
-            + packed.max_reach;
+        let radius =
+            (0..3).map(|a| (hi[a] - lo[a]).powi(2)).sum::<f64>().sqrt() * 0.5 + packed.max_reach;
         let v = ViewSetup::new(&cam, packed.origin, centre, radius, size).unwrap();
         let ply_r = p.ply_ellipse_n.max(p.ply_ellipse_b) * p.rho_max;
         let mut expect = 0u64;
         let mut lambdas = Vec::new();
         for s in &packed.segments {
-            let q = |j: usize| nalgebra::Vector3::new(s.p[j][0], s.p[j][1], s.p[j][2]).cast::<f64>();
+            let q =
+                |j: usize| nalgebra::Vector3::new(s.p[j][0], s.p[j][1], s.p[j][2]).cast::<f64>();
             let mid = (q(1) * 9.0 + q(2) * 9.0 - q(0) - q(3)) / 16.0;
             let depth = (mid - v.eye).dot(&v.forward);
             let px = |r: f64| r * v.px_per_metre / depth;

@@ -1,8 +1,9 @@
 //! GPU tests of the fiber passes (lavapipe in CI; skipped without an adapter unless
 //! `BTF_REQUIRE_GPU=1`).
 
-mod common;
 mod coherence;
+mod common;
 mod expand;
 mod lod;
+mod oblique;
 mod reference;

@@ -14,7 +14,9 @@ use yarn_ref::{
     Background, Camera, FiberScene, Light, PathSettings, RenderSettings, Scene, SceneOptions,
     Shading, render,
 };
-use yarn_render::{FiberCamera, FiberLight, FiberRenderer, FiberSettings, PackOptions, PackedYarns};
+use yarn_render::{
+    FiberCamera, FiberLight, FiberRenderer, FiberSettings, PackOptions, PackedYarns,
+};
 
 #[test]
 fn one_fiber_matches_the_cpu_reference_within_5_percent() {
@@ -55,7 +57,7 @@ fn one_fiber_matches_the_cpu_reference_within_5_percent() {
     let packed = PackedYarns::new(
         &set,
         std::slice::from_ref(&p),
-        &PackOptions { seed, frame_samples_per_segment: 4 },
+        &PackOptions { seed, frame_samples_per_segment: 4, tiles: [1, 1] },
     )
     .unwrap();
     let settings = FiberSettings { lod_px: 0.0, n_sub: 48, ..Default::default() };
