@@ -84,60 +84,7 @@ impl EnvMap {
     /// Loads an equirectangular `.hdr` or `.exr` file (linear RGB; EXR's first RGBA layer).
     pub fn load(path: &Path) -> Result<EnvMap> {
         let name = path.display().to_string();
-        let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-        let img_err = |what: String| Error::Image { path: path.to_owned(), what };
-        let (w, h, pixels) = match ext.as_str() {
-            "exr" => {
-                let meta = exr::meta::MetaData::read_from_file(path, false)
-                    .map_err(|e| img_err(e.to_string()))?;
-                if meta.headers.is_empty() {
-                    return Err(img_err("no layer".into()));
-                }
-                for h in &meta.headers {
-                    check_size(&name, h.layer_size.width(), h.layer_size.height())?;
-                    crate::exr_limits::check_header(h).map_err(|(field, what)| {
-                        Error::Limit(format!("{name}: {field}: {what}"))
-                    })?;
-                }
-                // Rows are allocated as they are decoded: a small file claiming a large
-                // map costs what it holds, not what its header claims.
-                let img = exr::prelude::read_first_rgba_layer_from_file(
-                    path,
-                    |res, _| btf_core::memory::LazyRows::<[f32; 3]>::new(res.width(), res.height()),
-                    |m: &mut btf_core::memory::LazyRows<[f32; 3]>,
-                     pos,
-                     (r, g, b, _a): (f32, f32, f32, f32)| {
-                        m.set(pos.x(), pos.y(), [r, g, b])
-                    },
-                )
-                .map_err(|e| img_err(e.to_string()))?;
-                let size = img.layer_data.size;
-                let pixels = img
-                    .layer_data
-                    .channel_data
-                    .pixels
-                    .into_vec()
-                    .map_err(|y| Error::Invalid(format!("{name}: pixel row {y} is missing")))?;
-                (size.width(), size.height(), pixels)
-            }
-            "hdr" => {
-                let open = || {
-                    image::ImageReader::open(path)
-                        .map_err(|e| Error::io(path, e))?
-                        .with_guessed_format()
-                        .map_err(|e| Error::io(path, e))
-                };
-                let (w, h) = open()?.into_dimensions().map_err(|e| img_err(e.to_string()))?;
-                check_size(&name, w as usize, h as usize)?;
-                let img = open()?.decode().map_err(|e| img_err(e.to_string()))?.into_rgb32f();
-                (w as usize, h as usize, img.pixels().map(|p| p.0).collect())
-            }
-            _ => {
-                return Err(Error::Unsupported(format!(
-                    "{name}: environment maps must be .hdr or .exr"
-                )));
-            }
-        };
+        let (w, h, pixels) = read_linear_rgb(path)?;
         EnvMap::new(w, h, pixels, &name)
     }
 
@@ -235,6 +182,74 @@ impl EnvMap {
 }
 
 /// Refuses empty, oversized (before allocating) and non-2:1 maps, naming the file.
+/// Reads a linear RGB image (`.exr`: the first RGBA layer; `.hdr`) of at most
+/// `MAX_PIXELS` pixels, any aspect: `(width, height, pixels)`, rows top first. Headers are
+/// checked before anything is allocated; rows are allocated as they are decoded.
+pub fn read_linear_rgb(path: &Path) -> Result<(usize, usize, Vec<[f32; 3]>)> {
+    let name = path.display().to_string();
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let img_err = |what: String| Error::Image { path: path.to_owned(), what };
+    let (w, h, pixels) = match ext.as_str() {
+        "exr" => {
+            let meta = exr::meta::MetaData::read_from_file(path, false)
+                .map_err(|e| img_err(e.to_string()))?;
+            if meta.headers.is_empty() {
+                return Err(img_err("no layer".into()));
+            }
+            for h in &meta.headers {
+                check_pixels(&name, h.layer_size.width(), h.layer_size.height())?;
+                crate::exr_limits::check_header(h)
+                    .map_err(|(field, what)| Error::Limit(format!("{name}: {field}: {what}")))?;
+            }
+            // Rows are allocated as they are decoded: a small file claiming a large
+            // map costs what it holds, not what its header claims.
+            let img = exr::prelude::read_first_rgba_layer_from_file(
+                path,
+                |res, _| btf_core::memory::LazyRows::<[f32; 3]>::new(res.width(), res.height()),
+                |m: &mut btf_core::memory::LazyRows<[f32; 3]>,
+                 pos,
+                 (r, g, b, _a): (f32, f32, f32, f32)| {
+                    m.set(pos.x(), pos.y(), [r, g, b])
+                },
+            )
+            .map_err(|e| img_err(e.to_string()))?;
+            let size = img.layer_data.size;
+            let pixels = img
+                .layer_data
+                .channel_data
+                .pixels
+                .into_vec()
+                .map_err(|y| Error::Invalid(format!("{name}: pixel row {y} is missing")))?;
+            (size.width(), size.height(), pixels)
+        }
+        "hdr" => {
+            let open = || {
+                image::ImageReader::open(path)
+                    .map_err(|e| Error::io(path, e))?
+                    .with_guessed_format()
+                    .map_err(|e| Error::io(path, e))
+            };
+            let (w, h) = open()?.into_dimensions().map_err(|e| img_err(e.to_string()))?;
+            check_pixels(&name, w as usize, h as usize)?;
+            let img = open()?.decode().map_err(|e| img_err(e.to_string()))?.into_rgb32f();
+            (w as usize, h as usize, img.pixels().map(|p| p.0).collect())
+        }
+        _ => {
+            return Err(Error::Unsupported(format!("{name}: linear images must be .hdr or .exr")));
+        }
+    };
+    Ok((w, h, pixels))
+}
+
+fn check_pixels(name: &str, w: usize, h: usize) -> Result<()> {
+    if w == 0 || h == 0 || w.saturating_mul(h) > MAX_PIXELS {
+        return Err(Error::Limit(format!(
+            "{name}: {w}×{h} pixels is empty or beyond {MAX_PIXELS}"
+        )));
+    }
+    Ok(())
+}
+
 fn check_size(name: &str, w: usize, h: usize) -> Result<()> {
     if w == 0 || h == 0 || w.saturating_mul(h) > MAX_PIXELS {
         return Err(Error::Limit(format!(

@@ -27,6 +27,8 @@ pub enum KnitCmd {
     Fibers(PatchArgs),
     /// Reference render (path traced explicit fibers) of a patch or of BCC yarn curves.
     Ref(Box<RefArgs>),
+    /// Real-time GPU render (fibers generated on the GPU, [W19]) of a patch or BCC curves.
+    Render(Box<super::knit_render::RenderArgs>),
 }
 
 /// `btf knit chart`.
@@ -135,6 +137,7 @@ pub fn run(cmd: KnitCmd) -> Result<()> {
         KnitCmd::Skeleton(a) => skeleton_cmd(a),
         KnitCmd::Fibers(a) => fibers_cmd(a),
         KnitCmd::Ref(a) => ref_cmd(*a),
+        KnitCmd::Render(a) => super::knit_render::run(*a),
     }
 }
 
@@ -185,11 +188,11 @@ fn output(a: &PatchArgs, inputs: &[(&str, &Path)]) -> Result<PathBuf> {
     Ok(out)
 }
 
-fn ext(p: &Path) -> String {
+pub(crate) fn ext(p: &Path) -> String {
     p.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase()
 }
 
-fn chart_inputs(a: &PatchArgs) -> Vec<(&'static str, &Path)> {
+pub(crate) fn chart_inputs(a: &PatchArgs) -> Vec<(&'static str, &Path)> {
     let mut v: Vec<(&'static str, &Path)> = Vec::new();
     if Path::new(&a.chart).is_file() {
         v.push(("chart", Path::new(&a.chart)));
@@ -308,7 +311,7 @@ pub(crate) fn rgb(s: &Option<String>, what: &str) -> Result<Option<[f64; 3]>> {
     Ok(Some(v))
 }
 
-fn light(s: &str) -> Result<yarn_ref::Light> {
+pub(crate) fn light(s: &str) -> Result<yarn_ref::Light> {
     let bad = || anyhow::anyhow!("--light '{s}': expected dir:THETA,PHI[,E] or point:X,Y,Z,I");
     let (kind, rest) = s.split_once(':').ok_or_else(bad)?;
     let v: Vec<f64> = rest

@@ -8,6 +8,7 @@ pub mod garment;
 pub mod import;
 pub mod inspect;
 pub mod knit;
+pub mod knit_render;
 pub mod reconstruct;
 pub mod registration_sweep;
 pub mod relight;

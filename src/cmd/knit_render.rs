@@ -1,0 +1,257 @@
+//! `btf knit render`: the real-time fiber renderer of `yarn-render` ([W19]: fibers
+//! generated on the GPU from yarn control points every frame, LoD [W19 eq. 4], fiber BCSDF)
+//! on a chart patch or BCC yarn curves, with the cameras, lights and image outputs of
+//! `btf knit ref`, so that the two render the same scene and `--compare` can score one
+//! against the other.
+
+use super::knit::{
+    PatchArgs, ShadingChoice, chart_inputs, ext, light, load_chart, load_yarn, rgb, stitches,
+};
+use crate::guard::{self, outln};
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use std::path::PathBuf;
+use yarn::bcsdf::{FiberBcsdf, HuangParams, KhungurnParams, SimpleParams};
+use yarn::knit::{SkeletonParams, StitchMesh, chen_skeleton};
+use yarn_render::{
+    FiberCamera, FiberLight, FiberRenderer, FiberSettings, PackOptions, PackedYarns,
+};
+
+/// `btf knit render`.
+#[derive(Args)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub patch: PatchArgs,
+    /// Render these BCC yarn curves instead of a chart patch.
+    #[arg(long)]
+    pub bcc: Option<PathBuf>,
+    /// Camera: btf:THETA,PHI (the BTF's oblique orthographic view of one period) or
+    /// persp:EX,EY,EZ,TX,TY,TZ,FOV_DEG (metres).
+    #[arg(long, default_value = "btf:0,0")]
+    pub camera: String,
+    /// Directional light dir:THETA,PHI[,E] or point light point:X,Y,Z,I (repeatable, ≤ 8).
+    #[arg(long = "light")]
+    pub lights: Vec<String>,
+    /// Fiber scattering (the GPU has no Lambert mode).
+    #[arg(long, default_value = "khungurn")]
+    pub shading: ShadingChoice,
+    /// Yarn colour R,G,B (linear).
+    #[arg(long)]
+    pub albedo: Option<String>,
+    /// Image size W,H.
+    #[arg(long, default_value = "256,256")]
+    pub size: String,
+    /// LoD threshold ω^LoD in pixels (0: LoD off, every fiber of every segment).
+    #[arg(long, default_value_t = 1.0)]
+    pub lod_px: f32,
+    /// Fibers per ply at full detail (default: all of the yarn's).
+    #[arg(long)]
+    pub n_max: Option<u32>,
+    /// Subdivisions per yarn segment at full detail (≤ 255).
+    #[arg(long, default_value_t = 8)]
+    pub n_sub: u32,
+    /// MSAA samples (1 or 4).
+    #[arg(long, default_value_t = 4)]
+    pub msaa: u32,
+    /// No frustum culling (for checking that culling changes nothing).
+    #[arg(long)]
+    pub no_cull: bool,
+    /// A chart patch alone instead of its 3 × 3 periodic neighbourhood.
+    #[arg(long)]
+    pub no_wrap: bool,
+    /// Score the render against this image of the same size (e.g. from `btf knit ref`):
+    /// relative RMSE over the frame.
+    #[arg(long)]
+    pub compare: Option<PathBuf>,
+    /// Print a JSON summary on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn bcsdf(name: &str) -> Result<FiberBcsdf> {
+    Ok(match name {
+        "khungurn" => FiberBcsdf::khungurn(&KhungurnParams::default())?,
+        "simple" => FiberBcsdf::simple(&SimpleParams::default())?,
+        "huang" => FiberBcsdf::huang(&HuangParams::default())?,
+        other => bail!("--shading {other}: the GPU fiber renderer takes khungurn, simple or huang"),
+    })
+}
+
+fn fiber_light(s: &str) -> Result<FiberLight> {
+    Ok(match light(s)? {
+        yarn_ref::Light::Directional { to_light, irradiance } => {
+            FiberLight::Directional { to_light, irradiance }
+        }
+        yarn_ref::Light::Point { position, intensity } => FiberLight::Point { position, intensity },
+        yarn_ref::Light::Environment(_) => bail!("--light '{s}': no environment light here"),
+    })
+}
+
+fn camera(
+    s: &str,
+    period: Option<[f64; 2]>,
+    bounds: ([f64; 3], [f64; 3]),
+    z_ref: f64,
+) -> Result<FiberCamera> {
+    let bad =
+        || anyhow::anyhow!("--camera '{s}': expected btf:THETA,PHI or persp:EX,EY,EZ,TX,TY,TZ,FOV");
+    let (kind, rest) = s.split_once(':').ok_or_else(bad)?;
+    let v: Vec<f64> = rest
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| bad())?;
+    if !v.iter().all(|x| x.is_finite()) {
+        return Err(bad());
+    }
+    match (kind, v.len()) {
+        ("btf", 2) => {
+            let view = btf_core::Direction::new(v[0], v[1]).to_vector();
+            let (origin, extent) = match period {
+                Some(p) => ([0.0, 0.0], p),
+                None => {
+                    let (lo, hi) = bounds;
+                    ([lo[0], lo[1]], [hi[0] - lo[0], hi[1] - lo[1]])
+                }
+            };
+            Ok(FiberCamera::oblique(view, z_ref, origin, extent))
+        }
+        ("persp", 7) => Ok(FiberCamera::perspective(
+            [v[0], v[1], v[2]],
+            [v[3], v[4], v[5]],
+            [0.0, 0.0, 1.0],
+            v[6],
+        )),
+        _ => Err(bad()),
+    }
+}
+
+/// Runs `btf knit render`.
+pub fn run(a: RenderArgs) -> Result<()> {
+    let Some(image) = a.patch.output.clone() else {
+        bail!("give the image with -o OUT.exr|OUT.png")
+    };
+    let mut inputs = chart_inputs(&a.patch);
+    if let Some(b) = &a.bcc {
+        inputs.push(("bcc", b.as_path()));
+    }
+    if let Some(c) = &a.compare {
+        inputs.push(("compare", c.as_path()));
+    }
+    guard::refuse_overlap(&[("-o", &image)], &inputs)?;
+    let kind = match ext(&image).as_str() {
+        "exr" => btf_core::fs::EXR,
+        "png" => btf_core::fs::PNG,
+        e => bail!("{}: unknown image extension '{e}' (exr or png)", image.display()),
+    };
+    guard::check_file(&image, kind)?;
+    let [w, h] = crate::args::numbers::<u32, 2>(&a.size, "--size")?;
+    if w == 0 || h == 0 || w > 8192 || h > 8192 {
+        bail!("--size {w},{h}: each side must be 1..=8192");
+    }
+    if a.msaa != 1 && a.msaa != 4 {
+        bail!("--msaa {}: 1 or 4", a.msaa);
+    }
+    let params = load_yarn(&a.patch.yarn)?;
+    let color = rgb(&a.albedo, "--albedo")?;
+    let t0 = std::time::Instant::now();
+    let (mut set, z_ref) = if let Some(b) = &a.bcc {
+        let set = yarn::io::read_bcc(b)?.set;
+        let (_, hi) = yarn_ref::patch::centre_line_z(&set);
+        (set, hi + params.yarn_radius())
+    } else {
+        let chart = load_chart(&a.patch.chart)?;
+        let [wales, courses] = stitches(&a.patch.stitches)?.unwrap_or([chart.width, chart.height]);
+        let sk = SkeletonParams::new(params.yarn_radius());
+        let (ws, cs) = sk.default_spacing();
+        let set = chen_skeleton(&StitchMesh::flat(&chart, wales, courses, ws, cs)?, &sk)?;
+        let (_, hi) = yarn_ref::patch::centre_line_z(&set);
+        (set, hi + params.yarn_radius())
+    };
+    if let Some(c) = color {
+        let c = c.map(|x| x as f32);
+        for curve in &mut set.curves {
+            curve.colors = vec![c; curve.points.len()];
+        }
+    }
+    let period = set.period;
+    let tiles = if period.is_some() && !a.no_wrap { [3, 3] } else { [1, 1] };
+    let packed = PackedYarns::new(
+        &set,
+        std::slice::from_ref(&params),
+        &PackOptions { seed: a.patch.seed, frame_samples_per_segment: 16, tiles },
+    )?;
+    let pack_s = t0.elapsed().as_secs_f64();
+    let lights: Vec<FiberLight> = a.lights.iter().map(|s| fiber_light(s)).collect::<Result<_>>()?;
+    if lights.is_empty() {
+        bail!("no light: give --light dir:THETA,PHI or --light point:X,Y,Z,I");
+    }
+    let cam = camera(&a.camera, period, packed.bounds, z_ref)?;
+    let settings = FiberSettings {
+        n_max: a.n_max.unwrap_or(u32::MAX),
+        n_sub: a.n_sub,
+        lod_px: a.lod_px,
+        cull: !a.no_cull,
+        msaa: a.msaa,
+        ..FiberSettings::default()
+    };
+    let gpu = btf_render::Gpu::new()?;
+    let renderer = FiberRenderer::new(&gpu, &packed, &bcsdf(a.shading.as_str())?, settings)?;
+    let t1 = std::time::Instant::now();
+    let img = renderer.render(&gpu, &cam, &lights, (w, h), [0.0, 0.0, 0.0, 0.0])?;
+    let render_s = t1.elapsed().as_secs_f64();
+    let rgb: Vec<f32> = img.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+    let (wu, hu) = (w as usize, h as usize);
+    match ext(&image).as_str() {
+        "exr" => btf_image::write::write_exr_rgb(&image, wu, hu, &rgb)?,
+        _ => btf_image::write::write_png_linear(&image, wu, hu, &rgb, 1.0)?,
+    }
+    let coverage: f64 = img.pixels.iter().map(|p| p[3] as f64).sum::<f64>() / (wu * hu) as f64;
+    let rel_rmse = match &a.compare {
+        Some(path) => {
+            let (rw, rh, r) = btf_image::envmap::read_linear_rgb(path)
+                .with_context(|| format!("reading --compare {}", path.display()))?;
+            let r: Vec<f32> = r.into_iter().flatten().collect();
+            if (rw, rh) != (wu, hu) {
+                bail!("--compare {}: {rw} × {rh}, but the render is {w} × {h}", path.display());
+            }
+            let (mut num, mut den) = (0.0, 0.0);
+            for (x, y) in rgb.iter().zip(&r) {
+                num += (*x as f64 - *y as f64).powi(2);
+                den += (*y as f64).powi(2);
+            }
+            Some(if den > 0.0 { (num / den).sqrt() } else { f64::NAN })
+        }
+        None => None,
+    };
+    let st = img.stats;
+    if a.json {
+        let j = serde_json::json!({
+            "image": image, "width": w, "height": h, "lod_px": a.lod_px, "n_sub": a.n_sub,
+            "msaa": a.msaa, "segments": st.segments, "culled": st.culled,
+            "instances": st.instances, "overflow": st.overflow, "triangles": st.triangles,
+            "yarn_bytes": st.yarn_bytes, "bytes_per_control_point":
+                st.yarn_bytes as f64 / packed.control_points().max(1) as f64,
+            "pack_seconds": pack_s, "render_seconds": render_s, "coverage": coverage,
+            "rel_rmse": rel_rmse, "adapter": gpu.info.name,
+        });
+        outln!("{}", serde_json::to_string_pretty(&j)?);
+    }
+    eprintln!(
+        "knit render: {} segments ({} culled), {} fiber instances, {} triangles, {:.2} s{} -> {}",
+        st.segments,
+        st.culled,
+        st.instances,
+        st.triangles,
+        render_s,
+        rel_rmse.map(|r| format!(", rel. RMSE {r:.4} against --compare")).unwrap_or_default(),
+        image.display()
+    );
+    if st.overflow > 0 {
+        eprintln!(
+            "warning: {} fiber instances did not fit the list and were not drawn",
+            st.overflow
+        );
+    }
+    Ok(())
+}
