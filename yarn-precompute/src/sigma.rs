@@ -133,3 +133,19 @@ impl SigmaField {
         d * dt
     }
 }
+
+/// The symmetrised extinction of `params` ([`yarn::density::CrossSectionDensity`] with the
+/// bake's grid, samples, seed and loop flag; folded over the `n_ply` plies).
+pub fn field_for(
+    params: &yarn::YarnParams,
+    settings: &crate::BakeSettings,
+) -> crate::Result<SigmaField> {
+    let opts = yarn::density::DensityOptions {
+        res: settings.density_res,
+        samples: settings.density_samples,
+        seed: settings.seed,
+        loops: settings.loops,
+    };
+    let d = CrossSectionDensity::from_params(params, &opts)?;
+    Ok(SigmaField::from_density(&d, params.ply_count as usize))
+}
