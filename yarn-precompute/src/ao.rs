@@ -88,7 +88,9 @@ impl AoTexture {
     /// Bilinear lookup at slice-frame `(x, y)` (metres), clamped to the edge texels.
     pub fn at(&self, x: f64, y: f64) -> f64 {
         let n = self.res as f64;
-        let g = |c: f64| ((c + self.half_width) / (2.0 * self.half_width) * n - 0.5).clamp(0.0, n - 1.0);
+        let g = |c: f64| {
+            ((c + self.half_width) / (2.0 * self.half_width) * n - 0.5).clamp(0.0, n - 1.0)
+        };
         let (gx, gy) = (g(x), g(y));
         let (x0, y0) = (gx.floor() as usize, gy.floor() as usize);
         let (fx, fy) = (gx - x0 as f64, gy - y0 as f64);

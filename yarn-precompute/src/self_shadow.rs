@@ -67,7 +67,8 @@ impl SelfShadowVolume {
                 let s1 = -h + 0.5 * cell;
                 let n0 = ((s1 - s0) / cell * m as f64).ceil() as usize;
                 let ds0 = (s1 - s0) / n0 as f64;
-                let mut d: f64 = (0..n0).map(|q| at(s0 + (q as f64 + 0.5) * ds0)).sum::<f64>() * ds0;
+                let mut d: f64 =
+                    (0..n0).map(|q| at(s0 + (q as f64 + 0.5) * ds0)).sum::<f64>() * ds0;
                 let ds = cell / m as f64;
                 let mut out = Vec::with_capacity(res);
                 for i in 0..res {
@@ -110,7 +111,8 @@ impl SelfShadowVolume {
         let (sg, cg) = rel_angle.sin_cos();
         let (s, t) = (x * cg + y * sg, -x * sg + y * cg);
         let period = TAU / self.ply_count as f64;
-        let w = (rel_angle.rem_euclid(period) / self.slice_step()).clamp(0.0, (self.slices - 1) as f64);
+        let w =
+            (rel_angle.rem_euclid(period) / self.slice_step()).clamp(0.0, (self.slices - 1) as f64);
         let k0 = (w.floor() as usize).min(self.slices - 2);
         let f = w - k0 as f64;
         (1.0 - f) * self.bilinear(k0, s, t) + f * self.bilinear(k0 + 1, s, t)

@@ -120,7 +120,7 @@ impl SigmaField {
                 t_exit = t_exit.min((-h - q[a]) / dir[a]);
             }
         }
-        if !(t_exit > 0.0) || !t_exit.is_finite() {
+        if t_exit.is_nan() || t_exit <= 0.0 || !t_exit.is_finite() {
             return 0.0;
         }
         let n = (t_exit / step).ceil().max(1.0) as usize;

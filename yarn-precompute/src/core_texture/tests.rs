@@ -71,7 +71,15 @@ fn column_u0_equals_column_u1() {
     // Cast the column that starts at u = 1 exactly as the bake casts column 0.
     let alpha = p.fiber_pitch;
     let margin = 0.05 * alpha.abs() + 4.0 * p.fiber_radius;
-    let fib = core_fibers(&p, 1, tex.core_fibers, s.migration, true, [alpha.min(0.0) - margin, alpha.max(0.0) + 2.0 * alpha.abs()], s.samples_per_turn);
+    let fib = core_fibers(
+        &p,
+        1,
+        tex.core_fibers,
+        s.migration,
+        true,
+        [alpha.min(0.0) - margin, alpha.max(0.0) + 2.0 * alpha.abs()],
+        s.samples_per_turn,
+    );
     let scene = FiberScene::new(&fib, &SceneOptions::default()).unwrap();
     let h = tex.half_width_circ;
     let mut worst: f64 = 0.0;
@@ -109,9 +117,11 @@ fn screw_symmetry_iou_and_normals_beat_eq3() {
     let p = cotton();
     let tex = bake(&p);
     let mut rows = Vec::new();
-    for mode in
-        [CoreTexcoord::ScrewSymmetric, CoreTexcoord::ScrewSymmetricUncorrected, CoreTexcoord::PaperEq3]
-    {
+    for mode in [
+        CoreTexcoord::ScrewSymmetric,
+        CoreTexcoord::ScrewSymmetricUncorrected,
+        CoreTexcoord::PaperEq3,
+    ] {
         let (mut iou_min, mut iou_sum, mut ang_max, mut ang_sum) = (1.0f64, 0.0, 0.0f64, 0.0);
         for k in 0..8 {
             let psi = TAU * k as f64 / 8.0 + 0.1;

@@ -110,7 +110,8 @@ fn beer_lambert(p: &YarnParams, rays: usize, elevations: &[f64]) -> Vec<Cell> {
     let pts: Vec<[f64; 3]> = (0..=8).map(|i| [0.0, 0.0, length * i as f64 / 8.0]).collect();
     let curve = YarnCurve::open(pts).unwrap().with_normals(vec![[1.0, 0.0, 0.0]; 9]).unwrap();
     let set = YarnSet::new(vec![curve], None).unwrap();
-    let opts = GenOptions { hairs: false, loops: false, samples_per_turn: 48, ..GenOptions::default() };
+    let opts =
+        GenOptions { hairs: false, loops: false, samples_per_turn: 48, ..GenOptions::default() };
     let scenes: Vec<FiberScene> = seeds
         .iter()
         .map(|&seed| {
@@ -210,6 +211,10 @@ fn beer_lambert_measurement() {
     let a = beer_lambert(&dilute_cotton(32.0), 5000, &el);
     let b = beer_lambert(&dilute_cotton(1.0), 5000, &el);
     let c = beer_lambert(&YarnParams::preset("cotton-2ply").unwrap(), 5000, &el);
-    eprintln!("failures: aligned {}, preset pitches {}, preset packing {}",
-        check(&a, "aligned"), check(&b, "twisted"), check(&c, "packed"));
+    eprintln!(
+        "failures: aligned {}, preset pitches {}, preset packing {}",
+        check(&a, "aligned"),
+        check(&b, "twisted"),
+        check(&c, "packed")
+    );
 }
