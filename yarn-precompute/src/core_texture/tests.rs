@@ -1,5 +1,5 @@
 use super::*;
-use crate::settings::{BakeSettings, CoreMigration};
+use crate::settings::{BakeSettings, CoreMigration, CoreSettings};
 
 fn cotton() -> YarnParams {
     YarnParams::preset("cotton-2ply").unwrap()
@@ -137,6 +137,29 @@ fn screw_symmetry_iou_and_normals_beat_eq3() {
             ang_sum / 8.0
         );
         rows.push((iou_min, iou_sum / 8.0, ang_max, ang_sum / 8.0));
+    }
+    // What migration costs (reported): the paper's s = 1 core against its own fibers, and
+    // our mean-radius core against the s = 1 fibers it stands in for.
+    let s1 = CoreSettings { migration: CoreMigration::PaperS1, ..BakeSettings::default().core };
+    let tex_s1 = CoreTexture::bake(&p, 1, &s1).unwrap();
+    for (label, t, fibers) in [
+        ("s = 1 core vs s = 1 fibers", &tex_s1, CoreMigration::PaperS1),
+        ("mean-radius core vs s = 1 fibers", &tex, CoreMigration::PaperS1),
+    ] {
+        let m: Vec<(f64, f64)> = (0..8)
+            .map(|k| {
+                screw_metrics(
+                    &p,
+                    t,
+                    fibers,
+                    TAU * k as f64 / 8.0 + 0.1,
+                    CoreTexcoord::ScrewSymmetric,
+                )
+            })
+            .collect();
+        let iou_min = m.iter().map(|x| x.0).fold(1.0, f64::min);
+        let ang = m.iter().map(|x| x.1).sum::<f64>() / 8.0;
+        eprintln!("{label}: IoU min {iou_min:.3}, normal angle mean {ang:.2}°");
     }
     let (ours, eq3) = (rows[0], rows[2]);
     assert!(ours.0 >= 0.85, "IoU {}", ours.0);

@@ -1,5 +1,5 @@
 use super::*;
-use crate::settings::BakeSettings;
+use crate::settings::{BakeSettings, ShadowSettings};
 use crate::sigma::{SigmaField, field_for};
 use yarn::YarnParams;
 use yarn::curve::{YarnCurve, YarnSet};
@@ -85,7 +85,7 @@ struct Cell {
 /// Shadow rays from points of the cross-section (random length coordinate over one ply
 /// twist, jittered inside one slice texel) to a light at relative angle γ and elevation
 /// `e`, through the explicit fibers of a straight yarn, against the texture.
-fn beer_lambert(p: &YarnParams, rays: usize, elevations: &[f64]) -> Vec<Cell> {
+fn beer_lambert(p: &YarnParams, slices: usize, rays: usize, elevations: &[f64]) -> Vec<Cell> {
     // The texture describes the ensemble of yarns the density stands for; the explicit side
     // samples four realizations (seeds), and so does the density (a single realization
     // leaves its own outermost fibers in the symmetrised field: a 5 % shadow where the
@@ -94,15 +94,17 @@ fn beer_lambert(p: &YarnParams, rays: usize, elevations: &[f64]) -> Vec<Cell> {
     let fields: Vec<SigmaField> = seeds
         .iter()
         .map(|&seed| {
-            let s = BakeSettings { loops: false, seed, ..BakeSettings::default() };
+            let s =
+                BakeSettings { loops: false, seed, density_res: 256, ..BakeSettings::default() };
             field_for(p, &s).unwrap()
         })
         .collect();
     let h = fields.iter().map(|f| f.half_width).fold(0.0, f64::max);
-    let field = SigmaField::from_fn(128, h, |x, y| {
+    let field = SigmaField::from_fn(256, h, |x, y| {
         fields.iter().map(|f| f.at(x, y)).sum::<f64>() / fields.len() as f64
     });
-    let vol = SelfShadowVolume::bake(&field, p.ply_count as usize, &BakeSettings::default().shadow);
+    let shadow = ShadowSettings { slices, ..BakeSettings::default().shadow };
+    let vol = SelfShadowVolume::bake(&field, p.ply_count as usize, &shadow);
     let r = p.yarn_radius();
     let twist = p.ply_pitch.abs();
     let margin = 4.0 * r * 3.0f64.sqrt() + 1e-3;
@@ -120,7 +122,7 @@ fn beer_lambert(p: &YarnParams, rays: usize, elevations: &[f64]) -> Vec<Cell> {
             FiberScene::new(&fibers, &SceneOptions::default()).unwrap()
         })
         .collect();
-    let gamma: f64 = 0.3;
+    let gamma: f64 = 0.3; // between slices 1 and 2 of 16
     let (l, lp) = ([gamma.cos(), gamma.sin()], [-gamma.sin(), gamma.cos()]);
     let cell = 2.0 * vol.half_width / vol.res as f64;
     let mut out = Vec::new();
@@ -170,16 +172,16 @@ fn dilute_cotton(pitch_scale: f64) -> YarnParams {
     p
 }
 
-/// Prints every cell; counts the failures among cells the texture shadows (T < 0.9).
-/// Known (reported, not asserted): cells whose shadow ray only grazes a ply's rim get
-/// T ≈ 0.91–0.95 from the density, whose splat and bilinear lookup spread the rim's
-/// fibers over a grid cell, while the explicit yarns have no fiber there (T = 1.000).
-fn check(cells: &[Cell], label: &str) -> usize {
+/// Prints every cell; counts the failures, but with `skip_rim` not among cells the texture
+/// barely shadows (T ≥ 0.9). Known: with 16 slices (12° apart for two plies) a shadow ray
+/// that grazes a ply's rim changes its depth faster in γ than the linear blend of two
+/// slices follows (T = 0.918 against 1.000 measured); 32 slices bring it to 0.986.
+fn check(cells: &[Cell], label: &str, skip_rim: bool) -> usize {
     let mut bad = 0;
     for c in cells {
         let tol = 4.0 * c.se + 0.03;
         let err = c.texture - c.explicit;
-        let rim = c.texture >= 0.9;
+        let rim = skip_rim && c.texture >= 0.9;
         let flag = match (err.abs() > tol, rim) {
             (true, false) => {
                 bad += 1;
@@ -200,21 +202,23 @@ fn check(cells: &[Cell], label: &str) -> usize {
 fn beer_lambert_matches_explicit_shadow_rays_at_three_elevations() {
     // Pitches ×32: the fibers run along the yarn and the plies turn < 10° along the
     // longest oblique shadow ray, the regime the slice describes exactly.
-    let cells = beer_lambert(&dilute_cotton(32.0), 500, &[0.0, 30.0, 60.0]);
-    assert_eq!(check(&cells, "aligned"), 0);
+    let p = dilute_cotton(32.0);
+    let el = [0.0, 30.0, 60.0];
+    assert_eq!(check(&beer_lambert(&p, 16, 500, &el), "aligned, 16 slices", true), 0);
+    assert_eq!(check(&beer_lambert(&p, 32, 500, &el), "aligned, 32 slices", false), 0);
 }
 
 #[test]
 #[ignore = "measurement: ~10⁵ rays per elevation; run with --ignored --nocapture"]
 fn beer_lambert_measurement() {
     let el = [0.0, 30.0, 60.0, 80.0];
-    let a = beer_lambert(&dilute_cotton(32.0), 5000, &el);
-    let b = beer_lambert(&dilute_cotton(1.0), 5000, &el);
-    let c = beer_lambert(&YarnParams::preset("cotton-2ply").unwrap(), 5000, &el);
+    let a = beer_lambert(&dilute_cotton(32.0), 16, 5000, &el);
+    let b = beer_lambert(&dilute_cotton(1.0), 16, 5000, &el);
+    let c = beer_lambert(&YarnParams::preset("cotton-2ply").unwrap(), 16, 5000, &el);
     eprintln!(
         "failures: aligned {}, preset pitches {}, preset packing {}",
-        check(&a, "aligned"),
-        check(&b, "twisted"),
-        check(&c, "packed")
+        check(&a, "aligned", false),
+        check(&b, "twisted", false),
+        check(&c, "packed", false)
     );
 }
