@@ -182,3 +182,31 @@ fn circular_ply_is_exact_up_to_filtering() {
         assert!(iou > 0.98 && ang < 4.0, "psi {psi}: IoU {iou}, angle {ang}");
     }
 }
+
+#[test]
+fn eye_along_the_ply_and_empty_cores_stay_finite() {
+    let p = cotton();
+    let s = CoreSettings { width: 32, height: 8, supersample: 2, ..BakeSettings::default().core };
+    let tex = CoreTexture::bake(&p, 1, &s).unwrap();
+    for mode in [
+        CoreTexcoord::ScrewSymmetric,
+        CoreTexcoord::ScrewSymmetricUncorrected,
+        CoreTexcoord::PaperEq3,
+    ] {
+        // Looking exactly along the ply: the strip is edge-on, any azimuth is as good.
+        let view = tex.view(1.0, [0.0, 0.0, 1.0], mode);
+        let surf = tex.lookup(&view, 0.3);
+        assert!(view.u.is_finite() && view.half_width > 0.0, "{mode:?} {view:?}");
+        assert!(surf.normal.iter().chain(&surf.direction).all(|x| x.is_finite()), "{surf:?}");
+    }
+    // [W19 eq. 3] in metres: the θ term is ~1e-6 θ, so u hardly moves along the yarn.
+    let du = u_paper_eq3(TAU, p.ply_pitch, p.fiber_pitch, 0.0)
+        - u_paper_eq3(0.0, p.ply_pitch, p.fiber_pitch, 0.0);
+    let du = du.rem_euclid(1.0);
+    assert!(du.min(1.0 - du) < 1e-5, "{du}");
+    let none = CoreSettings { core_fibers: Some(0), ..s };
+    let empty = CoreTexture::bake(&p, 1, &none).unwrap();
+    let surf = empty.lookup(&empty.view(0.5, [1.0, 0.0, 0.0], CoreTexcoord::ScrewSymmetric), 0.5);
+    assert_eq!(surf.alpha, 0.0);
+    assert!(surf.normal.iter().all(|x| x.is_finite()));
+}
