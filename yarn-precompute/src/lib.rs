@@ -31,5 +31,7 @@ pub use cache::{BakeTimes, Precomputed};
 pub use core_texture::{CoreTexcoord, CoreTexel, CoreTexture};
 pub use error::{Error, Result};
 pub use self_shadow::SelfShadowVolume;
-pub use settings::{AoSettings, BakeSettings, CoreSettings, ShadingModel, ShadowSettings};
+pub use settings::{
+    AoSettings, BakeSettings, CoreMigration, CoreSettings, ShadingModel, ShadowSettings,
+};
 pub use sigma::SigmaField;

@@ -209,12 +209,12 @@ fn beer_lambert_matches_explicit_shadow_rays_at_three_elevations() {
 }
 
 #[test]
-#[ignore = "measurement: ~10⁵ rays per elevation; run with --ignored --nocapture"]
+#[ignore = "measurement: 5·10⁵ rays, 3 yarns × 4 elevations; run with --ignored --nocapture"]
 fn beer_lambert_measurement() {
     let el = [0.0, 30.0, 60.0, 80.0];
-    let a = beer_lambert(&dilute_cotton(32.0), 16, 5000, &el);
-    let b = beer_lambert(&dilute_cotton(1.0), 16, 5000, &el);
-    let c = beer_lambert(&YarnParams::preset("cotton-2ply").unwrap(), 16, 5000, &el);
+    let a = beer_lambert(&dilute_cotton(32.0), 32, 5000, &el);
+    let b = beer_lambert(&dilute_cotton(1.0), 32, 5000, &el);
+    let c = beer_lambert(&YarnParams::preset("cotton-2ply").unwrap(), 32, 5000, &el);
     eprintln!(
         "failures: aligned {}, preset pitches {}, preset packing {}",
         check(&a, "aligned", false),
