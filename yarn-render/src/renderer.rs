@@ -42,6 +42,10 @@ pub struct FiberSettings {
     pub min_strip_px: f32,
     /// Most fiber instances one frame may list (8 bytes each).
     pub capacity: u32,
+    /// Draw plain tubes of the yarn radius instead of fibers (the baseline every speed
+    /// claim is a ratio to, DESIGN §2.5): one strip per segment, same vertex pulling,
+    /// same BCSDF.
+    pub tubes: bool,
 }
 
 impl Default for FiberSettings {
@@ -56,6 +60,7 @@ impl Default for FiberSettings {
             msaa: 4,
             min_strip_px: 1.0,
             capacity: 1 << 24,
+            tubes: false,
         }
     }
 }
@@ -194,7 +199,8 @@ impl FiberRenderer {
     ) -> Result<ViewRaw> {
         let setup = ViewSetup::new(cam, self.origin, self.centre, self.radius, size)?;
         let s = &self.settings;
-        let flags = s.cull as u32 | (s.loops as u32) << 1 | (s.tint as u32) << 2;
+        let flags =
+            s.cull as u32 | (s.loops as u32) << 1 | (s.tint as u32) << 2 | (s.tubes as u32) << 3;
         let f3 = |v: nalgebra::Vector3<f64>, w: f32| [v.x as f32, v.y as f32, v.z as f32, w];
         Ok(ViewRaw {
             view_proj: to_cols(&setup.view_proj),

@@ -1,4 +1,5 @@
-// fiber_draw (render, vertex pulling): one instance per listed (segment, ply, fiber), a
+// fiber_draw (render, vertex pulling): one instance per listed (segment, ply, fiber) — or,
+// for the plain-tube baseline (fiber index 0xffff), per segment with the yarn's width — a
 // triangle strip of 2·(n_sub_max + 1) vertices; vertex k of an instance with fewer
 // subdivisions collapses onto its last point. Each vertex evaluates the generator
 // (fiber_point, the function fiber_expand writes) and is pushed ± half the fiber width
@@ -65,11 +66,19 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     let side = select(-1.0, 1.0, (vi & 1u) == 1u);
     let t = f32(k) / f32(n_sub);
     let loops = (view.lod.z & 2u) != 0u;
-    let p = fiber_point(seg, ply, fib, t, loops);
+    let tube = fib == 0xffffu;
     // Tangent from a neighbour a quarter subdivision away (backwards at the end).
     let h = 0.25 / f32(n_sub);
     let t2 = select(t + h, t - h, t + h > 1.0);
-    let q = fiber_point(seg, ply, fib, t2, loops);
+    var p: vec3<f32>;
+    var q: vec3<f32>;
+    if tube {
+        p = yarn_point(seg, t).pos;
+        q = yarn_point(seg, t2).pos;
+    } else {
+        p = fiber_point(seg, ply, fib, t, loops);
+        q = fiber_point(seg, ply, fib, t2, loops);
+    }
     var tan = normalize_or(q - p, yarn_point(seg, t).t);
     if t2 < t {
         tan = -tan;
@@ -79,7 +88,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     let pr = yarn_params[c.ids.x];
     let e = view_dir(p);
     let across = normalize_or(cross(tan, e), any_perpendicular(tan));
-    let width = 2.0 * pr.b.y;
+    let width = select(2.0 * pr.b.y, 2.0 * pr.c.z, tube);
     let px = pixels_of(view, width, p);
     let min_px = view.strip.x;
     var w = width;

@@ -66,6 +66,17 @@ fn lod(@builtin(global_invocation_id) gid: vec3<u32>,
             }
         }
     }
+    if (view.lod.z & 8u) != 0u {
+        // Plain tubes (the baseline of DESIGN §2.5): one strip of the yarn's diameter per
+        // segment, at full subdivision; fiber index 0xffff marks it.
+        let k = atomicAdd(&args.instance_count, 1u);
+        if k < view.lod.w {
+            out_instances[k] = vec2<u32>(seg, 0xffffu | (view.lod.y << 24u));
+        } else {
+            atomicAdd(&args.overflow, 1u);
+        }
+        return;
+    }
     let mid = combine(s, cr_basis(0.5));
     let w_fiber = pixels_of(view, 2.0 * pr.b.y, mid);
     let ply_radius = max(pr.a.y, pr.a.z) * pr.b.x;

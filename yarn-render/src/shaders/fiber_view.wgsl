@@ -21,7 +21,7 @@ struct View {
     // Frustum planes (inside: dot(n, p) + w ≥ 0), normalised.
     planes: array<vec4<f32>, 6>,
     // Regular fibers per ply at λ = 1 (n_max), subdivisions at λ = 1, flags (bit 0 cull,
-    // bit 1 loops, bit 2 tint by the yarn colour), instance capacity.
+    // bit 1 loops, bit 2 tint by the yarn colour, bit 3 plain tubes), instance capacity.
     lod: vec4<u32>,
     // Lights in use, lobes in use, unused, unused.
     counts: vec4<u32>,

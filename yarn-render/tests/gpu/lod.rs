@@ -133,3 +133,28 @@ fn culling_changes_no_pixel() {
     let differing = on.pixels.iter().zip(&off.pixels).filter(|(a, b)| a != b).count();
     assert_eq!(differing, 0, "{differing} pixels differ");
 }
+
+#[test]
+fn plain_tubes_draw_one_strip_per_visible_segment_and_cover_the_fibers() {
+    let Some(gpu) = Gpu::for_tests("plain_tubes_draw_one_strip") else { return };
+    let (packed, bcsdf) = setup();
+    let cam = camera(&packed, 0.01);
+    let mut out = Vec::new();
+    for tubes in [false, true] {
+        let settings = FiberSettings { tubes, lod_px: 0.0, msaa: 4, ..Default::default() };
+        let r = FiberRenderer::new(&gpu, &packed, &bcsdf, settings).unwrap();
+        out.push(r.render(&gpu, &cam, &LIGHT, (64, 64), [0.0; 4]).unwrap());
+    }
+    let (fib, tub) = (&out[0], &out[1]);
+    assert_eq!(tub.stats.instances, tub.stats.segments - tub.stats.culled);
+    let cover = |i: &yarn_render::FiberImage| i.pixels.iter().map(|p| p[3] as f64).sum::<f64>();
+    eprintln!(
+        "tubes: {} instances against {} fibers; coverage {:.0} against {:.0} px",
+        tub.stats.instances,
+        fib.stats.instances,
+        cover(tub),
+        cover(fib)
+    );
+    // The tube of the yarn radius contains every (non-flyaway) fiber.
+    assert!(cover(tub) >= 0.97 * cover(fib));
+}
