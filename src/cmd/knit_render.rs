@@ -14,7 +14,8 @@ use std::path::PathBuf;
 use yarn::bcsdf::{FiberBcsdf, HuangParams, KhungurnParams, SimpleParams};
 use yarn::knit::{SkeletonParams, StitchMesh, chen_skeleton};
 use yarn_render::{
-    FiberCamera, FiberLight, FiberRenderer, FiberSettings, PackOptions, PackedYarns,
+    AoMode, FiberCamera, FiberEffects, FiberLight, FiberRenderer, FiberSettings, PackOptions,
+    PackedYarns,
 };
 
 /// `btf knit render`.
@@ -56,16 +57,43 @@ pub struct RenderArgs {
     /// No frustum culling (for checking that culling changes nothing).
     #[arg(long)]
     pub no_cull: bool,
+    /// No self-shadows inside the yarns (the precomputed volume, [W19 §4.1]).
+    #[arg(long)]
+    pub no_self_shadow: bool,
+    /// No shadows of other yarns (tube shadow maps of directional lights).
+    #[arg(long)]
+    pub no_yarn_shadows: bool,
+    /// Ambient occlusion inside the yarns [W19 §4.2].
+    #[arg(long, default_value = "cubic")]
+    pub ao: AoChoice,
+    /// Constant environment radiance R,G,B for the ambient term [W19 eq. 7] (default none).
+    #[arg(long)]
+    pub ambient: Option<String>,
+    /// Directory of the precomputation cache (core texture, self-shadow volume, AO).
+    #[arg(long)]
+    pub cache: Option<PathBuf>,
     /// A chart patch alone instead of its 3 × 3 periodic neighbourhood.
     #[arg(long)]
     pub no_wrap: bool,
     /// Score the render against this image of the same size (e.g. from `btf knit ref`):
-    /// relative RMSE over the frame.
+    /// relative RMSE over the frame and the ratio of mean radiances.
     #[arg(long)]
     pub compare: Option<PathBuf>,
     /// Print a JSON summary on stdout.
     #[arg(long)]
     pub json: bool,
+}
+
+crate::args::choices! {
+    /// `btf knit render --ao`: how ambient occlusion is computed.
+    AoChoice {
+        /// None.
+        Off = "off",
+        /// [W19]'s distance cubic (its default).
+        Cubic = "cubic",
+        /// The stratified 2-D texture over the cross-section.
+        Texture = "texture",
+    }
 }
 
 fn bcsdf(name: &str) -> Result<FiberBcsdf> {
@@ -187,7 +215,28 @@ pub fn run(a: RenderArgs) -> Result<()> {
         bail!("no light: give --light dir:THETA,PHI or --light point:X,Y,Z,I");
     }
     let cam = camera(&a.camera, period, packed.bounds, z_ref)?;
+    let ambient = match &a.ambient {
+        Some(s) => {
+            let v = crate::args::numbers::<f32, 3>(s, "--ambient")?;
+            if !v.iter().all(|x| x.is_finite() && *x >= 0.0) {
+                bail!("--ambient '{s}': three finite values ≥ 0");
+            }
+            v
+        }
+        None => [0.0; 3],
+    };
+    let effects = FiberEffects {
+        self_shadow: !a.no_self_shadow,
+        yarn_shadows: !a.no_yarn_shadows,
+        ao: match a.ao {
+            AoChoice::Off => AoMode::Off,
+            AoChoice::Cubic => AoMode::Cubic,
+            AoChoice::Texture => AoMode::Texture,
+        },
+        ambient,
+    };
     let settings = FiberSettings {
+        effects,
         n_max: a.n_max.unwrap_or(u32::MAX),
         n_sub: a.n_sub,
         lod_px: a.lod_px,
@@ -196,7 +245,14 @@ pub fn run(a: RenderArgs) -> Result<()> {
         ..FiberSettings::default()
     };
     let gpu = btf_render::Gpu::new()?;
-    let renderer = FiberRenderer::new(&gpu, &packed, &bcsdf(a.shading.as_str())?, settings)?;
+    let renderer = FiberRenderer::with_bake(
+        &gpu,
+        &packed,
+        &bcsdf(a.shading.as_str())?,
+        settings,
+        &yarn_precompute::BakeSettings { seed: a.patch.seed, ..Default::default() },
+        a.cache.as_deref(),
+    )?;
     let t1 = std::time::Instant::now();
     let img = renderer.render(&gpu, &cam, &lights, (w, h), [0.0, 0.0, 0.0, 0.0])?;
     let render_s = t1.elapsed().as_secs_f64();
@@ -220,10 +276,13 @@ pub fn run(a: RenderArgs) -> Result<()> {
                 num += (*x as f64 - *y as f64).powi(2);
                 den += (*y as f64).powi(2);
             }
-            Some(if den > 0.0 { (num / den).sqrt() } else { f64::NAN })
+            let sum = |v: &[f32]| v.iter().map(|x| *x as f64).sum::<f64>();
+            let ratio = sum(&rgb) / sum(&r);
+            Some((if den > 0.0 { (num / den).sqrt() } else { f64::NAN }, ratio))
         }
         None => None,
     };
+    let (rel_rmse, mean_ratio) = (rel_rmse.map(|r| r.0), rel_rmse.map(|r| r.1));
     let st = img.stats;
     if a.json {
         let j = serde_json::json!({
@@ -233,7 +292,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
             "yarn_bytes": st.yarn_bytes, "bytes_per_control_point":
                 st.yarn_bytes as f64 / packed.control_points().max(1) as f64,
             "pack_seconds": pack_s, "render_seconds": render_s, "coverage": coverage,
-            "rel_rmse": rel_rmse, "adapter": gpu.info.name,
+            "rel_rmse": rel_rmse, "mean_ratio": mean_ratio, "adapter": gpu.info.name,
         });
         outln!("{}", serde_json::to_string_pretty(&j)?);
     }

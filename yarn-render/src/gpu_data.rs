@@ -8,7 +8,7 @@ use wgpu::util::DeviceExt;
 
 /// The packed yarns on the GPU.
 pub struct YarnBuffers {
-    /// Layout of group 0 (five read-only storage buffers, visible to compute and vertex).
+    /// Layout of group 0 (five read-only storage buffers, visible to every stage).
     pub layout: wgpu::BindGroupLayout,
     /// Group 0.
     pub bind_group: wgpu::BindGroup,
@@ -23,7 +23,9 @@ pub struct YarnBuffers {
 pub fn layout(dev: &wgpu::Device) -> wgpu::BindGroupLayout {
     let entry = |binding| wgpu::BindGroupLayoutEntry {
         binding,
-        visibility: wgpu::ShaderStages::COMPUTE | wgpu::ShaderStages::VERTEX,
+        visibility: wgpu::ShaderStages::COMPUTE
+            | wgpu::ShaderStages::VERTEX
+            | wgpu::ShaderStages::FRAGMENT,
         ty: wgpu::BindingType::Buffer {
             ty: wgpu::BufferBindingType::Storage { read_only: true },
             has_dynamic_offset: false,

@@ -11,6 +11,8 @@
 //! | [`passes::expand`] | `fiber_expand`: fiber points of listed instances into a buffer | [W19 eq. 1–2], DESIGN §2.4 item 4 |
 //! | [`passes::lod`] | `fiber_lod`: conservative culling, λ, instance list, indirect arguments | [W19 eq. 4], DESIGN §2.3 items 7–8 |
 //! | [`passes::draw`] | `fiber_draw`: vertex-pulled camera-facing strips, fiber BCSDF, MSAA | [W19 §5, eq. 5–6], [H25 eq. 7] |
+//! | [`passes::shadow`] | `yarn_tube_shadow`: shadow maps of the yarns as tubes | [W19 §4.1] |
+//! | [`effects`] | self-shadow volume, AO, ambient term: precomputed data packed | [W19 §4, eq. 7–8] |
 //! | [`bcsdf`] | `yarn::bcsdf::FiberBcsdf` lobes packed for the shader | [W19 eq. 5–6] |
 //! | [`view`] | camera, lights, frustum planes in f64 about the origin | — |
 //! | [`renderer`] | `FiberRenderer`: the passes of one frame, stats | [W19 §3.3, §5] |
@@ -23,6 +25,7 @@
 #![allow(rustdoc::broken_intra_doc_links)]
 
 pub mod bcsdf;
+pub mod effects;
 pub mod error;
 pub mod gpu_data;
 pub mod pack;
@@ -30,6 +33,7 @@ pub mod passes;
 pub mod renderer;
 pub mod view;
 
+pub use effects::{AoMode, FiberEffects};
 pub use error::{Error, Result};
 pub use gpu_data::YarnBuffers;
 pub use pack::{PackOptions, PackedYarns};
@@ -48,6 +52,7 @@ pub fn wgsl_programs() -> Vec<(&'static str, String)> {
         ("fiber_expand", passes::expand::source()),
         ("fiber_lod", passes::lod::source()),
         ("fiber_draw", passes::draw::source()),
+        ("yarn_tube_shadow", passes::shadow::source()),
     ]
 }
 

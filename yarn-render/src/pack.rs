@@ -133,6 +133,8 @@ pub struct PackedYarns {
     pub max_reach: f64,
     /// Bounding box of the control points (world, metres).
     pub bounds: ([f64; 3], [f64; 3]),
+    /// The yarn descriptions (for the effects' precomputation).
+    pub yarn_params: Vec<YarnParams>,
 }
 
 /// The reach of flyaways beyond the yarn tube (metres): loops to `r_1 + 3σ` from the ply
@@ -219,6 +221,7 @@ impl PackedYarns {
             max_plies: 0,
             max_reach: 0.0,
             bounds: (lo, hi),
+            yarn_params: params.to_vec(),
         };
         for (i, p) in params.iter().enumerate() {
             p.validate().map_err(|e| Error::Invalid(format!("yarn params {i}: {e}")))?;

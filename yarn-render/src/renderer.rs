@@ -4,22 +4,29 @@
 //! the linear-RGB frame and what was drawn. Fibers are generated every frame from the
 //! packed control points; nothing per fiber point is ever stored ([W19 §5]).
 //!
-//! Not yet here (issue #19, DESIGN §2.4): core fibers with their texture, the self-shadow
-//! volume, ambient occlusion and the yarn shadow map (the precomputation is the
-//! `yarn-precompute` crate), environment light, hair flyaways on the GPU. Without the core
-//! texture LoD simply drops the innermost fibers; [`FiberSettings::n_max`] = all and
-//! `lod_px ≤ 0` draw every fiber (the full-detail mode the CPU reference is compared with).
+//! The effects of [`FiberEffects`] ([W19 §4]): self-shadows from the precomputed volume,
+//! AO, a constant ambient light, and tube shadow maps of other yarns for directional
+//! lights (at most four; point lights get self-shadows only).
+//!
+//! Not yet here (issue #19, DESIGN §2.4): core fibers with their texture, environment maps,
+//! hair flyaways on the GPU. Without the core texture LoD simply drops the innermost
+//! fibers; [`FiberSettings::n_max`] = all and `lod_px ≤ 0` draw every fiber (the
+//! full-detail mode the CPU reference is compared with).
 
 use crate::bcsdf;
+use crate::effects::{self, AoMode, FiberEffects};
 use crate::gpu_data::YarnBuffers;
 use crate::pack::PackedYarns;
 use crate::passes::draw::{DEPTH, DrawPass, color_format};
 use crate::passes::lod::{DrawArgsRaw, LodPass};
+use crate::passes::shadow::{MAX_SHADOW_MAPS, ShadowPass, ShadowPassRaw, ShadowViewsRaw};
 use crate::view::{FiberCamera, FiberLight, ViewRaw, ViewSetup, lights_raw, to_cols};
 use crate::{Error, Result};
 use btf_render::Gpu;
+use std::path::Path;
 use wgpu::util::DeviceExt;
 use yarn::bcsdf::FiberBcsdf;
+use yarn_precompute::BakeSettings;
 
 /// Accuracy/time knobs of a fiber frame (DESIGN §2.5's sweep).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -46,6 +53,10 @@ pub struct FiberSettings {
     /// claim is a ratio to, DESIGN §2.5): one strip per segment, same vertex pulling,
     /// same BCSDF.
     pub tubes: bool,
+    /// Self-shadows, AO, yarn shadows, ambient light.
+    pub effects: FiberEffects,
+    /// Side of the tube shadow maps (texels).
+    pub shadow_map: u32,
 }
 
 impl Default for FiberSettings {
@@ -61,6 +72,8 @@ impl Default for FiberSettings {
             min_strip_px: 1.0,
             capacity: 1 << 24,
             tubes: false,
+            effects: FiberEffects::default(),
+            shadow_map: 1024,
         }
     }
 }
@@ -100,6 +113,10 @@ pub struct FiberRenderer {
     data: YarnBuffers,
     lod: LodPass,
     draw: DrawPass,
+    shadow: ShadowPass,
+    effect_headers: wgpu::Buffer,
+    effect_data: wgpu::Buffer,
+    shadow_sampler: wgpu::Sampler,
     settings: FiberSettings,
     origin: [f64; 3],
     centre: [f64; 3],
@@ -117,12 +134,25 @@ fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
 }
 
 impl FiberRenderer {
-    /// Uploads `packed` and compiles the passes.
+    /// Uploads `packed` and compiles the passes; effects that need precomputed data bake
+    /// it with the default [`BakeSettings`] (once per process and yarn).
     pub fn new(
         gpu: &Gpu,
         packed: &PackedYarns,
         bcsdf: &FiberBcsdf,
         settings: FiberSettings,
+    ) -> Result<Self> {
+        Self::with_bake(gpu, packed, bcsdf, settings, &BakeSettings::default(), None)
+    }
+
+    /// [`Self::new`] with explicit bake settings and an on-disk cache directory.
+    pub fn with_bake(
+        gpu: &Gpu,
+        packed: &PackedYarns,
+        bcsdf: &FiberBcsdf,
+        settings: FiberSettings,
+        bake: &BakeSettings,
+        cache_dir: Option<&Path>,
     ) -> Result<Self> {
         if settings.n_sub == 0 || settings.n_sub > 255 {
             return Err(Error::Invalid(format!("n_sub {} (must be 1..=255)", settings.n_sub)));
@@ -133,11 +163,27 @@ impl FiberRenderer {
         if !settings.min_strip_px.is_finite() || settings.min_strip_px < 0.0 {
             return Err(Error::Invalid(format!("min_strip_px {}", settings.min_strip_px)));
         }
+        if settings.shadow_map < 16 || settings.shadow_map > 8192 {
+            return Err(Error::Invalid(format!("shadow_map {} (16..=8192)", settings.shadow_map)));
+        }
         let dev = &gpu.device;
         let data = YarnBuffers::new(gpu, packed)?;
         let lod = LodPass::new(gpu, &data)?;
         let draw = DrawPass::new(gpu, &data, settings.msaa)?;
+        let shadow = ShadowPass::new(gpu, &data)?;
         let (lobes, q) = bcsdf::pack(bcsdf)?;
+        let pre = packed
+            .yarn_params
+            .iter()
+            .map(|p| {
+                settings
+                    .effects
+                    .needs_bake()
+                    .then(|| effects::precomputed(p, bake, cache_dir))
+                    .transpose()
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let fx = effects::pack(&pre, bcsdf, 256)?;
         let max_binding = dev.limits().max_storage_buffer_binding_size;
         let capacity = (settings.capacity.max(1) as u64).min(max_binding / 8) as u32;
         let (lo, hi) = packed.bounds;
@@ -155,7 +201,18 @@ impl FiberRenderer {
                 usage: wgpu::BufferUsages::STORAGE,
             })
         };
+        let headers = if fx.headers.is_empty() { vec![Default::default()] } else { fx.headers };
         Ok(FiberRenderer {
+            effect_headers: storage("fiber effects", bytemuck::cast_slice(&headers)),
+            effect_data: storage("fiber effect data", bytemuck::cast_slice(&fx.data)),
+            shadow_sampler: dev.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("yarn shadow"),
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                compare: Some(wgpu::CompareFunction::LessEqual),
+                ..Default::default()
+            }),
+            shadow,
             lobes: storage("fiber lobes", bytemuck::cast_slice(&lobes)),
             q_nodes: storage("fiber q nodes", bytemuck::cast_slice(&q)),
             instances: dev.create_buffer(&wgpu::BufferDescriptor {
@@ -199,8 +256,17 @@ impl FiberRenderer {
     ) -> Result<ViewRaw> {
         let setup = ViewSetup::new(cam, self.origin, self.centre, self.radius, size)?;
         let s = &self.settings;
-        let flags =
-            s.cull as u32 | (s.loops as u32) << 1 | (s.tint as u32) << 2 | (s.tubes as u32) << 3;
+        let ao = match s.effects.ao {
+            AoMode::Off => 0,
+            AoMode::Cubic => 1,
+            AoMode::Texture => 2,
+        };
+        let flags = s.cull as u32
+            | (s.loops as u32) << 1
+            | (s.tint as u32) << 2
+            | (s.tubes as u32) << 3
+            | (s.effects.self_shadow as u32) << 4
+            | ao << 5;
         let f3 = |v: nalgebra::Vector3<f64>, w: f32| [v.x as f32, v.y as f32, v.z as f32, w];
         Ok(ViewRaw {
             view_proj: to_cols(&setup.view_proj),
@@ -212,7 +278,47 @@ impl FiberRenderer {
             counts: [lights.len() as u32, self.lobe_count, self.data.segment_count, 0],
             strip: [s.min_strip_px, s.msaa as f32, 0.0, 0.0],
             lights: lights_raw(lights, self.origin)?,
+            ambient: {
+                let a = s.effects.ambient;
+                [a[0], a[1], a[2], 0.0]
+            },
         })
+    }
+
+    /// The tube shadow passes of `lights` (the first [`MAX_SHADOW_MAPS`] directional lights,
+    /// when yarn shadows are on) and the uniform the fiber shader reads them with.
+    fn shadow_views(&self, lights: &[FiberLight]) -> Result<(Vec<ShadowPassRaw>, ShadowViewsRaw)> {
+        let mut passes = Vec::new();
+        let mut views = ShadowViewsRaw::default();
+        let size = self.settings.shadow_map;
+        views.texel = [1.0 / size as f32, 2e-3, 0.0, 0.0];
+        if !self.settings.effects.yarn_shadows || self.settings.tubes {
+            return Ok((passes, views));
+        }
+        for (i, l) in lights.iter().enumerate() {
+            let FiberLight::Directional { to_light, .. } = *l else { continue };
+            if passes.len() == MAX_SHADOW_MAPS {
+                break;
+            }
+            let n = (to_light.iter().map(|x| x * x).sum::<f64>()).sqrt();
+            let d = to_light.map(|x| x / n);
+            let r = self.radius;
+            let c = [0, 1, 2].map(|a| self.centre[a] + self.origin[a]);
+            let eye = [0, 1, 2].map(|a| c[a] + d[a] * 2.0 * r);
+            let up = if d[2].abs() < 0.9 { [0.0, 0.0, 1.0] } else { [1.0, 0.0, 0.0] };
+            let cam = FiberCamera::orthographic(eye, c, up, 2.0 * r);
+            let setup = ViewSetup::new(&cam, self.origin, self.centre, r, (size, size))?;
+            let vp = to_cols(&setup.view_proj);
+            views.view_proj[passes.len()] = vp;
+            views.light[passes.len()] = i as u32;
+            passes.push(ShadowPassRaw {
+                view_proj: vp,
+                to_light: [d[0] as f32, d[1] as f32, d[2] as f32, 0.0],
+                n: [8, 0, 0, 0],
+            });
+        }
+        views.n[0] = passes.len() as u32;
+        Ok((passes, views))
     }
 
     /// Renders one `width × height` frame over a background of `clear` (linear RGBA).
@@ -237,6 +343,31 @@ impl FiberRenderer {
             layout: &self.lod.layout,
             entries: &[entry(0, &ubuf), entry(1, &self.instances), entry(2, &self.args)],
         });
+        let (passes, views) = self.shadow_views(lights)?;
+        let size = self.settings.shadow_map;
+        let maps = dev.create_texture(&wgpu::TextureDescriptor {
+            label: Some("yarn shadow maps"),
+            size: wgpu::Extent3d {
+                width: size,
+                height: size,
+                depth_or_array_layers: passes.len().max(1) as u32,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: DEPTH,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let maps_view = maps.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
+        let vbuf = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("yarn shadow views"),
+            contents: bytemuck::bytes_of(&views),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
         let g_draw = dev.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("fiber_draw"),
             layout: &self.draw.layout,
@@ -245,6 +376,17 @@ impl FiberRenderer {
                 entry(1, &self.instances),
                 entry(2, &self.lobes),
                 entry(3, &self.q_nodes),
+                entry(4, &self.effect_headers),
+                entry(5, &self.effect_data),
+                wgpu::BindGroupEntry {
+                    binding: 6,
+                    resource: wgpu::BindingResource::TextureView(&maps_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 7,
+                    resource: wgpu::BindingResource::Sampler(&self.shadow_sampler),
+                },
+                entry(8, &vbuf),
             ],
         });
         let samples = self.settings.msaa;
@@ -278,6 +420,26 @@ impl FiberRenderer {
         });
         gpu.scoped("fiber frame", || {
             let mut enc = dev.create_command_encoder(&Default::default());
+            // A map that is bound must have been written: clear it when nothing is drawn.
+            if passes.is_empty() {
+                let v = maps.create_view(&Default::default());
+                enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("yarn shadow clear"),
+                    color_attachments: &[],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &v,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(1.0),
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: None,
+                    }),
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+            }
+            self.shadow.encode(gpu, &mut enc, &self.data, &maps, &passes);
             self.lod.encode(gpu, &mut enc, &self.data, &g_lod, &self.args, self.settings.n_sub);
             let targets = match &mv {
                 Some(m) => (m, Some(&rv), &dv),

@@ -111,6 +111,8 @@ pub struct ViewRaw {
     pub strip: [f32; 4],
     /// Lights.
     pub lights: [LightRaw; MAX_LIGHTS],
+    /// Constant ambient radiance (linear RGB), unused.
+    pub ambient: [f32; 4],
 }
 
 /// The camera matrices of a frame, relative to `origin`.

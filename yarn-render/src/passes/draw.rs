@@ -28,7 +28,8 @@ pub fn source() -> String {
 /// The compiled pass.
 pub struct DrawPass {
     pipeline: wgpu::RenderPipeline,
-    /// Layout of group 1 (view, instances, lobes, q nodes).
+    /// Layout of group 1 (view, instances, lobes, q nodes, effect headers and data, tube
+    /// shadow maps, their comparison sampler and views).
     pub layout: wgpu::BindGroupLayout,
     /// MSAA samples.
     pub samples: u32,
@@ -49,13 +50,33 @@ impl DrawPass {
         };
         let vf = wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT;
         let ro = wgpu::BufferBindingType::Storage { read_only: true };
+        let fs = wgpu::ShaderStages::FRAGMENT;
         let layout = dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("fiber_draw"),
             entries: &[
                 buf(0, vf, wgpu::BufferBindingType::Uniform),
                 buf(1, wgpu::ShaderStages::VERTEX, ro),
-                buf(2, wgpu::ShaderStages::FRAGMENT, ro),
-                buf(3, wgpu::ShaderStages::FRAGMENT, ro),
+                buf(2, fs, ro),
+                buf(3, fs, ro),
+                buf(4, fs, ro),
+                buf(5, fs, ro),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 6,
+                    visibility: fs,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Depth,
+                        view_dimension: wgpu::TextureViewDimension::D2Array,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 7,
+                    visibility: fs,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
+                    count: None,
+                },
+                buf(8, fs, wgpu::BufferBindingType::Uniform),
             ],
         });
         let src = source();

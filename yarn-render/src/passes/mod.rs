@@ -2,11 +2,13 @@
 //!
 //! - [`expand`]: `fiber_expand`, fiber points of an instance list into a storage buffer;
 //! - [`lod`]: `fiber_lod`, culling and level of detail into an indirect draw;
-//! - [`draw`]: `fiber_draw`, the strips and their shading.
+//! - [`draw`]: `fiber_draw`, the strips and their shading;
+//! - [`shadow`]: `yarn_tube_shadow`, the tube shadow maps.
 
 pub mod draw;
 pub mod expand;
 pub mod lod;
+pub mod shadow;
 
 /// A 1-D dispatch of `n` invocations in workgroups of `wg`, folded into two dimensions when
 /// it exceeds the 65 535-workgroup limit (shaders index `gid.x + gid.y·nwg.x·wg`).

@@ -32,6 +32,31 @@ struct Lobe {
 @group(1) @binding(2) var<storage, read> lobes: array<Lobe>;
 @group(1) @binding(3) var<storage, read> q_nodes: array<f32>;
 
+struct Effects {
+    shadow: vec4<u32>,
+    shadow_f: vec4<f32>,
+    ao: vec4<u32>,
+    ao_f: vec4<f32>,
+    cubic: vec4<f32>,
+    pad: vec4<f32>,
+}
+
+@group(1) @binding(4) var<storage, read> effects: array<Effects>;
+@group(1) @binding(5) var<storage, read> effect_data: array<f32>;
+@group(1) @binding(6) var yarn_shadow_maps: texture_depth_2d_array;
+@group(1) @binding(7) var shadow_cmp: sampler_comparison;
+@group(1) @binding(8) var<uniform> shadow_views: ShadowViews;
+
+// World (origin-relative) → light clip per shadowed directional light; count in n.x, the
+// light index each map belongs to in lights.
+struct ShadowViews {
+    view_proj: array<mat4x4<f32>, 4>,
+    n: vec4<u32>,
+    light: vec4<u32>,
+    // Texel size of the maps (1/size), depth bias, unused ×2.
+    texel: vec4<f32>,
+}
+
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
     // Origin-relative position on the fiber axis.
@@ -41,6 +66,12 @@ struct VertexOut {
     // Coverage of a widened strip (1 when the fiber is at least the minimum width).
     @location(3) coverage: f32,
     @location(4) @interpolate(flat) instance: u32,
+    // The yarn centre and the cross-section point in the frame that turns with the plies.
+    @location(5) centre: vec3<f32>,
+    @location(6) q: vec2<f32>,
+    @location(7) n_slice: vec3<f32>,
+    @location(8) b_slice: vec3<f32>,
+    @location(9) @interpolate(flat) params_id: u32,
 }
 
 struct FragmentOut {
@@ -72,11 +103,18 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     let t2 = select(t + h, t - h, t + h > 1.0);
     var p: vec3<f32>;
     var q: vec3<f32>;
+    var fsmp: FiberSample;
     if tube {
-        p = yarn_point(seg, t).pos;
+        let yp = yarn_point(seg, t);
+        p = yp.pos;
         q = yarn_point(seg, t2).pos;
+        fsmp.centre = p;
+        fsmp.q = vec2<f32>(0.0);
+        fsmp.n_slice = yp.n;
+        fsmp.b_slice = yp.b;
     } else {
-        p = fiber_point(seg, ply, fib, t, loops);
+        fsmp = fiber_sample(seg, ply, fib, t, loops);
+        p = fsmp.pos;
         q = fiber_point(seg, ply, fib, t2, loops);
     }
     var tan = normalize_or(q - p, yarn_point(seg, t).t);
@@ -103,6 +141,11 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     out.tangent = tan;
     out.color = select(s.color[0].rgb, s.color[1].rgb, t >= 0.5);
     out.coverage = coverage;
+    out.centre = fsmp.centre;
+    out.q = fsmp.q;
+    out.n_slice = fsmp.n_slice;
+    out.b_slice = fsmp.b_slice;
+    out.params_id = c.ids.x;
     // The fiber's identity, not its place in the list: culling and LoD reorder the list,
     // and the sample mask must not change with it.
     out.instance = pcg(seg) ^ (rec.y & 0xffffffu);
@@ -195,11 +238,139 @@ fn coverage_mask(c: f32, instance: u32, pixel: vec2<u32>) -> u32 {
     return ((bits << rot) | (bits >> (ni - rot))) & full;
 }
 
+// ---- effects [W19 §4] (effects.rs) ----
+
+fn fetch(i: u32) -> f32 {
+    return effect_data[i];
+}
+
+// Bilinear read of a res² grid at `first` spanning [−h, h]², clamp to edge.
+fn grid_bilinear(first: u32, res: u32, h: f32, x: f32, y: f32) -> f32 {
+    let n = f32(res);
+    let gx = clamp((x + h) / (2.0 * h) * n - 0.5, 0.0, n - 1.0);
+    let gy = clamp((y + h) / (2.0 * h) * n - 0.5, 0.0, n - 1.0);
+    let x0 = u32(floor(gx));
+    let y0 = u32(floor(gy));
+    let fx = gx - f32(x0);
+    let fy = gy - f32(y0);
+    let x1 = min(x0 + 1u, res - 1u);
+    let y1 = min(y0 + 1u, res - 1u);
+    return (1.0 - fx) * (1.0 - fy) * fetch(first + y0 * res + x0)
+        + fx * (1.0 - fy) * fetch(first + y0 * res + x1)
+        + (1.0 - fx) * fy * fetch(first + y1 * res + x0)
+        + fx * fy * fetch(first + y1 * res + x1);
+}
+
+// SelfShadowVolume::optical_depth: light travelling at in-plane angle `rel` of the slice
+// frame; two slices, each at the point's own light-frame coordinates, blended.
+fn self_depth(e: Effects, q: vec2<f32>, rel: f32) -> f32 {
+    let period = e.shadow_f.z;
+    let g = rel - period * floor(rel / period);
+    let slices = e.shadow.z;
+    let w = clamp(g / e.shadow_f.y, 0.0, f32(slices - 1u));
+    let k0 = min(u32(floor(w)), slices - 2u);
+    let f = w - f32(k0);
+    let back = g - rel;
+    let cb = cos(back);
+    let sb = sin(back);
+    let xr = q.x * cb - q.y * sb;
+    let yr = q.x * sb + q.y * cb;
+    let res = e.shadow.y;
+    let h = e.shadow_f.x;
+    var d = 0.0;
+    for (var j = 0u; j < 2u; j++) {
+        let k = k0 + j;
+        let a = f32(k) * e.shadow_f.y;
+        let cg = cos(a);
+        let sg = sin(a);
+        let v = grid_bilinear(e.shadow.x + k * res * res, res, h, xr * cg + yr * sg,
+            -xr * sg + yr * cg);
+        d += select(1.0 - f, f, j == 1u) * v;
+    }
+    return d;
+}
+
+// Transmittance towards a light in direction `wi` (towards the light).
+fn self_transmittance(e: Effects, in: VertexOut, wi: vec3<f32>) -> f32 {
+    if e.shadow_f.w == 0.0 || (view.lod.z & 16u) == 0u {
+        return 1.0;
+    }
+    let tx = -dot(wi, normalize(in.n_slice));
+    let ty = -dot(wi, normalize(in.b_slice));
+    let l = sqrt(tx * tx + ty * ty);
+    if l > 1e-4 {
+        return exp(-self_depth(e, in.q, atan2(ty, tx)));
+    }
+    // Along the yarn: the mean over the stored angles (SelfShadowVolume, limits differ).
+    var m = 0.0;
+    let n = (e.shadow.z - 1u) * e.shadow.w;
+    for (var k = 0u; k < n; k++) {
+        m += exp(-self_depth(e, in.q, f32(k) * e.shadow_f.y));
+    }
+    return m / f32(max(n, 1u));
+}
+
+fn ambient_occlusion(e: Effects, q: vec2<f32>) -> f32 {
+    let mode = (view.lod.z >> 5u) & 3u;
+    if e.ao_f.z == 0.0 || mode == 0u {
+        return 1.0;
+    }
+    if mode == 2u {
+        return clamp(grid_bilinear(e.ao.x, e.ao.y, e.ao_f.x, q.x, q.y), 0.0, 1.0);
+    }
+    let d = clamp(length(q) / max(e.ao_f.y, 1e-12), 0.0, 1.0);
+    let c = e.cubic;
+    return clamp(c.x + d * (c.y + d * (c.z + d * c.w)), 0.0, 1.0);
+}
+
+// A(θ_o) = ∫ f cos θ_i dω_i (AmbientTable, linear in θ_o).
+fn ambient_integral(e: Effects, theta_o: f32) -> vec3<f32> {
+    let n = e.ao.w;
+    let x = clamp((theta_o + 0.5 * PI) / PI * f32(n - 1u), 0.0, f32(n - 1u));
+    let k = min(u32(floor(x)), n - 2u);
+    let f = x - f32(k);
+    let a = e.ao.z + 4u * k;
+    let v0 = vec3<f32>(fetch(a), fetch(a + 1u), fetch(a + 2u));
+    let v1 = vec3<f32>(fetch(a + 4u), fetch(a + 5u), fetch(a + 6u));
+    return mix(v0, v1, f);
+}
+
+// Visibility of light `li` past other yarns: the tube shadow map of that light (if any),
+// read at the yarn centre moved towards the light by the tube radius (so a yarn never
+// shadows itself through its own tube; self-shadows are the volume's), 3 × 3 PCF.
+fn yarn_visibility(li: u32, centre: vec3<f32>, wi: vec3<f32>, radius: f32) -> f32 {
+    for (var m = 0u; m < shadow_views.n.x; m++) {
+        if shadow_views.light[m] != li {
+            continue;
+        }
+        let p = centre + wi * (radius * 1.05);
+        let c = shadow_views.view_proj[m] * vec4<f32>(p, 1.0);
+        let ndc = c.xyz / c.w;
+        let uv = vec2<f32>(0.5 * ndc.x + 0.5, 0.5 - 0.5 * ndc.y);
+        if any(uv < vec2<f32>(0.0)) || any(uv > vec2<f32>(1.0)) {
+            return 1.0;
+        }
+        let depth = ndc.z - shadow_views.texel.y;
+        var v = 0.0;
+        for (var dy = -1; dy <= 1; dy++) {
+            for (var dx = -1; dx <= 1; dx++) {
+                let o = vec2<f32>(f32(dx), f32(dy)) * shadow_views.texel.x;
+                v += textureSampleCompareLevel(yarn_shadow_maps, shadow_cmp, uv + o, i32(m),
+                    depth);
+            }
+        }
+        return v / 9.0;
+    }
+    return 1.0;
+}
+
 @fragment
 fn fs_main(in: VertexOut) -> FragmentOut {
     let tan = normalize_or(in.tangent, vec3<f32>(1.0, 0.0, 0.0));
     let wo = view_dir(in.axis);
     var l = vec3<f32>(0.0);
+    let ef = effects[in.params_id];
+    let radius = yarn_params[in.params_id].c.z;
     for (var i = 0u; i < view.counts.x; i++) {
         let light = view.lights[i];
         var wi = light.pos_dir.xyz;
@@ -210,7 +381,12 @@ fn fs_main(in: VertexOut) -> FragmentOut {
             wi = d / sqrt(d2);
             e = e / d2;
         }
-        l += bcsdf_cos(wi, wo, tan) * e;
+        let vis = self_transmittance(ef, in, wi) * yarn_visibility(i, in.centre, wi, radius);
+        l += bcsdf_cos(wi, wo, tan) * e * vis;
+    }
+    if any(view.ambient.rgb > vec3<f32>(0.0)) {
+        let to = asin(clamp(dot(wo, tan), -1.0, 1.0));
+        l += view.ambient.rgb * ambient_integral(ef, to) * ambient_occlusion(ef, in.q);
     }
     if (view.lod.z & 4u) != 0u {
         l *= in.color;

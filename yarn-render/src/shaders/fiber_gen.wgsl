@@ -372,3 +372,35 @@ fn fiber_point(seg: u32, ply: u32, fib: u32, t: f32, loops: bool) -> vec3<f32> {
     let ab = ellipse_offset(pr, fs.ply_angle, fs.radius, fs.psi);
     return yp.pos + ab.x * yp.n + ab.y * yp.b;
 }
+
+// A fiber point with what the lighting effects need: the yarn centre, the point in the
+// cross-section frame that turns with the plies (x along ply 0's direction N', as
+// yarn::density and yarn-precompute use it), and that frame's N', B' in the world.
+struct FiberSample {
+    pos: vec3<f32>,
+    centre: vec3<f32>,
+    tangent: vec3<f32>,
+    q: vec2<f32>,
+    n_slice: vec3<f32>,
+    b_slice: vec3<f32>,
+}
+
+fn fiber_sample(seg: u32, ply: u32, fib: u32, t: f32, loops: bool) -> FiberSample {
+    let yp = yarn_point(seg, t);
+    let c = curves[segments[seg].ids.x];
+    let pr = yarn_params[c.ids.x];
+    let fs = fiber_slot(seg, ply, fib, yp.dz, loops);
+    let ab = ellipse_offset(pr, fs.ply_angle, fs.radius, fs.psi);
+    // Ply 0's angle: φ_j − 2πj/n_ply.
+    let phi0 = fs.ply_angle - TAU * f32(ply) / f32(pr.d.x);
+    let c0 = cos(phi0);
+    let s0 = sin(phi0);
+    var out: FiberSample;
+    out.pos = yp.pos + ab.x * yp.n + ab.y * yp.b;
+    out.centre = yp.pos;
+    out.tangent = yp.t;
+    out.q = vec2<f32>(ab.x * c0 + ab.y * s0, -ab.x * s0 + ab.y * c0);
+    out.n_slice = c0 * yp.n + s0 * yp.b;
+    out.b_slice = -s0 * yp.n + c0 * yp.b;
+    return out;
+}

@@ -21,7 +21,8 @@ struct View {
     // Frustum planes (inside: dot(n, p) + w ≥ 0), normalised.
     planes: array<vec4<f32>, 6>,
     // Regular fibers per ply at λ = 1 (n_max), subdivisions at λ = 1, flags (bit 0 cull,
-    // bit 1 loops, bit 2 tint by the yarn colour, bit 3 plain tubes), instance capacity.
+    // bit 1 loops, bit 2 tint by the yarn colour, bit 3 plain tubes, bit 4 self-shadows,
+    // bits 5–6 AO mode: 0 off, 1 cubic, 2 texture), instance capacity.
     lod: vec4<u32>,
     // Lights in use, lobes in use, unused, unused.
     counts: vec4<u32>,
@@ -29,6 +30,8 @@ struct View {
     // unused ×2.
     strip: vec4<f32>,
     lights: array<Light, 8>,
+    // Constant environment radiance for the ambient term (linear RGB), unused.
+    ambient: vec4<f32>,
 }
 
 // Projected size in pixels of a length `r` at origin-relative point `p`.

@@ -1,0 +1,158 @@
+//! The lighting effects of [W19 §4] the fiber shader applies, and their precomputed data
+//! (`yarn-precompute`) packed for the GPU:
+//!
+//! - **self-shadows** inside a yarn [W19 §4.1]: the optical-depth volume of
+//!   `SelfShadowVolume`, read as its `optical_depth` does (two neighbouring angle slices,
+//!   each bilinear at the point's own light-frame coordinates, blended), transmittance
+//!   `exp(−D)` with `σ = 2 r_f n_A` per in-plane length (DESIGN §2.3 item 10);
+//! - **ambient occlusion** [W19 §4.2]: the 2-D stratified texture or the distance cubic;
+//! - **ambient light** [W19 eq. 7–8]: a constant environment radiance `L_amb` times the
+//!   ambient integral `A(θ_o) = ∫ f cos θ_i dω_i` (tabulated over θ_o, `yarn::bcsdf::ambient`)
+//!   times AO — eq. 7 as printed forgets the AO factor its text asks for (DESIGN §2.3
+//!   item 12);
+//! - **yarn shadows** [W19 §4.1]: a shadow map of the yarns as thick tubes per directional
+//!   light (`passes::shadow`).
+//!
+//! All data of one yarn description sit in one f32 array; `EffectsRaw` says where.
+
+use crate::{Error, Result};
+use std::collections::HashMap;
+use std::path::Path;
+use std::sync::{Arc, Mutex};
+use yarn::YarnParams;
+use yarn::bcsdf::{AmbientTable, FiberBcsdf};
+use yarn_precompute::{BakeSettings, Precomputed};
+
+/// The precomputation of `params`, baked once per process (and read from or written to
+/// `cache_dir` when given): renderers of the same yarn share it.
+pub fn precomputed(
+    params: &YarnParams,
+    bake: &BakeSettings,
+    cache_dir: Option<&Path>,
+) -> Result<Arc<Precomputed>> {
+    static MEMO: Mutex<Option<HashMap<String, Arc<Precomputed>>>> = Mutex::new(None);
+    let key = Precomputed::cache_key(params, bake).map_err(|e| Error::Invalid(e.to_string()))?;
+    if let Some(p) = MEMO.lock().ok().and_then(|m| m.as_ref().and_then(|m| m.get(&key).cloned())) {
+        return Ok(p);
+    }
+    let p = Arc::new(
+        Precomputed::for_params(params, bake, cache_dir)
+            .map_err(|e| Error::Invalid(format!("yarn '{}': precomputation: {e}", params.name)))?,
+    );
+    if let Ok(mut m) = MEMO.lock() {
+        m.get_or_insert_with(HashMap::new).insert(key, p.clone());
+    }
+    Ok(p)
+}
+
+/// How ambient occlusion is computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AoMode {
+    /// None (AO = 1).
+    Off,
+    /// [W19]'s default: the cubic in the distance to the yarn centre.
+    Cubic,
+    /// The stratified 2-D texture over the cross-section.
+    Texture,
+}
+
+/// Which effects a frame computes (DESIGN's promise: compute only what the scene calls for).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FiberEffects {
+    /// Self-shadows inside each yarn.
+    pub self_shadow: bool,
+    /// Ambient occlusion.
+    pub ao: AoMode,
+    /// Shadows of other yarns (tube shadow maps, directional lights).
+    pub yarn_shadows: bool,
+    /// Constant environment radiance (linear RGB); zero turns the ambient term off.
+    pub ambient: [f32; 3],
+}
+
+impl FiberEffects {
+    /// Nothing but direct light.
+    pub fn none() -> Self {
+        FiberEffects { self_shadow: false, ao: AoMode::Off, yarn_shadows: false, ambient: [0.0; 3] }
+    }
+
+    /// Whether any precomputed data is needed.
+    pub fn needs_bake(&self) -> bool {
+        self.self_shadow || self.ao != AoMode::Off
+    }
+}
+
+impl Default for FiberEffects {
+    fn default() -> Self {
+        FiberEffects { self_shadow: true, ao: AoMode::Cubic, yarn_shadows: true, ambient: [0.0; 3] }
+    }
+}
+
+/// Where one yarn description's effect data start (std430, 96 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct EffectsRaw {
+    /// Self-shadow: first value, texels per side, slices, plies.
+    pub shadow: [u32; 4],
+    /// Self-shadow: half width (m), slice step (rad), period 2π/n_ply, present (1/0).
+    pub shadow_f: [f32; 4],
+    /// AO texture: first value, texels per side; ambient table: first value, entries.
+    pub ao: [u32; 4],
+    /// AO texture half width (m), AO cubic's yarn radius (m), present (1/0), unused.
+    pub ao_f: [f32; 4],
+    /// AO cubic coefficients `c₀…c₃` of `d = |q|/R_yarn`.
+    pub cubic: [f32; 4],
+    /// Unused (alignment).
+    pub pad: [f32; 4],
+}
+
+/// Effect data of every yarn description: headers and one f32 array.
+#[derive(Debug, Clone, Default)]
+pub struct PackedEffects {
+    /// One header per yarn description.
+    pub headers: Vec<EffectsRaw>,
+    /// Self-shadow depths, AO texels and ambient tables (RGB + pad per entry).
+    pub data: Vec<f32>,
+}
+
+/// Packs `pre[i]` (the precomputation of yarn description `i`, or `None`) and the ambient
+/// table of `bcsdf` (shared by all; `entries` values over θ_o ∈ [−π/2, π/2]).
+pub fn pack(
+    pre: &[Option<Arc<Precomputed>>],
+    bcsdf: &FiberBcsdf,
+    entries: usize,
+) -> Result<PackedEffects> {
+    if entries < 2 {
+        return Err(Error::Invalid(format!("ambient table of {entries} entries (at least 2)")));
+    }
+    let mut out = PackedEffects::default();
+    let table = AmbientTable::build(bcsdf, entries);
+    let ambient_at = out.data.len() as u32;
+    for v in &table.values {
+        out.data.extend([v[0] as f32, v[1] as f32, v[2] as f32, 0.0]);
+    }
+    for p in pre {
+        let mut h = EffectsRaw { ao: [0, 0, ambient_at, entries as u32], ..Default::default() };
+        if let Some(p) = p {
+            let s = &p.self_shadow;
+            h.shadow = [out.data.len() as u32, s.res as u32, s.slices as u32, s.ply_count as u32];
+            h.shadow_f = [
+                s.half_width as f32,
+                s.slice_step() as f32,
+                (std::f64::consts::TAU / s.ply_count as f64) as f32,
+                1.0,
+            ];
+            out.data.extend_from_slice(&s.depth);
+            let a = &p.ao_texture;
+            h.ao[0] = out.data.len() as u32;
+            h.ao[1] = a.res as u32;
+            h.ao_f = [a.half_width as f32, p.ao_cubic.yarn_radius as f32, 1.0, 0.0];
+            out.data.extend_from_slice(&a.ao);
+            h.cubic = p.ao_cubic.coeffs.map(|c| c as f32);
+        }
+        out.headers.push(h);
+    }
+    if out.data.len() > u32::MAX as usize {
+        return Err(Error::Limit("effect data beyond 2³² values".into()));
+    }
+    Ok(out)
+}

@@ -1,0 +1,154 @@
+//! `yarn_tube_shadow` (render, depth only): one shadow map per directional light of the
+//! yarns drawn as thick tubes of the yarn radius [W19 §4.1], light-facing strips pulled
+//! from the control points like the fibers. The fiber shader reads it at the yarn centre
+//! moved towards the light by the tube radius, so a yarn is shadowed by other yarns only;
+//! its own fibers' shadows are the self-shadow volume's (`crate::effects`). The tube
+//! radius is the yarn radius without flyaways (DESIGN §2.3 item 14).
+
+use crate::gpu_data::YarnBuffers;
+use crate::passes::draw::DEPTH;
+use crate::{Error, Result};
+use btf_render::Gpu;
+use wgpu::util::DeviceExt;
+
+const WGSL: &str = include_str!("../shaders/yarn_tube_shadow.wgsl");
+
+/// The pass's WGSL (generator in front).
+pub fn source() -> String {
+    crate::with_generator(WGSL)
+}
+
+/// The most shadowed directional lights per frame.
+pub const MAX_SHADOW_MAPS: usize = 4;
+
+/// The uniform of one shadow pass.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ShadowPassRaw {
+    /// Origin-relative world → light clip.
+    pub view_proj: [[f32; 4]; 4],
+    /// Unit direction towards the light.
+    pub to_light: [f32; 4],
+    /// Subdivisions per segment.
+    pub n: [u32; 4],
+}
+
+/// The shadow maps as the fiber shader reads them (uniform).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ShadowViewsRaw {
+    /// World → light clip per map.
+    pub view_proj: [[[f32; 4]; 4]; MAX_SHADOW_MAPS],
+    /// Maps in use.
+    pub n: [u32; 4],
+    /// The light each map belongs to.
+    pub light: [u32; 4],
+    /// 1/size, depth bias, unused ×2.
+    pub texel: [f32; 4],
+}
+
+/// The compiled pass.
+pub struct ShadowPass {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+}
+
+impl ShadowPass {
+    /// Compiles the pass for `data`'s group-0 layout.
+    pub fn new(gpu: &Gpu, data: &YarnBuffers) -> Result<Self> {
+        let dev = &gpu.device;
+        let layout =
+            btf_render::gpu::uniform_layout(dev, "yarn_tube_shadow", wgpu::ShaderStages::VERTEX);
+        let src = source();
+        let pipeline = gpu
+            .scoped("yarn_tube_shadow pipeline", || {
+                let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some("yarn_tube_shadow.wgsl"),
+                    source: wgpu::ShaderSource::Wgsl(src.into()),
+                });
+                let pl = dev.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: Some("yarn_tube_shadow"),
+                    bind_group_layouts: &[Some(&data.layout), Some(&layout)],
+                    immediate_size: 0,
+                });
+                dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some("yarn_tube_shadow"),
+                    layout: Some(&pl),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some("vs_shadow"),
+                        compilation_options: Default::default(),
+                        buffers: &[],
+                    },
+                    primitive: wgpu::PrimitiveState {
+                        topology: wgpu::PrimitiveTopology::TriangleStrip,
+                        cull_mode: None,
+                        ..Default::default()
+                    },
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: DEPTH,
+                        depth_write_enabled: Some(true),
+                        depth_compare: Some(wgpu::CompareFunction::Less),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
+                    multisample: Default::default(),
+                    fragment: None,
+                    multiview_mask: None,
+                    cache: None,
+                })
+            })
+            .map_err(|e| Error::Gpu(e.to_string()))?;
+        Ok(ShadowPass { pipeline, layout })
+    }
+
+    /// Records one map per entry of `passes` into the layers of `maps` (a depth 2-D array
+    /// with at least that many layers).
+    pub fn encode(
+        &self,
+        gpu: &Gpu,
+        enc: &mut wgpu::CommandEncoder,
+        data: &YarnBuffers,
+        maps: &wgpu::Texture,
+        passes: &[ShadowPassRaw],
+    ) {
+        let dev = &gpu.device;
+        for (layer, raw) in passes.iter().enumerate() {
+            let ubuf = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("yarn_tube_shadow"),
+                contents: bytemuck::bytes_of(raw),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            let bg = dev.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("yarn_tube_shadow"),
+                layout: &self.layout,
+                entries: &[wgpu::BindGroupEntry { binding: 0, resource: ubuf.as_entire_binding() }],
+            });
+            let view = maps.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2),
+                base_array_layer: layer as u32,
+                array_layer_count: Some(1),
+                ..Default::default()
+            });
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("yarn_tube_shadow"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &data.bind_group, &[]);
+            pass.set_bind_group(1, &bg, &[]);
+            pass.draw(0..2 * (raw.n[0] + 1), 0..data.segment_count);
+        }
+    }
+}
