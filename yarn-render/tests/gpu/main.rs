@@ -3,6 +3,7 @@
 
 mod coherence;
 mod common;
+mod effects;
 mod expand;
 mod lod;
 mod oblique;
