@@ -57,6 +57,9 @@ pub struct RenderArgs {
     /// No frustum culling (for checking that culling changes nothing).
     #[arg(long)]
     pub no_cull: bool,
+    /// No core strips: every fiber explicit (LoD then drops the innermost fibers).
+    #[arg(long)]
+    pub no_core: bool,
     /// No self-shadows inside the yarns (the precomputed volume, [W19 §4.1]).
     #[arg(long)]
     pub no_self_shadow: bool,
@@ -226,6 +229,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
         None => [0.0; 3],
     };
     let effects = FiberEffects {
+        core: !a.no_core,
         self_shadow: !a.no_self_shadow,
         yarn_shadows: !a.no_yarn_shadows,
         ao: match a.ao {
@@ -292,6 +296,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
             "yarn_bytes": st.yarn_bytes, "bytes_per_control_point":
                 st.yarn_bytes as f64 / packed.control_points().max(1) as f64,
             "pack_seconds": pack_s, "render_seconds": render_s, "coverage": coverage,
+            "mean_radiance": rgb.iter().map(|v| *v as f64).sum::<f64>() / rgb.len() as f64,
             "rel_rmse": rel_rmse, "mean_ratio": mean_ratio, "adapter": gpu.info.name,
         });
         outln!("{}", serde_json::to_string_pretty(&j)?);

@@ -10,6 +10,8 @@
 //!   ambient integral `A(θ_o) = ∫ f cos θ_i dω_i` (tabulated over θ_o, `yarn::bcsdf::ambient`)
 //!   times AO — eq. 7 as printed forgets the AO factor its text asks for (DESIGN §2.3
 //!   item 12);
+//! - **core fibers** [W19 §3.2]: the core texture of `CoreTexture` (two RGBA layers, read
+//!   bilinearly with u repeating and v clamped, as `CoreTexture::sample`);
 //! - **yarn shadows** [W19 §4.1]: a shadow map of the yarns as thick tubes per directional
 //!   light (`passes::shadow`).
 //!
@@ -32,16 +34,17 @@ pub fn precomputed(
 ) -> Result<Arc<Precomputed>> {
     static MEMO: Mutex<Option<HashMap<String, Arc<Precomputed>>>> = Mutex::new(None);
     let key = Precomputed::cache_key(params, bake).map_err(|e| Error::Invalid(e.to_string()))?;
-    if let Some(p) = MEMO.lock().ok().and_then(|m| m.as_ref().and_then(|m| m.get(&key).cloned())) {
-        return Ok(p);
+    // Held while baking: renderers created at once (threads, tests) bake a yarn once.
+    let mut memo = MEMO.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    let memo = memo.get_or_insert_with(HashMap::new);
+    if let Some(p) = memo.get(&key) {
+        return Ok(p.clone());
     }
     let p = Arc::new(
         Precomputed::for_params(params, bake, cache_dir)
             .map_err(|e| Error::Invalid(format!("yarn '{}': precomputation: {e}", params.name)))?,
     );
-    if let Ok(mut m) = MEMO.lock() {
-        m.get_or_insert_with(HashMap::new).insert(key, p.clone());
-    }
+    memo.insert(key, p.clone());
     Ok(p)
 }
 
@@ -59,6 +62,9 @@ pub enum AoMode {
 /// Which effects a frame computes (DESIGN's promise: compute only what the scene calls for).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FiberEffects {
+    /// Core fibers [W19 §3.2]: the innermost fibers of each ply drawn as one textured strip
+    /// (widened towards the ply as λ falls, DESIGN §2.3 item 7), the rest explicit.
+    pub core: bool,
     /// Self-shadows inside each yarn.
     pub self_shadow: bool,
     /// Ambient occlusion.
@@ -72,22 +78,34 @@ pub struct FiberEffects {
 impl FiberEffects {
     /// Nothing but direct light.
     pub fn none() -> Self {
-        FiberEffects { self_shadow: false, ao: AoMode::Off, yarn_shadows: false, ambient: [0.0; 3] }
+        FiberEffects {
+            core: false,
+            self_shadow: false,
+            ao: AoMode::Off,
+            yarn_shadows: false,
+            ambient: [0.0; 3],
+        }
     }
 
     /// Whether any precomputed data is needed.
     pub fn needs_bake(&self) -> bool {
-        self.self_shadow || self.ao != AoMode::Off
+        self.core || self.self_shadow || self.ao != AoMode::Off
     }
 }
 
 impl Default for FiberEffects {
     fn default() -> Self {
-        FiberEffects { self_shadow: true, ao: AoMode::Cubic, yarn_shadows: true, ambient: [0.0; 3] }
+        FiberEffects {
+            core: true,
+            self_shadow: true,
+            ao: AoMode::Cubic,
+            yarn_shadows: true,
+            ambient: [0.0; 3],
+        }
     }
 }
 
-/// Where one yarn description's effect data start (std430, 96 bytes).
+/// Where one yarn description's effect data start (std430, 128 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct EffectsRaw {
@@ -101,8 +119,10 @@ pub struct EffectsRaw {
     pub ao_f: [f32; 4],
     /// AO cubic coefficients `c₀…c₃` of `d = |q|/R_yarn`.
     pub cubic: [f32; 4],
-    /// Unused (alignment).
-    pub pad: [f32; 4],
+    /// Core texture: first value of texture A, of texture B, width (u), height (v).
+    pub core: [u32; 4],
+    /// Core strip half-width `H` in circular space (m), ply ellipse `e_N`, `e_B`, present.
+    pub core_f: [f32; 4],
 }
 
 /// Effect data of every yarn description: headers and one f32 array.
@@ -148,6 +168,22 @@ pub fn pack(
             h.ao_f = [a.half_width as f32, p.ao_cubic.yarn_radius as f32, 1.0, 0.0];
             out.data.extend_from_slice(&a.ao);
             h.cubic = p.ao_cubic.coeffs.map(|c| c as f32);
+            let c = &p.core;
+            let (a, b) = c.to_rgba_f32();
+            h.core = [
+                out.data.len() as u32,
+                (out.data.len() + a.len()) as u32,
+                c.width as u32,
+                c.height as u32,
+            ];
+            out.data.extend_from_slice(a);
+            out.data.extend_from_slice(b);
+            h.core_f = [
+                c.half_width_circ as f32,
+                c.ellipse[0] as f32,
+                c.ellipse[1] as f32,
+                if c.core_fibers > 0 { 1.0 } else { 0.0 },
+            ];
         }
         out.headers.push(h);
     }

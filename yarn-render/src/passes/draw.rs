@@ -58,8 +58,8 @@ impl DrawPass {
                 buf(1, wgpu::ShaderStages::VERTEX, ro),
                 buf(2, fs, ro),
                 buf(3, fs, ro),
-                buf(4, fs, ro),
-                buf(5, fs, ro),
+                buf(4, vf, ro),
+                buf(5, vf, ro),
                 wgpu::BindGroupLayoutEntry {
                     binding: 6,
                     visibility: fs,

@@ -38,7 +38,8 @@ struct Effects {
     ao: vec4<u32>,
     ao_f: vec4<f32>,
     cubic: vec4<f32>,
-    pad: vec4<f32>,
+    core: vec4<u32>,
+    core_f: vec4<f32>,
 }
 
 @group(1) @binding(4) var<storage, read> effects: array<Effects>;
@@ -59,19 +60,25 @@ struct ShadowViews {
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
-    // Origin-relative position on the fiber axis.
+    // Origin-relative position on the fiber axis (core strips: on the ply centre line).
     @location(0) axis: vec3<f32>,
     @location(1) tangent: vec3<f32>,
     @location(2) color: vec3<f32>,
-    // Coverage of a widened strip (1 when the fiber is at least the minimum width).
-    @location(3) coverage: f32,
-    @location(4) @interpolate(flat) instance: u32,
+    // Coverage of a widened strip (1 when the fiber is at least the minimum width), the
+    // core strip's v across, unused ×2.
+    @location(3) misc: vec4<f32>,
+    // The fiber's identity hash (sample masks), params id, kind (0 fiber, 1 core, 2 tube).
+    @location(4) @interpolate(flat) ids: vec4<u32>,
     // The yarn centre and the cross-section point in the frame that turns with the plies.
     @location(5) centre: vec3<f32>,
     @location(6) q: vec2<f32>,
     @location(7) n_slice: vec3<f32>,
     @location(8) b_slice: vec3<f32>,
-    @location(9) @interpolate(flat) params_id: u32,
+    // Core strips: (cos, sin) of 2πu and of the texture azimuth ψ'.
+    @location(9) core_angles: vec4<f32>,
+    // Core strips: the ply frame N̂, B̂.
+    @location(10) n_ply: vec3<f32>,
+    @location(11) b_ply: vec3<f32>,
 }
 
 struct FragmentOut {
@@ -84,6 +91,86 @@ fn view_dir(p: vec3<f32>) -> vec3<f32> {
         return -view.forward.xyz;
     }
     return normalize(view.eye.xyz - p);
+}
+
+// A core strip vertex [W19 §3.2] (yarn_precompute::CoreTexture::view): the strip follows
+// the ply centre, faces the eye, is H·|A w| wide (widened towards the whole ply as λ falls,
+// DESIGN §2.3 item 7) and reads u = frac((θ_fib − ψ')/2π) with the ellipse-corrected eye
+// azimuth ψ'.
+fn core_vertex(seg: u32, ply: u32, t: f32, side: f32, rec: vec2<u32>) -> VertexOut {
+    let s = segments[seg];
+    let c = curves[s.ids.x];
+    let pr = yarn_params[c.ids.x];
+    let ef = effects[c.ids.x];
+    let n_sub = max(rec.y >> 24u, 1u);
+    let h = 0.25 / f32(n_sub);
+    let t2 = select(t + h, t - h, t + h > 1.0);
+    let ya = yarn_point(seg, t);
+    let yb = yarn_point(seg, t2);
+    let phi = TAU * fract(f32(ply) / f32(pr.d.x) + s.phase.x + ya.dz / c.pitch.x);
+    let phib = TAU * fract(f32(ply) / f32(pr.d.x) + s.phase.x + yb.dz / c.pitch.x);
+    let d = pr.a.x;
+    let radial = cos(phi) * ya.n + sin(phi) * ya.b;
+    let p = ya.pos + d * radial;
+    let pb = yb.pos + d * (cos(phib) * yb.n + sin(phib) * yb.b);
+    var tp = normalize_or(pb - p, ya.t);
+    if t2 < t {
+        tp = -tp;
+    }
+    let n_ply = normalize_or(radial - tp * dot(radial, tp), ya.n);
+    let b_ply = cross(tp, n_ply);
+    let e = view_dir(p);
+    var eye = vec2<f32>(dot(e, n_ply), dot(e, b_ply));
+    let el = length(eye);
+    eye = select(vec2<f32>(1.0, 0.0), eye / el, el > 1e-6);
+    let en = ef.core_f.y;
+    let eb = ef.core_f.z;
+    let g = sqrt(en * eb);
+    let psi_tex = atan2(eye.y / eb, eye.x / en);
+    let u = s.phase.y + ya.dz / c.pitch.y - psi_tex / TAU;
+    let across_e = sqrt((en * eye.y) * (en * eye.y) + (eb * eye.x) * (eb * eye.x));
+    let hw = ef.core_f.x * across_e / g;
+    // λ at the segment midpoint, as fiber_lod computes it.
+    var l2 = 1.0;
+    if view.viewport.w > 0.0 {
+        let mid = combine(s, cr_basis(0.5));
+        let w_fiber = pixels_of(view, 2.0 * pr.b.y, mid);
+        let w_ply = pixels_of(view, 2.0 * max(pr.a.y, pr.a.z) * pr.b.x, mid);
+        let lam = lod_lambda_draw(w_fiber, w_ply, view.viewport.w);
+        l2 = lam * lam;
+    }
+    let hp = pr.b.x * across_e + pr.b.y;
+    let half = l2 * hw + (1.0 - l2) * max(hp, hw);
+    let across = normalize_or(cross(tp, e), any_perpendicular(tp));
+    var out: VertexOut;
+    out.clip = view.view_proj * vec4<f32>(p + across * (half * side), 1.0);
+    out.axis = p;
+    out.tangent = tp;
+    out.color = select(s.color[0].rgb, s.color[1].rgb, t >= 0.5);
+    // A widened strip stretches the texture across its whole width ([W19 §3.3]: λ² scales
+    // the core's thickness); misc.z is the stretch, for the surface point.
+    out.misc = vec4<f32>(1.0, 0.5 + 0.5 * side, half / max(hw, 1e-12), 0.0);
+    out.ids = vec4<u32>(pcg(seg) ^ (rec.y & 0xffffffu), c.ids.x, 1u, 0u);
+    out.centre = ya.pos;
+    out.q = vec2<f32>(0.0);
+    let phi0 = phi - TAU * f32(ply) / f32(pr.d.x);
+    out.n_slice = cos(phi0) * ya.n + sin(phi0) * ya.b;
+    out.b_slice = -sin(phi0) * ya.n + cos(phi0) * ya.b;
+    out.core_angles = vec4<f32>(cos(TAU * u), sin(TAU * u), cos(psi_tex), sin(psi_tex));
+    out.n_ply = n_ply;
+    out.b_ply = b_ply;
+    return out;
+}
+
+// fiber_lod's lod_lambda ([W19 eq. 4]).
+fn lod_lambda_draw(w_fiber: f32, w_ply: f32, w_lod: f32) -> f32 {
+    if w_lod <= 0.0 || w_lod <= w_fiber {
+        return 1.0;
+    }
+    if w_ply <= w_lod {
+        return 0.0;
+    }
+    return clamp((w_fiber / w_lod) * (w_ply - w_lod) / (w_ply - w_fiber), 0.0, 1.0);
 }
 
 @vertex
@@ -104,6 +191,9 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     var p: vec3<f32>;
     var q: vec3<f32>;
     var fsmp: FiberSample;
+    if fib == 0xfffeu {
+        return core_vertex(seg, ply, t, side, rec);
+    }
     if tube {
         let yp = yarn_point(seg, t);
         p = yp.pos;
@@ -140,15 +230,14 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     out.axis = p;
     out.tangent = tan;
     out.color = select(s.color[0].rgb, s.color[1].rgb, t >= 0.5);
-    out.coverage = coverage;
+    out.misc = vec4<f32>(coverage, 0.0, 0.0, 0.0);
     out.centre = fsmp.centre;
     out.q = fsmp.q;
     out.n_slice = fsmp.n_slice;
     out.b_slice = fsmp.b_slice;
-    out.params_id = c.ids.x;
     // The fiber's identity, not its place in the list: culling and LoD reorder the list,
     // and the sample mask must not change with it.
-    out.instance = pcg(seg) ^ (rec.y & 0xffffffu);
+    out.ids = vec4<u32>(pcg(seg) ^ (rec.y & 0xffffffu), c.ids.x, select(0u, 2u, tube), 0u);
     return out;
 }
 
@@ -364,13 +453,87 @@ fn yarn_visibility(li: u32, centre: vec3<f32>, wi: vec3<f32>, radius: f32) -> f3
     return 1.0;
 }
 
+// Bilinear core texel (CoreTexture::sample): 8 channels, u repeats, v clamps.
+fn core_texel(ef: Effects, u: f32, v: f32) -> array<f32, 8> {
+    let w = ef.core.z;
+    let h = ef.core.w;
+    let x = fract(u) * f32(w) - 0.5;
+    let y = clamp(v * f32(h) - 0.5, 0.0, f32(h - 1u));
+    let x0 = floor(x);
+    let y0 = floor(y);
+    let fx = x - x0;
+    let fy = y - y0;
+    let i0 = u32((i32(x0) % i32(w) + i32(w)) % i32(w));
+    let i1 = (i0 + 1u) % w;
+    let j0 = u32(y0);
+    let j1 = min(j0 + 1u, h - 1u);
+    var out: array<f32, 8>;
+    for (var k = 0u; k < 4u; k++) {
+        let a = ef.core.x + k;
+        let b = ef.core.y + k;
+        let w00 = (1.0 - fx) * (1.0 - fy);
+        let w10 = fx * (1.0 - fy);
+        let w01 = (1.0 - fx) * fy;
+        let w11 = fx * fy;
+        out[k] = w00 * fetch(a + 4u * (j0 * w + i0)) + w10 * fetch(a + 4u * (j0 * w + i1))
+            + w01 * fetch(a + 4u * (j1 * w + i0)) + w11 * fetch(a + 4u * (j1 * w + i1));
+        out[k + 4u] = w00 * fetch(b + 4u * (j0 * w + i0)) + w10 * fetch(b + 4u * (j0 * w + i1))
+            + w01 * fetch(b + 4u * (j1 * w + i0)) + w11 * fetch(b + 4u * (j1 * w + i1));
+    }
+    return out;
+}
+
+struct CoreHit {
+    alpha: f32,
+    // World fiber direction (the BCSDF's tangent).
+    direction: vec3<f32>,
+    // The cross-section point in the slice frame (for self-shadows and AO).
+    q: vec2<f32>,
+}
+
+// CoreTexture::surface on the GPU: the texel's fiber direction and surface point placed on
+// the real (elliptical) ply.
+fn core_hit(ef: Effects, in: VertexOut) -> CoreHit {
+    let u = atan2(in.core_angles.y, in.core_angles.x) / TAU;
+    let v = in.misc.y;
+    let t = core_texel(ef, u, v);
+    let psi = atan2(in.core_angles.w, in.core_angles.z);
+    let e1 = vec2<f32>(cos(psi), sin(psi));
+    let w1 = vec2<f32>(-sin(psi), cos(psi));
+    let en = ef.core_f.y;
+    let eb = ef.core_f.z;
+    let g = sqrt(en * eb);
+    let a = vec2<f32>(en / g, eb / g);
+    let d2 = t[5] * w1 + t[6] * e1;
+    let dp = normalize_or(vec3<f32>(d2.x * a.x, d2.y * a.y, t[4]), vec3<f32>(0.0, 0.0, 1.0));
+    let tp = normalize_or(in.tangent, vec3<f32>(1.0, 0.0, 0.0));
+    var hit: CoreHit;
+    hit.alpha = clamp(t[0], 0.0, 1.0);
+    hit.direction = normalize_or(dp.x * in.n_ply + dp.y * in.b_ply + dp.z * tp, tp);
+    let hh = ef.core_f.x;
+    let c = (2.0 * clamp(v, 0.0, 1.0) - 1.0) * hh * w1 + t[1] * hh * e1;
+    let off = vec2<f32>(c.x * a.x, c.y * a.y) * in.misc.z;
+    let pt = in.axis + off.x * in.n_ply + off.y * in.b_ply;
+    let rel = pt - in.centre;
+    hit.q = vec2<f32>(dot(rel, normalize(in.n_slice)), dot(rel, normalize(in.b_slice)));
+    return hit;
+}
+
 @fragment
-fn fs_main(in: VertexOut) -> FragmentOut {
+fn fs_main(in_raw: VertexOut) -> FragmentOut {
+    var in = in_raw;
+    var coverage = in.misc.x;
+    let ef = effects[in.ids.y];
+    if in.ids.z == 1u {
+        let hit = core_hit(ef, in);
+        coverage = hit.alpha;
+        in.tangent = hit.direction;
+        in.q = hit.q;
+    }
     let tan = normalize_or(in.tangent, vec3<f32>(1.0, 0.0, 0.0));
     let wo = view_dir(in.axis);
     var l = vec3<f32>(0.0);
-    let ef = effects[in.params_id];
-    let radius = yarn_params[in.params_id].c.z;
+    let radius = yarn_params[in.ids.y].c.z;
     for (var i = 0u; i < view.counts.x; i++) {
         let light = view.lights[i];
         var wi = light.pos_dir.xyz;
@@ -393,6 +556,6 @@ fn fs_main(in: VertexOut) -> FragmentOut {
     }
     var out: FragmentOut;
     out.color = vec4<f32>(l, 1.0);
-    out.mask = coverage_mask(in.coverage, in.instance, vec2<u32>(in.clip.xy));
+    out.mask = coverage_mask(coverage, in.ids.x, vec2<u32>(in.clip.xy));
     return out;
 }

@@ -84,11 +84,19 @@ fn lod(@builtin(global_invocation_id) gid: vec3<u32>,
     let lambda = lod_lambda(w_fiber, w_ply, view.viewport.w);
     let l2 = lambda * lambda;
     let n_fib = pr.d.y;
-    let n_max = min(view.lod.x, n_fib);
-    let n = clamp(u32(round(l2 * f32(n_max))), 1u, n_max);
+    // Core mode [W19 §3.2]: one textured core strip per ply stands for the innermost
+    // pr.d.z fibers; the regular fibers are the rest, and may all be dropped.
+    let core = select(0u, pr.d.z, (view.lod.z & 128u) != 0u);
+    let first = core;
+    let n_max = min(view.lod.x, n_fib - first);
+    var n = clamp(u32(round(l2 * f32(n_max))), 1u, max(n_max, 1u));
+    if core > 0u {
+        n = min(u32(round(l2 * f32(n_max))), n_max);
+    }
     let n_sub = clamp(u32(ceil(l2 * f32(view.lod.y))), 2u, view.lod.y);
     let n_ply = pr.d.x;
-    let total = n * n_ply;
+    let per_ply = n + select(0u, 1u, core > 0u);
+    let total = per_ply * n_ply;
     // Reservations are contiguous from 0, so every slot below the capacity is written by
     // whoever reserved it; what lies beyond is counted and dropped, and `clamp_count`
     // (run after this pass) cuts instance_count back to the capacity.
@@ -99,6 +107,13 @@ fn lod(@builtin(global_invocation_id) gid: vec3<u32>,
     }
     var k = base;
     for (var ply = 0u; ply < n_ply; ply++) {
+        if core > 0u {
+            // The core strip keeps full subdivision: its texture twists along the segment.
+            if k < cap {
+                out_instances[k] = vec2<u32>(seg, 0xfffeu | (ply << 16u) | (view.lod.y << 24u));
+            }
+            k++;
+        }
         for (var f = n_fib - n; f < n_fib; f++) {
             if k < cap {
                 out_instances[k] = vec2<u32>(seg, f | (ply << 16u) | (n_sub << 24u));

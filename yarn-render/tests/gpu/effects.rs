@@ -103,3 +103,32 @@ fn shadows_bring_the_gpu_patch_to_the_reference() {
     assert!(e_self < e_off && e_all < e_self && e_all < 0.5 * e_off);
     assert!((m_all / m_ref - 1.0).abs() < 0.3, "mean ratio {}", m_all / m_ref);
 }
+
+#[test]
+fn constant_environment_through_the_ambient_integral_and_ao() {
+    let Some(gpu) = Gpu::for_tests("constant_environment_through_the_ambient") else { return };
+    let s = setup();
+    let env = EnvLight::new(btf_image::EnvMap::constant(32, [1.0; 3]).unwrap(), 1.0);
+    let r = reference(&s, &[Light::Environment(env)], 32);
+    let mut out = Vec::new();
+    for ao in [AoMode::Off, AoMode::Cubic, AoMode::Texture] {
+        let fx = FiberEffects { ao, ambient: [1.0; 3], ..FiberEffects::default() };
+        out.push(mean(&gpu_image(&gpu, &s, &[], fx)));
+    }
+    let m_ref = mean(&r);
+    eprintln!(
+        "constant sky L = 1: mean radiance GPU AO off {:.4}, cubic {:.4}, texture {:.4}; \
+         reference {m_ref:.4}",
+        out[0], out[1], out[2]
+    );
+    // AO only darkens, and each AO brings the frame closer to the reference. Measured
+    // (48², 32 spp): off 0.590, cubic 0.265, texture 0.178 against 0.085. Two gaps stay
+    // and are reported, not hidden: [W19]'s distance cubic is fitted to the radial *mean*
+    // of the texture, but fibers sit where the density — and the occlusion — is highest,
+    // so the cubic is 49 % brighter than the texture at the fibers; and AO covers a yarn's
+    // own fibers only, while the reference's sky is also blocked by the other yarns of the
+    // patch ([W19 §4.2] leaves that to "existing techniques").
+    assert!(out[1] < out[0] && out[2] < out[1]);
+    assert!((out[2] - m_ref).abs() < (out[1] - m_ref).abs());
+    assert!((out[1] - m_ref).abs() < (out[0] - m_ref).abs());
+}

@@ -63,8 +63,20 @@ fn gpu_fiber_counts_follow_the_lod_formula() {
     let (packed, bcsdf) = setup();
     let p = cotton();
     let size = (96, 96);
-    for (dist, lod_px) in [(0.004, 1.0), (0.02, 1.0), (0.02, 0.25), (0.06, 0.5), (0.02, 0.0)] {
-        let settings = FiberSettings { lod_px, cull: false, msaa: 1, ..Default::default() };
+    let n_core = (p.core_fraction * p.fibers_per_ply as f64).round() as u32;
+    for (core, dist, lod_px) in [
+        (false, 0.004, 1.0),
+        (false, 0.02, 1.0),
+        (false, 0.02, 0.25),
+        (false, 0.06, 0.5),
+        (false, 0.02, 0.0),
+        (true, 0.004, 1.0),
+        (true, 0.02, 0.25),
+        (true, 0.02, 0.0),
+    ] {
+        let effects = yarn_render::FiberEffects { core, ..yarn_render::FiberEffects::none() };
+        let settings =
+            FiberSettings { lod_px, cull: false, msaa: 1, effects, ..Default::default() };
         let r = FiberRenderer::new(&gpu, &packed, &bcsdf, settings).unwrap();
         let cam = camera(&packed, dist);
         let img = r.render(&gpu, &cam, &LIGHT, size, [0.0; 4]).unwrap();
@@ -86,12 +98,18 @@ fn gpu_fiber_counts_follow_the_lod_formula() {
             let px = |r: f64| r * v.px_per_metre / depth;
             let l = lambda(px(2.0 * p.fiber_radius), px(2.0 * ply_r), lod_px as f64);
             lambdas.push(l);
-            expect += 2 * counts(l, p.fibers_per_ply, settings.n_sub).0 as u64;
+            expect += if core {
+                // One core strip per ply, then round(λ²·n_regular) of the rest (maybe none).
+                let n_reg = p.fibers_per_ply - n_core;
+                2 * (1 + (l * l * n_reg as f64).round() as u64)
+            } else {
+                2 * counts(l, p.fibers_per_ply, settings.n_sub).0 as u64
+            };
         }
         let got = img.stats.instances as u64;
         let mean_l = lambdas.iter().sum::<f64>() / lambdas.len() as f64;
         eprintln!(
-            "distance {dist} m, ω^LoD {lod_px} px: mean λ {mean_l:.3}, instances GPU {got}, \
+            "core {core}, distance {dist} m, ω^LoD {lod_px} px: mean λ {mean_l:.3}, instances GPU {got}, \
              CPU {expect}, pixels/m {}",
             raw.viewport[2]
         );
@@ -157,4 +175,57 @@ fn plain_tubes_draw_one_strip_per_visible_segment_and_cover_the_fibers() {
     );
     // The tube of the yarn radius contains every (non-flyaway) fiber.
     assert!(cover(tub) >= 0.97 * cover(fib));
+}
+
+#[test]
+fn lod_with_core_strips_conserves_coverage_and_radiance() {
+    let Some(gpu) = Gpu::for_tests("lod_with_core_strips_conserves") else { return };
+    let chart = yarn::knit::Chart::builtin("stockinette").unwrap();
+    let p = cotton();
+    let sk = yarn::knit::SkeletonParams::new(p.yarn_radius());
+    let (ws, cs) = sk.default_spacing();
+    let set = yarn::knit::chen_skeleton(
+        &yarn::knit::StitchMesh::flat(&chart, chart.width, chart.height, ws, cs).unwrap(),
+        &sk,
+    )
+    .unwrap();
+    let period = set.period.unwrap();
+    let packed = PackedYarns::new(
+        &set,
+        std::slice::from_ref(&p),
+        &PackOptions { tiles: [3, 3], frame_samples_per_segment: 16, ..Default::default() },
+    )
+    .unwrap();
+    let bcsdf = FiberBcsdf::khungurn(&KhungurnParams::default()).unwrap();
+    let view = btf_core::Direction::new(30.0, 60.0).to_vector();
+    let (_, hi) = yarn_ref::patch::centre_line_z(&set);
+    let cam = FiberCamera::oblique(view, hi + p.yarn_radius(), [0.0, 0.0], period);
+    let light = [FiberLight::Directional { to_light: [0.3, -0.4, 1.0], irradiance: [3.0; 3] }];
+    let mut rows = Vec::new();
+    for lod_px in [0.0f32, 0.25, 4.0] {
+        let settings = FiberSettings { lod_px, ..Default::default() };
+        let r = FiberRenderer::new(&gpu, &packed, &bcsdf, settings).unwrap();
+        let img = r.render(&gpu, &cam, &light, (64, 64), [0.0; 4]).unwrap();
+        let n = img.pixels.len() as f64;
+        let cov = img.pixels.iter().map(|q| q[3] as f64).sum::<f64>() / n;
+        let rad = img.pixels.iter().map(|q| (q[0] + q[1] + q[2]) as f64).sum::<f64>() / n;
+        eprintln!(
+            "core strips, ω^LoD {lod_px} px: {} instances, coverage {cov:.4}, mean radiance {rad:.5}",
+            img.stats.instances
+        );
+        rows.push((img.stats.instances, cov, rad));
+    }
+    let (n0, c0, r0) = rows[0];
+    let (n2, c2, r2) = rows[2];
+    assert!(n2 * 10 < n0, "LoD must drop most fibers: {n0} → {n2}");
+    for &(_, c, r) in &rows[1..] {
+        // DESIGN §2.5's bound for "LoD conserves appearance" holds for the radiance.
+        assert!((r / r0 - 1.0).abs() < 0.05, "mean radiance {r} against {r0}");
+        // Coverage does not: the paper's compensation (the core widened towards the ply
+        // as λ² falls, DESIGN §2.3 item 7) loses 10 % of it here (measured 0.616 →
+        // 0.553 / 0.549), because the core texture's alpha is the core fibers' and the
+        // ply's own gaps stay open. A known gap, bounded here so it cannot grow unseen.
+        assert!(c <= c0 * 1.02 && c > 0.85 * c0, "coverage {c} against {c0}");
+    }
+    assert!((c2 / c0 - 1.0).abs() < 0.15 && (r2 / r0 - 1.0).abs() < 0.05);
 }
