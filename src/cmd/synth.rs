@@ -39,6 +39,8 @@ choices! {
     YarnMethod {
         /// The fiber-level path-traced reference (`yarn-ref`).
         Reference = "reference",
+        /// Fibers generated on the GPU [W19] (`yarn-render`): seconds, not hours.
+        Fibers = "fibers",
     }
 }
 
@@ -109,7 +111,7 @@ pub struct MaterialArgs {
     /// yarn: yarn preset name or yarn TOML file.
     #[arg(long)]
     pub yarn: Option<String>,
-    /// yarn: how the BTF is rendered (reference).
+    /// yarn: how the BTF is rendered (reference: path traced; fibers: GPU [W19]).
     #[arg(long, default_value = "reference")]
     pub method: YarnMethod,
     /// yarn: jittered samples per texel (default 16).
@@ -391,6 +393,28 @@ fn synth_yarn_material(a: &MaterialArgs, progress: bool) -> Result<()> {
     }
     let dtype = if a.f16 { btf_core::zarr::DType::F16 } else { a.dtype.dtype() };
     let opts = YarnBtfOptions { resume: a.resume, progress, dtype };
+    if spec.method == "fibers" {
+        let gpu = btf_render::Gpu::new()?;
+        let settings = yarn_render::FiberSettings::default();
+        let r = yarn_render::btf::generate_fiber_btf(&gpu, &spec, settings, &a.output, &opts)
+            .with_context(|| {
+                format!("synthesising yarn {} into {}", chart_name, a.output.display())
+            })?;
+        eprintln!(
+            "yarn {} in {} {}² ({}, GPU fibers, {} instances per image): {} images written, {} \
+             kept, {:.1} s -> {}",
+            spec.chart.name,
+            spec.params.name,
+            a.size,
+            a.sampling,
+            r.instances,
+            r.images_written,
+            r.images_skipped,
+            r.seconds,
+            a.output.display()
+        );
+        return Ok(());
+    }
     let r = generate_yarn_btf(&spec, &a.output, &opts)
         .with_context(|| format!("synthesising yarn {} into {}", chart_name, a.output.display()))?;
     eprintln!(

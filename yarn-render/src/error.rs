@@ -20,6 +20,9 @@ pub enum Error {
     /// From the yarn foundation.
     #[error(transparent)]
     Yarn(#[from] yarn::Error),
+    /// From the BTF data layer (the yarn BTF store).
+    #[error(transparent)]
+    Core(#[from] btf_core::Error),
 }
 
 /// The result of this crate.

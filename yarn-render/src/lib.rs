@@ -15,6 +15,7 @@
 //! | [`effects`] | self-shadow volume, AO, ambient term: precomputed data packed | [W19 §4, eq. 7–8] |
 //! | [`bcsdf`] | `yarn::bcsdf::FiberBcsdf` lobes packed for the shader | [W19 eq. 5–6] |
 //! | [`view`] | camera, lights, frustum planes in f64 about the origin | — |
+//! | [`btf`] | the yarn BTF of DESIGN §4.2 rendered with fibers (`--method fibers`) | DESIGN §4.2 |
 //! | [`renderer`] | `FiberRenderer`: the passes of one frame, stats | [W19 §3.3, §5] |
 //!
 //! The WGSL generator (`shaders/fiber_gen.wgsl`) mirrors `yarn::fiber::FiberModel`
@@ -25,6 +26,7 @@
 #![allow(rustdoc::broken_intra_doc_links)]
 
 pub mod bcsdf;
+pub mod btf;
 pub mod effects;
 pub mod error;
 pub mod gpu_data;

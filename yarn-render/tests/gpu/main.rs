@@ -1,6 +1,7 @@
 //! GPU tests of the fiber passes (lavapipe in CI; skipped without an adapter unless
 //! `BTF_REQUIRE_GPU=1`).
 
+mod btf;
 mod coherence;
 mod common;
 mod effects;

@@ -1,0 +1,140 @@
+//! The yarn BTF of DESIGN §4.2 rendered by the GPU fiber renderer instead of the CPU
+//! reference (`btf synth material --kind yarn --method fibers`): the same periodic patch
+//! (`yarn_ref::patch::KnitPatch`: chart, stitches, period, `z_ref`), the same oblique
+//! orthographic camera through the texel centres of `z_ref`, the same directional light of
+//! unit perpendicular irradiance, so a rendered frame *is* the normtexture; written through
+//! the same resumable `BtfWriter`, so `btf compress`, `btf render` and `btf view` take it
+//! unchanged and the representation R4′ of DESIGN §4.2 (a BTF from the fast renderer) can
+//! be set against R4 (a BTF from the reference).
+//!
+//! Differences from the reference, by construction: the periodic wrap is the 3 × 3
+//! neighbourhood of copies (`PackOptions::tiles`), the footprint average is MSAA 4
+//! instead of jittered rays, the light transport is [W19]'s (self-shadow volume, tube
+//! shadow maps, no multiple scattering), no hair flyaways, and the black backing is the
+//! black clear colour.
+
+use crate::{
+    FiberCamera, FiberLight, FiberRenderer, FiberSettings, PackOptions, PackedYarns, Result,
+};
+use btf_core::store::{BtfMeta, BtfWriter};
+use btf_render::Gpu;
+use serde_json::json;
+use std::path::Path;
+use std::time::Instant;
+use yarn_ref::btf::{YarnBtfOptions, YarnBtfSpec};
+use yarn_ref::patch::{KnitPatch, PatchOptions};
+
+/// What a run did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FiberBtfReport {
+    /// Images rendered in this run.
+    pub images_written: usize,
+    /// Images kept from an interrupted run.
+    pub images_skipped: usize,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+    /// Fiber instances drawn per image (the last one).
+    pub instances: u32,
+}
+
+/// Renders the yarn BTF of `spec` with the fiber renderer (`settings`) into `out`.
+pub fn generate_fiber_btf(
+    gpu: &Gpu,
+    spec: &YarnBtfSpec,
+    settings: FiberSettings,
+    out: &Path,
+    opts: &YarnBtfOptions,
+) -> Result<FiberBtfReport> {
+    let t0 = Instant::now();
+    let bcsdf = match &spec.shading {
+        yarn_ref::Shading::Fiber { bcsdf, .. } => (**bcsdf).clone(),
+        yarn_ref::Shading::Lambert { .. } => {
+            return Err(crate::Error::Invalid(
+                "the fiber renderer shades with a fiber BCSDF, not Lambert".into(),
+            ));
+        }
+    };
+    if spec.size == 0 || spec.size > 4096 {
+        return Err(crate::Error::Invalid(format!("yarn BTF size {} (1..=4096)", spec.size)));
+    }
+    let sampling = spec.sampling.clone().validated().map_err(btf_render::Error::from)?;
+    let mut popts =
+        PatchOptions { stitches: spec.stitches, color: spec.color, ..PatchOptions::default() };
+    popts.generation.seed = spec.seed;
+    popts.generation.hairs = false;
+    let patch = KnitPatch::new(&spec.chart, &spec.params, &popts)
+        .map_err(|e| crate::Error::Invalid(e.to_string()))?;
+    let packed = PackedYarns::new(
+        &patch.yarns,
+        std::slice::from_ref(&spec.params),
+        &PackOptions { seed: spec.seed, frame_samples_per_segment: 16, tiles: [3, 3] },
+    )?;
+    let renderer = FiberRenderer::new(gpu, &packed, &bcsdf, settings)?;
+    let n = sampling.len();
+    let dirs: Vec<[f64; 3]> = (0..n).map(|i| sampling.direction(i).to_vector()).collect();
+    let mut meta = BtfMeta::new(sampling.clone(), sampling, spec.size, spec.size);
+    let s = &settings;
+    meta.provenance = json!({
+        "generator": "yarn-render",
+        "version": env!("CARGO_PKG_VERSION"),
+        "kind": "yarn",
+        "method": "fibers",
+        "chart": {"name": spec.chart.name, "source": spec.chart_source, "text": spec.chart.to_text()},
+        "yarn": {"preset": spec.params.name},
+        "stitches": patch.stitches,
+        "size": spec.size,
+        "seed": spec.seed,
+        "shading": yarn_ref::Shading::Fiber { bcsdf: std::sync::Arc::new(bcsdf.clone()), tint: true }.name(),
+        "color": spec.color,
+        "period_m": patch.period.size,
+        "z_ref_m": patch.z_ref,
+        "settings": {
+            "lod_px": s.lod_px, "n_sub": s.n_sub, "msaa": s.msaa, "core": s.effects.core,
+            "self_shadow": s.effects.self_shadow, "yarn_shadows": s.effects.yarn_shadows,
+        },
+        "model": "procedural fibers generated on the GPU [W19] (vertex pulling, fiber BCSDF, \
+                  self-shadow volume, tube shadow maps), oblique orthographic camera through texel \
+                  centres of z_ref, 3x3 periodic copies, black background, directional light of \
+                  unit perpendicular irradiance, MSAA footprint",
+    });
+    let writer = BtfWriter::create(out, meta, opts.dtype, opts.resume)?;
+    let bar = if opts.progress {
+        indicatif::ProgressBar::new((n * n) as u64)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    bar.set_message(format!("yarn fibers {} {}²", spec.chart.name, spec.size));
+    let (mut written, mut skipped, mut instances) = (0, 0, 0);
+    let size = (spec.size as u32, spec.size as u32);
+    for view in 0..n {
+        let cam =
+            FiberCamera::oblique(dirs[view], patch.z_ref, patch.period.origin, patch.period.size);
+        for light in 0..n {
+            if writer.has_image(view, light) {
+                skipped += 1;
+                bar.inc(1);
+                continue;
+            }
+            let l = dirs[light];
+            let img = if l[2] <= 0.0 {
+                vec![0.0f32; spec.size * spec.size * 3]
+            } else {
+                let lights = [FiberLight::Directional { to_light: l, irradiance: [1.0; 3] }];
+                let f = renderer.render(gpu, &cam, &lights, size, [0.0; 4])?;
+                instances = f.stats.instances;
+                f.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect()
+            };
+            writer.write_image(view, light, &img)?;
+            written += 1;
+            bar.inc(1);
+        }
+    }
+    writer.finish()?;
+    bar.finish_and_clear();
+    Ok(FiberBtfReport {
+        images_written: written,
+        images_skipped: skipped,
+        seconds: t0.elapsed().as_secs_f64(),
+        instances,
+    })
+}
