@@ -60,6 +60,9 @@ pub struct RenderArgs {
     /// No core strips: every fiber explicit (LoD then drops the innermost fibers).
     #[arg(long)]
     pub no_core: bool,
+    /// No shadow hiding (the light = view hot spot) in the self-shadows.
+    #[arg(long)]
+    pub no_shadow_hiding: bool,
     /// No self-shadows inside the yarns (the precomputed volume, [W19 §4.1]).
     #[arg(long)]
     pub no_self_shadow: bool,
@@ -230,6 +233,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
     };
     let effects = FiberEffects {
         core: !a.no_core,
+        shadow_hiding: !a.no_shadow_hiding,
         self_shadow: !a.no_self_shadow,
         yarn_shadows: !a.no_yarn_shadows,
         ao: match a.ao {

@@ -67,6 +67,10 @@ pub struct FiberEffects {
     pub core: bool,
     /// Self-shadows inside each yarn.
     pub self_shadow: bool,
+    /// Shadow hiding in the self-shadows (ours): the light's optical depth in the corridor
+    /// the eye's ray proves empty is removed, which gives the hot spot at light = view
+    /// (`fiber_draw.wgsl`, `self_transmittance`).
+    pub shadow_hiding: bool,
     /// Ambient occlusion.
     pub ao: AoMode,
     /// Shadows of other yarns (tube shadow maps, directional lights).
@@ -81,6 +85,7 @@ impl FiberEffects {
         FiberEffects {
             core: false,
             self_shadow: false,
+            shadow_hiding: false,
             ao: AoMode::Off,
             yarn_shadows: false,
             ambient: [0.0; 3],
@@ -98,6 +103,7 @@ impl Default for FiberEffects {
         FiberEffects {
             core: true,
             self_shadow: true,
+            shadow_hiding: true,
             ao: AoMode::Cubic,
             yarn_shadows: true,
             ambient: [0.0; 3],

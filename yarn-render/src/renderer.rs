@@ -267,7 +267,8 @@ impl FiberRenderer {
             | (s.tubes as u32) << 3
             | (s.effects.self_shadow as u32) << 4
             | ao << 5
-            | (s.effects.core as u32) << 7;
+            | (s.effects.core as u32) << 7
+            | (s.effects.shadow_hiding as u32) << 8;
         let f3 = |v: nalgebra::Vector3<f64>, w: f32| [v.x as f32, v.y as f32, v.z as f32, w];
         Ok(ViewRaw {
             view_proj: to_cols(&setup.view_proj),
