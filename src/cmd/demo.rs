@@ -96,6 +96,9 @@ pub fn run(a: DemoArgs) -> Result<()> {
     crate::cmd::render_sweep::demo_section(&a.out, a.components, &mut |name, done, f| {
         stage(&mut stages, name, done, f)
     })?;
+    stage(&mut stages, "knit: fibers on the GPU", a.out.join("knit/knit.json").exists(), || {
+        crate::demo::knit::run(&a.out, a.width)
+    })?;
     let eig = EigenStore::open(&eig_path)?;
     let summary =
         crate::report::demo::write(&a.out, a.kind.as_str(), &btf, &eig, &renders, &stages)?;

@@ -22,6 +22,8 @@ fn demo_runs_end_to_end_and_resumes() {
         "sweep/report.md",
         "garment.obj",
         "sky.exr",
+        "knit/knit.png",
+        "knit/knit.json",
     ] {
         assert!(out.join(f).exists(), "missing {f}");
     }
@@ -57,6 +59,13 @@ fn demo_runs_end_to_end_and_resumes() {
     for src in html.split("src=\"").skip(1).map(|t| t.split('"').next().unwrap()) {
         assert!(out.join(src).exists(), "report.html shows a missing {src}");
     }
+    // The knit close-up: fibers drawn (core strips at least), timed against plain tubes.
+    let k: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("knit/knit.json")).unwrap())
+            .unwrap();
+    assert!(k["fiber_instances"].as_u64().unwrap() > k["control_points"].as_u64().unwrap());
+    assert!(k["fibers_ms"].as_f64().unwrap() > 0.0 && k["tubes_ms"].as_f64().unwrap() > 0.0);
+    assert!(report.contains("Knitwear, fiber by fiber") && report.contains("knit/knit.png"));
     let details = std::fs::read_to_string(out.join("details.md")).unwrap();
     assert!(report.contains("(details.html)") && details.contains("| synthesise material |"));
     let gpu_required = std::env::var("BTF_REQUIRE_GPU").is_ok_and(|v| v == "1");
@@ -110,6 +119,13 @@ fn demo_runs_end_to_end_and_resumes() {
     }
     // Second run: everything reused, same report numbers.
     let again = d.ok(&args);
+    // The knit close-up: fibers drawn (core strips at least), timed against plain tubes.
+    let k: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("knit/knit.json")).unwrap())
+            .unwrap();
+    assert!(k["fiber_instances"].as_u64().unwrap() > k["control_points"].as_u64().unwrap());
+    assert!(k["fibers_ms"].as_f64().unwrap() > 0.0 && k["tubes_ms"].as_f64().unwrap() > 0.0);
+    assert!(report.contains("Knitwear, fiber by fiber") && report.contains("knit/knit.png"));
     let details = std::fs::read_to_string(out.join("details.md")).unwrap();
     assert!(details.matches("reused").count() >= 3, "{details}");
     // Same headline numbers from the kept stores.

@@ -1,0 +1,84 @@
+//! The demo's knitwear stage: a stockinette patch of cotton yarn rendered fiber by fiber
+//! on the GPU ([W19], `yarn-render`: fibers generated every frame, level of detail with
+//! core strips, self-shadows with shadow hiding, yarn shadows), next to the plain-tube
+//! baseline timed in the same run. Writes `knit/knit.png` and `knit/knit.json` (what the
+//! report shows); no equation lives here.
+
+use anyhow::Result;
+use std::path::Path;
+use std::time::Instant;
+use yarn::bcsdf::{FiberBcsdf, KhungurnParams};
+use yarn::knit::{Chart, SkeletonParams, StitchMesh, chen_skeleton};
+use yarn_render::{
+    FiberCamera, FiberLight, FiberRenderer, FiberSettings, PackOptions, PackedYarns,
+};
+
+/// Renders the knit close-up into `out/knit/`.
+pub fn run(out: &Path, width: u32) -> Result<()> {
+    let dir = out.join("knit");
+    std::fs::create_dir_all(&dir)?;
+    let chart = Chart::builtin("stockinette")?;
+    let params = yarn::YarnParams::preset("cotton-2ply")?;
+    let sk =
+        SkeletonParams { color: [0.55, 0.16, 0.12], ..SkeletonParams::new(params.yarn_radius()) };
+    let (ws, cs) = sk.default_spacing();
+    let set = chen_skeleton(&StitchMesh::flat(&chart, 8, 8, ws, cs)?, &sk)?;
+    let mut set = set;
+    set.period = None;
+    let packed = PackedYarns::new(&set, std::slice::from_ref(&params), &PackOptions::default())?;
+    let gpu = btf_render::Gpu::new()?;
+    let bcsdf = FiberBcsdf::khungurn(&KhungurnParams::default())?;
+    let (lo, hi) = packed.bounds;
+    let c = [0, 1, 2].map(|a| 0.5 * (lo[a] + hi[a]));
+    let span = hi[0] - lo[0];
+    let cam = FiberCamera::perspective(
+        [c[0] + 0.15 * span, c[1] - 0.55 * span, c[2] + 0.45 * span],
+        c,
+        [0.0, 0.0, 1.0],
+        40.0,
+    );
+    let lights = [
+        FiberLight::Directional { to_light: [-0.4, -0.6, 0.7], irradiance: [2.6, 2.4, 2.2] },
+        FiberLight::Directional { to_light: [0.7, 0.3, 0.4], irradiance: [0.5, 0.55, 0.7] },
+    ];
+    let size = (width.max(64), (width.max(64) * 5) / 8);
+    let effects = yarn_render::FiberEffects { ambient: [0.15, 0.16, 0.18], ..Default::default() };
+    let settings = FiberSettings { effects, ..Default::default() };
+    let fibers = FiberRenderer::new(&gpu, &packed, &bcsdf, settings)?;
+    let tubes =
+        FiberRenderer::new(&gpu, &packed, &bcsdf, FiberSettings { tubes: true, ..settings })?;
+    // One warm-up frame each, then interleaved timing.
+    let img = fibers.render(&gpu, &cam, &lights, size, [0.02, 0.02, 0.025, 1.0])?;
+    tubes.render(&gpu, &cam, &lights, size, [0.0; 4])?;
+    let (mut tf, mut tt) = (f64::INFINITY, f64::INFINITY);
+    for _ in 0..2 {
+        let t = Instant::now();
+        fibers.render(&gpu, &cam, &lights, size, [0.0; 4])?;
+        tf = tf.min(t.elapsed().as_secs_f64());
+        let t = Instant::now();
+        tubes.render(&gpu, &cam, &lights, size, [0.0; 4])?;
+        tt = tt.min(t.elapsed().as_secs_f64());
+    }
+    let rgb: Vec<f32> = img.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+    btf_image::write::write_png_linear(
+        &dir.join("knit.png"),
+        size.0 as usize,
+        size.1 as usize,
+        &rgb,
+        1.0,
+    )?;
+    let st = img.stats;
+    let j = serde_json::json!({
+        "png": "knit/knit.png",
+        "width": size.0, "height": size.1,
+        "stitches": [8, 8],
+        "control_points": packed.control_points(),
+        "yarn_bytes": st.yarn_bytes,
+        "fiber_instances": st.instances,
+        "triangles": st.triangles,
+        "fibers_ms": tf * 1e3,
+        "tubes_ms": tt * 1e3,
+    });
+    btf_image::write::write_text(&dir.join("knit.json"), &serde_json::to_string_pretty(&j)?)?;
+    Ok(())
+}
