@@ -14,10 +14,14 @@
 //!
 //! - group `fibers-scale`: per size `fibers/CP` and `tubes/CP`, each iteration one frame timed
 //!   by wall clock around `FiberRenderer::render` (LoD + draw passes, the 256² read-back).
+//!   Sizes above `FIBERS_CRITERION_MAX_CP` (70 000) take seconds per frame on lavapipe and
+//!   are timed directly instead: `FIBERS_DIRECT_FRAMES` (3) frames per case, fibers and
+//!   tubes interleaved frame by frame; the median is reported either way.
 //! - then **largest**: sizes doubling in control points past the series until
 //!   `PackedYarns`/`FiberRenderer` refuse (a `Limit` error), a frame fails, or the
 //!   predicted host memory (1 KiB per control point, measured ≈ 0.6 KiB) exceeds half of
-//!   `MemAvailable`; each size renders one frame. Nothing here panics on a refusal.
+//!   `MemAvailable`, or the next frame is predicted above `FIBERS_LARGEST_BUDGET_S` (90 s);
+//!   each size renders one frame. Nothing here panics on a refusal.
 //!
 //! `cargo bench -p yarn-render --bench fibers -- --quick` (`FIBERS_MAX_CP=100000` stops the
 //! series early, `FIBERS_LARGEST=0` skips the largest-patch search). Without a GPU adapter
@@ -29,9 +33,9 @@ use std::cell::RefCell;
 use std::collections::BTreeMap;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
+use yarn::YarnParams;
 use yarn::bcsdf::{FiberBcsdf, KhungurnParams};
 use yarn::knit::crane::CraneKnit;
-use yarn::YarnParams;
 use yarn_render::{
     Error, FiberCamera, FiberLight, FiberRenderer, FiberSettings, FiberStats, PackOptions,
     PackedYarns,
@@ -99,8 +103,22 @@ struct Row {
     tubes: FiberStats,
 }
 
+/// Renders one frame of `r`, wall-clock milliseconds and the stats.
+fn frame(
+    gpu: &Gpu,
+    r: &FiberRenderer,
+    cam: &FiberCamera,
+) -> yarn_render::Result<(f64, FiberStats)> {
+    let t = Instant::now();
+    let img = r.render(gpu, cam, &LIGHTS, SIZE, [0.0; 4])?;
+    std::hint::black_box(img.pixels.len());
+    Ok((t.elapsed().as_secs_f64() * 1e3, img.stats))
+}
+
 fn scaling(c: &mut Criterion, gpu: &Gpu, p: &YarnParams, bcsdf: &FiberBcsdf) -> Vec<Row> {
     let max_cp: usize = env_or("FIBERS_MAX_CP", usize::MAX);
+    let criterion_max: usize = env_or("FIBERS_CRITERION_MAX_CP", 70_000);
+    let direct_frames: usize = env_or("FIBERS_DIRECT_FRAMES", 3);
     let samples = Samples::default();
     let mut rows = Vec::new();
     let mut g = c.benchmark_group("fibers-scale");
@@ -116,39 +134,47 @@ fn scaling(c: &mut Criterion, gpu: &Gpu, p: &YarnParams, bcsdf: &FiberBcsdf) -> 
         let cps = packed.control_points();
         let cam = camera(&packed);
         let mut stats = [FiberStats::default(); 2];
+        let mut renderers = Vec::new();
         for (k, tubes) in [false, true].into_iter().enumerate() {
             let case = if tubes { "tubes" } else { "fibers" };
             let settings = FiberSettings { tubes, ..Default::default() };
-            let r = match FiberRenderer::new(gpu, &packed, bcsdf, settings) {
-                Ok(r) => r,
-                Err(e) => {
-                    println!("{cps} control points, {case}: renderer refused ({e})");
-                    continue;
+            let made = FiberRenderer::new(gpu, &packed, bcsdf, settings)
+                .and_then(|r| frame(gpu, &r, &cam).map(|(_, st)| (r, st)));
+            match made {
+                Ok((r, st)) => {
+                    stats[k] = st;
+                    renderers.push((case, r));
                 }
-            };
-            match r.render(gpu, &cam, &LIGHTS, SIZE, [0.0; 4]) {
-                Ok(img) => stats[k] = img.stats,
-                Err(e) => {
-                    println!("{cps} control points, {case}: frame failed ({e})");
-                    continue;
+                Err(e) => println!("{cps} control points, {case}: refused ({e})"),
+            }
+        }
+        if cps <= criterion_max {
+            for (case, r) in &renderers {
+                let key = format!("{case}/{cps}");
+                let smp = samples.clone();
+                g.bench_function(key.clone(), |b| {
+                    b.iter_custom(|iters| {
+                        let mut total = 0.0;
+                        for _ in 0..iters {
+                            let (ms, _) = frame(gpu, r, &cam).unwrap();
+                            smp.push(&key, ms);
+                            total += ms;
+                        }
+                        Duration::from_secs_f64(total / 1e3)
+                    })
+                });
+            }
+        } else {
+            // Seconds per frame: criterion's ≥ 11 frames per case would take minutes, so
+            // `direct_frames` frames each, fibers and tubes interleaved frame by frame.
+            println!("{cps} control points: {direct_frames} interleaved frames per case (direct)");
+            for _ in 0..direct_frames {
+                for (case, r) in &renderers {
+                    if let Ok((ms, _)) = frame(gpu, r, &cam) {
+                        samples.push(&format!("{case}/{cps}"), ms);
+                    }
                 }
             }
-            let key = format!("{case}/{cps}");
-            let smp = samples.clone();
-            g.bench_function(key.clone(), |b| {
-                b.iter_custom(|iters| {
-                    let mut total = Duration::ZERO;
-                    for _ in 0..iters {
-                        let t = Instant::now();
-                        let img = r.render(gpu, &cam, &LIGHTS, SIZE, [0.0; 4]).unwrap();
-                        let dt = t.elapsed();
-                        std::hint::black_box(img.pixels.len());
-                        smp.push(&key, dt.as_secs_f64() * 1e3);
-                        total += dt;
-                    }
-                    total
-                })
-            });
         }
         rows.push(Row { cps, fibers: stats[0], tubes: stats[1] });
     }
@@ -222,11 +248,26 @@ fn largest(gpu: &Gpu, p: &YarnParams, bcsdf: &FiberBcsdf, start_side: usize) {
     println!("\n## Largest patch that renders ({}², lod_px 1)\n", SIZE.0);
     println!("| stitches | control points | pack s | frame s | instances | yarn bytes | outcome |");
     println!("|---|---:|---:|---:|---:|---:|---|");
+    let binding = gpu.device.limits().max_storage_buffer_binding_size;
+    println!(
+        "Storage-buffer binding limit {binding} B: the segment buffer (192 B a segment) is refused \
+         above {} segments (= control points of closed curves).\n",
+        binding / 192
+    );
+    let budget_s: f64 = env_or("FIBERS_LARGEST_BUDGET_S", 90.0);
     let mut side = start_side;
     let mut last_ok = None;
+    let mut last_s = 0.0;
     for _ in 0..8 {
         side = (side as f64 * std::f64::consts::SQRT_2).round() as usize;
         let cps = 8 * side * side;
+        if 2.0 * last_s > budget_s {
+            println!(
+                "| {side}×{side} | {cps} | | | | | stopped: frame predicted ~{:.0} s, above the {budget_s} s budget (FIBERS_LARGEST_BUDGET_S) |",
+                2.0 * last_s
+            );
+            break;
+        }
         let need = cps as u64 * 1024;
         if let Some(avail) = mem_available().filter(|&a| need > a / 2) {
             println!(
@@ -248,7 +289,9 @@ fn largest(gpu: &Gpu, p: &YarnParams, bcsdf: &FiberBcsdf, start_side: usize) {
         let r = match FiberRenderer::new(gpu, &packed, bcsdf, FiberSettings::default()) {
             Ok(r) => r,
             Err(e) => {
-                println!("| {side}×{side} | {cps} | {pack_s:.1} | | | | refused by FiberRenderer: {e} |");
+                println!(
+                    "| {side}×{side} | {cps} | {pack_s:.1} | | | | refused by FiberRenderer: {e} |"
+                );
                 break;
             }
         };
@@ -256,12 +299,17 @@ fn largest(gpu: &Gpu, p: &YarnParams, bcsdf: &FiberBcsdf, start_side: usize) {
         match r.render(gpu, &camera(&packed), &LIGHTS, SIZE, [0.0; 4]) {
             Ok(img) => {
                 let st = img.stats;
+                last_s = t.elapsed().as_secs_f64();
                 println!(
                     "| {side}×{side} | {cps} | {pack_s:.1} | {:.2} | {} | {} | rendered{} |",
                     t.elapsed().as_secs_f64(),
                     st.instances,
                     st.yarn_bytes,
-                    if st.overflow > 0 { format!(", {} overflowed", st.overflow) } else { String::new() }
+                    if st.overflow > 0 {
+                        format!(", {} overflowed", st.overflow)
+                    } else {
+                        String::new()
+                    }
                 );
                 last_ok = Some(cps);
             }
