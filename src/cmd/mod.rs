@@ -9,6 +9,7 @@ pub mod import;
 pub mod inspect;
 pub mod knit;
 pub mod knit_render;
+pub mod knit_sweep;
 pub mod reconstruct;
 pub mod registration_sweep;
 pub mod relight;
