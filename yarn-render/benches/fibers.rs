@@ -17,15 +17,20 @@
 //!   Sizes above `FIBERS_CRITERION_MAX_CP` (70 000) take seconds per frame on lavapipe and
 //!   are timed directly instead: `FIBERS_DIRECT_FRAMES` (3) frames per case, fibers and
 //!   tubes interleaved frame by frame; the median is reported either way.
-//! - then **largest**: sizes doubling in control points past the series until
-//!   `PackedYarns`/`FiberRenderer` refuse (a `Limit` error), a frame fails, or the
-//!   predicted host memory (1 KiB per control point, measured ≈ 0.6 KiB) exceeds half of
-//!   `MemAvailable`, or the next frame is predicted above `FIBERS_LARGEST_BUDGET_S` (90 s);
-//!   each size renders one frame. Nothing here panics on a refusal.
+//! - then **largest**: sides growing by √2 past the series until
+//!   `PackedYarns`/`FiberRenderer` refuse (a `Limit` error) or a frame fails, then bisection
+//!   on the side between the last size that rendered and the first refused. A size is
+//!   skipped (stopped) when its host memory (estimated high at 1 KiB per control point:
+//!   ~390 B packed, as much again in lavapipe's buffers, which are host memory, plus the
+//!   `YarnSet`) exceeds half of `MemAvailable`, or its frame, extrapolated linearly in
+//!   control points, exceeds `FIBERS_LARGEST_BUDGET_S` (90 s). Each size renders one frame.
+//!   Nothing here panics on a refusal.
 //!
-//! `cargo bench -p yarn-render --bench fibers -- --quick` (`FIBERS_MAX_CP=100000` stops the
-//! series early, `FIBERS_LARGEST=0` skips the largest-patch search). Without a GPU adapter
-//! it prints why and exits 0.
+//! `cargo bench -p yarn-render --bench fibers --profile dev -- --quick` (the dev profile
+//! builds every dependency at opt-level 3 and avoids a release build of the workspace; the
+//! timed work is lavapipe's either way). `FIBERS_MAX_CP=100000` stops the series early,
+//! `FIBERS_LARGEST=0` skips the largest-patch search. Without a GPU adapter it prints why
+//! and exits 0.
 
 use btf_render::Gpu;
 use criterion::{Criterion, SamplingMode};
@@ -99,6 +104,8 @@ fn fit(pts: &[(f64, f64)]) -> (f64, f64, f64) {
 
 struct Row {
     cps: usize,
+    /// Median fiber frame ms (filled after the measurements).
+    fibers_ms: f64,
     fibers: FiberStats,
     tubes: FiberStats,
 }
@@ -148,6 +155,9 @@ fn scaling(c: &mut Criterion, gpu: &Gpu, p: &YarnParams, bcsdf: &FiberBcsdf) -> 
                 Err(e) => println!("{cps} control points, {case}: refused ({e})"),
             }
         }
+        if renderers.is_empty() {
+            break;
+        }
         if cps <= criterion_max {
             for (case, r) in &renderers {
                 let key = format!("{case}/{cps}");
@@ -176,10 +186,13 @@ fn scaling(c: &mut Criterion, gpu: &Gpu, p: &YarnParams, bcsdf: &FiberBcsdf) -> 
                 }
             }
         }
-        rows.push(Row { cps, fibers: stats[0], tubes: stats[1] });
+        rows.push(Row { cps, fibers_ms: f64::NAN, fibers: stats[0], tubes: stats[1] });
     }
     g.finish();
     report(&rows, &samples);
+    for r in &mut rows {
+        r.fibers_ms = samples.median(&format!("fibers/{}", r.cps)).unwrap_or(f64::NAN);
+    }
     rows
 }
 
@@ -243,86 +256,117 @@ fn mem_available() -> Option<u64> {
     line.split_whitespace().nth(1)?.parse::<u64>().ok().map(|kb| kb * 1024)
 }
 
-/// Sizes doubling in control points past the series until something refuses.
-fn largest(gpu: &Gpu, p: &YarnParams, bcsdf: &FiberBcsdf, start_side: usize) {
+enum Outcome {
+    Rendered(f64),
+    Refused,
+    Stopped,
+}
+
+/// Packs, builds and renders the `side × side` patch once; prints its row.
+fn try_side(
+    gpu: &Gpu,
+    p: &YarnParams,
+    bcsdf: &FiberBcsdf,
+    side: usize,
+    predicted_s: f64,
+) -> Outcome {
+    let budget_s: f64 = env_or("FIBERS_LARGEST_BUDGET_S", 90.0);
+    let cps = 8 * side * side;
+    let row = |rest: String| println!("| {side}×{side} | {cps} | {rest} |");
+    if predicted_s > budget_s {
+        row(format!(
+            "| | | | stopped: frame predicted ~{predicted_s:.0} s, above the {budget_s} s budget (FIBERS_LARGEST_BUDGET_S)"
+        ));
+        return Outcome::Stopped;
+    }
+    let need = cps as u64 * 1024;
+    if let Some(avail) = mem_available().filter(|&a| need > a / 2) {
+        row(format!(
+            "| | | | stopped: ~{:.1} GB predicted, above half of the {:.1} GB available",
+            need as f64 / 1e9,
+            avail as f64 / 1e9
+        ));
+        return Outcome::Stopped;
+    }
+    let t = Instant::now();
+    let packed = match patch(p, side) {
+        Ok(x) => x,
+        Err(e) => {
+            row(format!("| | | | refused by PackedYarns: {e}"));
+            return Outcome::Refused;
+        }
+    };
+    let pack_s = t.elapsed().as_secs_f64();
+    let r = match FiberRenderer::new(gpu, &packed, bcsdf, FiberSettings::default()) {
+        Ok(r) => r,
+        Err(e) => {
+            row(format!("{pack_s:.1} | | | | refused by FiberRenderer: {e}"));
+            return Outcome::Refused;
+        }
+    };
+    match frame(gpu, &r, &camera(&packed)) {
+        Ok((ms, st)) => {
+            let over = if st.overflow > 0 {
+                format!(", {} overflowed", st.overflow)
+            } else {
+                String::new()
+            };
+            row(format!(
+                "{pack_s:.1} | {:.2} | {} | {} | rendered{over}",
+                ms / 1e3,
+                st.instances,
+                st.yarn_bytes
+            ));
+            Outcome::Rendered(ms / 1e3)
+        }
+        Err(e) => {
+            row(format!("{pack_s:.1} | | | | frame failed: {e}"));
+            Outcome::Refused
+        }
+    }
+}
+
+/// Sizes growing by √2 per side past the last size of the series until one is refused (or
+/// stopped by the time or memory budget), then bisection on the side between the last
+/// size that rendered and the first refused.
+fn largest(gpu: &Gpu, p: &YarnParams, bcsdf: &FiberBcsdf, start: (usize, f64)) {
     println!("\n## Largest patch that renders ({}², lod_px 1)\n", SIZE.0);
-    println!("| stitches | control points | pack s | frame s | instances | yarn bytes | outcome |");
-    println!("|---|---:|---:|---:|---:|---:|---|");
     let binding = gpu.device.limits().max_storage_buffer_binding_size;
     println!(
         "Storage-buffer binding limit {binding} B: the segment buffer (192 B a segment) is refused \
          above {} segments (= control points of closed curves).\n",
         binding / 192
     );
-    let budget_s: f64 = env_or("FIBERS_LARGEST_BUDGET_S", 90.0);
-    let mut side = start_side;
-    let mut last_ok = None;
-    let mut last_s = 0.0;
+    println!("| stitches | control points | pack s | frame s | instances | yarn bytes | outcome |");
+    println!("|---|---:|---:|---:|---:|---:|---|");
+    let (mut ok, mut ok_s) = start;
+    let per_cp = |side: usize, ok: usize, ok_s: f64| ok_s * (side * side) as f64 / (ok * ok) as f64;
+    let mut refused = None;
     for _ in 0..8 {
-        side = (side as f64 * std::f64::consts::SQRT_2).round() as usize;
-        let cps = 8 * side * side;
-        if 2.0 * last_s > budget_s {
-            println!(
-                "| {side}×{side} | {cps} | | | | | stopped: frame predicted ~{:.0} s, above the {budget_s} s budget (FIBERS_LARGEST_BUDGET_S) |",
-                2.0 * last_s
-            );
-            break;
+        let side = (ok as f64 * std::f64::consts::SQRT_2).round() as usize;
+        match try_side(gpu, p, bcsdf, side, per_cp(side, ok, ok_s)) {
+            Outcome::Rendered(s) => (ok, ok_s) = (side, s),
+            Outcome::Refused => {
+                refused = Some(side);
+                break;
+            }
+            Outcome::Stopped => break,
         }
-        let need = cps as u64 * 1024;
-        if let Some(avail) = mem_available().filter(|&a| need > a / 2) {
-            println!(
-                "| {side}×{side} | {cps} | | | | | stopped: ~{:.1} GB predicted, above half of the {:.1} GB available |",
-                need as f64 / 1e9,
-                avail as f64 / 1e9
-            );
-            break;
-        }
-        let t = Instant::now();
-        let packed = match patch(p, side) {
-            Ok(x) => x,
-            Err(e) => {
-                println!("| {side}×{side} | {cps} | | | | | refused by PackedYarns: {e} |");
-                break;
-            }
-        };
-        let pack_s = t.elapsed().as_secs_f64();
-        let r = match FiberRenderer::new(gpu, &packed, bcsdf, FiberSettings::default()) {
-            Ok(r) => r,
-            Err(e) => {
-                println!(
-                    "| {side}×{side} | {cps} | {pack_s:.1} | | | | refused by FiberRenderer: {e} |"
-                );
-                break;
-            }
-        };
-        let t = Instant::now();
-        match r.render(gpu, &camera(&packed), &LIGHTS, SIZE, [0.0; 4]) {
-            Ok(img) => {
-                let st = img.stats;
-                last_s = t.elapsed().as_secs_f64();
-                println!(
-                    "| {side}×{side} | {cps} | {pack_s:.1} | {:.2} | {} | {} | rendered{} |",
-                    t.elapsed().as_secs_f64(),
-                    st.instances,
-                    st.yarn_bytes,
-                    if st.overflow > 0 {
-                        format!(", {} overflowed", st.overflow)
-                    } else {
-                        String::new()
-                    }
-                );
-                last_ok = Some(cps);
-            }
-            Err(e) => {
-                println!("| {side}×{side} | {cps} | {pack_s:.1} | | | | frame failed: {e} |");
-                break;
+    }
+    if let Some(mut bad) = refused {
+        while bad - ok > 1 {
+            let mid = (ok + bad) / 2;
+            match try_side(gpu, p, bcsdf, mid, per_cp(mid, ok, ok_s)) {
+                Outcome::Rendered(s) => (ok, ok_s) = (mid, s),
+                Outcome::Refused => bad = mid,
+                Outcome::Stopped => break,
             }
         }
     }
-    match last_ok {
-        Some(c) => println!("\nLargest patch rendered: {c} control points."),
-        None => println!("\nNo size past the series rendered."),
-    }
+    println!(
+        "\nLargest patch rendered: {ok}×{ok} stitches, {} control points ({ok_s:.1} s a frame).",
+        8 * ok * ok
+    );
 }
 
 fn main() {
@@ -350,8 +394,10 @@ fn main() {
         .configure_from_args();
     let rows = scaling(&mut c, &gpu, &p, &bcsdf);
     if env_or("FIBERS_LARGEST", 1u32) == 1 {
-        let last = rows.last().map_or(SIDES[0], |r| ((r.cps / 8) as f64).sqrt().round() as usize);
-        largest(&gpu, &p, &bcsdf, last);
+        if let Some(r) = rows.last() {
+            let side = ((r.cps / 8) as f64).sqrt().round() as usize;
+            largest(&gpu, &p, &bcsdf, (side, r.fibers_ms / 1e3));
+        }
     }
     c.final_summary();
 }
