@@ -104,7 +104,7 @@ struct Cam {
 /// One cell of the grid and what it measured.
 #[derive(Debug, Clone)]
 pub struct Cell {
-    /// Camera name (`btf:θ,φ` or `persp:Npx`).
+    /// Camera name (`btf`, the oblique BTF camera, or `persp-Npx`; no commas, for the CSV).
     pub camera: String,
     /// Shading model.
     pub shading: String,
@@ -245,6 +245,8 @@ pub fn run(a: SweepArgs) -> Result<()> {
         .iter()
         .map(|s| Ok((s.as_str().to_string(), fiber_bcsdf(s.as_str())?)))
         .collect::<Result<_>>()?;
+    // The device first: without one there is nothing to sweep.
+    let gpu = btf_render::Gpu::new().context("creating a headless GPU device")?;
     guard::output_folder(&a.output, "knit sweep", a.fresh, &guard::report_output)?;
 
     // The period: grown until every perspective camera's footprint fits 9 × 9 periods.
@@ -294,7 +296,7 @@ pub fn run(a: SweepArgs) -> Result<()> {
     let (lo, hi) = yarn_ref::patch::centre_line_z(&patch.yarns);
     let target = [0.5 * patch.period.size[0], 0.5 * patch.period.size[1], 0.5 * (lo + hi)];
     let mut cams = vec![Cam {
-        name: format!("btf:{vt},{vp}"),
+        name: "btf".into(),
         stitch_px: None,
         reference: yarn_ref::Camera::oblique(view, patch.z_ref, [0.0, 0.0], patch.period.size)?,
         gpu: FiberCamera::oblique(view, patch.z_ref, [0.0, 0.0], patch.period.size),
@@ -304,7 +306,7 @@ pub fn run(a: SweepArgs) -> Result<()> {
         let eye = persp_eye(target, view, ws, px, h);
         let up = [0.0, 0.0, 1.0];
         cams.push(Cam {
-            name: format!("persp:{px}px"),
+            name: format!("persp-{px}px"),
             stitch_px: Some(px),
             reference: yarn_ref::Camera::perspective(eye, target, up, FOV_DEG)?,
             gpu: FiberCamera::perspective(eye, target, up, FOV_DEG),
@@ -312,10 +314,8 @@ pub fn run(a: SweepArgs) -> Result<()> {
         });
     }
 
-    // References: once per camera and shading model.
+    // References: once per camera and shading model; then the GPU grid.
     let refs = references(&a, &cams, &bcsdfs, &scene, &ref_lights, (w, h))?;
-    // The GPU grid.
-    let gpu = btf_render::Gpu::new().context("creating a headless GPU device")?;
     let cells = gpu_grid(&a, &gpu, &patch, &params, &cams, &bcsdfs, &gpu_lights, &refs, (w, h))?;
 
     write_text(&a.output.join("sweep.csv"), &csv(&cells, &cams))?;
@@ -358,7 +358,9 @@ fn references(
 }
 
 fn file_safe(s: &str) -> String {
-    s.chars().map(|c| if c.is_ascii_alphanumeric() || c == '.' { c } else { '_' }).collect()
+    s.chars()
+        .map(|c| if c.is_ascii_alphanumeric() || c == '.' || c == '-' { c } else { '_' })
+        .collect()
 }
 
 /// Relative RMSE and pixel count of `g` against `r` on the interior mask, the silhouette
@@ -611,7 +613,8 @@ fn markdown(
         cams.iter().map(|c| format!("{} ({}×{} periods)", c.name, c.tiles, c.tiles)).collect();
     let _ = writeln!(
         s,
-        "Cameras: {}. Hair flyaways off in both (R-approx). Frame ms: median of {} interleaved frames; × tubes: against the plain tubes of the same camera and shading in this run.\n",
+        "Cameras (viewing direction θ,φ = {}° for all): {}. Hair flyaways off in both (R-approx). Frame ms: median of {} interleaved frames; × tubes: against the plain tubes of the same camera and shading in this run.\n",
+        a.view,
         tiles.join(", "),
         a.repeat
     );
