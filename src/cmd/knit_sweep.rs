@@ -550,25 +550,37 @@ fn csv(cells: &[Cell], cams: &[Cam]) -> String {
 /// The LoD crossover of one (camera, shading, n_max) series: with `e₀` the covered-pixel error
 /// at the smallest threshold swept (full detail when 0 is swept), the largest ω^LoD such
 /// that it and every smaller threshold keep the error ≤ 1.1·e₀ — the most LoD that costs
-/// at most 10 % more error. Returns `(crossover, e₀, first threshold past it with its
-/// error)`.
-pub fn crossover(series: &[(f32, f64)]) -> Option<(f32, f64, Option<(f32, f64)>)> {
+/// at most 10 % more error. A NaN error (nothing scored) counts as outside the band.
+pub fn crossover(series: &[(f32, f64)]) -> Option<Crossover> {
     let mut s: Vec<(f32, f64)> = series.to_vec();
     s.sort_by(|a, b| a.0.total_cmp(&b.0));
     let &(l0, e0) = s.first()?;
-    let mut best = l0;
+    let mut lod = l0;
     for &(l, e) in &s[1..] {
-        if !(e <= 1.1 * e0) {
-            return Some((best, e0, Some((l, e))));
+        let within = e.partial_cmp(&(1.1 * e0)).is_some_and(|o| o.is_le());
+        if !within {
+            return Some(Crossover { lod, e0, next: Some((l, e)) });
         }
-        best = l;
+        lod = l;
     }
-    Some((best, e0, None))
+    Some(Crossover { lod, e0, next: None })
 }
 
-fn crossovers(
-    cells: &[Cell],
-) -> Vec<(String, String, u32, Option<(f32, f64, Option<(f32, f64)>)>)> {
+/// The LoD crossover of one series (see [`crossover`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Crossover {
+    /// The crossover threshold ω^LoD (px).
+    pub lod: f32,
+    /// The error at the smallest threshold swept.
+    pub e0: f64,
+    /// The first threshold past the crossover and its error.
+    pub next: Option<(f32, f64)>,
+}
+
+/// One crossover per (camera, shading, n_max).
+type CrossoverRow = (String, String, u32, Option<Crossover>);
+
+fn crossovers(cells: &[Cell]) -> Vec<CrossoverRow> {
     let mut keys: Vec<(String, String, u32)> = Vec::new();
     for c in cells.iter().filter(|c| c.lod_px.is_some()) {
         let k = (c.camera.clone(), c.shading.clone(), c.n_max);
@@ -643,7 +655,7 @@ fn markdown(
     s.push_str("\nInterior: reference coverage ≥ 0.99 and GPU alpha ≥ 0.99; silhouette: the other pixels either image covers by more than 0.01; covered: both together (a LoD that thins the yarn moves pixels out of the interior, so the crossover is judged on this one). LoD crossover: the largest ω^LoD whose covered-pixel error, and that of every smaller threshold, stays within 10 % of the error at the smallest threshold swept (full detail at 0).\n\n");
     for (cam, sh, n, x) in crossovers(cells) {
         match x {
-            Some((l, e0, next)) => {
+            Some(Crossover { lod: l, e0, next }) => {
                 let after = next.map_or("no threshold swept leaves the band".into(), |(l2, e2)| {
                     format!("ω^LoD = {l2} px gives {e2:.4}")
                 });
@@ -708,10 +720,11 @@ mod tests {
     #[test]
     fn crossover_is_the_last_threshold_within_ten_percent() {
         let s = [(0.0, 0.10), (0.5, 0.105), (1.0, 0.109), (2.0, 0.2), (4.0, 0.105)];
-        let (l, e0, next) = crossover(&s).unwrap();
-        assert_eq!((l, e0), (1.0, 0.10));
-        assert_eq!(next, Some((2.0, 0.2)));
-        assert_eq!(crossover(&[(0.0, 0.1), (1.0, 0.1)]).unwrap().0, 1.0);
+        let c = crossover(&s).unwrap();
+        assert_eq!((c.lod, c.e0), (1.0, 0.10));
+        assert_eq!(c.next, Some((2.0, 0.2)));
+        assert_eq!(crossover(&[(0.0, 0.1), (1.0, 0.1)]).unwrap().lod, 1.0);
+        assert_eq!(crossover(&[(0.0, 0.1), (1.0, f64::NAN)]).unwrap().lod, 0.0);
         assert!(crossover(&[]).is_none());
     }
 

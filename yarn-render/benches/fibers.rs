@@ -393,11 +393,9 @@ fn main() {
         .without_plots()
         .configure_from_args();
     let rows = scaling(&mut c, &gpu, &p, &bcsdf);
-    if env_or("FIBERS_LARGEST", 1u32) == 1 {
-        if let Some(r) = rows.last() {
-            let side = ((r.cps / 8) as f64).sqrt().round() as usize;
-            largest(&gpu, &p, &bcsdf, (side, r.fibers_ms / 1e3));
-        }
+    if let Some(r) = rows.last().filter(|_| env_or("FIBERS_LARGEST", 1u32) == 1) {
+        let side = ((r.cps / 8) as f64).sqrt().round() as usize;
+        largest(&gpu, &p, &bcsdf, (side, r.fibers_ms / 1e3));
     }
     c.final_summary();
 }
