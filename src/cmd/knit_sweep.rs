@@ -121,6 +121,9 @@ pub struct Cell {
     /// Relative RMSE over every pixel either image covers by more than 0.01 (interior and
     /// band together: what the LoD crossover is judged on), and its pixel count.
     pub all: (f64, usize),
+    /// Relative RMSE over the frame against the finest threshold's GPU image of the same
+    /// camera, shading and n_max: what the LoD alone changes (0 for that image itself).
+    pub vs_full: f64,
     /// Median frame ms.
     pub ms: f64,
     /// Median frame ms of the tubes of the same camera and shading.
@@ -389,6 +392,18 @@ pub fn errors(g: &[[f32; 4]], r: &yarn_ref::Image) -> [(f64, usize); 3] {
     acc.map(rel)
 }
 
+/// `√(Σ(g−f)²/Σf²)` over the RGB of every pixel.
+fn rel_rmse(g: &[[f32; 4]], f: &[[f32; 4]]) -> f64 {
+    let (mut num, mut den) = (0.0f64, 0.0f64);
+    for (p, q) in g.iter().zip(f) {
+        for c in 0..3 {
+            num += (p[c] as f64 - q[c] as f64).powi(2);
+            den += (q[c] as f64).powi(2);
+        }
+    }
+    if den > 0.0 { (num / den).sqrt() } else { f64::NAN }
+}
+
 /// Builds every cell's renderer, renders each once (stats, error), then times
 /// `a.repeat` frames per cell, interleaved.
 #[allow(clippy::too_many_arguments)]
@@ -404,9 +419,14 @@ fn gpu_grid(
     size: (u32, u32),
 ) -> Result<Vec<Cell>> {
     let n_maxes = if a.n_max.is_empty() { vec![u32::MAX] } else { a.n_max.clone() };
-    let mut lods: Vec<Option<f32>> = vec![None];
-    lods.extend(a.lod_px.iter().map(|&l| Some(l)));
-    let total = cams.len() * bcsdfs.len() * (1 + n_maxes.len() * a.lod_px.len());
+    // Fibers from the finest threshold up (the first is the full-detail image every other
+    // threshold is also compared with), then the tubes.
+    let mut fine: Vec<f32> = a.lod_px.clone();
+    fine.sort_by(f32::total_cmp);
+    fine.dedup();
+    let mut lods: Vec<Option<f32>> = fine.iter().map(|&l| Some(l)).collect();
+    lods.push(None);
+    let total = cams.len() * bcsdfs.len() * (1 + n_maxes.len() * fine.len());
     let bar = crate::progress::bar((total * (1 + a.repeat as usize)) as u64, "GPU cells");
     let mut cells = Vec::new();
     let mut renderers = Vec::new();
@@ -422,6 +442,7 @@ fn gpu_grid(
         )?;
         for (si, (sname, b)) in bcsdfs.iter().enumerate() {
             for &n_max in &n_maxes {
+                let mut full: Option<Vec<[f32; 4]>> = None;
                 for &lod in &lods {
                     if lod.is_none() && n_max != n_maxes[0] {
                         continue; // one tube baseline per camera and shading
@@ -437,6 +458,8 @@ fn gpu_grid(
                     let r = FiberRenderer::new(gpu, &packed, b, settings)?;
                     let img = r.render(gpu, &cam.gpu, lights, size, [0.0; 4])?;
                     let [interior, band, all] = errors(&img.pixels, &refs[ci][si]);
+                    let full = full.get_or_insert_with(|| img.pixels.clone());
+                    let vs_full = rel_rmse(&img.pixels, full);
                     let lod_name = lod.map_or("tubes".into(), |l| format!("lod{l}"));
                     let n_name =
                         if n_maxes.len() > 1 { format!("-n{n_max}") } else { String::new() };
@@ -461,6 +484,7 @@ fn gpu_grid(
                         interior,
                         band,
                         all,
+                        vs_full,
                         ms: f64::NAN,
                         tubes_ms: f64::NAN,
                     });
@@ -516,13 +540,13 @@ fn n_max_text(n: u32) -> String {
 fn csv(cells: &[Cell], cams: &[Cam]) -> String {
     let mut s = String::from(
         "camera,stitch_px,shading,n_max,method,lod_px,segments,culled,instances,triangles,\
-         rel_rmse_interior,interior_px,rel_rmse_band,band_px,rel_rmse_all,all_px,frame_ms,tubes_ms,ratio_tubes\n",
+         rel_rmse_interior,interior_px,rel_rmse_band,band_px,rel_rmse_all,all_px,rel_rmse_vs_full,frame_ms,tubes_ms,ratio_tubes\n",
     );
     for c in cells {
         let px = cams.iter().find(|k| k.name == c.camera).and_then(|k| k.stitch_px);
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{:.6e},{},{:.6e},{},{:.6e},{},{:.4},{:.4},{:.4}",
+            "{},{},{},{},{},{},{},{},{},{},{:.6e},{},{:.6e},{},{:.6e},{},{:.6e},{:.4},{:.4},{:.4}",
             c.camera,
             px.map(|p| p.to_string()).unwrap_or_default(),
             c.shading,
@@ -539,6 +563,7 @@ fn csv(cells: &[Cell], cams: &[Cam]) -> String {
             c.band.1,
             c.all.0,
             c.all.1,
+            c.vs_full,
             c.ms,
             c.tubes_ms,
             c.ms / c.tubes_ms
@@ -549,15 +574,16 @@ fn csv(cells: &[Cell], cams: &[Cam]) -> String {
 
 /// The LoD crossover of one (camera, shading, n_max) series: with `e₀` the covered-pixel error
 /// at the smallest threshold swept (full detail when 0 is swept), the largest ω^LoD such
-/// that it and every smaller threshold keep the error ≤ 1.1·e₀ — the most LoD that costs
-/// at most 10 % more error. A NaN error (nothing scored) counts as outside the band.
+/// that it and every smaller threshold keep the error within ±10 % of e₀ — the most LoD
+/// that changes the error by at most 10 % either way (a large drop is as much a change of
+/// appearance as a rise while e₀ is large). A NaN error counts as outside the band.
 pub fn crossover(series: &[(f32, f64)]) -> Option<Crossover> {
     let mut s: Vec<(f32, f64)> = series.to_vec();
     s.sort_by(|a, b| a.0.total_cmp(&b.0));
     let &(l0, e0) = s.first()?;
     let mut lod = l0;
     for &(l, e) in &s[1..] {
-        let within = e.partial_cmp(&(1.1 * e0)).is_some_and(|o| o.is_le());
+        let within = (e - e0).abs().partial_cmp(&(0.1 * e0)).is_some_and(|o| o.is_le());
         if !within {
             return Some(Crossover { lod, e0, next: Some((l, e)) });
         }
@@ -630,13 +656,13 @@ fn markdown(
         tiles.join(", "),
         a.repeat
     );
-    s.push_str("| camera | shading | n_max | ω^LoD px | instances | triangles | rel. RMSE interior | (px) | rel. RMSE silhouette | (px) | rel. RMSE covered | frame ms | × tubes |\n");
-    s.push_str("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    s.push_str("| camera | shading | n_max | ω^LoD px | instances | triangles | rel. RMSE interior | (px) | rel. RMSE silhouette | (px) | rel. RMSE covered | vs full detail | frame ms | × tubes |\n");
+    s.push_str("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     let e = |v: f64| if v.is_finite() { format!("{v:.4}") } else { "—".into() };
     for c in cells {
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1} | {:.2} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1} | {:.2} |",
             c.camera,
             c.shading,
             n_max_text(c.n_max),
@@ -648,11 +674,12 @@ fn markdown(
             e(c.band.0),
             c.band.1,
             e(c.all.0),
+            e(c.vs_full),
             c.ms,
             c.ms / c.tubes_ms
         );
     }
-    s.push_str("\nInterior: reference coverage ≥ 0.99 and GPU alpha ≥ 0.99; silhouette: the other pixels either image covers by more than 0.01; covered: both together (a LoD that thins the yarn moves pixels out of the interior, so the crossover is judged on this one). LoD crossover: the largest ω^LoD whose covered-pixel error, and that of every smaller threshold, stays within 10 % of the error at the smallest threshold swept (full detail at 0).\n\n");
+    s.push_str("\nInterior: reference coverage ≥ 0.99 and GPU alpha ≥ 0.99; silhouette: the other pixels either image covers by more than 0.01; covered: both together (a LoD that thins the yarn moves pixels out of the interior, so the crossover is judged on this one); vs full detail: the frame against the finest threshold's GPU image (what the LoD alone changes). LoD crossover: the largest ω^LoD whose covered-pixel error, and that of every smaller threshold, stays within ±10 % of the error at the smallest threshold swept (full detail at 0). Two-sided: while the full-detail error is large, a LoD that drops most fibers can score *lower* against the reference (a near-black frame scores ≈ 1), and that is a change of appearance, not a gain.\n\n");
     for (cam, sh, n, x) in crossovers(cells) {
         match x {
             Some(Crossover { lod: l, e0, next }) => {
@@ -725,6 +752,8 @@ mod tests {
         assert_eq!(c.next, Some((2.0, 0.2)));
         assert_eq!(crossover(&[(0.0, 0.1), (1.0, 0.1)]).unwrap().lod, 1.0);
         assert_eq!(crossover(&[(0.0, 0.1), (1.0, f64::NAN)]).unwrap().lod, 0.0);
+        // Two-sided: a 20 % drop leaves the band too.
+        assert_eq!(crossover(&[(0.0, 1.0), (0.5, 0.95), (1.0, 0.8)]).unwrap().lod, 0.5);
         assert!(crossover(&[]).is_none());
     }
 

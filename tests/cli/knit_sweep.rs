@@ -104,8 +104,11 @@ fn knit_sweep_writes_the_grid_with_tubes_at_ratio_one() {
             assert_eq!(f(x, "triangles"), f(x, "instances") * 16.0, "{csv}");
             assert!(f(x, "frame_ms") > 0.0 && f(x, "ratio_tubes") > 0.0, "{csv}");
         }
-        // Full detail draws every fiber: its interior exists and is scored.
+        // Full detail draws every fiber: its interior exists and is scored; it is its own
+        // full-detail image, and the coarser LoD changes the frame.
         assert!(f(full, "interior_px") > 0.0, "{csv}");
+        assert_eq!(f(full, "rel_rmse_vs_full"), 0.0, "{csv}");
+        assert!(f(coarse, "rel_rmse_vs_full") > 0.01, "{csv}");
     }
     let md = std::fs::read_to_string(d.path("sw/sweep.md")).unwrap();
     assert!(md.contains("| persp-12px | simple | all | tubes |"), "{md}");
