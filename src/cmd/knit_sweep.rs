@@ -719,7 +719,8 @@ fn plot(cells: &[Cell]) -> Plot {
             .filter(|p| finite(p.1, p.2))
             .collect();
         let name = if n == u32::MAX { format!("{cam} {sh}") } else { format!("{cam} {sh} n{n}") };
-        series.push(Series::parametric(name, pts, |l| format!("{l}px")));
+        // Labels from the f32 threshold as given (0.1, not 0.10000000149…).
+        series.push(Series::parametric(name, pts, |l| format!("{}px", l as f32)));
     }
     let tubes: Vec<(f64, f64)> = cells
         .iter()
@@ -732,10 +733,10 @@ fn plot(cells: &[Cell]) -> Plot {
     series.push(t);
     Plot {
         title: "GPU fibers: error against frame time".into(),
-        x_label: "frame time / plain tubes (same run)".into(),
+        x_label: "frame time / plain tubes (same run, log)".into(),
         y_label: "rel. RMSE against the reference, covered pixels (log)".into(),
         log_y: true,
-        log_x: false,
+        log_x: true,
         series,
     }
 }
