@@ -461,8 +461,11 @@ fn gpu_grid(
                     let full = full.get_or_insert_with(|| img.pixels.clone());
                     let vs_full = rel_rmse(&img.pixels, full);
                     let lod_name = lod.map_or("tubes".into(), |l| format!("lod{l}"));
-                    let n_name =
-                        if n_maxes.len() > 1 { format!("-n{n_max}") } else { String::new() };
+                    let n_name = if n_maxes.len() > 1 && lod.is_some() {
+                        format!("-n{n_max}")
+                    } else {
+                        String::new()
+                    };
                     let file =
                         format!("gpu-{}-{sname}-{lod_name}{n_name}.exr", file_safe(&cam.name));
                     let rgb: Vec<f32> =
@@ -539,14 +542,14 @@ fn n_max_text(n: u32) -> String {
 
 fn csv(cells: &[Cell], cams: &[Cam]) -> String {
     let mut s = String::from(
-        "camera,stitch_px,shading,n_max,method,lod_px,segments,culled,instances,triangles,\
+        "camera,stitch_px,shading,n_max,method,lod_px,segments,culled,instances,triangles,yarn_bytes,\
          rel_rmse_interior,interior_px,rel_rmse_band,band_px,rel_rmse_all,all_px,rel_rmse_vs_full,frame_ms,tubes_ms,ratio_tubes\n",
     );
     for c in cells {
         let px = cams.iter().find(|k| k.name == c.camera).and_then(|k| k.stitch_px);
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{:.6e},{},{:.6e},{},{:.6e},{},{:.6e},{:.4},{:.4},{:.4}",
+            "{},{},{},{},{},{},{},{},{},{},{},{:.6e},{},{:.6e},{},{:.6e},{},{:.6e},{:.4},{:.4},{:.4}",
             c.camera,
             px.map(|p| p.to_string()).unwrap_or_default(),
             c.shading,
@@ -557,6 +560,7 @@ fn csv(cells: &[Cell], cams: &[Cam]) -> String {
             c.stats.culled,
             c.stats.instances,
             c.stats.triangles,
+            c.stats.yarn_bytes,
             c.interior.0,
             c.interior.1,
             c.band.0,

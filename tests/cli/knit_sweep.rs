@@ -103,6 +103,8 @@ fn knit_sweep_writes_the_grid_with_tubes_at_ratio_one() {
             }
             assert_eq!(f(x, "triangles"), f(x, "instances") * 16.0, "{csv}");
             assert!(f(x, "frame_ms") > 0.0 && f(x, "ratio_tubes") > 0.0, "{csv}");
+            // The same packed yarns for every cell of a camera: O(control points) bytes.
+            assert_eq!(f(x, "yarn_bytes"), f(tubes, "yarn_bytes"), "{csv}");
         }
         // Full detail draws every fiber: its interior exists and is scored; it is its own
         // full-detail image, and the coarser LoD changes the frame.
