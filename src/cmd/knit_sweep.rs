@@ -9,16 +9,18 @@
 //! band (the other pixels either covers by more than 0.01), median frame ms and its ratio
 //! to the tubes of the same camera and shading, instances and triangles. Writes
 //! `sweep.csv`, `sweep.md`, `sweep.png` (error against time ratio) and the references
-//! `ref-*.exr`, and prints the LoD crossover (defined in [`crossover`]).
+//! `ref-*.exr`, and prints the LoD crossover (defined in
+//! [`super::knit_sweep_report::crossover`]); the tables and the plot are
+//! `knit_sweep_report`.
 
 use super::knit::{ShadingChoice, chart_inputs_of, load_chart, load_yarn};
 use super::knit_render::{bcsdf as fiber_bcsdf, fiber_light};
+use super::knit_sweep_report::{csv, markdown, plot};
 use crate::guard::{self, outln};
 use anyhow::{Context, Result, bail};
-use btf_image::plot::{Plot, Series, render};
+use btf_image::plot::render;
 use btf_image::write::{write_exr_rgb, write_png, write_text};
 use clap::Args;
-use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
@@ -93,12 +95,15 @@ pub struct SweepArgs {
 }
 
 /// One camera of the sweep, for both renderers.
-struct Cam {
-    name: String,
-    stitch_px: Option<f64>,
+pub(crate) struct Cam {
+    /// `btf` or `persp-Npx` (no commas: a CSV cell).
+    pub(crate) name: String,
+    /// On-screen stitch width of a perspective camera (px).
+    pub(crate) stitch_px: Option<f64>,
     reference: yarn_ref::Camera,
     gpu: FiberCamera,
-    tiles: u32,
+    /// Periods drawn per side by the GPU (odd).
+    pub(crate) tiles: u32,
 }
 
 /// One cell of the grid and what it measured.
@@ -214,6 +219,85 @@ fn tiles_for(half: [f64; 2], margin: f64, period: [f64; 2]) -> u32 {
     (n.max(3)) | 1
 }
 
+/// The period: the chart repeat `base` grown (× m) until every perspective camera's
+/// footprint fits 9 × 9 periods; returns the stitches and each camera's tile count.
+fn grow_period(
+    base: [usize; 2],
+    params: &yarn::params::YarnParams,
+    view: [f64; 3],
+    dists: &[f64],
+    (w, h): (u32, u32),
+    view_arg: &str,
+) -> Result<([usize; 2], Vec<u32>)> {
+    let sk = SkeletonParams::new(params.yarn_radius());
+    let (ws, cs) = sk.default_spacing();
+    let margin = 4.0 * params.yarn_radius();
+    for m in 1..=16 {
+        let st = [base[0] * m, base[1] * m];
+        let period = [st[0] as f64 * ws, st[1] as f64 * cs];
+        let centre = [0.5 * period[0], 0.5 * period[1], 0.0];
+        let mut tiles = Vec::new();
+        for &px in dists {
+            let eye = persp_eye(centre, view, ws, px, h);
+            let half = footprint(eye, centre, (w, h)).ok_or_else(|| {
+                anyhow::anyhow!("--view {view_arg}: the frame reaches the horizon")
+            })?;
+            tiles.push(tiles_for(half, margin, period));
+        }
+        if tiles.iter().all(|&n| n <= 9) {
+            return Ok((st, tiles));
+        }
+    }
+    bail!(
+        "--distances {dists:?}: a stitch this small shows more stitches than 9 × 9 periods of 16 × the chart hold"
+    )
+}
+
+/// The `btf` camera over one period and a perspective camera per stitch width in `dists`,
+/// looking along `-view` at the patch centre.
+fn cameras(
+    patch: &KnitPatch,
+    view: [f64; 3],
+    ws: f64,
+    dists: &[f64],
+    tiles: &[u32],
+    h: u32,
+) -> Result<Vec<Cam>> {
+    let (lo, hi) = yarn_ref::patch::centre_line_z(&patch.yarns);
+    let target = [0.5 * patch.period.size[0], 0.5 * patch.period.size[1], 0.5 * (lo + hi)];
+    let mut cams = vec![Cam {
+        name: "btf".into(),
+        stitch_px: None,
+        reference: yarn_ref::Camera::oblique(view, patch.z_ref, [0.0, 0.0], patch.period.size)?,
+        gpu: FiberCamera::oblique(view, patch.z_ref, [0.0, 0.0], patch.period.size),
+        tiles: 3,
+    }];
+    for (&px, &tiles) in dists.iter().zip(tiles) {
+        let eye = persp_eye(target, view, ws, px, h);
+        let up = [0.0, 0.0, 1.0];
+        cams.push(Cam {
+            name: format!("persp-{px}px"),
+            stitch_px: Some(px),
+            reference: yarn_ref::Camera::perspective(eye, target, up, FOV_DEG)?,
+            gpu: FiberCamera::perspective(eye, target, up, FOV_DEG),
+            tiles,
+        });
+    }
+    Ok(cams)
+}
+
+/// `--light` for both renderers (default `dir:35,60`).
+fn lights(specs: &[String]) -> Result<(Vec<FiberLight>, Vec<yarn_ref::Light>)> {
+    let specs = if specs.is_empty() { vec!["dir:35,60".into()] } else { specs.to_vec() };
+    let max = yarn_render::view::MAX_LIGHTS;
+    if specs.len() > max {
+        bail!("--light given {} times: at most {max}", specs.len());
+    }
+    let gpu = specs.iter().map(|s| fiber_light(s)).collect::<Result<_>>()?;
+    let reference = specs.iter().map(|s| super::knit::light(s)).collect::<Result<_>>()?;
+    Ok((gpu, reference))
+}
+
 /// Runs `btf knit sweep`.
 pub fn run(a: SweepArgs) -> Result<()> {
     validate(&a)?;
@@ -227,22 +311,14 @@ pub fn run(a: SweepArgs) -> Result<()> {
     if !(0.0..80.0).contains(&vt) || !vp.is_finite() {
         bail!("--view {}: THETA in [0, 80) degrees, PHI finite", a.view);
     }
-    let view = btf_core::Direction::new(vt, vp).to_vector();
     let dists = distances(&a)?;
+    if vt < 1.0 && !dists.is_empty() {
+        bail!("--view {}: THETA ≥ 1° with perspective cameras (their up vector is z)", a.view);
+    }
+    let view = btf_core::Direction::new(vt, vp).to_vector();
     let chart = load_chart(&a.chart)?;
     let params = load_yarn(&a.yarn)?;
-    let light_specs = if a.lights.is_empty() { vec!["dir:35,60".into()] } else { a.lights.clone() };
-    let gpu_lights: Vec<FiberLight> =
-        light_specs.iter().map(|s| fiber_light(s)).collect::<Result<_>>()?;
-    let ref_lights: Vec<yarn_ref::Light> =
-        light_specs.iter().map(|s| super::knit::light(s)).collect::<Result<_>>()?;
-    if gpu_lights.len() > yarn_render::view::MAX_LIGHTS {
-        bail!(
-            "--light given {} times: at most {}",
-            gpu_lights.len(),
-            yarn_render::view::MAX_LIGHTS
-        );
-    }
+    let (gpu_lights, ref_lights) = lights(&a.lights)?;
     let bcsdfs: Vec<(String, yarn::bcsdf::FiberBcsdf)> = a
         .shading
         .iter()
@@ -252,32 +328,8 @@ pub fn run(a: SweepArgs) -> Result<()> {
     let gpu = btf_render::Gpu::new().context("creating a headless GPU device")?;
     guard::output_folder(&a.output, "knit sweep", a.fresh, &guard::report_output)?;
 
-    // The period: grown until every perspective camera's footprint fits 9 × 9 periods.
     let base = super::knit::stitches(&a.stitches)?.unwrap_or([chart.width, chart.height]);
-    let sk = SkeletonParams::new(params.yarn_radius());
-    let (ws, cs) = sk.default_spacing();
-    let margin = 4.0 * params.yarn_radius();
-    let mut m = 1;
-    let (stitches, patch_tiles) = loop {
-        let st = [base[0] * m, base[1] * m];
-        let period = [st[0] as f64 * ws, st[1] as f64 * cs];
-        let centre = [0.5 * period[0], 0.5 * period[1], 0.0];
-        let mut tiles = Vec::new();
-        for &px in &dists {
-            let eye = persp_eye(centre, view, ws, px, h);
-            let half = footprint(eye, centre, (w, h)).ok_or_else(|| {
-                anyhow::anyhow!("--view {}: the frame reaches the horizon", a.view)
-            })?;
-            tiles.push(tiles_for(half, margin, period));
-        }
-        if tiles.iter().all(|&n| n <= 9) || m >= 16 {
-            break (st, tiles);
-        }
-        m += 1;
-    };
-    if patch_tiles.iter().any(|&n| n > 9) {
-        bail!("--distances: a stitch of {:?} px shows too many stitches to tile", dists);
-    }
+    let (stitches, patch_tiles) = grow_period(base, &params, view, &dists, (w, h), &a.view)?;
     let popts = PatchOptions {
         stitches: Some(stitches),
         generation: GenOptions { seed: a.seed, hairs: false, ..GenOptions::default() },
@@ -296,26 +348,8 @@ pub fn run(a: SweepArgs) -> Result<()> {
         patch.fibers.fiber_count(),
         t0.elapsed().as_secs_f64()
     );
-    let (lo, hi) = yarn_ref::patch::centre_line_z(&patch.yarns);
-    let target = [0.5 * patch.period.size[0], 0.5 * patch.period.size[1], 0.5 * (lo + hi)];
-    let mut cams = vec![Cam {
-        name: "btf".into(),
-        stitch_px: None,
-        reference: yarn_ref::Camera::oblique(view, patch.z_ref, [0.0, 0.0], patch.period.size)?,
-        gpu: FiberCamera::oblique(view, patch.z_ref, [0.0, 0.0], patch.period.size),
-        tiles: 3,
-    }];
-    for (&px, &tiles) in dists.iter().zip(&patch_tiles) {
-        let eye = persp_eye(target, view, ws, px, h);
-        let up = [0.0, 0.0, 1.0];
-        cams.push(Cam {
-            name: format!("persp-{px}px"),
-            stitch_px: Some(px),
-            reference: yarn_ref::Camera::perspective(eye, target, up, FOV_DEG)?,
-            gpu: FiberCamera::perspective(eye, target, up, FOV_DEG),
-            tiles,
-        });
-    }
+    let ws = SkeletonParams::new(params.yarn_radius()).default_spacing().0;
+    let cams = cameras(&patch, view, ws, &dists, &patch_tiles, h)?;
 
     // References: once per camera and shading model; then the GPU grid.
     let refs = references(&a, &cams, &bcsdfs, &scene, &ref_lights, (w, h))?;
@@ -536,231 +570,9 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
-fn n_max_text(n: u32) -> String {
-    if n == u32::MAX { "all".into() } else { n.to_string() }
-}
-
-fn csv(cells: &[Cell], cams: &[Cam]) -> String {
-    let mut s = String::from(
-        "camera,stitch_px,shading,n_max,method,lod_px,segments,culled,instances,triangles,yarn_bytes,\
-         rel_rmse_interior,interior_px,rel_rmse_band,band_px,rel_rmse_all,all_px,rel_rmse_vs_full,frame_ms,tubes_ms,ratio_tubes\n",
-    );
-    for c in cells {
-        let px = cams.iter().find(|k| k.name == c.camera).and_then(|k| k.stitch_px);
-        let _ = writeln!(
-            s,
-            "{},{},{},{},{},{},{},{},{},{},{},{:.6e},{},{:.6e},{},{:.6e},{},{:.6e},{:.4},{:.4},{:.4}",
-            c.camera,
-            px.map(|p| p.to_string()).unwrap_or_default(),
-            c.shading,
-            n_max_text(c.n_max),
-            if c.lod_px.is_some() { "fibers" } else { "tubes" },
-            c.lod_px.map(|l| l.to_string()).unwrap_or_default(),
-            c.stats.segments,
-            c.stats.culled,
-            c.stats.instances,
-            c.stats.triangles,
-            c.stats.yarn_bytes,
-            c.interior.0,
-            c.interior.1,
-            c.band.0,
-            c.band.1,
-            c.all.0,
-            c.all.1,
-            c.vs_full,
-            c.ms,
-            c.tubes_ms,
-            c.ms / c.tubes_ms
-        );
-    }
-    s
-}
-
-/// The LoD crossover of one (camera, shading, n_max) series: with `e₀` the covered-pixel error
-/// at the smallest threshold swept (full detail when 0 is swept), the largest ω^LoD such
-/// that it and every smaller threshold keep the error within ±10 % of e₀ — the most LoD
-/// that changes the error by at most 10 % either way (a large drop is as much a change of
-/// appearance as a rise while e₀ is large). A NaN error counts as outside the band.
-pub fn crossover(series: &[(f32, f64)]) -> Option<Crossover> {
-    let mut s: Vec<(f32, f64)> = series.to_vec();
-    s.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let &(l0, e0) = s.first()?;
-    let mut lod = l0;
-    for &(l, e) in &s[1..] {
-        let within = (e - e0).abs().partial_cmp(&(0.1 * e0)).is_some_and(|o| o.is_le());
-        if !within {
-            return Some(Crossover { lod, e0, next: Some((l, e)) });
-        }
-        lod = l;
-    }
-    Some(Crossover { lod, e0, next: None })
-}
-
-/// The LoD crossover of one series (see [`crossover`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Crossover {
-    /// The crossover threshold ω^LoD (px).
-    pub lod: f32,
-    /// The error at the smallest threshold swept.
-    pub e0: f64,
-    /// The first threshold past the crossover and its error.
-    pub next: Option<(f32, f64)>,
-}
-
-/// One crossover per (camera, shading, n_max).
-type CrossoverRow = (String, String, u32, Option<Crossover>);
-
-fn crossovers(cells: &[Cell]) -> Vec<CrossoverRow> {
-    let mut keys: Vec<(String, String, u32)> = Vec::new();
-    for c in cells.iter().filter(|c| c.lod_px.is_some()) {
-        let k = (c.camera.clone(), c.shading.clone(), c.n_max);
-        if !keys.contains(&k) {
-            keys.push(k);
-        }
-    }
-    keys.into_iter()
-        .map(|(cam, sh, n)| {
-            let series: Vec<(f32, f64)> = cells
-                .iter()
-                .filter(|c| c.camera == cam && c.shading == sh && c.n_max == n)
-                .filter_map(|c| c.lod_px.map(|l| (l, c.all.0)))
-                .collect();
-            let x = crossover(&series);
-            (cam, sh, n, x)
-        })
-        .collect()
-}
-
-fn markdown(
-    a: &SweepArgs,
-    cells: &[Cell],
-    cams: &[Cam],
-    st: [usize; 2],
-    (w, h): (u32, u32),
-) -> String {
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "## What accuracy costs in time: GPU fibers against the reference ({} × {} stitches of {}, {}, {w}×{h}, MSAA {}, reference {} spp, {} bounce{})\n",
-        st[0],
-        st[1],
-        a.chart,
-        a.yarn,
-        a.msaa,
-        a.spp,
-        a.bounces,
-        if a.bounces == 1 { "" } else { "s" }
-    );
-    let tiles: Vec<String> =
-        cams.iter().map(|c| format!("{} ({}×{} periods)", c.name, c.tiles, c.tiles)).collect();
-    let _ = writeln!(
-        s,
-        "Cameras (viewing direction θ,φ = {}° for all): {}. Hair flyaways off in both (R-approx). Frame ms: median of {} interleaved frames; × tubes: against the plain tubes of the same camera and shading in this run.\n",
-        a.view,
-        tiles.join(", "),
-        a.repeat
-    );
-    s.push_str("| camera | shading | n_max | ω^LoD px | instances | triangles | rel. RMSE interior | (px) | rel. RMSE silhouette | (px) | rel. RMSE covered | vs full detail | frame ms | × tubes |\n");
-    s.push_str("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
-    let e = |v: f64| if v.is_finite() { format!("{v:.4}") } else { "—".into() };
-    for c in cells {
-        let _ = writeln!(
-            s,
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1} | {:.2} |",
-            c.camera,
-            c.shading,
-            n_max_text(c.n_max),
-            c.lod_px.map_or("tubes".into(), |l| l.to_string()),
-            c.stats.instances,
-            c.stats.triangles,
-            e(c.interior.0),
-            c.interior.1,
-            e(c.band.0),
-            c.band.1,
-            e(c.all.0),
-            e(c.vs_full),
-            c.ms,
-            c.ms / c.tubes_ms
-        );
-    }
-    s.push_str("\nInterior: reference coverage ≥ 0.99 and GPU alpha ≥ 0.99; silhouette: the other pixels either image covers by more than 0.01; covered: both together (a LoD that thins the yarn moves pixels out of the interior, so the crossover is judged on this one); vs full detail: the frame against the finest threshold's GPU image (what the LoD alone changes). LoD crossover: the largest ω^LoD whose covered-pixel error, and that of every smaller threshold, stays within ±10 % of the error at the smallest threshold swept (full detail at 0). Two-sided: while the full-detail error is large, a LoD that drops most fibers can score *lower* against the reference (a near-black frame scores ≈ 1), and that is a change of appearance, not a gain.\n\n");
-    for (cam, sh, n, x) in crossovers(cells) {
-        match x {
-            Some(Crossover { lod: l, e0, next }) => {
-                let after = next.map_or("no threshold swept leaves the band".into(), |(l2, e2)| {
-                    format!("ω^LoD = {l2} px gives {e2:.4}")
-                });
-                let _ = writeln!(
-                    s,
-                    "- {cam}, {sh}, n_max {}: crossover ω^LoD = **{l} px** (full-detail error {e0:.4}; {after})",
-                    n_max_text(n)
-                );
-            }
-            None => {
-                let _ = writeln!(s, "- {cam}, {sh}: no fiber cells");
-            }
-        }
-    }
-    s.push_str("\n![error against time](sweep.png)\n");
-    s
-}
-
-fn plot(cells: &[Cell]) -> Plot {
-    let mut series = Vec::new();
-    let mut keys: Vec<(String, String, u32)> = Vec::new();
-    for c in cells.iter().filter(|c| c.lod_px.is_some()) {
-        let k = (c.camera.clone(), c.shading.clone(), c.n_max);
-        if !keys.contains(&k) {
-            keys.push(k);
-        }
-    }
-    let finite = |x: f64, y: f64| x.is_finite() && y.is_finite() && y > 0.0;
-    for (cam, sh, n) in keys {
-        let pts: Vec<(f64, f64, f64)> = cells
-            .iter()
-            .filter(|c| c.camera == cam && c.shading == sh && c.n_max == n)
-            .filter_map(|c| c.lod_px.map(|l| (l as f64, c.ms / c.tubes_ms, c.all.0)))
-            .filter(|p| finite(p.1, p.2))
-            .collect();
-        let name = if n == u32::MAX { format!("{cam} {sh}") } else { format!("{cam} {sh} n{n}") };
-        // Labels from the f32 threshold as given (0.1, not 0.10000000149…).
-        series.push(Series::parametric(name, pts, |l| format!("{}px", l as f32)));
-    }
-    let tubes: Vec<(f64, f64)> = cells
-        .iter()
-        .filter(|c| c.lod_px.is_none())
-        .map(|c| (1.0, c.all.0))
-        .filter(|p| finite(p.0, p.1))
-        .collect();
-    let mut t = Series::new("plain tubes", tubes);
-    t.points_only = true;
-    series.push(t);
-    Plot {
-        title: "GPU fibers: error against frame time".into(),
-        x_label: "frame time / plain tubes (same run, log)".into(),
-        y_label: "rel. RMSE against the reference, covered pixels (log)".into(),
-        log_y: true,
-        log_x: true,
-        series,
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn crossover_is_the_last_threshold_within_ten_percent() {
-        let s = [(0.0, 0.10), (0.5, 0.105), (1.0, 0.109), (2.0, 0.2), (4.0, 0.105)];
-        let c = crossover(&s).unwrap();
-        assert_eq!((c.lod, c.e0), (1.0, 0.10));
-        assert_eq!(c.next, Some((2.0, 0.2)));
-        assert_eq!(crossover(&[(0.0, 0.1), (1.0, 0.1)]).unwrap().lod, 1.0);
-        assert_eq!(crossover(&[(0.0, 0.1), (1.0, f64::NAN)]).unwrap().lod, 0.0);
-        // Two-sided: a 20 % drop leaves the band too.
-        assert_eq!(crossover(&[(0.0, 1.0), (0.5, 0.95), (1.0, 0.8)]).unwrap().lod, 0.5);
-        assert!(crossover(&[]).is_none());
-    }
 
     #[test]
     fn tiles_cover_the_footprint_with_an_odd_count() {
