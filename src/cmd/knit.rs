@@ -29,6 +29,8 @@ pub enum KnitCmd {
     Ref(Box<RefArgs>),
     /// Real-time GPU render (fibers generated on the GPU, [W19]) of a patch or BCC curves.
     Render(Box<super::knit_render::RenderArgs>),
+    /// What accuracy costs in time: GPU fibers over LoD × shading against the reference.
+    Sweep(Box<super::knit_sweep::SweepArgs>),
 }
 
 /// `btf knit chart`.
@@ -138,6 +140,7 @@ pub fn run(cmd: KnitCmd) -> Result<()> {
         KnitCmd::Fibers(a) => fibers_cmd(a),
         KnitCmd::Ref(a) => ref_cmd(*a),
         KnitCmd::Render(a) => super::knit_render::run(*a),
+        KnitCmd::Sweep(a) => super::knit_sweep::run(*a),
     }
 }
 
@@ -193,12 +196,17 @@ pub(crate) fn ext(p: &Path) -> String {
 }
 
 pub(crate) fn chart_inputs(a: &PatchArgs) -> Vec<(&'static str, &Path)> {
+    chart_inputs_of(&a.chart, &a.yarn)
+}
+
+/// The chart and yarn arguments that name files (inputs no output may overwrite).
+pub(crate) fn chart_inputs_of<'a>(chart: &'a str, yarn: &'a str) -> Vec<(&'static str, &'a Path)> {
     let mut v: Vec<(&'static str, &Path)> = Vec::new();
-    if Path::new(&a.chart).is_file() {
-        v.push(("chart", Path::new(&a.chart)));
+    if Path::new(chart).is_file() {
+        v.push(("chart", Path::new(chart)));
     }
-    if Path::new(&a.yarn).is_file() {
-        v.push(("yarn", Path::new(&a.yarn)));
+    if Path::new(yarn).is_file() {
+        v.push(("yarn", Path::new(yarn)));
     }
     v
 }

@@ -102,7 +102,7 @@ crate::args::choices! {
     }
 }
 
-fn bcsdf(name: &str) -> Result<FiberBcsdf> {
+pub(crate) fn bcsdf(name: &str) -> Result<FiberBcsdf> {
     Ok(match name {
         "khungurn" => FiberBcsdf::khungurn(&KhungurnParams::default())?,
         "simple" => FiberBcsdf::simple(&SimpleParams::default())?,
@@ -111,7 +111,7 @@ fn bcsdf(name: &str) -> Result<FiberBcsdf> {
     })
 }
 
-fn fiber_light(s: &str) -> Result<FiberLight> {
+pub(crate) fn fiber_light(s: &str) -> Result<FiberLight> {
     Ok(match light(s)? {
         yarn_ref::Light::Directional { to_light, irradiance } => {
             FiberLight::Directional { to_light, irradiance }

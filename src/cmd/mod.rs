@@ -9,6 +9,8 @@ pub mod import;
 pub mod inspect;
 pub mod knit;
 pub mod knit_render;
+pub mod knit_sweep;
+pub mod knit_sweep_report;
 pub mod reconstruct;
 pub mod registration_sweep;
 pub mod relight;

@@ -15,6 +15,7 @@ mod garment;
 mod hostile;
 mod import_export;
 mod knit;
+mod knit_sweep;
 mod python;
 mod relight;
 mod render;

@@ -1,0 +1,144 @@
+//! End-to-end tests of the GPU fiber commands (issue #19): `btf knit render` with its
+//! `--json` stats and `--compare` (a render against an identical render scores exactly 0),
+//! and `btf knit sweep` on a tiny grid (32², ω^LoD ∈ {0, 2}, 4 spp): its CSV rows and
+//! numbers (finite errors, the tubes row at ratio 1, fewer instances at the coarser LoD,
+//! triangles = instances·2·n_sub), the Markdown, plot and reference images; and refusals
+//! that name the flag. GPU runs are skipped without an adapter unless `BTF_REQUIRE_GPU=1`.
+
+use crate::common::Dir;
+
+/// `btf ARGS`: stdout, or `None` when there is no GPU adapter and none is required.
+fn run_gpu(d: &Dir, args: &[&str]) -> Option<String> {
+    let o = d.btf(args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    if !o.status.success() && err.contains("no GPU adapter") {
+        assert!(std::env::var("BTF_REQUIRE_GPU").as_deref() != Ok("1"), "{err}");
+        eprintln!("skipped: {err}");
+        return None;
+    }
+    assert!(o.status.success(), "btf {args:?} failed:\n{err}");
+    Some(String::from_utf8(o.stdout).unwrap())
+}
+
+const RENDER: [&str; 10] =
+    ["knit", "render", "--size", "32,32", "--light", "dir:30,45", "--lod-px", "0", "--json", "-o"];
+
+#[test]
+fn knit_render_stats_and_compare_against_itself_is_zero() {
+    let d = Dir::new();
+    let Some(js) = run_gpu(&d, &[&RENDER[..], &["a.exr"]].concat()) else { return };
+    let j: serde_json::Value = serde_json::from_str(&js).unwrap();
+    let (seg, inst, tri) = (
+        j["segments"].as_u64().unwrap(),
+        j["instances"].as_u64().unwrap(),
+        j["triangles"].as_u64().unwrap(),
+    );
+    // 3 × 3 periods of the stockinette repeat; full detail: many fibers per segment.
+    assert!(seg > 0 && inst > 10 * (seg - j["culled"].as_u64().unwrap()), "{j}");
+    assert_eq!(tri, inst * 2 * 8, "triangles = instances · 2 · n_sub");
+    let bpc = j["bytes_per_control_point"].as_f64().unwrap();
+    assert!((100.0..1000.0).contains(&bpc), "{bpc} bytes per control point");
+    assert!(j["coverage"].as_f64().unwrap() > 0.3, "{j}");
+    let js = run_gpu(&d, &[&RENDER[..], &["b.exr", "--compare", "a.exr"]].concat()).unwrap();
+    let j: serde_json::Value = serde_json::from_str(&js).unwrap();
+    assert_eq!(j["rel_rmse"].as_f64(), Some(0.0), "{j}");
+}
+
+/// The CSV as rows of named cells.
+fn rows(csv: &str) -> Vec<std::collections::HashMap<String, String>> {
+    let mut lines = csv.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    lines
+        .map(|l| {
+            let cells: Vec<&str> = l.split(',').collect();
+            assert_eq!(cells.len(), head.len(), "{l}");
+            head.iter().zip(cells).map(|(h, c)| (h.to_string(), c.to_string())).collect()
+        })
+        .collect()
+}
+
+#[test]
+fn knit_sweep_writes_the_grid_with_tubes_at_ratio_one() {
+    let d = Dir::new();
+    let args = [
+        "knit",
+        "sweep",
+        "--size",
+        "32,32",
+        "--spp",
+        "4",
+        "--lod-px",
+        "0,2",
+        "--distances",
+        "12",
+        "--shading",
+        "simple",
+        "--repeat",
+        "1",
+        "-o",
+        "sw",
+    ];
+    let Some(out) = run_gpu(&d, &args) else { return };
+    assert!(out.contains("LoD crossover"), "{out}");
+    let csv = std::fs::read_to_string(d.path("sw/sweep.csv")).unwrap();
+    let r = rows(&csv);
+    // 2 cameras × 1 shading × (tubes + 2 thresholds).
+    assert_eq!(r.len(), 6, "{csv}");
+    let f = |row: &std::collections::HashMap<String, String>, k: &str| -> f64 {
+        row[k].parse().unwrap_or_else(|_| panic!("{k} = '{}'", row[k]))
+    };
+    for cam in ["btf", "persp-12px"] {
+        let of = |m: &str, lod: &str| {
+            r.iter().find(|x| x["camera"] == cam && x["method"] == m && x["lod_px"] == lod).unwrap()
+        };
+        let (tubes, full, coarse) = (of("tubes", ""), of("fibers", "0"), of("fibers", "2"));
+        assert_eq!(f(tubes, "ratio_tubes"), 1.0, "{csv}");
+        assert!(f(coarse, "instances") < f(full, "instances"), "{csv}");
+        for x in [tubes, full, coarse] {
+            let all = f(x, "rel_rmse_all");
+            assert!(all.is_finite() && all >= 0.0, "{csv}");
+            if f(x, "interior_px") > 0.0 {
+                let e = f(x, "rel_rmse_interior");
+                assert!(e.is_finite() && e >= 0.0, "{csv}");
+            }
+            assert_eq!(f(x, "triangles"), f(x, "instances") * 16.0, "{csv}");
+            assert!(f(x, "frame_ms") > 0.0 && f(x, "ratio_tubes") > 0.0, "{csv}");
+            // The same packed yarns for every cell of a camera: O(control points) bytes.
+            assert_eq!(f(x, "yarn_bytes"), f(tubes, "yarn_bytes"), "{csv}");
+        }
+        // Full detail draws every fiber: its interior exists and is scored; it is its own
+        // full-detail image, and the coarser LoD changes the frame.
+        assert!(f(full, "interior_px") > 0.0, "{csv}");
+        assert_eq!(f(full, "rel_rmse_vs_full"), 0.0, "{csv}");
+        assert!(f(coarse, "rel_rmse_vs_full") > 0.01, "{csv}");
+    }
+    let md = std::fs::read_to_string(d.path("sw/sweep.md")).unwrap();
+    assert!(md.contains("| persp-12px | simple | all | tubes |"), "{md}");
+    let png = std::fs::read(d.path("sw/sweep.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    for f in ["ref-btf-simple.exr", "ref-persp-12px-simple.exr"] {
+        assert!(d.path("sw").join(f).is_file(), "{f}");
+    }
+}
+
+#[test]
+fn knit_gpu_refusals_name_the_flag() {
+    let d = Dir::new();
+    let e = d.fails(&["knit", "sweep", "--msaa", "3", "-o", "o"]);
+    assert!(e.contains("--msaa 3"), "{e}");
+    let e = d.fails(&["knit", "render", "--msaa", "3", "--light", "dir:0,0", "-o", "r.exr"]);
+    assert!(e.contains("--msaa 3"), "{e}");
+    let e = d.fails(&["knit", "sweep", "--yarn", "no-such-yarn", "-o", "o"]);
+    assert!(e.contains("no-such-yarn"), "{e}");
+    let e = d.fails(&["knit", "sweep", "--lod-px=0,-1", "-o", "o"]);
+    assert!(e.contains("--lod-px -1"), "{e}");
+    let e = d.fails(&["knit", "sweep", "--shading", "lambert", "-o", "o"]);
+    assert!(e.contains("--shading lambert"), "{e}");
+    let e = d.fails(&["knit", "sweep", "--distances", "0", "-o", "o"]);
+    assert!(e.contains("--distances 0"), "{e}");
+    std::fs::write(d.path("c.chart"), "name: c\nkp\n").unwrap();
+    let e = d.fails(&["knit", "sweep", "--chart", "c.chart", "-o", "c.chart"]);
+    assert!(e.contains("c.chart"), "{e}");
+    // Nothing was written for a refused sweep.
+    assert!(!d.path("o").exists());
+}
