@@ -63,6 +63,9 @@ pub struct RenderArgs {
     /// No shadow hiding (the light = view hot spot) in the self-shadows.
     #[arg(long)]
     pub no_shadow_hiding: bool,
+    /// Self-shadows marched through the twisted yarn instead of [W19]'s slices (slower).
+    #[arg(long)]
+    pub helix_shadows: bool,
     /// No self-shadows inside the yarns (the precomputed volume, [W19 §4.1]).
     #[arg(long)]
     pub no_self_shadow: bool,
@@ -234,6 +237,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
     let effects = FiberEffects {
         core: !a.no_core,
         shadow_hiding: !a.no_shadow_hiding,
+        helix_shadows: a.helix_shadows,
         self_shadow: !a.no_self_shadow,
         yarn_shadows: !a.no_yarn_shadows,
         ao: match a.ao {

@@ -183,7 +183,19 @@ impl FiberRenderer {
                     .transpose()
             })
             .collect::<Result<Vec<_>>>()?;
-        let fx = effects::pack(&pre, bcsdf, 256)?;
+        let sigma = packed
+            .yarn_params
+            .iter()
+            .map(|p| {
+                if !(settings.effects.self_shadow && settings.effects.helix_shadows) {
+                    return Ok(None);
+                }
+                let f = yarn_precompute::sigma::field_for(p, bake)
+                    .map_err(|e| Error::Invalid(format!("yarn '{}': extinction: {e}", p.name)))?;
+                Ok(Some((f, p.ply_pitch)))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let fx = effects::pack(&pre, &sigma, bcsdf, 256)?;
         let max_binding = dev.limits().max_storage_buffer_binding_size;
         let capacity = (settings.capacity.max(1) as u64).min(max_binding / 8) as u32;
         let (lo, hi) = packed.bounds;
@@ -268,7 +280,8 @@ impl FiberRenderer {
             | (s.effects.self_shadow as u32) << 4
             | ao << 5
             | (s.effects.core as u32) << 7
-            | (s.effects.shadow_hiding as u32) << 8;
+            | (s.effects.shadow_hiding as u32) << 8
+            | (s.effects.helix_shadows as u32) << 9;
         let f3 = |v: nalgebra::Vector3<f64>, w: f32| [v.x as f32, v.y as f32, v.z as f32, w];
         Ok(ViewRaw {
             view_proj: to_cols(&setup.view_proj),

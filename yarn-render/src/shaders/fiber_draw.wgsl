@@ -40,6 +40,8 @@ struct Effects {
     cubic: vec4<f32>,
     core: vec4<u32>,
     core_f: vec4<f32>,
+    sigma: vec4<u32>,
+    sigma_f: vec4<f32>,
 }
 
 @group(1) @binding(4) var<storage, read> effects: array<Effects>;
@@ -393,9 +395,47 @@ fn self_depth(e: Effects, q: vec2<f32>, rel: f32) -> f32 {
 // along the light), at most 3/4 of all of it; `rate` is |sin Δ| plus the parting of rays
 // that differ along the yarn, whose fibers are helices. Beyond a few r_f·σ it changes
 // nothing.
+// σ at slice-frame point q (bilinear, 0 outside the grid): SigmaField::at.
+fn sigma_at(e: Effects, q: vec2<f32>) -> f32 {
+    let h = e.sigma_f.x;
+    if abs(q.x) > h || abs(q.y) > h {
+        return 0.0;
+    }
+    return grid_bilinear(e.sigma.x, e.sigma.y, h, q.x, q.y);
+}
+
+// The optical depth from q towards the light through the *twisted* yarn (ours; [W19]'s
+// slices assume light ⟂ yarn): the light's in-plane direction `to_l` (unit, slice frame)
+// and its rise along the yarn per unit of in-plane travel, `rise`. At in-plane distance s
+// the ray is `rise·s` further along the yarn, where the ply pattern (the slice frame) has
+// turned by 2π·rise·s/α_ply, so σ is read at R(−2π·rise·s/α_ply)(q + s·to_l). Per unit
+// of in-plane length, as the slices: aligned fibers present σ·cos e over the 1/cos e
+// longer 3-D path (DESIGN §2.3 item 10).
+fn helix_depth(e: Effects, q: vec2<f32>, to_l: vec2<f32>, rise: f32) -> f32 {
+    let h = e.sigma_f.x;
+    // Leave the grid's circumscribed disk: at most |q| + h√2.
+    let reach = length(q) + 1.4143 * h;
+    let n = 48u;
+    let ds = reach / f32(n);
+    let k = TAU * rise / e.sigma_f.y;
+    var d = 0.0;
+    for (var i = 0u; i < n; i++) {
+        let s = (f32(i) + 0.5) * ds;
+        let p = q + s * to_l;
+        let a = -k * s;
+        let c = cos(a);
+        let sn = sin(a);
+        d += sigma_at(e, vec2<f32>(c * p.x - sn * p.y, sn * p.x + c * p.y));
+    }
+    return d * ds;
+}
+
 fn self_transmittance(e: Effects, in: VertexOut, wi: vec3<f32>, wo: vec3<f32>) -> f32 {
     if e.shadow_f.w == 0.0 || (view.lod.z & 16u) == 0u {
         return 1.0;
+    }
+    if (view.lod.z & 512u) != 0u && e.sigma.z != 0u {
+        return helix_transmittance(e, in, wi, wo);
     }
     let ns = normalize(in.n_slice);
     let bs = normalize(in.b_slice);
@@ -448,6 +488,47 @@ fn self_transmittance(e: Effects, in: VertexOut, wi: vec3<f32>, wo: vec3<f32>) -
         m += exp(-self_depth(e, in.q, f32(k) * e.shadow_f.y));
     }
     return m / f32(max(n, 1u));
+}
+
+// Self-shadow through the twisted yarn (helix_depth), with the same shadow hiding as the
+// slices (self_transmittance), σ(p) read directly.
+fn helix_transmittance(e: Effects, in: VertexOut, wi: vec3<f32>, wo: vec3<f32>) -> f32 {
+    let ns = normalize(in.n_slice);
+    let bs = normalize(in.b_slice);
+    let t_axis = normalize(cross(ns, bs));
+    // Towards the light, in the slice frame.
+    let lx = dot(wi, ns);
+    let ly = dot(wi, bs);
+    let lz = dot(wi, t_axis);
+    let l = sqrt(lx * lx + ly * ly);
+    if l < 1e-4 {
+        // Along the yarn: no in-plane travel; the depth of the local column is unbounded
+        // in the model — use the local σ over one ply pitch (a ray along the yarn meets
+        // what lies along it).
+        return exp(-sigma_at(e, in.q) * abs(e.sigma_f.y));
+    }
+    let d = helix_depth(e, in.q, vec2<f32>(lx, ly) / l, lz / l);
+    var removed = 0.0;
+    if (view.lod.z & 256u) != 0u {
+        let tx = -lx;
+        let ty = -ly;
+        let ex = -dot(wo, ns);
+        let ey = -dot(wo, bs);
+        let el = sqrt(ex * ex + ey * ey);
+        if el > 1e-4 {
+            let sin_d = abs(tx * ey - ty * ex) / (l * el);
+            let cos_d = (tx * ex + ty * ey) / (l * el);
+            if cos_d > 0.0 {
+                let pr = yarn_params[in.ids.y];
+                let tan_tilt = TAU * pr.c.z / max(abs(e.sigma_f.y), 1e-9);
+                let along = abs(dot(wi - wo, t_axis));
+                let rate = sin_d + tan_tilt * along;
+                removed = min(0.75 * d,
+                    sigma_at(e, in.q) * (7.0 / 12.0) * pr.b.y / max(rate, 1e-6));
+            }
+        }
+    }
+    return exp(-(d - removed));
 }
 
 fn ambient_occlusion(e: Effects, q: vec2<f32>) -> f32 {
