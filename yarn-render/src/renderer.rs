@@ -435,25 +435,6 @@ impl FiberRenderer {
         });
         gpu.scoped("fiber frame", || {
             let mut enc = dev.create_command_encoder(&Default::default());
-            // A map that is bound must have been written: clear it when nothing is drawn.
-            if passes.is_empty() {
-                let v = maps.create_view(&Default::default());
-                enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("yarn shadow clear"),
-                    color_attachments: &[],
-                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: &v,
-                        depth_ops: Some(wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(1.0),
-                            store: wgpu::StoreOp::Store,
-                        }),
-                        stencil_ops: None,
-                    }),
-                    timestamp_writes: None,
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                });
-            }
             self.shadow.encode(gpu, &mut enc, &self.data, &maps, &passes);
             self.lod.encode(gpu, &mut enc, &self.data, &g_lod, &self.args, self.settings.n_sub);
             let targets = match &mv {

@@ -103,7 +103,8 @@ impl ShadowPass {
     }
 
     /// Records one map per entry of `passes` into the layers of `maps` (a depth 2-D array
-    /// with at least that many layers).
+    /// with at least that many layers); with no passes, layer 0 is cleared (a bound map
+    /// must have been written).
     pub fn encode(
         &self,
         gpu: &Gpu,
@@ -113,24 +114,14 @@ impl ShadowPass {
         passes: &[ShadowPassRaw],
     ) {
         let dev = &gpu.device;
-        for (layer, raw) in passes.iter().enumerate() {
-            let ubuf = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("yarn_tube_shadow"),
-                contents: bytemuck::bytes_of(raw),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
-            let bg = dev.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("yarn_tube_shadow"),
-                layout: &self.layout,
-                entries: &[wgpu::BindGroupEntry { binding: 0, resource: ubuf.as_entire_binding() }],
-            });
+        let begin = |enc: &mut wgpu::CommandEncoder, layer: u32| {
             let view = maps.create_view(&wgpu::TextureViewDescriptor {
                 dimension: Some(wgpu::TextureViewDimension::D2),
-                base_array_layer: layer as u32,
+                base_array_layer: layer,
                 array_layer_count: Some(1),
                 ..Default::default()
             });
-            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("yarn_tube_shadow"),
                 color_attachments: &[],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
@@ -144,7 +135,25 @@ impl ShadowPass {
                 timestamp_writes: None,
                 occlusion_query_set: None,
                 multiview_mask: None,
+            })
+            .forget_lifetime()
+        };
+        if passes.is_empty() {
+            drop(begin(enc, 0));
+            return;
+        }
+        for (layer, raw) in passes.iter().enumerate() {
+            let ubuf = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("yarn_tube_shadow"),
+                contents: bytemuck::bytes_of(raw),
+                usage: wgpu::BufferUsages::UNIFORM,
             });
+            let bg = dev.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("yarn_tube_shadow"),
+                layout: &self.layout,
+                entries: &[wgpu::BindGroupEntry { binding: 0, resource: ubuf.as_entire_binding() }],
+            });
+            let mut pass = begin(enc, layer as u32);
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &data.bind_group, &[]);
             pass.set_bind_group(1, &bg, &[]);
