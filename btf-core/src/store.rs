@@ -209,6 +209,91 @@ impl StoreTxn {
         Ok(StoreTxn { final_path: path.to_owned(), partial, job: job.clone() })
     }
 
+    /// Joins the partial store at `path` as one of several concurrent writers (the shards
+    /// of a job, issue #23): creates `NAME.partial` and records `job` in it if nobody has
+    /// ([`crate::fs::write_new`]: once, by whoever comes first), or checks that the job
+    /// recorded there is `job`, refusing with the first differing field named before
+    /// anything is written. Never removes anything; the store is committed later by the
+    /// finaliser ([`StoreTxn::reopen`]).
+    pub fn join(path: &Path, job: &Value) -> Result<Self> {
+        let name = path
+            .file_name()
+            .ok_or_else(|| Error::Invalid(format!("{}: not a file name", path.display())))?;
+        crate::fs::check_replaceable(path, crate::fs::OutputKind::Store)?;
+        let partial = path.with_file_name(format!("{}.partial", name.to_string_lossy()));
+        if partial.exists() && !partial.is_dir() {
+            return Err(Error::Invalid(format!(
+                "{} exists and is not a partial store folder; refusing to write into it",
+                partial.display()
+            )));
+        }
+        let doc = json!({"zarr_format": 3, "node_type": "group", "attributes": {"partial_job": job}});
+        let text = serde_json::to_string_pretty(&doc).unwrap_or_default();
+        let meta = partial.join("zarr.json");
+        if partial.is_dir() && !meta.exists() && !is_empty_dir(&partial) {
+            return Err(Error::Invalid(format!(
+                "{} exists, holds files and records no job; refusing to write into it",
+                partial.display()
+            )));
+        }
+        fs::create_dir_all(&partial).map_err(|e| Error::io(&partial, e))?;
+        if !crate::fs::write_new(&meta, text.as_bytes())? {
+            let attrs = zarr::read_group(&partial)?;
+            match attrs.get("partial_job") {
+                Some(r) if r == job => {}
+                Some(r) => {
+                    return Err(Error::Invalid(format!(
+                        "{} was begun by a different job ({}); every shard of one output \
+                         must be given the same input and parameters — refusing before \
+                         writing anything",
+                        partial.display(),
+                        first_difference(r, job, "")
+                    )));
+                }
+                None => {
+                    return Err(Error::Invalid(format!(
+                        "{} records no job (is it being finalised?); refusing to write into it",
+                        partial.display()
+                    )));
+                }
+            }
+        }
+        Ok(StoreTxn { final_path: path.to_owned(), partial, job: job.clone() })
+    }
+
+    /// The job recorded in the partial store of `path` (by [`StoreTxn::begin`] or
+    /// [`StoreTxn::join`]; or, for a commit that was interrupted, beside it), if any.
+    pub fn recorded_job(path: &Path) -> Option<Value> {
+        let name = path.file_name()?.to_string_lossy().into_owned();
+        let partial = path.with_file_name(format!("{name}.partial"));
+        zarr::read_group(&partial)
+            .ok()
+            .and_then(|a| a.get("partial_job").cloned())
+            .or_else(|| read_sidecar(&job_sidecar(&partial)).map(|(job, _)| job))
+    }
+
+    /// The partial store of `path` and its job, for reading only (a status report):
+    /// nothing is created, resumed or removed.
+    pub fn peek(path: &Path) -> Option<(Self, Value)> {
+        let job = Self::recorded_job(path)?;
+        let name = path.file_name()?.to_string_lossy().into_owned();
+        let partial = path.with_file_name(format!("{name}.partial"));
+        Some((StoreTxn { final_path: path.to_owned(), partial, job: job.clone() }, job))
+    }
+
+    /// Reopens the partial store of `path` to commit it (the finaliser of a sharded job):
+    /// the job it records is resumed as [`StoreTxn::begin`] resumes one, which also
+    /// completes a commit that a killed finaliser left half done.
+    pub fn reopen(path: &Path) -> Result<(Self, Value)> {
+        let job = Self::recorded_job(path).ok_or_else(|| {
+            Error::Invalid(format!(
+                "{}: no partial store of a job to finalise beside it",
+                path.display()
+            ))
+        })?;
+        Ok((Self::begin(path, true, &job)?, job))
+    }
+
     /// The folder being written.
     pub fn dir(&self) -> &Path {
         &self.partial
