@@ -332,8 +332,9 @@ impl EigenWriter {
                 path.display()
             )));
         }
-        let meta: EigenMeta = serde_json::from_value(record["meta"].clone())
+        let mut meta: EigenMeta = serde_json::from_value(record["meta"].clone())
             .map_err(|source| Error::Json { path: txn.dir().join("zarr.json"), source })?;
+        meta.btf = meta.btf.validate(txn.dir())?;
         let arrays = open_arrays(txn.dir(), &meta, true)?;
         zarr::ensure_record_group(txn.dir(), "stats")?;
         Ok((EigenWriter { txn, meta, arrays }, record["job"].clone()))
@@ -345,8 +346,9 @@ impl EigenWriter {
         let (txn, record) = StoreTxn::peek(path).ok_or_else(|| {
             Error::Invalid(format!("{}: no partial store beside it", path.display()))
         })?;
-        let meta: EigenMeta = serde_json::from_value(record["meta"].clone())
+        let mut meta: EigenMeta = serde_json::from_value(record["meta"].clone())
             .map_err(|source| Error::Json { path: txn.dir().join("zarr.json"), source })?;
+        meta.btf = meta.btf.validate(txn.dir())?;
         let arrays = open_arrays(txn.dir(), &meta, false)?;
         Ok((EigenWriter { txn, meta, arrays }, record["job"].clone()))
     }

@@ -42,6 +42,9 @@ pub struct RelightArgs {
     /// Delete the output folder's frames and start again.
     #[arg(long)]
     pub fresh: bool,
+    /// Shard of the job (its frames only) when several processes or machines share it.
+    #[command(flatten)]
+    pub shard: crate::args::ShardArgs,
 }
 
 /// One environment of the job.
@@ -94,14 +97,26 @@ pub fn run(args: RelightArgs) -> Result<()> {
     let env_index = attach_environment(&mut scene, &args)?;
     scene.validate(&args.scene.scene)?;
     let mut jobs = plan(&args, &scene, env_index)?;
+    let shard = args.shard.shard()?;
+    if let Some(shard) = shard {
+        keep_shard(&mut jobs, shard, args.rotations as usize);
+    }
     let envs: Vec<(&str, &Path)> = args.envs.iter().map(|p| ("--env", p.as_path())).collect();
     crate::guard::refuse_scene_overlap(&[("-o", &args.output)], &args.scene.scene, &scene, &envs)?;
-    prepare_output(&args, &scene)?;
     let pending: usize =
         jobs.iter().map(|j| j.frames.iter().filter(|(_, p)| !p.exists()).count()).sum();
     let all: usize = jobs.iter().map(|j| j.frames.len()).sum();
-    if pending == 0 && jobs.iter().all(|j| j.report_done) {
-        crate::guard::outln!("all {all} frames of {} already rendered", args.output.display());
+    let finished = pending == 0 && jobs.iter().all(|j| j.report_done);
+    if finished && shard.is_some() && args.output.join("job.json").is_file() {
+        // A shard retried after its work (or the whole job) was done: check it is the same
+        // job and leave the folder as it is (a finalised job keeps no shard records).
+        btf_core::shard::check_agrees(&args.output.join("job.json"), &job_record(&args, &scene))?;
+    } else {
+        prepare_output(&args, &scene, shard)?;
+    }
+    if finished {
+        let whose = shard.map_or(String::new(), |s| format!("shard {}: ", s.label()));
+        crate::guard::outln!("{whose}all {all} frames of {} already rendered", args.output.display());
         return Ok(());
     }
     let first = jobs.iter().position(|j| !j.is_done()).unwrap_or(0);
@@ -139,17 +154,47 @@ pub fn run(args: RelightArgs) -> Result<()> {
     bar.finish_and_clear();
     let summary = summarise(&renderer, &scene, &args, summaries)?;
     let text = serde_json::to_string_pretty(&summary)?;
-    btf_image::write::write_text(&args.output.join("summary.json"), &text)?;
+    // A shard's summary covers its own frames: it goes beside the others', for
+    // `btf finalize` to merge into summary.json.
+    let path = match shard {
+        Some(s) => crate::cmd::shards::relight_shard_summary(&args.output, s),
+        None => args.output.join("summary.json"),
+    };
+    btf_image::write::write_text(&path, &text)?;
     crate::guard::outln!(
-        "{} frames rendered, {} reused; visibility {:.2} s, weights {:.3} s per environment, {:.1} ms per frame → {}",
+        "{}{} frames rendered, {} reused; visibility {:.2} s, weights {:.3} s per environment, {:.1} ms per frame → {}",
+        shard.map_or(String::new(), |s| format!("shard {}: ", s.label())),
         summary.frames_rendered,
         summary.frames_skipped,
         summary.visibility_s,
         summary.weights_s_per_env,
         summary.frame_ms,
-        args.output.join("summary.json").display()
+        path.display()
     );
+    if shard.is_some() {
+        crate::guard::outln!("  when every shard is done: btf finalize {}", args.output.display());
+    }
     Ok(())
+}
+
+/// Keeps the frames `shard` owns: frames are numbered environment by environment, rotation
+/// by rotation, and split into contiguous blocks ([`btf_core::shard::Shard::range`]). An
+/// environment's eigenweightset report goes with its first frame's shard.
+fn keep_shard(jobs: &mut [EnvJob], shard: btf_core::shard::Shard, rotations: usize) {
+    let mine = shard.range(jobs.len() * rotations);
+    for (e, job) in jobs.iter_mut().enumerate() {
+        let first = e * rotations;
+        if !mine.contains(&first) {
+            job.report_done = true;
+        }
+        let frames = std::mem::take(&mut job.frames);
+        job.frames = frames
+            .into_iter()
+            .enumerate()
+            .filter(|(r, _)| mine.contains(&(first + r)))
+            .map(|(_, f)| f)
+            .collect();
+    }
 }
 
 impl EnvJob {
@@ -243,37 +288,76 @@ fn relight_output(name: &str) -> bool {
         .and_then(|(stem, _)| stem.rsplit_once("_r"))
         .is_some_and(|(_, r)| r.len() == 3 && r.bytes().all(|b| b.is_ascii_digit()));
     frame
-        || matches!(name, "summary.json" | "job.json" | "eigen")
+        || matches!(name, "summary.json" | "job.json" | "eigen" | "shards")
         || btf_core::fs::is_temp_name(name)
 }
 
 /// Creates the folder and checks (or writes) `job.json`, so that frames of a different job
-/// are never mistaken for finished ones.
-fn prepare_output(args: &RelightArgs, scene: &Scene) -> Result<()> {
+/// are never mistaken for finished ones. A shard checks the job (and the shard plan)
+/// before it writes anything; the first shard creates them ([`btf_core::shard`]).
+fn prepare_output(
+    args: &RelightArgs,
+    scene: &Scene,
+    shard: Option<btf_core::shard::Shard>,
+) -> Result<()> {
     let out = &args.output;
+    let job = job_record(args, scene);
+    if let Some(shard) = shard {
+        ensure!(
+            !args.fresh,
+            "--fresh cannot be combined with --shard: one shard would delete the others' frames"
+        );
+        btf_core::fs::check_replaceable(
+            out,
+            btf_core::fs::OutputKind::Folder { marker: crate::guard::FOLDER_MARKER },
+        )?;
+        let plan = crate::cmd::shards::relight_plan(shard.count, args.envs.len(), args.rotations);
+        for (path, record) in [(out.join("job.json"), &job), (crate::cmd::shards::plan_path(out), &plan)]
+        {
+            if path.exists() {
+                btf_core::shard::check_agrees(&path, record)
+                    .context("this shard is not part of the relight job in that folder")?;
+            }
+        }
+        crate::guard::output_folder(out, "relight", false, &relight_output)?;
+        btf_core::shard::agree_or_create(&out.join("job.json"), &job)?;
+        btf_core::shard::agree_or_create(&crate::cmd::shards::plan_path(out), &plan)?;
+        return Ok(());
+    }
+    let path = out.join("job.json");
+    let text = serde_json::to_string_pretty(&job)?;
+    if !args.fresh {
+        if let Ok(old) = std::fs::read_to_string(&path) {
+            if old != text {
+                let was: serde_json::Value = serde_json::from_str(&old).unwrap_or_default();
+                bail!(
+                    "{} holds frames of a different relight job ({}); use --fresh or another folder",
+                    out.display(),
+                    btf_core::store::first_difference(&was, &job, "")
+                );
+            }
+        }
+    }
     crate::guard::output_folder(out, "relight", args.fresh, &relight_output)?;
+    if path.exists() {
+        return Ok(());
+    }
+    Ok(btf_image::write::write_text(&path, &text)?)
+}
+
+/// What `job.json` pins: the scene (without the environment path, which varies), the
+/// environments, rotations and whether EXR frames are written.
+fn job_record(args: &RelightArgs, scene: &Scene) -> serde_json::Value {
     let mut scene_for_key = scene.clone();
     if let Some((i, _)) = scene.environment() {
         set_env_path(&mut scene_for_key, i, Path::new(""));
     }
-    let job = serde_json::json!({
+    serde_json::json!({
         "scene": scene_for_key,
         "envs": args.envs,
         "rotations": args.rotations,
         "exr": args.exr,
-    });
-    let path = out.join("job.json");
-    let text = serde_json::to_string_pretty(&job)?;
-    if let Ok(old) = std::fs::read_to_string(&path) {
-        if old != text {
-            bail!(
-                "{} holds frames of a different relight job (scene, environments or rotations changed); use --fresh or another folder",
-                out.display()
-            );
-        }
-        return Ok(());
-    }
-    Ok(btf_image::write::write_text(&path, &text)?)
+    })
 }
 
 fn render_frames(
