@@ -417,7 +417,11 @@ pub fn check_replaceable(path: &Path, kind: OutputKind) -> Result<()> {
             if !meta.is_dir() {
                 return refuse("is a file, not a folder");
             }
-            let empty = fs::read_dir(path).map(|mut d| d.next().is_none()).unwrap_or(false);
+            // A temporary of another writer creating the marker at this instant (a shard
+            // of the same job) does not make the folder somebody else's.
+            let empty = fs::read_dir(path).is_ok_and(|mut d| {
+                d.all(|e| e.is_ok_and(|e| e.file_name().to_str().is_some_and(is_temp_name)))
+            });
             if !empty && !path.join(marker).is_file() {
                 return refuse(&format!(
                     "holds files this toolkit did not write (no {marker} in it)"

@@ -106,7 +106,10 @@ fn run_shard(
 ) -> Result<()> {
     let views = shard.range(input.meta().n_views());
     let pb = progress::bar(views.len() as u64, &format!("shard {}", shard.label()));
-    let r = btf_core::compress::compress_shard(input, output, params, shard, &|| pb.inc(1))
+    let r = btf_core::compress::compress_shard(input, output, params, shard, &|| {
+        pb.inc(1);
+        progress::unit_delay();
+    })
         .with_context(|| {
             format!(
                 "compressing shard {} of {} into {}",

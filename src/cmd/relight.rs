@@ -388,6 +388,7 @@ fn render_frames(
         btf_image::write::write_png_linear(png, w, h, &frame.rgb, scene.output.exposure)?;
         s.frames_rendered += 1;
         bar.inc(1);
+        crate::progress::unit_delay();
     }
     let n = s.frames_rendered.max(1) as f64;
     (s.frame_ms_mean, s.rotation_ms_mean) = (frame_ms / n, rotation_ms / n);

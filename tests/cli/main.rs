@@ -17,6 +17,7 @@ mod import_export;
 mod knit;
 mod python;
 mod relight;
+mod shards;
 mod render;
 mod synth;
 mod thin;
