@@ -114,6 +114,14 @@ pub fn run(args: RelightArgs) -> Result<()> {
     } else {
         prepare_output(&args, &scene, shard)?;
     }
+    let (pending, finished) = if args.fresh {
+        // `--fresh` (never with --shard) removed the frames: plan again.
+        jobs = plan(&args, &scene, env_index)?;
+        let pending: usize = jobs.iter().map(|j| j.frames.len()).sum();
+        (pending, false)
+    } else {
+        (pending, finished)
+    };
     if finished {
         let whose = shard.map_or(String::new(), |s| format!("shard {}: ", s.label()));
         crate::guard::outln!("{whose}all {all} frames of {} already rendered", args.output.display());
