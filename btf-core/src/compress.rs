@@ -3,9 +3,9 @@
 //! beside the arrays so an interrupted run resumes where it stopped.
 
 use crate::eigen::{EigenMeta, EigenWriter, Quantization, QuantizedSlot, SlotState};
-use crate::shard::Shard;
 use crate::metrics::{psnr_db, rel_rmse_from};
 use crate::pca::{PcaScratch, SlotRows, max_components, pca_rows_in, pca_slot_in};
+use crate::shard::Shard;
 use crate::store::{BtfStore, SlotData};
 use crate::zarr::DType;
 use crate::{Error, Result};

@@ -53,9 +53,8 @@ impl Shard {
 
     /// Parses `I/N` (0-based index).
     pub fn parse(text: &str) -> Result<Self> {
-        let bad = || {
-            Error::Invalid(format!("--shard {text:?}: expected I/N with 0 ≤ I < N, e.g. 0/4"))
-        };
+        let bad =
+            || Error::Invalid(format!("--shard {text:?}: expected I/N with 0 ≤ I < N, e.g. 0/4"));
         let (i, n) = text.split_once('/').ok_or_else(bad)?;
         let i = i.trim().parse().map_err(|_| bad())?;
         let n = n.trim().parse().map_err(|_| bad())?;
@@ -105,10 +104,8 @@ impl Shard {
 /// refusal.
 pub fn agree_or_create(path: &Path, record: &Value) -> Result<bool> {
     let text = serde_json::to_string_pretty(record).unwrap_or_default();
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        if !dir.exists() {
-            fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-        }
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty() && !d.exists()) {
+        fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     }
     if crate::fs::write_new(path, text.as_bytes())? {
         return Ok(true);

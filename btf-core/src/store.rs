@@ -227,7 +227,8 @@ impl StoreTxn {
                 partial.display()
             )));
         }
-        let doc = json!({"zarr_format": 3, "node_type": "group", "attributes": {"partial_job": job}});
+        let doc =
+            json!({"zarr_format": 3, "node_type": "group", "attributes": {"partial_job": job}});
         let text = serde_json::to_string_pretty(&doc).unwrap_or_default();
         let meta = partial.join("zarr.json");
         if partial.is_dir() && !meta.exists() && !is_empty_dir(&partial) {

@@ -110,14 +110,14 @@ fn run_shard(
         pb.inc(1);
         progress::unit_delay();
     })
-        .with_context(|| {
-            format!(
-                "compressing shard {} of {} into {}",
-                shard.label(),
-                input.path().display(),
-                output.display()
-            )
-        })?;
+    .with_context(|| {
+        format!(
+            "compressing shard {} of {} into {}",
+            shard.label(),
+            input.path().display(),
+            output.display()
+        )
+    })?;
     pb.finish_and_clear();
     for w in &r.warnings {
         eprintln!("warning: {w}");

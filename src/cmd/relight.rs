@@ -124,7 +124,10 @@ pub fn run(args: RelightArgs) -> Result<()> {
     };
     if finished {
         let whose = shard.map_or(String::new(), |s| format!("shard {}: ", s.label()));
-        crate::guard::outln!("{whose}all {all} frames of {} already rendered", args.output.display());
+        crate::guard::outln!(
+            "{whose}all {all} frames of {} already rendered",
+            args.output.display()
+        );
         return Ok(());
     }
     let first = jobs.iter().position(|j| !j.is_done()).unwrap_or(0);
@@ -320,7 +323,8 @@ fn prepare_output(
             btf_core::fs::OutputKind::Folder { marker: crate::guard::FOLDER_MARKER },
         )?;
         let plan = crate::cmd::shards::relight_plan(shard.count, args.envs.len(), args.rotations);
-        for (path, record) in [(out.join("job.json"), &job), (crate::cmd::shards::plan_path(out), &plan)]
+        for (path, record) in
+            [(out.join("job.json"), &job), (crate::cmd::shards::plan_path(out), &plan)]
         {
             if path.exists() {
                 btf_core::shard::check_agrees(&path, record)
@@ -334,17 +338,14 @@ fn prepare_output(
     }
     let path = out.join("job.json");
     let text = serde_json::to_string_pretty(&job)?;
-    if !args.fresh {
-        if let Ok(old) = std::fs::read_to_string(&path) {
-            if old != text {
-                let was: serde_json::Value = serde_json::from_str(&old).unwrap_or_default();
-                bail!(
-                    "{} holds frames of a different relight job ({}); use --fresh or another folder",
-                    out.display(),
-                    btf_core::store::first_difference(&was, &job, "")
-                );
-            }
-        }
+    let old = if args.fresh { None } else { std::fs::read_to_string(&path).ok() };
+    if let Some(old) = old.filter(|old| *old != text) {
+        let was: serde_json::Value = serde_json::from_str(&old).unwrap_or_default();
+        bail!(
+            "{} holds frames of a different relight job ({}); use --fresh or another folder",
+            out.display(),
+            btf_core::store::first_difference(&was, &job, "")
+        );
     }
     crate::guard::output_folder(out, "relight", args.fresh, &relight_output)?;
     if path.exists() {

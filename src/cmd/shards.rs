@@ -158,7 +158,14 @@ pub fn run_status(a: StatusArgs) -> Result<()> {
         st.corrupt,
         if st.finalised { "; finalised" } else { "" }
     );
-    outln!("{:>9} {:>7} {:>7} {:>8} {:>8}  state", "shard", st.units.split(' ').next_back().unwrap_or(""), "done", "missing", "corrupt");
+    outln!(
+        "{:>9} {:>7} {:>7} {:>8} {:>8}  state",
+        "shard",
+        st.units.split(' ').next_back().unwrap_or(""),
+        "done",
+        "missing",
+        "corrupt"
+    );
     for r in &st.shards {
         outln!(
             "{:>9} {:>7} {:>7} {:>8} {:>8}  {}",
@@ -171,7 +178,11 @@ pub fn run_status(a: StatusArgs) -> Result<()> {
         );
     }
     for c in &st.corrupt_units {
-        outln!("  corrupt {}: {}", c["unit"].as_str().unwrap_or(""), c["why"].as_str().unwrap_or(""));
+        outln!(
+            "  corrupt {}: {}",
+            c["unit"].as_str().unwrap_or(""),
+            c["why"].as_str().unwrap_or("")
+        );
     }
     if st.complete && !st.finalised {
         outln!("every part is done: run `btf finalize {}`", a.output.display());
@@ -185,7 +196,9 @@ fn status(output: &Path) -> Result<Status> {
     if output.join("job.json").is_file() {
         return relight_status(&output);
     }
-    if btf_core::store::StoreTxn::recorded_job(&output).is_some() || output.join("zarr.json").is_file() {
+    if btf_core::store::StoreTxn::recorded_job(&output).is_some()
+        || output.join("zarr.json").is_file()
+    {
         let st = btf_core::compress::status(&output)
             .with_context(|| format!("reading the state of {}", output.display()))?;
         let list: Vec<(String, State)> = st
@@ -264,14 +277,18 @@ pub fn relight_shard_summary(out: &Path, s: Shard) -> PathBuf {
 /// state.
 fn relight_frames(out: &Path) -> Result<Vec<(String, State)>> {
     let path = out.join("job.json");
-    let job: Value = serde_json::from_slice(&std::fs::read(&path).with_context(|| format!("reading {}", path.display()))?)
-        .with_context(|| format!("{}: not JSON", path.display()))?;
-    let envs = job["envs"].as_array().with_context(|| format!("{}: no envs list", path.display()))?;
-    let rotations = job["rotations"].as_u64().with_context(|| format!("{}: no rotations", path.display()))?;
+    let job: Value = serde_json::from_slice(
+        &std::fs::read(&path).with_context(|| format!("reading {}", path.display()))?,
+    )
+    .with_context(|| format!("{}: not JSON", path.display()))?;
+    let envs =
+        job["envs"].as_array().with_context(|| format!("{}: no envs list", path.display()))?;
+    let rotations =
+        job["rotations"].as_u64().with_context(|| format!("{}: no rotations", path.display()))?;
     let exr = job["exr"].as_bool().unwrap_or(false);
-    let eigen = job["scene"]["lights"]
-        .as_array()
-        .is_some_and(|ls| ls.iter().any(|l| !l["eigenweightsets"].is_null() && l.get("eigenweightsets").is_some()));
+    let eigen = job["scene"]["lights"].as_array().is_some_and(|ls| {
+        ls.iter().any(|l| !l["eigenweightsets"].is_null() && l.get("eigenweightsets").is_some())
+    });
     let mut list = Vec::new();
     for env in envs {
         let env = Path::new(env.as_str().unwrap_or_default());
@@ -279,7 +296,11 @@ fn relight_frames(out: &Path) -> Result<Vec<(String, State)>> {
         for r in 0..rotations {
             let name = format!("{stem}_r{r:03}.png");
             let mut state = frame_state(&out.join(&name), exr);
-            if r == 0 && eigen && state == State::Done && !out.join("eigen").join(format!("{stem}-error.md")).is_file() {
+            if r == 0
+                && eigen
+                && state == State::Done
+                && !out.join("eigen").join(format!("{stem}-error.md")).is_file()
+            {
                 state = State::Missing;
             }
             list.push((name, state));
@@ -325,7 +346,8 @@ fn finalize_relight(out: &Path, as_json: bool) -> Result<()> {
     if !st.complete {
         let mut names = st.missing_units.clone();
         names.extend(st.corrupt_units.iter().map(|c| c["unit"].as_str().unwrap_or("").to_string()));
-        let more = if names.len() > 8 { format!(" and {} more", names.len() - 8) } else { String::new() };
+        let more =
+            if names.len() > 8 { format!(" and {} more", names.len() - 8) } else { String::new() };
         names.truncate(8);
         bail!(
             "{}: cannot finalise: {} of {} frames missing, {} corrupt ({}{more}); run the \
@@ -350,7 +372,9 @@ fn finalize_relight(out: &Path, as_json: bool) -> Result<()> {
     let mut records = Vec::new();
     for i in 0..st.shards.len() {
         let p = relight_shard_summary(out, Shard { index: i, count: st.shards.len() });
-        if let Some(v) = std::fs::read(&p).ok().and_then(|b| serde_json::from_slice::<Value>(&b).ok()) {
+        if let Some(v) =
+            std::fs::read(&p).ok().and_then(|b| serde_json::from_slice::<Value>(&b).ok())
+        {
             records.push(json!({ "shard": format!("{i}/{}", st.shards.len()), "summary": v }));
         }
     }

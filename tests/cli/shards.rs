@@ -18,10 +18,9 @@ use std::time::{Duration, Instant};
 
 /// An 81 × 81 (ubo81) store of 16² texels whose images vary smoothly with the light and
 /// the view (a PCA with several real components), shifted by `offset`.
-fn store_81(path: &Path, offset: f32) {
+pub(crate) fn store_81(path: &Path, offset: f32) {
     let s = Sampling::ubo81();
-    let w = BtfWriter::create(path, BtfMeta::new(s.clone(), s, 16, 16), DType::F32, false)
-        .unwrap();
+    let w = BtfWriter::create(path, BtfMeta::new(s.clone(), s, 16, 16), DType::F32, false).unwrap();
     for v in 0..81 {
         for l in 0..81 {
             let img: Vec<f32> =
@@ -80,7 +79,7 @@ fn kill_after(mut child: Child, at_least: usize, done: impl Fn() -> usize) -> us
 }
 
 /// Every file below `dir`, relative path → bytes.
-fn tree(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+pub(crate) fn tree(dir: &Path) -> BTreeMap<String, Vec<u8>> {
     let mut out = BTreeMap::new();
     let mut stack = vec![dir.to_owned()];
     while let Some(d) = stack.pop() {
@@ -109,7 +108,7 @@ fn tree_with_partial(d: &Dir, name: &str) -> BTreeMap<String, Vec<u8>> {
 }
 
 /// Asserts two trees hold the same files with the same bytes, after `normalise`.
-fn assert_same_tree(
+pub(crate) fn assert_same_tree(
     a: &BTreeMap<String, Vec<u8>>,
     b: &BTreeMap<String, Vec<u8>>,
     normalise: impl Fn(&str, &[u8]) -> Vec<u8>,
@@ -179,7 +178,7 @@ fn compress_in_four_shards_with_one_killed_matches_one_process() {
     assert!(tree_with_partial(&d, "sh.eig") == before, "a refused writer changed the output");
     // The restarted shard keeps what it finished and computes the rest.
     let out = wait_ok(run(2, 0), "restarted shard 2");
-    assert!(out.contains(&format!("already done")), "{out}");
+    assert!(out.contains("already done"), "{out}");
     let resumed: usize =
         out.split(" computed, ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
     assert!(resumed >= at_kill - 1 && resumed < 20, "{out}");
@@ -190,27 +189,34 @@ fn compress_in_four_shards_with_one_killed_matches_one_process() {
     let report: serde_json::Value = serde_json::from_str(&again).unwrap();
     assert_eq!(report["slots"].as_array().unwrap().len(), 81);
     let single: serde_json::Value = serde_json::from_str(&d.ok(&[
-        "compress", "m.btf", "-c", "4", "-o", "single2.eig", "--json",
+        "compress",
+        "m.btf",
+        "-c",
+        "4",
+        "-o",
+        "single2.eig",
+        "--json",
     ]))
     .unwrap();
     assert_eq!(report["rel_rmse"], single["rel_rmse"], "the report over all slots");
     assert_eq!(report["psnr_db"], single["psnr_db"]);
-    // Byte for byte the single-process store, except the wall-clock `seconds` each slot's
-    // statistics record (stats/<view>/zarr.json): timings legitimately differ.
-    let strip_seconds = |name: &str, bytes: &[u8]| -> Vec<u8> {
-        if !name.starts_with("stats/") {
-            return bytes.to_vec();
-        }
-        let mut v: serde_json::Value = serde_json::from_slice(bytes).unwrap();
-        if let Some(r) = v["attributes"]["record"].as_object_mut() {
-            r.remove("seconds");
-        }
-        v.to_string().into_bytes()
-    };
     let (a, b) = (tree(&d.path("single.eig")), tree(&d.path("sh.eig")));
     assert!(a.len() > 81 * 5, "{} files", a.len());
     assert_same_tree(&a, &b, strip_seconds);
     assert!(!d.path("sh.eig.partial").exists());
+}
+
+/// Byte for byte the single-process store, except the wall-clock `seconds` each slot's
+/// statistics record (`stats/<view>/zarr.json`): timings legitimately differ.
+pub(crate) fn strip_seconds(name: &str, bytes: &[u8]) -> Vec<u8> {
+    if !name.starts_with("stats/") {
+        return bytes.to_vec();
+    }
+    let mut v: serde_json::Value = serde_json::from_slice(bytes).unwrap();
+    if let Some(r) = v["attributes"]["record"].as_object_mut() {
+        r.remove("seconds");
+    }
+    v.to_string().into_bytes()
 }
 
 /// 2 environments × 100 rotations = 200 frames of 16² (the plane of the relight tests).
@@ -295,9 +301,13 @@ fn relight_of_200_frames_in_four_shards_with_one_killed_matches_one_process() {
     let (a, b) = (tree(&d.path("single")), tree(&d.path("sh")));
     assert_eq!(a.keys().filter(|k| k.ends_with(".png")).count(), 200);
     assert_eq!(a.keys().filter(|k| k.ends_with(".exr")).count(), 200);
-    assert_same_tree(&a, &b, |name, bytes| {
-        if name == "summary.json" { Vec::new() } else { bytes.to_vec() }
-    });
+    assert_same_tree(
+        &a,
+        &b,
+        |name, bytes| {
+            if name == "summary.json" { Vec::new() } else { bytes.to_vec() }
+        },
+    );
     let merged: serde_json::Value =
         serde_json::from_slice(&std::fs::read(d.path("sh/summary.json")).unwrap()).unwrap();
     assert_eq!(merged["frames"], 200);
