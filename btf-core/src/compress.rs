@@ -2,11 +2,11 @@
 //! all view slots in parallel, one slot in memory per worker, with per-slot statistics kept
 //! beside the arrays so an interrupted run resumes where it stopped.
 
-use crate::eigen::{EigenMeta, EigenWriter, Quantization, QuantizedSlot, SlotState};
+use crate::eigen::{EigenMeta, EigenWriter, Quantization, QuantizedSlot};
 use crate::metrics::{psnr_db, rel_rmse_from};
 use crate::pca::{PcaScratch, SlotRows, max_components, pca_rows_in, pca_slot_in};
 use crate::shard::Shard;
-use crate::store::{BtfStore, SlotData};
+use crate::store::{BtfStore, ShardedStatus, SlotData};
 use crate::zarr::DType;
 use crate::{Error, Result};
 use half::f16;
@@ -204,26 +204,6 @@ fn shard_job(input: &BtfStore, shards: usize) -> Result<serde_json::Value> {
     }))
 }
 
-/// What [`status`] and [`finalize`] find in a sharded compression's output.
-#[derive(Debug, Clone, Serialize)]
-pub struct ShardedStatus {
-    /// Components per slot of the job.
-    pub components: usize,
-    /// Shards the job was split into (1 when it was not sharded).
-    pub shards: usize,
-    /// State of every view slot: `"done"`, `"missing"` or `"corrupt: …"`.
-    pub slots: Vec<String>,
-    /// True when the store has been committed (finalised).
-    pub finalised: bool,
-}
-
-impl ShardedStatus {
-    /// View slots of `state` (`"done"`, `"missing"`, `"corrupt"`).
-    pub fn views(&self, state: &str) -> Vec<usize> {
-        (0..self.slots.len()).filter(|&v| self.slots[v].starts_with(state)).collect()
-    }
-}
-
 /// The state of every view slot of the eigen store being written at `output` by the
 /// shards of a compression (or of the finished store): done (every chunk present with a
 /// valid crc32c and statistics recorded), missing, or corrupt (naming the chunk file).
@@ -231,7 +211,7 @@ pub fn status(output: &Path) -> Result<ShardedStatus> {
     if crate::store::StoreTxn::recorded_job(output).is_none() {
         let out = crate::eigen::EigenStore::open(output)?;
         return Ok(ShardedStatus {
-            components: out.meta().components,
+            store: "eigen".into(),
             shards: 1,
             slots: vec!["done".into(); out.meta().btf.n_views()],
             finalised: true,
@@ -242,19 +222,8 @@ pub fn status(output: &Path) -> Result<ShardedStatus> {
 }
 
 fn status_of(writer: &EigenWriter, job: &serde_json::Value) -> ShardedStatus {
-    let slots = (0..writer.meta().btf.n_views())
-        .map(|v| match writer.slot_state(v) {
-            SlotState::Done => "done".to_string(),
-            SlotState::Missing => "missing".to_string(),
-            SlotState::Corrupt(why) => format!("corrupt: {why}"),
-        })
-        .collect();
-    ShardedStatus {
-        components: writer.meta().components,
-        shards: job["shards"].as_u64().unwrap_or(1) as usize,
-        slots,
-        finalised: false,
-    }
+    let states = (0..writer.meta().btf.n_views()).map(|v| writer.slot_state(v)).collect();
+    ShardedStatus::of("eigen", job, states)
 }
 
 /// Finalises a sharded compression: checks that every view slot of `OUTPUT.partial` is
@@ -268,21 +237,7 @@ pub fn finalize(output: &Path) -> Result<(CompressReport, bool)> {
     let already = crate::store::StoreTxn::recorded_job(output).is_none();
     if !already {
         let (writer, job) = EigenWriter::reopen(output)?;
-        let st = status_of(&writer, &job);
-        let (missing, corrupt) = (st.views("missing"), st.views("corrupt"));
-        if !missing.is_empty() || !corrupt.is_empty() {
-            let why: Vec<&str> = corrupt.iter().map(|&v| st.slots[v].as_str()).collect();
-            return Err(Error::Invalid(format!(
-                "{}: cannot finalise: {} of {} view slots missing ({}), {} corrupt{}{}",
-                output.display(),
-                missing.len(),
-                st.slots.len(),
-                list_views(&missing),
-                corrupt.len(),
-                if why.is_empty() { "" } else { ": " },
-                why.join("; ")
-            )));
-        }
+        status_of(&writer, &job).require_complete(output)?;
         writer.finish()?;
     }
     let out = crate::eigen::EigenStore::open(output)?;
@@ -303,25 +258,6 @@ pub fn finalize(output: &Path) -> Result<(CompressReport, bool)> {
     r.seconds = r.slots.iter().map(|s| s.seconds).sum();
     (r.simd, r.warnings) = (isa.name(), warnings);
     Ok((r, already))
-}
-
-/// `0-3, 7, 9-12`.
-pub fn list_views(views: &[usize]) -> String {
-    let mut parts: Vec<String> = Vec::new();
-    let mut i = 0;
-    while i < views.len() {
-        let mut j = i;
-        while j + 1 < views.len() && views[j + 1] == views[j] + 1 {
-            j += 1;
-        }
-        parts.push(if i == j {
-            views[i].to_string()
-        } else {
-            format!("{}-{}", views[i], views[j])
-        });
-        i = j + 1;
-    }
-    parts.join(", ")
 }
 
 /// The report of a run over `slots` (sorted by view; `true` = taken from an earlier run).

@@ -10,6 +10,7 @@
 //! onto 0‥255. Means and weights are `f32`, eigenvalues `f64`.
 
 use crate::sampling::Sampling;
+pub use crate::store::SlotState;
 use crate::store::{BtfMeta, StoreTxn, read_meta_of_kind};
 use crate::zarr::{self, ArrayMeta, DType, Limits, ZarrArray};
 use crate::{Error, Result};
@@ -262,17 +263,6 @@ pub fn dequantize(raw: &[u8], scale_offset: &[[f32; 2]], q: Quantization) -> Vec
         }
     }
     out
-}
-
-/// The state of one view slot of a store being written ([`EigenWriter::slot_state`]).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum SlotState {
-    /// Every chunk present and checked, statistics recorded.
-    Done,
-    /// Some chunk (or the statistics) not written yet.
-    Missing,
-    /// A chunk fails its size or checksum check: what is wrong, with the file named.
-    Corrupt(String),
 }
 
 /// Writer of an eigen store, one slot at a time, resumable.

@@ -518,6 +518,67 @@ impl BtfWriter {
         Ok(BtfWriter { txn, meta, arr })
     }
 
+    /// [`BtfWriter::create_for_job`] for one shard of several filling one store at once
+    /// ([`StoreTxn::join`]): the first creates the partial store and its job record, the
+    /// others check that they agree (metadata with its provenance, element type, `job`)
+    /// before writing anything. Nothing is committed: the finaliser does that
+    /// ([`finalize_sharded`]).
+    pub fn join_for_job(path: &Path, meta: BtfMeta, dtype: DType, job: Value) -> Result<Self> {
+        if !matches!(dtype, DType::F16 | DType::F32) {
+            return Err(Error::Unsupported(format!(
+                "normtexture dtype {dtype:?} (use f16 or f32)"
+            )));
+        }
+        let meta = meta.validate(path)?;
+        let record = json!({"store": "btf", "meta": meta, "dtype": dtype.zarr_name(), "job": job});
+        let txn = StoreTxn::join(path, &record)?;
+        let array = ArrayMeta {
+            compression: zarr::Compression::DEFAULT_ZSTD,
+            ..normtexture_array(&meta, dtype)
+        };
+        let arr = ZarrArray::create(&txn.dir().join("normtextures"), array)?;
+        Ok(BtfWriter { txn, meta, arr })
+    }
+
+    /// The partial BTF store of `path` with its job record, opened to read its state
+    /// (`commit = false`: nothing is created or removed) or to commit it.
+    fn open_partial(path: &Path, commit: bool) -> Result<(Self, Value)> {
+        let (txn, record) = if commit {
+            StoreTxn::reopen(path)?
+        } else {
+            StoreTxn::peek(path).ok_or_else(|| {
+                Error::Invalid(format!("{}: no partial store beside it", path.display()))
+            })?
+        };
+        if record.get("store") != Some(&json!("btf")) {
+            return Err(Error::Invalid(format!(
+                "{}: the partial store beside it is not a BTF store",
+                path.display()
+            )));
+        }
+        let meta: BtfMeta = serde_json::from_value(record["meta"].clone())
+            .map_err(|source| Error::Json { path: txn.dir().join("zarr.json"), source })?;
+        let meta = meta.validate(txn.dir())?;
+        let arr = ZarrArray::open(&txn.dir().join("normtextures"), &Limits::default())?;
+        Ok((BtfWriter { txn, meta, arr }, record))
+    }
+
+    /// The state of view slot `view`: every light image present with a valid checksum,
+    /// some image missing, or an image failing its check (the file named).
+    pub fn slot_state(&self, view: usize) -> SlotState {
+        let n_l = self.meta.n_lights();
+        let idx = |l: usize| [view as u64, l as u64, 0, 0, 0];
+        if (0..n_l).any(|l| !self.arr.chunk_path(&idx(l)).exists()) {
+            return SlotState::Missing;
+        }
+        for l in 0..n_l {
+            if let Err(e) = self.arr.read_chunk(&idx(l)) {
+                return SlotState::Corrupt(e.to_string());
+            }
+        }
+        SlotState::Done
+    }
+
     /// The metadata being written.
     pub fn meta(&self) -> &BtfMeta {
         &self.meta
@@ -577,6 +638,134 @@ impl BtfWriter {
         let attrs = json!({"btf": self.meta});
         self.txn.commit(attrs)
     }
+}
+
+/// The state of one view slot of a store being written (by shards, issue #23).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum SlotState {
+    /// Every chunk present and checked (and, for an eigen slot, its statistics recorded).
+    Done,
+    /// Some chunk (or the statistics) not written yet.
+    Missing,
+    /// A chunk fails its size or checksum check: what is wrong, with the file named.
+    Corrupt(String),
+}
+
+/// What the shards of a job have written into a store at `output` (a BTF or eigen store,
+/// still `OUTPUT.partial` or already committed).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct ShardedStatus {
+    /// `"btf"` or `"eigen"`.
+    pub store: String,
+    /// Shards the job was split into (1 when it was not sharded).
+    pub shards: usize,
+    /// State of every view slot: `"done"`, `"missing"` or `"corrupt: …"`.
+    pub slots: Vec<String>,
+    /// True when the store has been committed (finalised).
+    pub finalised: bool,
+}
+
+impl ShardedStatus {
+    /// View slots whose state starts with `state` (`"done"`, `"missing"`, `"corrupt"`).
+    pub fn views(&self, state: &str) -> Vec<usize> {
+        (0..self.slots.len()).filter(|&v| self.slots[v].starts_with(state)).collect()
+    }
+
+    pub(crate) fn of(store: &str, job: &Value, states: Vec<SlotState>) -> Self {
+        let slots = states
+            .into_iter()
+            .map(|s| match s {
+                SlotState::Done => "done".to_string(),
+                SlotState::Missing => "missing".to_string(),
+                SlotState::Corrupt(why) => format!("corrupt: {why}"),
+            })
+            .collect();
+        ShardedStatus {
+            store: store.into(),
+            shards: job["shards"].as_u64().unwrap_or(1) as usize,
+            slots,
+            finalised: false,
+        }
+    }
+
+    /// Refuses (listing them) when slots are missing or corrupt.
+    pub(crate) fn require_complete(&self, output: &Path) -> Result<()> {
+        let (missing, corrupt) = (self.views("missing"), self.views("corrupt"));
+        if missing.is_empty() && corrupt.is_empty() {
+            return Ok(());
+        }
+        let why: Vec<&str> = corrupt.iter().map(|&v| self.slots[v].as_str()).collect();
+        Err(Error::Invalid(format!(
+            "{}: cannot finalise: {} of {} view slots missing ({}), {} corrupt{}{}",
+            output.display(),
+            missing.len(),
+            self.slots.len(),
+            list_units(&missing),
+            corrupt.len(),
+            if why.is_empty() { "" } else { ": " },
+            why.join("; ")
+        )))
+    }
+}
+
+/// `0-3, 7, 9-12`.
+pub fn list_units(units: &[usize]) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    let mut i = 0;
+    while i < units.len() {
+        let mut j = i;
+        while j + 1 < units.len() && units[j + 1] == units[j] + 1 {
+            j += 1;
+        }
+        parts.push(if i == j {
+            units[i].to_string()
+        } else {
+            format!("{}-{}", units[i], units[j])
+        });
+        i = j + 1;
+    }
+    parts.join(", ")
+}
+
+/// Which kind of store (`"btf"`, `"eigen"`) the job beside `output` is writing, or the
+/// committed store at `output` is; `None` for neither.
+pub fn store_kind(output: &Path) -> Option<String> {
+    if let Some(job) = StoreTxn::recorded_job(output) {
+        return job["store"].as_str().map(String::from);
+    }
+    read_meta(output).ok().map(|m| m.kind)
+}
+
+/// The state of every view slot of the BTF store that shards are writing at `output`
+/// (or of the committed store).
+pub fn sharded_status(output: &Path) -> Result<ShardedStatus> {
+    if StoreTxn::recorded_job(output).is_none() {
+        let store = BtfStore::open(output)?;
+        let n = store.meta().n_views();
+        return Ok(ShardedStatus {
+            store: "btf".into(),
+            shards: 1,
+            slots: vec!["done".into(); n],
+            finalised: true,
+        });
+    }
+    let (w, record) = BtfWriter::open_partial(output, false)?;
+    let states = (0..w.meta.n_views()).map(|v| w.slot_state(v)).collect();
+    Ok(ShardedStatus::of("btf", &record["job"], states))
+}
+
+/// Commits the BTF store that shards filled at `output` once every image is in and sound;
+/// `Ok(true)` when it was committed already (safe to run twice).
+pub fn finalize_sharded(output: &Path) -> Result<bool> {
+    if StoreTxn::recorded_job(output).is_none() {
+        BtfStore::open(output)?;
+        return Ok(true);
+    }
+    let (w, record) = BtfWriter::open_partial(output, true)?;
+    let states = (0..w.meta.n_views()).map(|v| w.slot_state(v)).collect();
+    ShardedStatus::of("btf", &record["job"], states).require_complete(output)?;
+    w.finish()?;
+    Ok(false)
 }
 
 /// The light images of one view slot: `n_lights` rows of `texel_values` floats.

@@ -1,8 +1,9 @@
 //! `btf status OUT` and `btf finalize OUT` (issue #23): which frames (a `btf relight`
-//! folder) or view slots (a `btf compress` eigen store) of a job are done, missing or
-//! corrupt — overall and per shard, as a table or `--json` — and the one step that needs
-//! every part: for a compression, committing `OUT.partial` to `OUT` with the error report
-//! over all slots; for a relight job, merging the shards' summaries into `summary.json`.
+//! folder) or view slots (a `btf compress` eigen store, a `btf synth material` BTF store)
+//! of a job are done, missing or corrupt — overall and per shard, as a table or `--json` —
+//! and the one step that needs every part: for a store, committing `OUT.partial` to `OUT`
+//! (with the error report over all slots for a compression); for a relight job, merging
+//! the shards' summaries into `summary.json`.
 //!
 //! A frame is done when its PNG (and EXR, when the job writes them) decodes — the PNG
 //! chunks' CRCs and the EXR's structure are checked by decoding — and, for an
@@ -50,7 +51,8 @@ enum State {
 /// What `btf status` reports (the `--json` keys).
 #[derive(Serialize)]
 struct Status {
-    /// `"relight"` or `"compress"`.
+    /// `"relight"`, `"compress"` or `"synth"` (a BTF store that `btf synth material` shards
+    /// fill).
     kind: &'static str,
     output: String,
     /// `"frames"` or `"view slots"`.
@@ -196,11 +198,14 @@ fn status(output: &Path) -> Result<Status> {
     if output.join("job.json").is_file() {
         return relight_status(&output);
     }
-    if btf_core::store::StoreTxn::recorded_job(&output).is_some()
-        || output.join("zarr.json").is_file()
-    {
-        let st = btf_core::compress::status(&output)
-            .with_context(|| format!("reading the state of {}", output.display()))?;
+    if let Some(kind) = btf_core::store::store_kind(&output) {
+        let st = if kind == "btf" {
+            btf_core::store::sharded_status(&output)
+        } else {
+            btf_core::compress::status(&output)
+        }
+        .with_context(|| format!("reading the state of {}", output.display()))?;
+        let kind = if kind == "btf" { "synth" } else { "compress" };
         let list: Vec<(String, State)> = st
             .slots
             .iter()
@@ -214,7 +219,7 @@ fn status(output: &Path) -> Result<Status> {
                 (format!("slot {v}"), state)
             })
             .collect();
-        return Ok(status_of("compress", &output, "view slots", &list, st.shards, st.finalised));
+        return Ok(status_of(kind, &output, "view slots", &list, st.shards, st.finalised));
     }
     bail!(
         "{}: neither a `btf relight` folder (no job.json) nor a `btf compress` store or its \
@@ -237,6 +242,18 @@ pub fn run_finalize(a: FinalizeArgs) -> Result<()> {
     let output = strip_partial(&a.output);
     if output.join("job.json").is_file() {
         return finalize_relight(&output, a.json);
+    }
+    if btf_core::store::store_kind(&output).as_deref() == Some("btf") {
+        let already = btf_core::store::finalize_sharded(&output)
+            .with_context(|| format!("finalising {}", output.display()))?;
+        let st = status(&output)?;
+        if a.json {
+            outln!("{}", serde_json::to_string_pretty(&st)?);
+        } else {
+            let what = if already { "already finalised" } else { "finalised" };
+            outln!("{what} {}: {} view slots", output.display(), st.total);
+        }
+        return Ok(());
     }
     let (r, already) = btf_core::compress::finalize(&output)
         .with_context(|| format!("finalising {}", output.display()))?;

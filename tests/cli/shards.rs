@@ -313,3 +313,35 @@ fn relight_of_200_frames_in_four_shards_with_one_killed_matches_one_process() {
     assert_eq!(merged["frames"], 200);
     assert_eq!(merged["shards"].as_array().unwrap().len(), 4);
 }
+
+#[test]
+fn synth_material_in_four_shards_matches_one_process_and_refuses_another_kind() {
+    let d = Dir::new();
+    let base = ["synth", "material", "--kind", "corduroy", "--size", "8"];
+    let with = |extra: &[&str]| -> Vec<String> {
+        base.iter().chain(extra).map(|s| s.to_string()).collect()
+    };
+    let single = with(&["-o", "one.btf"]);
+    d.ok(&single.iter().map(String::as_str).collect::<Vec<_>>());
+    let children: Vec<Child> = (0..4)
+        .map(|i| {
+            let a = with(&["-o", "sh.btf", "--shard", &format!("{i}/4")]);
+            spawn(&d, &a.iter().map(String::as_str).collect::<Vec<_>>(), 0)
+        })
+        .collect();
+    for (i, c) in children.into_iter().enumerate() {
+        wait_ok(c, &format!("shard {i}"));
+    }
+    let st = status_json(&d, "sh.btf");
+    assert_eq!((st["kind"].as_str(), st["done"].as_u64()), (Some("synth"), Some(81)), "{st}");
+    let before = tree_with_partial(&d, "sh.btf");
+    let err = d.fails(&[
+        "synth", "material", "--kind", "knit", "--size", "8", "-o", "sh.btf", "--shard", "0/4",
+    ]);
+    assert!(err.contains("meta.provenance.kind: was \"corduroy\", now \"knit\""), "{err}");
+    assert!(tree_with_partial(&d, "sh.btf") == before, "a refused writer changed the output");
+    d.ok(&["finalize", "sh.btf"]);
+    assert!(d.ok(&["finalize", "sh.btf"]).contains("already finalised"));
+    // No timings in a BTF store: every byte is the single-process store's.
+    assert!(tree(&d.path("one.btf")) == tree(&d.path("sh.btf")));
+}
