@@ -377,6 +377,9 @@ fn finalize_relight(out: &Path, as_json: bool) -> Result<()> {
             out.display()
         );
     }
+    // Every frame is in, so no shard of this job is writing: what a killed one left under
+    // a temporary name goes.
+    btf_core::fs::sweep_temps(out)?;
     let shards_dir = out.join("shards");
     if !shards_dir.exists() {
         if as_json {
