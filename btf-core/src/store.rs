@@ -231,7 +231,10 @@ impl StoreTxn {
             json!({"zarr_format": 3, "node_type": "group", "attributes": {"partial_job": job}});
         let text = serde_json::to_string_pretty(&doc).unwrap_or_default();
         let meta = partial.join("zarr.json");
-        if partial.is_dir() && !meta.exists() && !is_empty_dir(&partial) {
+        // Another shard creating the record leaves only its temporary here meanwhile; and
+        // every other file of a job comes after its record, so the record is looked for
+        // after the listing.
+        if partial.is_dir() && !holds_only_temporaries(&partial) && !meta.exists() {
             return Err(Error::Invalid(format!(
                 "{} exists, holds files and records no job; refusing to write into it",
                 partial.display()
@@ -342,6 +345,12 @@ impl StoreTxn {
 fn read_sidecar(sidecar: &Path) -> Option<(Value, Value)> {
     let v: Value = serde_json::from_slice(&fs::read(sidecar).ok()?).ok()?;
     Some((v.get("job")?.clone(), v.get("attributes")?.clone()))
+}
+
+fn holds_only_temporaries(p: &Path) -> bool {
+    fs::read_dir(p).is_ok_and(|mut d| {
+        d.all(|e| e.is_ok_and(|e| e.file_name().to_str().is_some_and(crate::fs::is_temp_name)))
+    })
 }
 
 fn is_empty_dir(p: &Path) -> bool {
