@@ -5,7 +5,8 @@
 #   benches/shards.sh [BTF_BINARY]        (default target/release/btf)
 # Knobs: ROTATIONS (per environment, 2 environments; default 100 → 200 frames),
 #        FRAME (frame size, default 128), TEX (material size, default 32),
-#        STORE (compression store size, default 64), ROUNDS (default 2).
+#        STORE (compression store size, default 64), ROUNDS (default 2),
+#        KINDS (default "relight compress"), LP_NUM_THREADS (lavapipe's threads per process).
 # Prints one line per run: wall seconds, CPU seconds (user + sys summed over every
 # process of the run), frames or slots per wall second, CPU overhead against one process.
 set -euo pipefail
@@ -22,7 +23,7 @@ q compress mat.btf -c 8 -o mat.eig
 q synth mesh --kind sphere -o sphere.obj
 q synth env --kind sky --width 128 -o sky.exr
 q synth env --kind studio --width 128 -o studio.exr
-q synth material --kind corduroy --size "$store" -o big.btf
+case " ${KINDS:-compress} " in *" compress "*) q synth material --kind corduroy --size "$store" -o big.btf ;; esac
 cat > scene.toml <<TOML
 [output]
 width = $frame
@@ -83,13 +84,14 @@ PY
 }
 
 for r in $(seq 1 "$rounds"); do
-  for kind in relight compress; do
+  for kind in ${KINDS:-relight compress}; do
     for n in 0 1 2 4; do run_job "$kind" "$n" "$r"; done
   done
 done
 python3 - <<'PY'
 import collections
-for kind in ("relight", "compress"):
+import os
+for kind in os.environ.get("KINDS", "relight compress").split():
     runs = collections.defaultdict(list)
     for l in open(f"{kind}.cpu"):
         n, cpu, wall = l.split()
