@@ -322,7 +322,9 @@ fn prepare_output(
             out,
             btf_core::fs::OutputKind::Folder { marker: crate::guard::FOLDER_MARKER },
         )?;
-        let plan = crate::cmd::shards::relight_plan(shard.count, args.envs.len(), args.rotations);
+        let mut plan =
+            crate::cmd::shards::relight_plan(shard.count, args.envs.len(), args.rotations);
+        plan["inputs"] = input_identities(args, scene)?;
         for (path, record) in
             [(out.join("job.json"), &job), (crate::cmd::shards::plan_path(out), &plan)]
         {
@@ -352,6 +354,37 @@ fn prepare_output(
         return Ok(());
     }
     Ok(btf_image::write::write_text(&path, &text)?)
+}
+
+/// What identifies the job's input files for its shards, by the name the job knows them
+/// by (not their path, which may differ between machines): a store by its content
+/// fingerprint ([`btf_core::shard::fingerprint`]), any other file by its size and
+/// modification time (reading every environment map in every shard would cost more than
+/// the shard's frames).
+fn input_identities(args: &RelightArgs, scene: &Scene) -> Result<serde_json::Value> {
+    let mut named: Vec<(String, std::path::PathBuf)> = scene
+        .input_paths()
+        .into_iter()
+        .filter(|(name, _)| !name.starts_with("[[lights]]"))
+        .collect();
+    named.extend(args.envs.iter().enumerate().map(|(i, p)| (format!("--env {i}"), p.clone())));
+    let mut out = serde_json::Map::new();
+    for (name, path) in named {
+        let id = if path.is_dir() {
+            serde_json::json!({ "fingerprint": btf_core::shard::fingerprint(&path)? })
+        } else {
+            let m =
+                std::fs::metadata(&path).with_context(|| format!("{name} {}", path.display()))?;
+            let mtime = m
+                .modified()
+                .ok()
+                .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
+                .map_or(0, |d| d.as_nanos());
+            serde_json::json!({ "bytes": m.len(), "mtime_ns": mtime.to_string() })
+        };
+        out.insert(name, id);
+    }
+    Ok(serde_json::Value::Object(out))
 }
 
 /// What `job.json` pins: the scene (without the environment path, which varies), the

@@ -283,6 +283,15 @@ fn relight_of_200_frames_in_four_shards_with_one_killed_matches_one_process() {
     let err = d.fails(&other.iter().map(String::as_str).collect::<Vec<_>>());
     assert!(err.contains("rotations: was 100, now 50"), "{err}");
     assert!(tree(&d.path("sh")) == before, "a refused writer changed the output");
+    // So is another environment map behind the same path (the original moved aside and
+    // back: a rename keeps its size and modification time).
+    std::fs::rename(d.path("sky.exr"), d.path("sky.orig")).unwrap();
+    crate::relight::write_env(&d.path("sky.exr"), |_, _| [0.5; 3]);
+    let mine = relight_args("sh", Some(1));
+    let err = d.fails(&mine.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(err.contains("inputs.--env 1"), "{err}");
+    assert!(tree(&d.path("sh")) == before, "a refused writer changed the output");
+    std::fs::rename(d.path("sky.orig"), d.path("sky.exr")).unwrap();
     let err = d.fails(&["finalize", "sh"]);
     assert!(err.contains("cannot finalise") && err.contains("white_r"), "{err}");
     // Restarted, the shard renders only what is missing.
