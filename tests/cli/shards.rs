@@ -176,8 +176,31 @@ fn compress_in_four_shards_with_one_killed_matches_one_process() {
     let err = d.fails(&["compress", "m.btf", "-c", "4", "-o", "sh.eig", "--shard", "1/2"]);
     assert!(err.contains("job.shards: was 4, now 2"), "{err}");
     assert!(tree_with_partial(&d, "sh.eig") == before, "a refused writer changed the output");
-    // The restarted shard keeps what it finished and computes the rest.
-    let out = wait_ok(run(2, 0), "restarted shard 2");
+    // The restarted shard keeps what it finished and computes the rest; this time its
+    // index comes from the variable a Kubernetes Indexed Job sets.
+    let shard_count = |var: Option<(&str, &str)>| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_btf"));
+        c.args(["compress", "m.btf", "-c", "4", "-o", "sh.eig", "--shard-count", "4"])
+            .current_dir(d.tmp.path())
+            .env("BTF_NO_PROGRESS", "1")
+            .env_remove("JOB_COMPLETION_INDEX")
+            .env_remove("SLURM_ARRAY_TASK_ID");
+        if let Some((k, v)) = var {
+            c.env(k, v);
+        }
+        c.output().unwrap()
+    };
+    let o = shard_count(None);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("JOB_COMPLETION_INDEX"), "{err}");
+    let o = shard_count(Some(("SLURM_ARRAY_TASK_ID", "4")));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("SLURM_ARRAY_TASK_ID=4"), "{err}");
+    assert!(tree_with_partial(&d, "sh.eig") == before, "a refused writer changed the output");
+    let o = shard_count(Some(("JOB_COMPLETION_INDEX", "2")));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = String::from_utf8(o.stdout).unwrap();
+    assert!(out.starts_with("shard 2/4: view slots 40..60"), "{out}");
     assert!(out.contains("already done"), "{out}");
     let resumed: usize =
         out.split(" computed, ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
