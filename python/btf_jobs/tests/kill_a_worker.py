@@ -21,13 +21,20 @@ from dask.distributed import Client, LocalCluster
 import btf_jobs
 
 
-def units_done(output: str) -> int:
-    """View slots with statistics in OUTPUT.partial (a compression's finished slots)."""
+def units_done(output: str, index: int, count: int, total: int = 81) -> int:
+    """View slots of shard INDEX/COUNT with statistics in OUTPUT.partial (its finished
+    slots; the blocks are btf's: floor(i * total / count) ..)."""
+    lo, hi = index * total // count, (index + 1) * total // count
     stats = output + ".partial/stats"
     try:
-        return sum(1 for n in os.listdir(stats) if n.isdigit())
+        return sum(1 for n in os.listdir(stats) if n.isdigit() and lo <= int(n) < hi)
     except FileNotFoundError:
         return 0
+
+
+def running_shard(keys) -> int:
+    """The shard index of a task key `btf-shard-I-of-N-…`."""
+    return int(str(next(iter(keys))).split("-")[2])
 
 
 def main() -> int:
@@ -42,14 +49,16 @@ def main() -> int:
     def killer():
         deadline = time.time() + 60
         while time.time() < deadline:
-            busy = [w for w, keys in client.processing().items() if keys]
-            if busy and units_done(output) >= 2:
-                pid = client.run(os.getpid, workers=[busy[0]])[busy[0]]
-                killed["units_done"] = units_done(output)
-                os.kill(pid, signal.SIGKILL)
-                killed["pid"] = pid
-                killed["worker"] = busy[0]
-                return
+            for worker, keys in client.processing().items():
+                if not keys:
+                    continue
+                shard = running_shard(keys)
+                if units_done(output, shard, shards) >= 2:
+                    pid = client.run(os.getpid, workers=[worker])[worker]
+                    os.kill(pid, signal.SIGKILL)
+                    killed.update(pid=pid, worker=worker, shard=shard)
+                    killed["units_done"] = units_done(output, shard, shards)
+                    return
             time.sleep(0.01)
 
     t = threading.Thread(target=killer, daemon=True)
