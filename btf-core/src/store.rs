@@ -234,10 +234,25 @@ impl StoreTxn {
         // Another shard creating the record leaves only its temporary here meanwhile; and
         // every other file of a job comes after its record, so the record is looked for
         // after the listing.
-        if partial.is_dir() && !holds_only_temporaries(&partial) && !meta.exists() {
+        let foreign = || partial.is_dir() && !holds_only_temporaries(&partial) && !meta.exists();
+        // A folder of files without a record may be another shard's record in flight (a
+        // file system may list a directory being changed loosely): look again for up to
+        // 2 s before refusing it.
+        let mut tries = 0;
+        while foreign() && tries < 100 {
+            std::thread::sleep(std::time::Duration::from_millis(20));
+            tries += 1;
+        }
+        if foreign() {
+            let names: Vec<String> = fs::read_dir(&partial)
+                .map(|d| {
+                    d.flatten().map(|e| e.file_name().to_string_lossy().into_owned()).collect()
+                })
+                .unwrap_or_default();
             return Err(Error::Invalid(format!(
-                "{} exists, holds files and records no job; refusing to write into it",
-                partial.display()
+                "{} exists, holds files ({}) and records no job; refusing to write into it",
+                partial.display(),
+                names.join(", ")
             )));
         }
         fs::create_dir_all(&partial).map_err(|e| Error::io(&partial, e))?;
