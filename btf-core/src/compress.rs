@@ -159,16 +159,17 @@ pub fn compress_shard(
         // Finalised already (a retried shard after the finaliser ran): nothing to compute
         // if the store is this job's.
         let out = crate::eigen::EigenStore::open(output)?;
-        let (a, b) = (out.meta(), &emeta);
-        if (a.components, a.quantization) != (b.components, b.quantization) {
+        // The finished store keeps no job record, but its metadata is the input's (samplings,
+        // size, provenance) with the components and quantisation: all must agree.
+        let mut was = out.meta().clone();
+        was.btf.kind = emeta.btf.kind.clone();
+        let (was, now) = (serde_json::json!(was), serde_json::json!(emeta));
+        if was != now {
             return Err(Error::Invalid(format!(
-                "{} is already finalised with {} components ({}), not {} ({}); remove it to \
-                 run another job into it",
+                "{} is already finalised for another job ({}); remove it to run this one \
+                 into it",
                 output.display(),
-                a.components,
-                a.quantization.name(),
-                b.components,
-                b.quantization.name()
+                crate::store::first_difference(&was, &now, "")
             )));
         }
         let slots = views

@@ -210,6 +210,13 @@ fn compress_in_four_shards_with_one_killed_matches_one_process() {
     d.ok(&["finalize", "sh.eig"]);
     let again = d.ok(&["finalize", "sh.eig", "--json"]);
     let report: serde_json::Value = serde_json::from_str(&again).unwrap();
+    // A shard retried after the finalisation has nothing to do; one of another job is
+    // refused (the finished store's metadata is the input's, with c and quantisation).
+    let late = d.ok(&["compress", "m.btf", "-c", "4", "-o", "sh.eig", "--shard", "1/4"]);
+    assert!(late.contains("0 computed, 20 already done"), "{late}");
+    let err = d.fails(&["compress", "m.btf", "-c", "3", "-o", "sh.eig", "--shard", "1/4"]);
+    assert!(err.contains("already finalised for another job (components: was 4, now 3)"), "{err}");
+    assert!(!d.path("sh.eig.partial").exists());
     assert_eq!(report["slots"].as_array().unwrap().len(), 81);
     let single: serde_json::Value = serde_json::from_str(&d.ok(&[
         "compress",
