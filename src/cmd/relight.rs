@@ -133,10 +133,15 @@ pub fn run(args: RelightArgs) -> Result<()> {
     let first = jobs.iter().position(|j| !j.is_done()).unwrap_or(0);
     set_env_path(&mut scene, env_index, &jobs[first].path);
     let gpu = Gpu::new().context("creating a headless GPU device")?;
-    let mut renderer =
-        Renderer::new(&gpu, &scene, RenderOptions::default()).with_context(|| {
-            format!("preparing {} with {}", args.scene.scene.display(), jobs[first].path.display())
-        })?;
+    // With eigenweightsets, the PCA of `U` over rotations takes every vertex side, so the
+    // frames would depend on which sides' visibility happens to be cached (the report
+    // computes all of them): compute all from the start, so that a resumed job or a
+    // shard started at any time renders the very same frames.
+    let eigen = scene.environment().and_then(|(_, e)| e.eigenweightsets).is_some();
+    let options = RenderOptions { all_env_sides: eigen, ..RenderOptions::default() };
+    let mut renderer = Renderer::new(&gpu, &scene, options).with_context(|| {
+        format!("preparing {} with {}", args.scene.scene.display(), jobs[first].path.display())
+    })?;
     let bar = crate::progress::bar(pending as u64, "relight");
     let mut summaries = Vec::new();
     for (i, job) in jobs.iter_mut().enumerate() {

@@ -386,3 +386,49 @@ fn synth_material_in_four_shards_matches_one_process_and_refuses_another_kind() 
     // No timings in a BTF store: every byte is the single-process store's.
     assert!(tree(&d.path("one.btf")) == tree(&d.path("sh.btf")));
 }
+
+#[test]
+fn relight_with_eigenweightsets_in_four_shards_matches_one_process() {
+    // Each environment's error report goes with its first frame's shard; the frames do not
+    // depend on which shard ran when (every vertex side's visibility is computed).
+    let d = setup();
+    std::fs::write(d.path("sphere.obj"), crate::relight::sphere(16, 8)).unwrap();
+    let s = scene("per-vertex", "sky.exr", "").replace("plane.obj", "sphere.obj").replace(
+        "visibility_res = 16",
+        "visibility_res = 16\neigenweightsets = { rotations = 12, components = 3 }",
+    );
+    std::fs::write(d.path("s.toml"), s).unwrap();
+    let args = |shard: Option<usize>| {
+        let mut a: Vec<String> =
+            ["relight", "s.toml", "--env", "sky.exr", "--env", "white.exr", "--rotations", "6"]
+                .map(String::from)
+                .to_vec();
+        a.extend(["-o".into(), "sh".into()]);
+        if let Some(i) = shard {
+            a.extend(["--shard".to_string(), format!("{i}/4")]);
+        }
+        a
+    };
+    if run_gpu(&d, &args(None).iter().map(String::as_str).collect::<Vec<_>>()).is_none() {
+        return;
+    }
+    std::fs::rename(d.path("sh"), d.path("single")).unwrap();
+    let children: Vec<Child> = (0..4)
+        .map(|i| spawn(&d, &args(Some(i)).iter().map(String::as_str).collect::<Vec<_>>(), 0))
+        .collect();
+    for (i, c) in children.into_iter().enumerate() {
+        wait_ok(c, &format!("shard {i}"));
+    }
+    d.ok(&["finalize", "sh"]);
+    let (a, b) = (tree(&d.path("single")), tree(&d.path("sh")));
+    for report in ["eigen/sky-error.csv", "eigen/white-error.csv", "eigen/sky-heat-e8.png"] {
+        assert!(a.contains_key(report), "{report}");
+    }
+    assert_same_tree(
+        &a,
+        &b,
+        |name, bytes| {
+            if name == "summary.json" { Vec::new() } else { bytes.to_vec() }
+        },
+    );
+}
