@@ -358,7 +358,7 @@ fn relight_of_200_frames_in_four_shards_with_one_killed_matches_one_process() {
 #[test]
 fn synth_material_in_four_shards_matches_one_process_and_refuses_another_kind() {
     let d = Dir::new();
-    let base = ["synth", "material", "--kind", "corduroy", "--size", "8"];
+    let base = ["synth", "material", "--kind", "woven", "--size", "4"];
     let with = |extra: &[&str]| -> Vec<String> {
         base.iter().chain(extra).map(|s| s.to_string()).collect()
     };
@@ -377,9 +377,9 @@ fn synth_material_in_four_shards_matches_one_process_and_refuses_another_kind() 
     assert_eq!((st["kind"].as_str(), st["done"].as_u64()), (Some("synth"), Some(81)), "{st}");
     let before = tree_with_partial(&d, "sh.btf");
     let err = d.fails(&[
-        "synth", "material", "--kind", "knit", "--size", "8", "-o", "sh.btf", "--shard", "0/4",
+        "synth", "material", "--kind", "lambert", "--size", "4", "-o", "sh.btf", "--shard", "0/4",
     ]);
-    assert!(err.contains("meta.provenance.kind: was \"corduroy\", now \"knit\""), "{err}");
+    assert!(err.contains("meta.provenance.kind: was \"woven\", now \"lambert\""), "{err}");
     assert!(tree_with_partial(&d, "sh.btf") == before, "a refused writer changed the output");
     d.ok(&["finalize", "sh.btf"]);
     assert!(d.ok(&["finalize", "sh.btf"]).contains("already finalised"));
