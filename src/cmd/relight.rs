@@ -338,7 +338,7 @@ fn prepare_output(
                     .context("this shard is not part of the relight job in that folder")?;
             }
         }
-        crate::guard::output_folder(out, "relight", false, &relight_output)?;
+        crate::guard::shared_output_folder(out, "relight")?;
         btf_core::shard::agree_or_create(&out.join("job.json"), &job)?;
         btf_core::shard::agree_or_create(&crate::cmd::shards::plan_path(out), &plan)?;
         return Ok(());
