@@ -103,7 +103,7 @@ pub fn compress(
     let job = serde_json::json!({ "input": crate::fs::input_identity(input.path()) });
     let writer = EigenWriter::create_for_job(output, emeta, params.resume, job)?;
     let views = 0..input.meta().n_views();
-    let slots = compress_views(input, &writer, views, params, isa, progress)?;
+    let slots = compress_views(input, &writer, views, params, isa, false, progress)?;
     writer.finish()?;
     let out = crate::eigen::EigenStore::open(output)?;
     let mut r = report_of(input.meta(), params, slots, &mut warnings, out.bytes());
@@ -136,7 +136,8 @@ fn eigen_meta(input: &BtfStore, params: CompressParams) -> Result<(EigenMeta, Ve
 /// shared partial store (`OUTPUT.partial`), whose job — the eigen metadata (components,
 /// quantisation, samplings), the input store's content fingerprint and the shard count —
 /// is recorded by the first shard and checked by every other before it writes anything.
-/// Slots already done (by an earlier, interrupted run of this shard) are kept. Nothing is
+/// Slots already done (by an earlier, interrupted run of this shard: every chunk there with
+/// a valid checksum) are kept, corrupt ones computed again. Nothing is
 /// committed: [`finalize`] does that once every slot is in. The report covers this
 /// shard's slots.
 pub fn compress_shard(
@@ -186,7 +187,7 @@ pub fn compress_shard(
         return Ok(r);
     }
     let writer = EigenWriter::join_for_job(output, emeta, job)?;
-    let slots = compress_views(input, &writer, views, params, isa, progress)?;
+    let slots = compress_views(input, &writer, views, params, isa, true, progress)?;
     let mut r = report_of(input.meta(), params, slots, &mut warnings, 0);
     r.seconds = start.elapsed().as_secs_f64();
     (r.simd, r.input_bytes, r.warnings) = (isa.name(), input.bytes(), warnings);
@@ -308,6 +309,7 @@ fn compress_views(
     views: std::ops::Range<usize>,
     params: CompressParams,
     isa: crate::simd::Isa,
+    verify: bool,
     progress: &(dyn Fn() + Sync),
 ) -> Result<Vec<(SlotReport, bool)>> {
     let meta = input.meta().clone();
@@ -321,7 +323,14 @@ fn compress_views(
                raw: &mut Vec<u8>,
                scratch: &mut PcaScratch|
      -> Result<(SlotReport, Option<QuantizedSlot>)> {
-        let done = writer.has_slot(v).then(|| writer.read_stats(v)).flatten();
+        // A shard checks its finished slots' checksums (a slot `btf status` calls corrupt is
+        // computed again); a resume trusts chunks that are there whole.
+        let finished = if verify {
+            writer.slot_state(v) == crate::store::SlotState::Done
+        } else {
+            writer.has_slot(v)
+        };
+        let done = finished.then(|| writer.read_stats(v)).flatten();
         if let Some(r) = done.and_then(|s| serde_json::from_value(s).ok()) {
             progress();
             return Ok((r, None));

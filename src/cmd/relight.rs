@@ -100,6 +100,14 @@ pub fn run(args: RelightArgs) -> Result<()> {
     let shard = args.shard.shard()?;
     if let Some(shard) = shard {
         keep_shard(&mut jobs, shard, args.rotations as usize);
+        // A frame of this shard that does not decode (`btf status` calls it corrupt) is
+        // rendered again: it is this shard's own file.
+        for (_, png) in jobs.iter().flat_map(|j| &j.frames) {
+            if crate::cmd::shards::frame_is_corrupt(png, args.exr) {
+                eprintln!("warning: {} is corrupt; rendering it again", png.display());
+                std::fs::remove_file(png).with_context(|| format!("removing {}", png.display()))?;
+            }
+        }
     }
     let envs: Vec<(&str, &Path)> = args.envs.iter().map(|p| ("--env", p.as_path())).collect();
     crate::guard::refuse_scene_overlap(&[("-o", &args.output)], &args.scene.scene, &scene, &envs)?;

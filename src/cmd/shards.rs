@@ -326,6 +326,11 @@ fn relight_frames(out: &Path) -> Result<Vec<(String, State)>> {
     Ok(list)
 }
 
+/// Whether frame `png` (and its EXR, with `exr`) is there but does not decode.
+pub fn frame_is_corrupt(png: &Path, exr: bool) -> bool {
+    png.is_file() && matches!(frame_state(png, exr), State::Corrupt(_))
+}
+
 fn frame_state(png: &Path, exr: bool) -> State {
     if !png.is_file() || exr && !png.with_extension("exr").is_file() {
         return State::Missing;

@@ -167,6 +167,32 @@ fn compress_in_four_shards_with_one_killed_matches_one_process() {
     let before = tree_with_partial(&d, "sh.eig");
     let err = d.fails(&["finalize", "sh.eig"]);
     assert!(err.contains("cannot finalise") && err.contains("missing"), "{err}");
+    assert!(tree_with_partial(&d, "sh.eig") == before, "a refused finalize changed the output");
+    // A damaged chunk of a finished slot (one bit of shard 0's slot 3) is seen by its
+    // checksum: status calls the slot corrupt, naming the file; the shard's next run
+    // computes it again.
+    let chunk = d.path("sh.eig.partial/weights/c.3.0.0");
+    let mut bytes = std::fs::read(&chunk).unwrap();
+    bytes[0] ^= 1;
+    std::fs::write(&chunk, &bytes).unwrap();
+    let st = status_json(&d, "sh.eig");
+    assert_eq!(
+        (st["corrupt"].as_u64(), st["shards"][0]["state"].as_str()),
+        (Some(1), Some("corrupt"))
+    );
+    let why = st["corrupt_units"][0].to_string();
+    assert!(
+        why.contains("slot 3") && why.contains("weights/c.3.0.0") && why.contains("crc32c"),
+        "{why}"
+    );
+    let out = d.ok(&["compress", "m.btf", "-c", "4", "-o", "sh.eig", "--shard", "0/4"]);
+    assert!(out.contains("(1 computed, 19 already done)"), "{out}");
+    let st = status_json(&d, "sh.eig");
+    assert_eq!(
+        (st["corrupt"].as_u64(), st["shards"][0]["state"].as_str()),
+        (Some(0), Some("done"))
+    );
+    let before = tree_with_partial(&d, "sh.eig");
     // Disagreeing writers are refused before writing anything: another -c, another store.
     let err = d.fails(&["compress", "m.btf", "-c", "8", "-o", "sh.eig", "--shard", "2/4"]);
     assert!(err.contains("meta.components: was 4, now 8"), "{err}");
@@ -324,12 +350,21 @@ fn relight_of_200_frames_in_four_shards_with_one_killed_matches_one_process() {
     std::fs::rename(d.path("sky.orig"), d.path("sky.exr")).unwrap();
     let err = d.fails(&["finalize", "sh"]);
     assert!(err.contains("cannot finalise") && err.contains("white_r"), "{err}");
-    // Restarted, the shard renders only what is missing.
+    // A truncated frame of shard 1 is corrupt (its PNG does not decode), named by status.
+    let bytes = std::fs::read(frame(50)).unwrap();
+    std::fs::write(frame(50), &bytes[..bytes.len() / 2]).unwrap();
+    let st = status_json(&d, "sh");
+    assert_eq!(
+        (st["corrupt"].as_u64(), st["shards"][1]["state"].as_str()),
+        (Some(1), Some("corrupt"))
+    );
+    assert!(st["corrupt_units"][0]["unit"] == "white_r050.png", "{st}");
+    // Restarted, the shard renders only what is missing or corrupt.
     wait_ok(run(1, 0), "restarted shard 1");
     let summary: serde_json::Value =
         serde_json::from_slice(&std::fs::read(d.path("sh/shards/summary-1-of-4.json")).unwrap())
             .unwrap();
-    assert_eq!(summary["frames_rendered"].as_u64(), Some(missing as u64), "{summary}");
+    assert_eq!(summary["frames_rendered"].as_u64(), Some(missing as u64 + 1), "{summary}");
     // What a shard killed inside a write leaves (a temporary name) is swept by finalize.
     std::fs::write(d.path("sh/.white_r050.png.tmp-4242123"), "half a frame").unwrap();
     d.ok(&["finalize", "sh"]);
