@@ -620,6 +620,12 @@ impl BtfWriter {
         self.meta.provenance = provenance;
     }
 
+    /// True when image `(view, light)` is written and passes its size and checksum check
+    /// (what a shard keeps of an earlier run; a damaged image is written again).
+    pub fn has_sound_image(&self, view: usize, light: usize) -> bool {
+        self.arr.read_chunk(&[view as u64, light as u64, 0, 0, 0]).is_ok()
+    }
+
     /// True when image `(view, light)` is already written (for resuming).
     pub fn has_image(&self, view: usize, light: usize) -> bool {
         self.arr.has_chunk(&[view as u64, light as u64, 0, 0, 0])

@@ -81,7 +81,12 @@ pub fn generate(spec: &MaterialSpec, out: &Path, opts: &GenerateOptions) -> Resu
     let counts = views
         .into_par_iter()
         .map(|view| -> Result<(usize, usize)> {
-            let missing: Vec<usize> = (0..n).filter(|&l| !writer.has_image(view, l)).collect();
+            // A shard checks the checksums of what an earlier run of it left.
+            let kept = |l: usize| match opts.shard {
+                Some(_) => writer.has_sound_image(view, l),
+                None => writer.has_image(view, l),
+            };
+            let missing: Vec<usize> = (0..n).filter(|&l| !kept(l)).collect();
             bar.inc((n - missing.len()) as u64);
             if missing.is_empty() {
                 return Ok((0, n));
