@@ -587,6 +587,23 @@ impl BtfWriter {
         Ok((BtfWriter { txn, meta, arr }, record))
     }
 
+    /// The partial BTF store of `path` reopened to commit it (the finaliser of a sharded
+    /// job that has more to record than the images), with its job record; `None` when no
+    /// partial store is beside `path`.
+    pub fn reopen_for_commit(path: &Path) -> Result<Option<(Self, Value)>> {
+        if StoreTxn::recorded_job(path).is_none() {
+            return Ok(None);
+        }
+        Self::open_partial(path, true).map(Some)
+    }
+
+    /// Refuses, listing them, while view slots of the store being written are missing or
+    /// corrupt.
+    pub fn check_complete(&self, output: &Path) -> Result<()> {
+        let states = (0..self.meta.n_views()).map(|v| self.slot_state(v)).collect();
+        ShardedStatus::of("btf", &self.txn.job["job"], states).require_complete(output)
+    }
+
     /// The state of view slot `view`: every light image present with a valid checksum,
     /// some image missing, or an image failing its check (the file named).
     pub fn slot_state(&self, view: usize) -> SlotState {

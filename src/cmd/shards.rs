@@ -244,8 +244,14 @@ pub fn run_finalize(a: FinalizeArgs) -> Result<()> {
         return finalize_relight(&output, a.json);
     }
     if btf_core::store::store_kind(&output).as_deref() == Some("btf") {
-        let already = btf_core::store::finalize_sharded(&output)
-            .with_context(|| format!("finalising {}", output.display()))?;
+        let record = btf_core::store::StoreTxn::recorded_job(&output);
+        let capture = record.is_some_and(|r| r["job"]["kind"] == "capture process");
+        let already = if capture {
+            btf_capture::capture::finalize_shards(&output).map_err(anyhow::Error::from)
+        } else {
+            btf_core::store::finalize_sharded(&output).map_err(anyhow::Error::from)
+        }
+        .with_context(|| format!("finalising {}", output.display()))?;
         let st = status(&output)?;
         if a.json {
             outln!("{}", serde_json::to_string_pretty(&st)?);

@@ -467,3 +467,35 @@ fn relight_with_eigenweightsets_in_four_shards_matches_one_process() {
         },
     );
 }
+
+#[test]
+fn capture_process_in_three_shards_matches_one_process() {
+    // 5 view slots (the pole and a ring of 4) over 3 shards: blocks of 1, 2 and 2 slots.
+    let d = Dir::new();
+    let synth = ["synth", "capture", "--material", "lambert", "--sampling", "rings:0x1,45x4"];
+    d.ok(&[&synth[..], &["-o", "raw"]].concat());
+    d.ok(&["capture", "process", "raw", "-o", "one.btf", "--size", "32"]);
+    let children: Vec<Child> = (0..3)
+        .map(|i| {
+            let shard = format!("{i}/3");
+            let a =
+                ["capture", "process", "raw", "-o", "sh.btf", "--size", "32", "--shard", &shard];
+            spawn(&d, &a, 0)
+        })
+        .collect();
+    for (i, c) in children.into_iter().enumerate() {
+        wait_ok(c, &format!("shard {i}"));
+    }
+    let before = tree_with_partial(&d, "sh.btf");
+    let err =
+        d.fails(&["capture", "process", "raw", "-o", "sh.btf", "--size", "16", "--shard", "1/3"]);
+    assert!(err.contains("job.options: was") && err.contains("size: 32"), "{err}");
+    assert!(tree_with_partial(&d, "sh.btf") == before, "a refused writer changed the output");
+    let shards = status_json(&d, "sh.btf")["shards"].clone();
+    let units: Vec<u64> =
+        shards.as_array().unwrap().iter().map(|s| s["done"].as_u64().unwrap()).collect();
+    assert_eq!(units, [1, 2, 2]);
+    d.ok(&["finalize", "sh.btf"]);
+    // Every byte, the provenance with every slot's registration and plate tilt included.
+    assert!(tree(&d.path("one.btf")) == tree(&d.path("sh.btf")));
+}
