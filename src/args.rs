@@ -147,6 +147,32 @@ impl SceneArgs {
     }
 }
 
+/// `--shard I/N` / `--shard-count N`: which part of a job this process does (issue #23).
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct ShardArgs {
+    /// Do shard I of N (0-based) of the job, writing only its own part into the shared
+    /// output; every shard must be given the same inputs and parameters. Finish with
+    /// `btf finalize OUT`.
+    #[arg(long, value_name = "I/N", conflicts_with = "shard_count")]
+    pub shard: Option<String>,
+    /// Split the job into N shards and take this process's index from
+    /// JOB_COMPLETION_INDEX (Kubernetes Indexed Job) or SLURM_ARRAY_TASK_ID (Slurm array).
+    #[arg(long, value_name = "N")]
+    pub shard_count: Option<usize>,
+}
+
+impl ShardArgs {
+    /// The shard asked for, if any.
+    pub fn shard(&self) -> Result<Option<btf_core::shard::Shard>> {
+        use btf_core::shard::Shard;
+        Ok(match (&self.shard, self.shard_count) {
+            (Some(s), _) => Some(Shard::parse(s)?),
+            (None, Some(n)) => Some(Shard::from_env(n, |k| std::env::var(k).ok())?),
+            (None, None) => None,
+        })
+    }
+}
+
 /// Parses `N` comma-separated numbers of option `what` (`"--roi"`), naming the option and
 /// the text on error.
 pub fn numbers<T: std::str::FromStr, const N: usize>(s: &str, what: &str) -> Result<[T; N]>

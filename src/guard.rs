@@ -95,6 +95,17 @@ pub fn output_folder(
     Ok(())
 }
 
+/// [`output_folder`] for one of several writers of a folder (the shards of a job): the
+/// marker is created once, by whoever comes first ([`btf_core::fs::write_new`]), and never
+/// rewritten; nothing is cleared.
+pub fn shared_output_folder(dir: &Path, command: &str) -> Result<()> {
+    btf_core::fs::check_replaceable(dir, OutputKind::Folder { marker: FOLDER_MARKER })?;
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let marker = serde_json::json!({ "written_by": format!("btf {command}") });
+    btf_core::fs::write_new(&dir.join(FOLDER_MARKER), marker.to_string().as_bytes())?;
+    Ok(())
+}
+
 /// What the demos and reports write into their folders: files of the kinds they make and
 /// the folders they fill. `--fresh` removes these and nothing else.
 pub fn report_output(name: &str) -> bool {

@@ -16,7 +16,7 @@ mod view;
 
 use cmd::{
     capture, compress, demo as demo_cmd, export, import, inspect, knit, reconstruct, relight,
-    render, render_sweep, synth, thin,
+    render, render_sweep, shards, synth, thin,
 };
 
 use clap::{CommandFactory, Parser, Subcommand};
@@ -57,6 +57,10 @@ enum Command {
     RenderSweep(render_sweep::RenderSweepArgs),
     /// Render a scene under several environment maps and rotations (batch relighting).
     Relight(relight::RelightArgs),
+    /// Which shards, frames or view slots of a sharded job are done, missing or corrupt.
+    Status(shards::StatusArgs),
+    /// Finish a sharded job once every shard is done (commit the store, merge summaries).
+    Finalize(shards::FinalizeArgs),
     /// Knit and yarn: charts, stitch meshes, yarn skeletons, fibers, reference renders.
     #[command(subcommand)]
     Knit(knit::KnitCmd),
@@ -120,6 +124,8 @@ fn main() -> ExitCode {
         Command::Render(a) => render::run(a),
         Command::RenderSweep(a) => render_sweep::run(a),
         Command::Relight(a) => relight::run(a),
+        Command::Status(a) => shards::run_status(a),
+        Command::Finalize(a) => shards::run_finalize(a),
         Command::Knit(c) => knit::run(c),
         Command::Thin(c) => thin::run(c),
         Command::View(a) => view::run(a),

@@ -34,6 +34,20 @@ pub fn counted<T>(what: &str, work: impl FnOnce(&dyn Fn(usize, usize)) -> T) -> 
     out
 }
 
+/// A testing aid for the kill-and-restart tests of sharded jobs (issue #23): with
+/// `BTF_TEST_UNIT_DELAY_MS=N` set, every finished unit of a shard (a frame, a view slot)
+/// is followed by a pause of N ms, so that a test can kill a shard in the middle of its
+/// work at a point it observes. Never set in normal use.
+pub fn unit_delay() {
+    static DELAY: std::sync::OnceLock<u64> = std::sync::OnceLock::new();
+    let ms = *DELAY.get_or_init(|| {
+        std::env::var("BTF_TEST_UNIT_DELAY_MS").ok().and_then(|v| v.parse().ok()).unwrap_or(0)
+    });
+    if ms > 0 {
+        std::thread::sleep(std::time::Duration::from_millis(ms));
+    }
+}
+
 /// True when progress bars should be drawn.
 pub fn enabled() -> bool {
     std::env::var_os("BTF_NO_PROGRESS").is_none()

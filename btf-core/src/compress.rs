@@ -5,7 +5,8 @@
 use crate::eigen::{EigenMeta, EigenWriter, Quantization, QuantizedSlot};
 use crate::metrics::{psnr_db, rel_rmse_from};
 use crate::pca::{PcaScratch, SlotRows, max_components, pca_rows_in, pca_slot_in};
-use crate::store::{BtfStore, SlotData};
+use crate::shard::Shard;
+use crate::store::{BtfStore, ShardedStatus, SlotData};
 use crate::zarr::DType;
 use crate::{Error, Result};
 use half::f16;
@@ -98,6 +99,22 @@ pub fn compress(
     let start = Instant::now();
     // A forced kernel path this CPU cannot run is refused before any work.
     let isa = crate::simd::Isa::from_env()?;
+    let (emeta, mut warnings) = eigen_meta(input, params)?;
+    let job = serde_json::json!({ "input": crate::fs::input_identity(input.path()) });
+    let writer = EigenWriter::create_for_job(output, emeta, params.resume, job)?;
+    let views = 0..input.meta().n_views();
+    let slots = compress_views(input, &writer, views, params, isa, false, progress)?;
+    writer.finish()?;
+    let out = crate::eigen::EigenStore::open(output)?;
+    let mut r = report_of(input.meta(), params, slots, &mut warnings, out.bytes());
+    r.seconds = start.elapsed().as_secs_f64();
+    (r.simd, r.input_bytes, r.warnings) = (isa.name(), input.bytes(), warnings);
+    Ok(r)
+}
+
+/// The eigen store's metadata for `params` (components clamped to what the lights allow,
+/// with a warning).
+fn eigen_meta(input: &BtfStore, params: CompressParams) -> Result<(EigenMeta, Vec<String>)> {
     let meta = input.meta().clone();
     let n_l = meta.n_lights();
     let mut warnings = Vec::new();
@@ -111,9 +128,192 @@ pub fn compress(
             params.components
         ));
     }
-    let emeta = EigenMeta { btf: meta.clone(), components: c, quantization: params.quantization };
-    let job = serde_json::json!({ "input": crate::fs::input_identity(input.path()) });
-    let writer = EigenWriter::create_for_job(output, emeta, params.resume, job)?;
+    Ok((EigenMeta { btf: meta, components: c, quantization: params.quantization }, warnings))
+}
+
+/// Shard `shard` of a compression into one eigen store that every shard fills
+/// (issue #23): only the view slots [`Shard::range`] gives it are computed, into the
+/// shared partial store (`OUTPUT.partial`), whose job — the eigen metadata (components,
+/// quantisation, samplings), the input store's content fingerprint and the shard count —
+/// is recorded by the first shard and checked by every other before it writes anything.
+/// Slots already done (by an earlier, interrupted run of this shard: every chunk there with
+/// a valid checksum) are kept, corrupt ones computed again. Nothing is
+/// committed: [`finalize`] does that once every slot is in. The report covers this
+/// shard's slots.
+pub fn compress_shard(
+    input: &BtfStore,
+    output: &Path,
+    params: CompressParams,
+    shard: Shard,
+    progress: &(dyn Fn() + Sync),
+) -> Result<CompressReport> {
+    let start = Instant::now();
+    let isa = crate::simd::Isa::from_env()?;
+    let (emeta, mut warnings) = eigen_meta(input, params)?;
+    let views = shard.range(input.meta().n_views());
+    let partial = output.with_file_name(format!(
+        "{}.partial",
+        output.file_name().map(|n| n.to_string_lossy()).unwrap_or_default()
+    ));
+    let job = shard_job(input, shard.count)?;
+    if !partial.exists() && crate::store::read_meta(output).is_ok() {
+        // Finalised already (a retried shard after the finaliser ran): nothing to compute
+        // if the store is this job's.
+        let out = crate::eigen::EigenStore::open(output)?;
+        // The finished store keeps no job record, but its metadata is the input's (samplings,
+        // size, provenance) with the components and quantisation: all must agree.
+        let mut was = out.meta().clone();
+        was.btf.kind = emeta.btf.kind.clone();
+        let (was, now) = (serde_json::json!(was), serde_json::json!(emeta));
+        if was != now {
+            return Err(Error::Invalid(format!(
+                "{} is already finalised for another job ({}); remove it to run this one \
+                 into it",
+                output.display(),
+                crate::store::first_difference(&was, &now, "")
+            )));
+        }
+        let slots = views
+            .map(|v| {
+                let s = out.slot_stats(v).and_then(|s| serde_json::from_value(s).ok());
+                s.map(|s| (s, true)).ok_or_else(|| Error::Corrupt {
+                    path: output.join("stats"),
+                    what: format!("no statistics for view slot {v}"),
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let mut r = report_of(input.meta(), params, slots, &mut warnings, out.bytes());
+        (r.simd, r.input_bytes, r.warnings) = (isa.name(), input.bytes(), warnings);
+        return Ok(r);
+    }
+    let writer = EigenWriter::join_for_job(output, emeta, job)?;
+    let slots = compress_views(input, &writer, views, params, isa, true, progress)?;
+    let mut r = report_of(input.meta(), params, slots, &mut warnings, 0);
+    r.seconds = start.elapsed().as_secs_f64();
+    (r.simd, r.input_bytes, r.warnings) = (isa.name(), input.bytes(), warnings);
+    Ok(r)
+}
+
+/// The job every shard of a compression records and checks: the input's content (not its
+/// path, which differs between machines) and the shard count.
+fn shard_job(input: &BtfStore, shards: usize) -> Result<serde_json::Value> {
+    Ok(serde_json::json!({
+        "input": {
+            "fingerprint": crate::shard::fingerprint(input.path())?,
+            "bytes": input.bytes(),
+        },
+        "shards": shards,
+    }))
+}
+
+/// The state of every view slot of the eigen store being written at `output` by the
+/// shards of a compression (or of the finished store): done (every chunk present with a
+/// valid crc32c and statistics recorded), missing, or corrupt (naming the chunk file).
+pub fn status(output: &Path) -> Result<ShardedStatus> {
+    if crate::store::StoreTxn::recorded_job(output).is_none() {
+        let out = crate::eigen::EigenStore::open(output)?;
+        return Ok(ShardedStatus {
+            store: "eigen".into(),
+            shards: 1,
+            slots: vec!["done".into(); out.meta().btf.n_views()],
+            finalised: true,
+        });
+    }
+    let (writer, job) = EigenWriter::open_partial(output)?;
+    Ok(status_of(&writer, &job))
+}
+
+fn status_of(writer: &EigenWriter, job: &serde_json::Value) -> ShardedStatus {
+    let states = (0..writer.meta().btf.n_views()).map(|v| writer.slot_state(v)).collect();
+    ShardedStatus::of("eigen", job, states)
+}
+
+/// Finalises a sharded compression: checks that every view slot of `OUTPUT.partial` is
+/// done (chunks present, checksums valid, statistics recorded), commits the store to
+/// `output` and returns the report over all slots, built from the statistics the shards
+/// recorded (`seconds` is then the sum of the slots' seconds, `simd` this machine's
+/// kernel path). Safe to run twice: on a store already finalised it only rebuilds the
+/// report. Refuses, listing them, when slots are missing or corrupt.
+pub fn finalize(output: &Path) -> Result<(CompressReport, bool)> {
+    let isa = crate::simd::Isa::from_env()?;
+    let already = crate::store::StoreTxn::recorded_job(output).is_none();
+    if !already {
+        let (writer, job) = EigenWriter::reopen(output)?;
+        status_of(&writer, &job).require_complete(output)?;
+        writer.finish()?;
+    }
+    let out = crate::eigen::EigenStore::open(output)?;
+    let m = out.meta();
+    let slots = (0..m.btf.n_views())
+        .map(|v| {
+            let s = out.slot_stats(v).and_then(|s| serde_json::from_value(s).ok());
+            s.map(|s| (s, false)).ok_or_else(|| Error::Corrupt {
+                path: output.join("stats"),
+                what: format!("no statistics for view slot {v}"),
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let params =
+        CompressParams { components: m.components, quantization: m.quantization, resume: true };
+    let mut warnings = Vec::new();
+    let mut r = report_of(&m.btf, params, slots, &mut warnings, out.bytes());
+    r.seconds = r.slots.iter().map(|s| s.seconds).sum();
+    (r.simd, r.warnings) = (isa.name(), warnings);
+    Ok((r, already))
+}
+
+/// The report of a run over `slots` (sorted by view; `true` = taken from an earlier run).
+fn report_of(
+    meta: &crate::store::BtfMeta,
+    params: CompressParams,
+    slots: Vec<(SlotReport, bool)>,
+    warnings: &mut Vec<String>,
+    output_bytes: u64,
+) -> CompressReport {
+    let c = params.components.min(max_components(meta.n_lights()));
+    let resumed_slots = slots.iter().filter(|s| s.1).count();
+    let slots: Vec<SlotReport> = slots.into_iter().map(|s| s.0).collect();
+    let deficient = slots.iter().filter(|s| s.effective_components < c).count();
+    if deficient > 0 {
+        warnings.push(format!(
+            "{deficient} slot(s) have fewer than {c} non-zero eigenvalues (rank-deficient data); their extra components are zero"
+        ));
+    }
+    let sse: f64 = slots.iter().map(|s| s.sse_stored).sum();
+    let sse_exact: f64 = slots.iter().map(|s| s.sse).sum();
+    let energy: f64 = slots.iter().map(|s| s.energy).sum();
+    let peak = slots.iter().map(|s| s.peak).fold(0f32, f32::max) as f64;
+    let values = (slots.len() * meta.n_lights() * meta.texel_values()) as f64;
+    CompressReport {
+        components: c,
+        requested_components: params.components,
+        quantization: params.quantization,
+        rel_rmse: rel_rmse_from(sse, energy),
+        psnr_db: psnr_db(sse / values.max(1.0), peak),
+        rel_rmse_exact: rel_rmse_from(sse_exact, energy),
+        seconds: 0.0,
+        simd: "",
+        input_bytes: 0,
+        output_bytes,
+        resumed_slots,
+        warnings: Vec::new(),
+        slots,
+    }
+}
+
+/// Computes (or takes from an earlier run) the view slots `views` into `writer`, slots in
+/// parallel; returns their reports sorted by view, each with whether it was resumed.
+fn compress_views(
+    input: &BtfStore,
+    writer: &EigenWriter,
+    views: std::ops::Range<usize>,
+    params: CompressParams,
+    isa: crate::simd::Isa,
+    verify: bool,
+    progress: &(dyn Fn() + Sync),
+) -> Result<Vec<(SlotReport, bool)>> {
+    let meta = input.meta().clone();
+    let c = writer.meta().components;
     // One worker per thread, each with its own slot buffers for the whole run (a slot is
     // 64 MB at 256²: allocating and faulting it in per slot would cost more than reading it).
     // A finished slot goes to the writer thread (its chunks written by direct I/O, which
@@ -123,7 +323,14 @@ pub fn compress(
                raw: &mut Vec<u8>,
                scratch: &mut PcaScratch|
      -> Result<(SlotReport, Option<QuantizedSlot>)> {
-        let done = writer.has_slot(v).then(|| writer.read_stats(v)).flatten();
+        // A shard checks its finished slots' checksums (a slot `btf status` calls corrupt is
+        // computed again); a resume trusts chunks that are there whole.
+        let finished = if verify {
+            writer.slot_state(v) == crate::store::SlotState::Done
+        } else {
+            writer.has_slot(v)
+        };
+        let done = finished.then(|| writer.read_stats(v)).flatten();
         if let Some(r) = done.and_then(|s| serde_json::from_value(s).ok()) {
             progress();
             return Ok((r, None));
@@ -168,10 +375,10 @@ pub fn compress(
         };
         Ok((report, Some(r.stored)))
     };
-    let n_views = meta.n_views();
-    let next = AtomicUsize::new(0);
+    let (first, n_views) = (views.start, views.end);
+    let next = AtomicUsize::new(first);
     let failed = AtomicBool::new(false);
-    let workers = rayon::current_num_threads().clamp(1, n_views.max(1));
+    let workers = rayon::current_num_threads().clamp(1, (n_views - first).max(1));
     // At most two finished slots wait for the writer (a slot's arrays are 7 MB at 256²);
     // the eigentexture bytes it has written come back for the next slots to reuse.
     let (to_writer, queue) = mpsc::sync_channel::<(SlotReport, QuantizedSlot)>(2);
@@ -225,41 +432,12 @@ pub fn compress(
         (per_worker, write.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
     });
     written?;
-    let mut slots = Vec::with_capacity(n_views);
+    let mut slots = Vec::with_capacity(n_views - first);
     for w in per_worker {
         slots.extend(w?);
     }
     slots.sort_by_key(|s| s.0.view);
-    writer.finish()?;
-    let resumed_slots = slots.iter().filter(|s| s.1).count();
-    let slots: Vec<SlotReport> = slots.into_iter().map(|s| s.0).collect();
-    let deficient = slots.iter().filter(|s| s.effective_components < c).count();
-    if deficient > 0 {
-        warnings.push(format!(
-            "{deficient} slot(s) have fewer than {c} non-zero eigenvalues (rank-deficient data); their extra components are zero"
-        ));
-    }
-    let sse: f64 = slots.iter().map(|s| s.sse_stored).sum();
-    let sse_exact: f64 = slots.iter().map(|s| s.sse).sum();
-    let energy: f64 = slots.iter().map(|s| s.energy).sum();
-    let peak = slots.iter().map(|s| s.peak).fold(0f32, f32::max) as f64;
-    let values = (meta.n_views() * n_l * meta.texel_values()) as f64;
-    let out = crate::eigen::EigenStore::open(output)?;
-    Ok(CompressReport {
-        components: c,
-        requested_components: params.components,
-        quantization: params.quantization,
-        rel_rmse: rel_rmse_from(sse, energy),
-        psnr_db: psnr_db(sse / values, peak),
-        rel_rmse_exact: rel_rmse_from(sse_exact, energy),
-        seconds: start.elapsed().as_secs_f64(),
-        simd: isa.name(),
-        input_bytes: input.bytes(),
-        output_bytes: out.bytes(),
-        resumed_slots,
-        warnings,
-        slots,
-    })
+    Ok(slots)
 }
 
 #[cfg(test)]

@@ -57,7 +57,7 @@ mod linux {
         let dir = path.parent().unwrap_or(Path::new("."));
         fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("file");
-        let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
+        let tmp = crate::fs::temp_path(&dir.join(name));
         let aligned = payload.len() / ALIGN * ALIGN;
         let direct = rustix::fs::OFlags::DIRECT.bits() as i32;
         let opened = fs::OpenOptions::new()

@@ -10,6 +10,7 @@
 //! onto 0‥255. Means and weights are `f32`, eigenvalues `f64`.
 
 use crate::sampling::Sampling;
+pub use crate::store::SlotState;
 use crate::store::{BtfMeta, StoreTxn, read_meta_of_kind};
 use crate::zarr::{self, ArrayMeta, DType, Limits, ZarrArray};
 use crate::{Error, Result};
@@ -297,6 +298,83 @@ impl EigenWriter {
         let arrays = open_arrays(txn.dir(), &meta, true)?;
         zarr::ensure_record_group(txn.dir(), "stats")?;
         Ok(EigenWriter { txn, meta, arrays })
+    }
+
+    /// [`EigenWriter::create_for_job`] for one shard of several writing into one store at
+    /// once ([`StoreTxn::join`]): the first creates the partial store and its job record,
+    /// the others check that they agree before writing anything. Nothing is committed: the
+    /// finaliser does that ([`EigenWriter::reopen`], then [`EigenWriter::finish`]).
+    pub fn join_for_job(path: &Path, meta: EigenMeta, job: serde_json::Value) -> Result<Self> {
+        let record = serde_json::json!({"store": "eigen", "meta": meta, "job": job});
+        let txn = StoreTxn::join(path, &record)?;
+        let arrays = open_arrays(txn.dir(), &meta, true)?;
+        zarr::ensure_record_group(txn.dir(), "stats")?;
+        Ok(EigenWriter { txn, meta, arrays })
+    }
+
+    /// Reopens the partial eigen store of `path` that shards filled, to check and commit
+    /// it; returns the writer and the job (`"job"` of the record) it was begun for.
+    pub fn reopen(path: &Path) -> Result<(Self, serde_json::Value)> {
+        let (txn, record) = StoreTxn::reopen(path)?;
+        if record.get("store") != Some(&json!("eigen")) {
+            return Err(Error::Invalid(format!(
+                "{}: the partial store beside it is not an eigen store",
+                path.display()
+            )));
+        }
+        let mut meta: EigenMeta = serde_json::from_value(record["meta"].clone())
+            .map_err(|source| Error::Json { path: txn.dir().join("zarr.json"), source })?;
+        meta.btf = meta.btf.validate(txn.dir())?;
+        let arrays = open_arrays(txn.dir(), &meta, true)?;
+        zarr::ensure_record_group(txn.dir(), "stats")?;
+        Ok((EigenWriter { txn, meta, arrays }, record["job"].clone()))
+    }
+
+    /// The partial eigen store of `path` opened for reading its state only (nothing is
+    /// created or removed); returns the writer and the job (`"job"` of the record).
+    pub fn open_partial(path: &Path) -> Result<(Self, serde_json::Value)> {
+        let (txn, record) = StoreTxn::peek(path).ok_or_else(|| {
+            Error::Invalid(format!("{}: no partial store beside it", path.display()))
+        })?;
+        let mut meta: EigenMeta = serde_json::from_value(record["meta"].clone())
+            .map_err(|source| Error::Json { path: txn.dir().join("zarr.json"), source })?;
+        meta.btf = meta.btf.validate(txn.dir())?;
+        let arrays = open_arrays(txn.dir(), &meta, false)?;
+        Ok((EigenWriter { txn, meta, arrays }, record["job"].clone()))
+    }
+
+    /// The metadata being written.
+    pub fn meta(&self) -> &EigenMeta {
+        &self.meta
+    }
+
+    /// The state of slot `view` in the store being written: every chunk present with a
+    /// valid crc32c ([`zarr::ZarrArray::read_chunk`]) and its statistics recorded, some
+    /// chunk missing, or a chunk failing its check (the error names the file).
+    pub fn slot_state(&self, view: usize) -> SlotState {
+        let v = view as u64;
+        let a = &self.arrays;
+        let chunks: [(&ZarrArray, Vec<u64>); 5] = [
+            (&a.values, vec![v, 0]),
+            (&a.mean, vec![v, 0, 0, 0]),
+            (&a.eig, vec![v, 0, 0, 0, 0]),
+            (&a.weights, vec![v, 0, 0]),
+            (&a.scale, vec![v, 0, 0]),
+        ];
+        for (arr, idx) in &chunks {
+            if !arr.chunk_path(idx).exists() {
+                return SlotState::Missing;
+            }
+        }
+        for (arr, idx) in &chunks {
+            if let Err(e) = arr.read_chunk(idx) {
+                return SlotState::Corrupt(e.to_string());
+            }
+        }
+        if self.read_stats(view).is_none() {
+            return SlotState::Missing;
+        }
+        SlotState::Done
     }
 
     /// True when slot `view` is fully written (for resuming).

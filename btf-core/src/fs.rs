@@ -24,10 +24,72 @@ use std::fs;
 use std::io::{BufWriter, Write};
 use std::path::{Component, Path, PathBuf};
 
-/// The temporary name beside `path` that a write goes through: `.NAME.tmp-PID`.
+/// The temporary name beside `path` that a write goes through: `.NAME.tmp-PIDNONCE`, where
+/// the nonce is drawn once per process so that writers on different machines sharing one
+/// file system (shards of a job, issue #23) never share a temporary name even when their
+/// process ids coincide (every pod of a Kubernetes job may be pid 1).
 pub fn temp_path(path: &Path) -> PathBuf {
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    path.with_file_name(format!(".{name}.tmp-{}", std::process::id()))
+    path.with_file_name(format!(".{name}.tmp-{}{:09}", std::process::id(), process_nonce()))
+}
+
+/// A number fixed for the life of the process and unlikely to repeat in another one: the
+/// start time's nanoseconds mixed with the host name's bytes.
+fn process_nonce() -> u32 {
+    static NONCE: std::sync::OnceLock<u32> = std::sync::OnceLock::new();
+    *NONCE.get_or_init(|| {
+        let t = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos() as u64);
+        let host = fs::read("/proc/sys/kernel/hostname").unwrap_or_default();
+        let mut h = 0xcbf2_9ce4_8422_2325u64 ^ t;
+        for b in host.iter().chain(&std::process::id().to_le_bytes()) {
+            h = (h ^ *b as u64).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+        (h % 1_000_000_000) as u32
+    })
+}
+
+/// Writes `bytes` to `path` only if nothing is there yet, atomically and durably: the
+/// document is written to a temporary name, synced, and moved to `path` by a rename that
+/// refuses to replace (`renameat2(RENAME_NOREPLACE)`, or a hard link where the file system
+/// lacks it, as NFS does). Returns `true` when this call created `path`, `false` when
+/// another writer had (its content is left as it was, for the caller to compare). How
+/// metadata shared by the shards of a job is written once, by whoever comes first.
+pub fn write_new(path: &Path, bytes: &[u8]) -> Result<bool> {
+    if path.exists() {
+        return Ok(false);
+    }
+    let mut file = AtomicFile::create(path)?;
+    file.write_all(bytes).map_err(|e| Error::io(path, e))?;
+    let tmp = file.tmp.clone();
+    let out = file.out.take().expect("an AtomicFile before its commit");
+    let synced = out.into_inner().map_err(|e| e.into_error()).and_then(|f| f.sync_all());
+    let linked = synced.and_then(|()| rename_no_replace(&tmp, path));
+    let _ = fs::remove_file(&tmp);
+    match linked {
+        Ok(()) => Ok(true),
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(false),
+        Err(e) => Err(Error::io(path, e)),
+    }
+}
+
+/// Moves `tmp` to `path` unless `path` exists (`AlreadyExists` then). Leaves `tmp` for the
+/// caller to remove when it was linked rather than renamed.
+fn rename_no_replace(tmp: &Path, path: &Path) -> std::io::Result<()> {
+    #[cfg(any(target_os = "linux", target_os = "android"))]
+    {
+        use rustix::fs::{CWD, RenameFlags, renameat_with};
+        match renameat_with(CWD, tmp, CWD, path, RenameFlags::NOREPLACE) {
+            Ok(()) => return Ok(()),
+            Err(e) if e == rustix::io::Errno::EXIST => {
+                return Err(std::io::ErrorKind::AlreadyExists.into());
+            }
+            // Not supported by this file system or kernel: fall back to a hard link.
+            Err(_) => {}
+        }
+    }
+    fs::hard_link(tmp, path)
 }
 
 /// True for a name that [`temp_path`] makes (of any process).
@@ -355,7 +417,11 @@ pub fn check_replaceable(path: &Path, kind: OutputKind) -> Result<()> {
             if !meta.is_dir() {
                 return refuse("is a file, not a folder");
             }
-            let empty = fs::read_dir(path).map(|mut d| d.next().is_none()).unwrap_or(false);
+            // A temporary of another writer creating the marker at this instant (a shard
+            // of the same job) does not make the folder somebody else's.
+            let empty = fs::read_dir(path).is_ok_and(|mut d| {
+                d.all(|e| e.is_ok_and(|e| e.file_name().to_str().is_some_and(is_temp_name)))
+            });
             if !empty && !path.join(marker).is_file() {
                 return refuse(&format!(
                     "holds files this toolkit did not write (no {marker} in it)"
@@ -431,6 +497,16 @@ pub fn remove_listed(dir: &Path, is_ours: &dyn Fn(&Path) -> bool) -> Result<usiz
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn write_new_creates_once_and_never_replaces() {
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("job.json");
+        assert!(write_new(&p, b"first").unwrap());
+        assert!(!write_new(&p, b"second").unwrap());
+        assert_eq!(fs::read(&p).unwrap(), b"first");
+        assert_eq!(fs::read_dir(d.path()).unwrap().count(), 1, "no temporary left");
+    }
 
     #[test]
     fn temp_names_are_recognised() {

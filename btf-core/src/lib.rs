@@ -13,6 +13,8 @@
 //! - [`reconstruct`]: CPU reconstruction for any view and light ([S03 eq. 2–5]);
 //! - [`fs`]: atomic writes, leftovers, and the output rules (never an input, replace only
 //!   what the toolkit made);
+//! - [`shard`]: shards of a batch job — partition, job records every writer agrees on,
+//!   content fingerprints of stores;
 //! - [`metrics`]: error measures (relative RMSE, PSNR, Eckart–Young);
 //! - [`thin_slab`]: thin semi-transparent cloth as an optically thin slab (first-order
 //!   reflection/transmission, direct transmittance, Monte-Carlo reference).
@@ -35,6 +37,7 @@ pub mod metrics;
 pub mod pca;
 pub mod reconstruct;
 pub mod sampling;
+pub mod shard;
 pub mod simd;
 pub mod store;
 pub mod thin_slab;

@@ -209,6 +209,110 @@ impl StoreTxn {
         Ok(StoreTxn { final_path: path.to_owned(), partial, job: job.clone() })
     }
 
+    /// Joins the partial store at `path` as one of several concurrent writers (the shards
+    /// of a job, issue #23): creates `NAME.partial` and records `job` in it if nobody has
+    /// ([`crate::fs::write_new`]: once, by whoever comes first), or checks that the job
+    /// recorded there is `job`, refusing with the first differing field named before
+    /// anything is written. Never removes anything; the store is committed later by the
+    /// finaliser ([`StoreTxn::reopen`]).
+    pub fn join(path: &Path, job: &Value) -> Result<Self> {
+        let name = path
+            .file_name()
+            .ok_or_else(|| Error::Invalid(format!("{}: not a file name", path.display())))?;
+        crate::fs::check_replaceable(path, crate::fs::OutputKind::Store)?;
+        let partial = path.with_file_name(format!("{}.partial", name.to_string_lossy()));
+        if partial.exists() && !partial.is_dir() {
+            return Err(Error::Invalid(format!(
+                "{} exists and is not a partial store folder; refusing to write into it",
+                partial.display()
+            )));
+        }
+        let doc =
+            json!({"zarr_format": 3, "node_type": "group", "attributes": {"partial_job": job}});
+        let text = serde_json::to_string_pretty(&doc).unwrap_or_default();
+        let meta = partial.join("zarr.json");
+        // Another shard creating the record leaves only its temporary here meanwhile; and
+        // every other file of a job comes after its record, so the record is looked for
+        // after the listing.
+        let foreign = || partial.is_dir() && !holds_only_temporaries(&partial) && !meta.exists();
+        // A folder of files without a record may be another shard's record in flight (a
+        // file system may list a directory being changed loosely): look again for up to
+        // 2 s before refusing it.
+        let mut tries = 0;
+        while foreign() && tries < 100 {
+            std::thread::sleep(std::time::Duration::from_millis(20));
+            tries += 1;
+        }
+        if foreign() {
+            let names: Vec<String> = fs::read_dir(&partial)
+                .map(|d| {
+                    d.flatten().map(|e| e.file_name().to_string_lossy().into_owned()).collect()
+                })
+                .unwrap_or_default();
+            return Err(Error::Invalid(format!(
+                "{} exists, holds files ({}) and records no job; refusing to write into it",
+                partial.display(),
+                names.join(", ")
+            )));
+        }
+        fs::create_dir_all(&partial).map_err(|e| Error::io(&partial, e))?;
+        if !crate::fs::write_new(&meta, text.as_bytes())? {
+            let attrs = zarr::read_group(&partial)?;
+            match attrs.get("partial_job") {
+                Some(r) if r == job => {}
+                Some(r) => {
+                    return Err(Error::Invalid(format!(
+                        "{} was begun by a different job ({}); every shard of one output \
+                         must be given the same input and parameters — refusing before \
+                         writing anything",
+                        partial.display(),
+                        first_difference(r, job, "")
+                    )));
+                }
+                None => {
+                    return Err(Error::Invalid(format!(
+                        "{} records no job (is it being finalised?); refusing to write into it",
+                        partial.display()
+                    )));
+                }
+            }
+        }
+        Ok(StoreTxn { final_path: path.to_owned(), partial, job: job.clone() })
+    }
+
+    /// The job recorded in the partial store of `path` (by [`StoreTxn::begin`] or
+    /// [`StoreTxn::join`]; or, for a commit that was interrupted, beside it), if any.
+    pub fn recorded_job(path: &Path) -> Option<Value> {
+        let name = path.file_name()?.to_string_lossy().into_owned();
+        let partial = path.with_file_name(format!("{name}.partial"));
+        zarr::read_group(&partial)
+            .ok()
+            .and_then(|a| a.get("partial_job").cloned())
+            .or_else(|| read_sidecar(&job_sidecar(&partial)).map(|(job, _)| job))
+    }
+
+    /// The partial store of `path` and its job, for reading only (a status report):
+    /// nothing is created, resumed or removed.
+    pub fn peek(path: &Path) -> Option<(Self, Value)> {
+        let job = Self::recorded_job(path)?;
+        let name = path.file_name()?.to_string_lossy().into_owned();
+        let partial = path.with_file_name(format!("{name}.partial"));
+        Some((StoreTxn { final_path: path.to_owned(), partial, job: job.clone() }, job))
+    }
+
+    /// Reopens the partial store of `path` to commit it (the finaliser of a sharded job):
+    /// the job it records is resumed as [`StoreTxn::begin`] resumes one, which also
+    /// completes a commit that a killed finaliser left half done.
+    pub fn reopen(path: &Path) -> Result<(Self, Value)> {
+        let job = Self::recorded_job(path).ok_or_else(|| {
+            Error::Invalid(format!(
+                "{}: no partial store of a job to finalise beside it",
+                path.display()
+            ))
+        })?;
+        Ok((Self::begin(path, true, &job)?, job))
+    }
+
     /// The folder being written.
     pub fn dir(&self) -> &Path {
         &self.partial
@@ -256,6 +360,12 @@ impl StoreTxn {
 fn read_sidecar(sidecar: &Path) -> Option<(Value, Value)> {
     let v: Value = serde_json::from_slice(&fs::read(sidecar).ok()?).ok()?;
     Some((v.get("job")?.clone(), v.get("attributes")?.clone()))
+}
+
+fn holds_only_temporaries(p: &Path) -> bool {
+    fs::read_dir(p).is_ok_and(|mut d| {
+        d.all(|e| e.is_ok_and(|e| e.file_name().to_str().is_some_and(crate::fs::is_temp_name)))
+    })
 }
 
 fn is_empty_dir(p: &Path) -> bool {
@@ -432,6 +542,84 @@ impl BtfWriter {
         Ok(BtfWriter { txn, meta, arr })
     }
 
+    /// [`BtfWriter::create_for_job`] for one shard of several filling one store at once
+    /// ([`StoreTxn::join`]): the first creates the partial store and its job record, the
+    /// others check that they agree (metadata with its provenance, element type, `job`)
+    /// before writing anything. Nothing is committed: the finaliser does that
+    /// ([`finalize_sharded`]).
+    pub fn join_for_job(path: &Path, meta: BtfMeta, dtype: DType, job: Value) -> Result<Self> {
+        if !matches!(dtype, DType::F16 | DType::F32) {
+            return Err(Error::Unsupported(format!(
+                "normtexture dtype {dtype:?} (use f16 or f32)"
+            )));
+        }
+        let meta = meta.validate(path)?;
+        let record = json!({"store": "btf", "meta": meta, "dtype": dtype.zarr_name(), "job": job});
+        let txn = StoreTxn::join(path, &record)?;
+        let array = ArrayMeta {
+            compression: zarr::Compression::DEFAULT_ZSTD,
+            ..normtexture_array(&meta, dtype)
+        };
+        let arr = ZarrArray::create(&txn.dir().join("normtextures"), array)?;
+        Ok(BtfWriter { txn, meta, arr })
+    }
+
+    /// The partial BTF store of `path` with its job record, opened to read its state
+    /// (`commit = false`: nothing is created or removed) or to commit it.
+    fn open_partial(path: &Path, commit: bool) -> Result<(Self, Value)> {
+        let (txn, record) = if commit {
+            StoreTxn::reopen(path)?
+        } else {
+            StoreTxn::peek(path).ok_or_else(|| {
+                Error::Invalid(format!("{}: no partial store beside it", path.display()))
+            })?
+        };
+        if record.get("store") != Some(&json!("btf")) {
+            return Err(Error::Invalid(format!(
+                "{}: the partial store beside it is not a BTF store",
+                path.display()
+            )));
+        }
+        let meta: BtfMeta = serde_json::from_value(record["meta"].clone())
+            .map_err(|source| Error::Json { path: txn.dir().join("zarr.json"), source })?;
+        let meta = meta.validate(txn.dir())?;
+        let arr = ZarrArray::open(&txn.dir().join("normtextures"), &Limits::default())?;
+        Ok((BtfWriter { txn, meta, arr }, record))
+    }
+
+    /// The partial BTF store of `path` reopened to commit it (the finaliser of a sharded
+    /// job that has more to record than the images), with its job record; `None` when no
+    /// partial store is beside `path`.
+    pub fn reopen_for_commit(path: &Path) -> Result<Option<(Self, Value)>> {
+        if StoreTxn::recorded_job(path).is_none() {
+            return Ok(None);
+        }
+        Self::open_partial(path, true).map(Some)
+    }
+
+    /// Refuses, listing them, while view slots of the store being written are missing or
+    /// corrupt.
+    pub fn check_complete(&self, output: &Path) -> Result<()> {
+        let states = (0..self.meta.n_views()).map(|v| self.slot_state(v)).collect();
+        ShardedStatus::of("btf", &self.txn.job["job"], states).require_complete(output)
+    }
+
+    /// The state of view slot `view`: every light image present with a valid checksum,
+    /// some image missing, or an image failing its check (the file named).
+    pub fn slot_state(&self, view: usize) -> SlotState {
+        let n_l = self.meta.n_lights();
+        let idx = |l: usize| [view as u64, l as u64, 0, 0, 0];
+        if (0..n_l).any(|l| !self.arr.chunk_path(&idx(l)).exists()) {
+            return SlotState::Missing;
+        }
+        for l in 0..n_l {
+            if let Err(e) = self.arr.read_chunk(&idx(l)) {
+                return SlotState::Corrupt(e.to_string());
+            }
+        }
+        SlotState::Done
+    }
+
     /// The metadata being written.
     pub fn meta(&self) -> &BtfMeta {
         &self.meta
@@ -447,6 +635,12 @@ impl BtfWriter {
     /// at the end of a run).
     pub fn set_provenance(&mut self, provenance: Value) {
         self.meta.provenance = provenance;
+    }
+
+    /// True when image `(view, light)` is written and passes its size and checksum check
+    /// (what a shard keeps of an earlier run; a damaged image is written again).
+    pub fn has_sound_image(&self, view: usize, light: usize) -> bool {
+        self.arr.read_chunk(&[view as u64, light as u64, 0, 0, 0]).is_ok()
     }
 
     /// True when image `(view, light)` is already written (for resuming).
@@ -491,6 +685,134 @@ impl BtfWriter {
         let attrs = json!({"btf": self.meta});
         self.txn.commit(attrs)
     }
+}
+
+/// The state of one view slot of a store being written (by shards, issue #23).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum SlotState {
+    /// Every chunk present and checked (and, for an eigen slot, its statistics recorded).
+    Done,
+    /// Some chunk (or the statistics) not written yet.
+    Missing,
+    /// A chunk fails its size or checksum check: what is wrong, with the file named.
+    Corrupt(String),
+}
+
+/// What the shards of a job have written into a store at `output` (a BTF or eigen store,
+/// still `OUTPUT.partial` or already committed).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct ShardedStatus {
+    /// `"btf"` or `"eigen"`.
+    pub store: String,
+    /// Shards the job was split into (1 when it was not sharded).
+    pub shards: usize,
+    /// State of every view slot: `"done"`, `"missing"` or `"corrupt: …"`.
+    pub slots: Vec<String>,
+    /// True when the store has been committed (finalised).
+    pub finalised: bool,
+}
+
+impl ShardedStatus {
+    /// View slots whose state starts with `state` (`"done"`, `"missing"`, `"corrupt"`).
+    pub fn views(&self, state: &str) -> Vec<usize> {
+        (0..self.slots.len()).filter(|&v| self.slots[v].starts_with(state)).collect()
+    }
+
+    pub(crate) fn of(store: &str, job: &Value, states: Vec<SlotState>) -> Self {
+        let slots = states
+            .into_iter()
+            .map(|s| match s {
+                SlotState::Done => "done".to_string(),
+                SlotState::Missing => "missing".to_string(),
+                SlotState::Corrupt(why) => format!("corrupt: {why}"),
+            })
+            .collect();
+        ShardedStatus {
+            store: store.into(),
+            shards: job["shards"].as_u64().unwrap_or(1) as usize,
+            slots,
+            finalised: false,
+        }
+    }
+
+    /// Refuses (listing them) when slots are missing or corrupt.
+    pub(crate) fn require_complete(&self, output: &Path) -> Result<()> {
+        let (missing, corrupt) = (self.views("missing"), self.views("corrupt"));
+        if missing.is_empty() && corrupt.is_empty() {
+            return Ok(());
+        }
+        let why: Vec<&str> = corrupt.iter().map(|&v| self.slots[v].as_str()).collect();
+        Err(Error::Invalid(format!(
+            "{}: cannot finalise: {} of {} view slots missing ({}), {} corrupt{}{}",
+            output.display(),
+            missing.len(),
+            self.slots.len(),
+            list_units(&missing),
+            corrupt.len(),
+            if why.is_empty() { "" } else { ": " },
+            why.join("; ")
+        )))
+    }
+}
+
+/// `0-3, 7, 9-12`.
+pub fn list_units(units: &[usize]) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    let mut i = 0;
+    while i < units.len() {
+        let mut j = i;
+        while j + 1 < units.len() && units[j + 1] == units[j] + 1 {
+            j += 1;
+        }
+        parts.push(if i == j {
+            units[i].to_string()
+        } else {
+            format!("{}-{}", units[i], units[j])
+        });
+        i = j + 1;
+    }
+    parts.join(", ")
+}
+
+/// Which kind of store (`"btf"`, `"eigen"`) the job beside `output` is writing, or the
+/// committed store at `output` is; `None` for neither.
+pub fn store_kind(output: &Path) -> Option<String> {
+    if let Some(job) = StoreTxn::recorded_job(output) {
+        return job["store"].as_str().map(String::from);
+    }
+    read_meta(output).ok().map(|m| m.kind)
+}
+
+/// The state of every view slot of the BTF store that shards are writing at `output`
+/// (or of the committed store).
+pub fn sharded_status(output: &Path) -> Result<ShardedStatus> {
+    if StoreTxn::recorded_job(output).is_none() {
+        let store = BtfStore::open(output)?;
+        let n = store.meta().n_views();
+        return Ok(ShardedStatus {
+            store: "btf".into(),
+            shards: 1,
+            slots: vec!["done".into(); n],
+            finalised: true,
+        });
+    }
+    let (w, record) = BtfWriter::open_partial(output, false)?;
+    let states = (0..w.meta.n_views()).map(|v| w.slot_state(v)).collect();
+    Ok(ShardedStatus::of("btf", &record["job"], states))
+}
+
+/// Commits the BTF store that shards filled at `output` once every image is in and sound;
+/// `Ok(true)` when it was committed already (safe to run twice).
+pub fn finalize_sharded(output: &Path) -> Result<bool> {
+    if StoreTxn::recorded_job(output).is_none() {
+        BtfStore::open(output)?;
+        return Ok(true);
+    }
+    let (w, record) = BtfWriter::open_partial(output, true)?;
+    let states = (0..w.meta.n_views()).map(|v| w.slot_state(v)).collect();
+    ShardedStatus::of("btf", &record["job"], states).require_complete(output)?;
+    w.finish()?;
+    Ok(false)
 }
 
 /// The light images of one view slot: `n_lights` rows of `texel_values` floats.

@@ -89,6 +89,9 @@ pub struct ProcessArgs {
     /// Keep the images of an interrupted run.
     #[arg(long)]
     resume: bool,
+    /// Shard of the processing (its view slots) when several processes share it.
+    #[command(flatten)]
+    shard: crate::args::ShardArgs,
     /// Registration features.
     #[arg(long, default_value = "markers")]
     registration: RegistrationChoice,
@@ -163,10 +166,35 @@ fn process(a: ProcessArgs) -> Result<()> {
         resume: a.resume,
         dtype,
         correct_light_incidence,
+        shard: a.shard.shard()?,
         ..ProcessOptions::default()
     };
     opt.register.use_lines = use_lines;
     crate::guard::refuse_overlap(&[("-o", &a.output)], &[("raw folder", &a.raw_dir)])?;
+    if let Some(shard) = opt.shard {
+        let layout = CaptureLayout::read(&a.raw_dir)?;
+        let n = layout.sampling.len();
+        let views = shard.range(n);
+        let bar =
+            crate::progress::bar((views.len() * n) as u64, &format!("shard {}", shard.label()));
+        let rep = cap::process(&a.raw_dir, &a.output, &opt, &|| bar.inc(1))
+            .with_context(|| format!("cannot process {}", a.raw_dir.display()))?;
+        bar.finish_and_clear();
+        for r in rep.registrations.iter().filter(|r| r.fallback_nominal) {
+            eprintln!("warning: view slot {} registered from the nominal pose", r.view);
+        }
+        crate::guard::outln!(
+            "shard {}: view slots {}..{}: {} images processed ({} kept) into {}",
+            shard.label(),
+            views.start,
+            views.end,
+            rep.images_written,
+            rep.images_kept,
+            crate::guard::partial_of(&a.output).display()
+        );
+        crate::guard::outln!("  when every shard is done: btf finalize {}", a.output.display());
+        return Ok(());
+    }
     let layout = CaptureLayout::read(&a.raw_dir)?;
     let n = layout.sampling.len() as u64;
     let bar = crate::progress::bar(n * n, "rectify");

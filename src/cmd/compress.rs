@@ -30,6 +30,9 @@ pub struct CompressArgs {
     /// Continue an interrupted run, keeping the slots it finished.
     #[arg(long)]
     resume: bool,
+    /// Shard of a compression split over several processes or machines.
+    #[command(flatten)]
+    shard: crate::args::ShardArgs,
     /// Sweep these component counts (comma separated) instead of one compression.
     #[arg(long, value_delimiter = ',')]
     sweep: Option<Vec<usize>>,
@@ -54,6 +57,9 @@ pub fn run(a: CompressArgs) -> Result<()> {
     let Some(output) = a.output else { bail!("give -o OUT.eig (or --sweep LIST --report DIR)") };
     guard::refuse_overlap(&[("-o", &output)], &[("input", &a.input)])?;
     let params = CompressParams { components: a.components, quantization, resume: a.resume };
+    if let Some(shard) = a.shard.shard()? {
+        return run_shard(&input, &output, params, shard, a.json);
+    }
     let r =
         guard::resumable(&output, || progress::compress_with_progress(&input, &output, params))?;
     for w in &r.warnings {
@@ -86,6 +92,50 @@ pub fn run(a: CompressArgs) -> Result<()> {
         if r.resumed_slots > 0 {
             outln!("  resumed {} slots from an interrupted run", r.resumed_slots);
         }
+    }
+    Ok(())
+}
+
+/// One shard of a compression: its view slots into the shared `OUT.partial`.
+fn run_shard(
+    input: &BtfStore,
+    output: &std::path::Path,
+    params: CompressParams,
+    shard: btf_core::shard::Shard,
+    json: bool,
+) -> Result<()> {
+    let views = shard.range(input.meta().n_views());
+    let pb = progress::bar(views.len() as u64, &format!("shard {}", shard.label()));
+    let r = btf_core::compress::compress_shard(input, output, params, shard, &|| {
+        pb.inc(1);
+        progress::unit_delay();
+    })
+    .with_context(|| {
+        format!(
+            "compressing shard {} of {} into {}",
+            shard.label(),
+            input.path().display(),
+            output.display()
+        )
+    })?;
+    pb.finish_and_clear();
+    for w in &r.warnings {
+        eprintln!("warning: {w}");
+    }
+    if json {
+        outln!("{}", serde_json::to_string_pretty(&r)?);
+    } else {
+        outln!(
+            "shard {}: view slots {}..{} ({} computed, {} already done) into {} in {:.2} s",
+            shard.label(),
+            views.start,
+            views.end,
+            r.slots.len() - r.resumed_slots,
+            r.resumed_slots,
+            guard::partial_of(output).display(),
+            r.seconds
+        );
+        outln!("  when every shard is done: btf finalize {}", output.display());
     }
     Ok(())
 }

@@ -16,5 +16,6 @@ pub mod registration_sweep;
 pub mod relight;
 pub mod render;
 pub mod render_sweep;
+pub mod shards;
 pub mod synth;
 pub mod thin;

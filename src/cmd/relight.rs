@@ -42,6 +42,9 @@ pub struct RelightArgs {
     /// Delete the output folder's frames and start again.
     #[arg(long)]
     pub fresh: bool,
+    /// Shard of the job (its frames only) when several processes or machines share it.
+    #[command(flatten)]
+    pub shard: crate::args::ShardArgs,
 }
 
 /// One environment of the job.
@@ -94,23 +97,59 @@ pub fn run(args: RelightArgs) -> Result<()> {
     let env_index = attach_environment(&mut scene, &args)?;
     scene.validate(&args.scene.scene)?;
     let mut jobs = plan(&args, &scene, env_index)?;
+    let shard = args.shard.shard()?;
+    if let Some(shard) = shard {
+        keep_shard(&mut jobs, shard, args.rotations as usize);
+        // A frame of this shard that does not decode (`btf status` calls it corrupt) is
+        // rendered again: it is this shard's own file.
+        for (_, png) in jobs.iter().flat_map(|j| &j.frames) {
+            if crate::cmd::shards::frame_is_corrupt(png, args.exr) {
+                eprintln!("warning: {} is corrupt; rendering it again", png.display());
+                std::fs::remove_file(png).with_context(|| format!("removing {}", png.display()))?;
+            }
+        }
+    }
     let envs: Vec<(&str, &Path)> = args.envs.iter().map(|p| ("--env", p.as_path())).collect();
     crate::guard::refuse_scene_overlap(&[("-o", &args.output)], &args.scene.scene, &scene, &envs)?;
-    prepare_output(&args, &scene)?;
     let pending: usize =
         jobs.iter().map(|j| j.frames.iter().filter(|(_, p)| !p.exists()).count()).sum();
     let all: usize = jobs.iter().map(|j| j.frames.len()).sum();
-    if pending == 0 && jobs.iter().all(|j| j.report_done) {
-        crate::guard::outln!("all {all} frames of {} already rendered", args.output.display());
+    let finished = pending == 0 && jobs.iter().all(|j| j.report_done);
+    if finished && shard.is_some() && args.output.join("job.json").is_file() {
+        // A shard retried after its work (or the whole job) was done: check it is the same
+        // job and leave the folder as it is (a finalised job keeps no shard records).
+        btf_core::shard::check_agrees(&args.output.join("job.json"), &job_record(&args, &scene))?;
+    } else {
+        prepare_output(&args, &scene, shard)?;
+    }
+    let (pending, finished) = if args.fresh {
+        // `--fresh` (never with --shard) removed the frames: plan again.
+        jobs = plan(&args, &scene, env_index)?;
+        let pending: usize = jobs.iter().map(|j| j.frames.len()).sum();
+        (pending, false)
+    } else {
+        (pending, finished)
+    };
+    if finished {
+        let whose = shard.map_or(String::new(), |s| format!("shard {}: ", s.label()));
+        crate::guard::outln!(
+            "{whose}all {all} frames of {} already rendered",
+            args.output.display()
+        );
         return Ok(());
     }
     let first = jobs.iter().position(|j| !j.is_done()).unwrap_or(0);
     set_env_path(&mut scene, env_index, &jobs[first].path);
     let gpu = Gpu::new().context("creating a headless GPU device")?;
-    let mut renderer =
-        Renderer::new(&gpu, &scene, RenderOptions::default()).with_context(|| {
-            format!("preparing {} with {}", args.scene.scene.display(), jobs[first].path.display())
-        })?;
+    // With eigenweightsets, the PCA of `U` over rotations takes every vertex side, so the
+    // frames would depend on which sides' visibility happens to be cached (the report
+    // computes all of them): compute all from the start, so that a resumed job or a
+    // shard started at any time renders the very same frames.
+    let eigen = scene.environment().and_then(|(_, e)| e.eigenweightsets).is_some();
+    let options = RenderOptions { all_env_sides: eigen, ..RenderOptions::default() };
+    let mut renderer = Renderer::new(&gpu, &scene, options).with_context(|| {
+        format!("preparing {} with {}", args.scene.scene.display(), jobs[first].path.display())
+    })?;
     let bar = crate::progress::bar(pending as u64, "relight");
     let mut summaries = Vec::new();
     for (i, job) in jobs.iter_mut().enumerate() {
@@ -139,17 +178,47 @@ pub fn run(args: RelightArgs) -> Result<()> {
     bar.finish_and_clear();
     let summary = summarise(&renderer, &scene, &args, summaries)?;
     let text = serde_json::to_string_pretty(&summary)?;
-    btf_image::write::write_text(&args.output.join("summary.json"), &text)?;
+    // A shard's summary covers its own frames: it goes beside the others', for
+    // `btf finalize` to merge into summary.json.
+    let path = match shard {
+        Some(s) => crate::cmd::shards::relight_shard_summary(&args.output, s),
+        None => args.output.join("summary.json"),
+    };
+    btf_image::write::write_text(&path, &text)?;
     crate::guard::outln!(
-        "{} frames rendered, {} reused; visibility {:.2} s, weights {:.3} s per environment, {:.1} ms per frame → {}",
+        "{}{} frames rendered, {} reused; visibility {:.2} s, weights {:.3} s per environment, {:.1} ms per frame → {}",
+        shard.map_or(String::new(), |s| format!("shard {}: ", s.label())),
         summary.frames_rendered,
         summary.frames_skipped,
         summary.visibility_s,
         summary.weights_s_per_env,
         summary.frame_ms,
-        args.output.join("summary.json").display()
+        path.display()
     );
+    if shard.is_some() {
+        crate::guard::outln!("  when every shard is done: btf finalize {}", args.output.display());
+    }
     Ok(())
+}
+
+/// Keeps the frames `shard` owns: frames are numbered environment by environment, rotation
+/// by rotation, and split into contiguous blocks ([`btf_core::shard::Shard::range`]). An
+/// environment's eigenweightset report goes with its first frame's shard.
+fn keep_shard(jobs: &mut [EnvJob], shard: btf_core::shard::Shard, rotations: usize) {
+    let mine = shard.range(jobs.len() * rotations);
+    for (e, job) in jobs.iter_mut().enumerate() {
+        let first = e * rotations;
+        if !mine.contains(&first) {
+            job.report_done = true;
+        }
+        let frames = std::mem::take(&mut job.frames);
+        job.frames = frames
+            .into_iter()
+            .enumerate()
+            .filter(|(r, _)| mine.contains(&(first + r)))
+            .map(|(_, f)| f)
+            .collect();
+    }
 }
 
 impl EnvJob {
@@ -243,37 +312,107 @@ fn relight_output(name: &str) -> bool {
         .and_then(|(stem, _)| stem.rsplit_once("_r"))
         .is_some_and(|(_, r)| r.len() == 3 && r.bytes().all(|b| b.is_ascii_digit()));
     frame
-        || matches!(name, "summary.json" | "job.json" | "eigen")
+        || matches!(name, "summary.json" | "job.json" | "eigen" | "shards")
         || btf_core::fs::is_temp_name(name)
 }
 
 /// Creates the folder and checks (or writes) `job.json`, so that frames of a different job
-/// are never mistaken for finished ones.
-fn prepare_output(args: &RelightArgs, scene: &Scene) -> Result<()> {
+/// are never mistaken for finished ones. A shard checks the job (and the shard plan)
+/// before it writes anything; the first shard creates them ([`btf_core::shard`]).
+fn prepare_output(
+    args: &RelightArgs,
+    scene: &Scene,
+    shard: Option<btf_core::shard::Shard>,
+) -> Result<()> {
     let out = &args.output;
+    let job = job_record(args, scene);
+    if let Some(shard) = shard {
+        ensure!(
+            !args.fresh,
+            "--fresh cannot be combined with --shard: one shard would delete the others' frames"
+        );
+        btf_core::fs::check_replaceable(
+            out,
+            btf_core::fs::OutputKind::Folder { marker: crate::guard::FOLDER_MARKER },
+        )?;
+        let mut plan =
+            crate::cmd::shards::relight_plan(shard.count, args.envs.len(), args.rotations);
+        plan["inputs"] = input_identities(args, scene)?;
+        for (path, record) in
+            [(out.join("job.json"), &job), (crate::cmd::shards::plan_path(out), &plan)]
+        {
+            if path.exists() {
+                btf_core::shard::check_agrees(&path, record)
+                    .context("this shard is not part of the relight job in that folder")?;
+            }
+        }
+        crate::guard::shared_output_folder(out, "relight")?;
+        btf_core::shard::agree_or_create(&out.join("job.json"), &job)?;
+        btf_core::shard::agree_or_create(&crate::cmd::shards::plan_path(out), &plan)?;
+        return Ok(());
+    }
+    let path = out.join("job.json");
+    let text = serde_json::to_string_pretty(&job)?;
+    let old = if args.fresh { None } else { std::fs::read_to_string(&path).ok() };
+    if let Some(old) = old.filter(|old| *old != text) {
+        let was: serde_json::Value = serde_json::from_str(&old).unwrap_or_default();
+        bail!(
+            "{} holds frames of a different relight job ({}); use --fresh or another folder",
+            out.display(),
+            btf_core::store::first_difference(&was, &job, "")
+        );
+    }
     crate::guard::output_folder(out, "relight", args.fresh, &relight_output)?;
+    if path.exists() {
+        return Ok(());
+    }
+    Ok(btf_image::write::write_text(&path, &text)?)
+}
+
+/// What identifies the job's input files for its shards, by the name the job knows them
+/// by (not their path, which may differ between machines): a store by its content
+/// fingerprint ([`btf_core::shard::fingerprint`]), any other file by its size and
+/// modification time (reading every environment map in every shard would cost more than
+/// the shard's frames).
+fn input_identities(args: &RelightArgs, scene: &Scene) -> Result<serde_json::Value> {
+    let mut named: Vec<(String, std::path::PathBuf)> = scene
+        .input_paths()
+        .into_iter()
+        .filter(|(name, _)| !name.starts_with("[[lights]]"))
+        .collect();
+    named.extend(args.envs.iter().enumerate().map(|(i, p)| (format!("--env {i}"), p.clone())));
+    let mut out = serde_json::Map::new();
+    for (name, path) in named {
+        let id = if path.is_dir() {
+            serde_json::json!({ "fingerprint": btf_core::shard::fingerprint(&path)? })
+        } else {
+            let m =
+                std::fs::metadata(&path).with_context(|| format!("{name} {}", path.display()))?;
+            let mtime = m
+                .modified()
+                .ok()
+                .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
+                .map_or(0, |d| d.as_nanos());
+            serde_json::json!({ "bytes": m.len(), "mtime_ns": mtime.to_string() })
+        };
+        out.insert(name, id);
+    }
+    Ok(serde_json::Value::Object(out))
+}
+
+/// What `job.json` pins: the scene (without the environment path, which varies), the
+/// environments, rotations and whether EXR frames are written.
+fn job_record(args: &RelightArgs, scene: &Scene) -> serde_json::Value {
     let mut scene_for_key = scene.clone();
     if let Some((i, _)) = scene.environment() {
         set_env_path(&mut scene_for_key, i, Path::new(""));
     }
-    let job = serde_json::json!({
+    serde_json::json!({
         "scene": scene_for_key,
         "envs": args.envs,
         "rotations": args.rotations,
         "exr": args.exr,
-    });
-    let path = out.join("job.json");
-    let text = serde_json::to_string_pretty(&job)?;
-    if let Ok(old) = std::fs::read_to_string(&path) {
-        if old != text {
-            bail!(
-                "{} holds frames of a different relight job (scene, environments or rotations changed); use --fresh or another folder",
-                out.display()
-            );
-        }
-        return Ok(());
-    }
-    Ok(btf_image::write::write_text(&path, &text)?)
+    })
 }
 
 fn render_frames(
@@ -304,6 +443,7 @@ fn render_frames(
         btf_image::write::write_png_linear(png, w, h, &frame.rgb, scene.output.exposure)?;
         s.frames_rendered += 1;
         bar.inc(1);
+        crate::progress::unit_delay();
     }
     let n = s.frames_rendered.max(1) as f64;
     (s.frame_ms_mean, s.rotation_ms_mean) = (frame_ms / n, rotation_ms / n);

@@ -63,7 +63,7 @@ fn vertical_plane(n: usize) -> String {
 }
 
 /// A UV sphere of radius 0.35 around `(0.5, 0, 0.5)` (many normals: a rich `U(δ)`).
-fn sphere(seg: usize, rings: usize) -> String {
+pub(crate) fn sphere(seg: usize, rings: usize) -> String {
     let mut s = String::new();
     for j in 0..=rings {
         for i in 0..=seg {
@@ -100,7 +100,7 @@ fn sphere(seg: usize, rings: usize) -> String {
 }
 
 /// Writes an equirectangular 64×32 EXR of `radiance(θ, φ)`.
-fn write_env(path: &Path, radiance: impl Fn(f32, f32) -> [f32; 3] + Sync) {
+pub(crate) fn write_env(path: &Path, radiance: impl Fn(f32, f32) -> [f32; 3] + Sync) {
     let (w, h) = (64usize, 32usize);
     exr::prelude::write_rgb_file(path, w, h, |x, y| {
         let theta = std::f32::consts::PI * (y as f32 + 0.5) / h as f32;
@@ -112,7 +112,7 @@ fn write_env(path: &Path, radiance: impl Fn(f32, f32) -> [f32; 3] + Sync) {
 }
 
 /// A scene of the plane seen head-on by an orthographic camera filling the frame.
-fn scene(evaluation: &str, env: &str, extra: &str) -> String {
+pub(crate) fn scene(evaluation: &str, env: &str, extra: &str) -> String {
     format!(
         r#"
 [output]
@@ -140,7 +140,7 @@ msaa = 1   # exact sums within 1e-4: MSAA frames resolve into f16
     )
 }
 
-fn setup() -> Dir {
+pub(crate) fn setup() -> Dir {
     let d = Dir::new();
     lambert_store(&d.path("lambert.eig"));
     std::fs::write(d.path("plane.obj"), vertical_plane(4)).unwrap();
@@ -153,7 +153,7 @@ fn setup() -> Dir {
 }
 
 /// `btf ARGS`, or `None` when there is no GPU adapter and none is required.
-fn run_gpu(d: &Dir, args: &[&str]) -> Option<String> {
+pub(crate) fn run_gpu(d: &Dir, args: &[&str]) -> Option<String> {
     let o = d.btf(args);
     let err = String::from_utf8_lossy(&o.stderr);
     if !o.status.success() && err.contains("no GPU adapter") {

@@ -29,5 +29,5 @@ pub mod register;
 pub mod score;
 
 pub use layout::CaptureLayout;
-pub use process::{ProcessOptions, ProcessReport, Roi, process};
+pub use process::{ProcessOptions, ProcessReport, Roi, finalize_shards, process};
 pub use rectify::Filter;

@@ -62,6 +62,9 @@ pub struct ProcessOptions {
     /// Scale each light's images by `cos θ_l / cos θ_l'` for the registered plate tilt
     /// ([`super::incidence`]).
     pub correct_light_incidence: bool,
+    /// Process only this shard's view slots into the store every shard fills (issue #23);
+    /// the store is committed by [`finalize_shards`] (`btf finalize`).
+    pub shard: Option<btf_core::shard::Shard>,
 }
 
 impl Default for ProcessOptions {
@@ -78,6 +81,7 @@ impl Default for ProcessOptions {
             registration_lights: 8,
             register: RegisterOptions::default(),
             correct_light_incidence: true,
+            shard: None,
         }
     }
 }
@@ -314,17 +318,45 @@ pub fn process(
     }
     // The job a resume must match: which raw capture (its folder and its capture.toml) and
     // every option that shapes the result.
+    let options = format!("{:?}", ProcessOptions { resume: false, shard: None, ..opt.clone() });
+    if let Some(shard) = opt.shard {
+        // Shards identify the capture by content (their paths may differ) and record what
+        // the finaliser needs for the provenance.
+        let job = serde_json::json!({
+            "kind": "capture process",
+            "raw": { "fingerprint": btf_core::shard::fingerprint(raw_dir)? },
+            "options": options,
+            "shards": shard.count,
+            "provenance": provenance_base(&layout, &grid, opt),
+        });
+        let writer = BtfWriter::join_for_job(out, meta, opt.dtype, job)?;
+        btf_core::zarr::ensure_record_group(writer.dir(), "registration")?;
+        btf_core::zarr::ensure_record_group(writer.dir(), TILT)?;
+        let views = shard.range(layout.sampling.len());
+        let (regs, written, kept) = run_slots(&layout, &writer, &grid, opt, views, tick)?;
+        return Ok(ProcessReport {
+            images_written: written,
+            images_kept: kept,
+            registrations: regs,
+            grid,
+        });
+    }
     let job = serde_json::json!({
         "raw_dir": btf_core::fs::input_identity(raw_dir),
         "capture_toml": btf_core::fs::input_identity(&raw_dir.join("capture.toml")),
-        "options": format!("{:?}", ProcessOptions { resume: false, ..opt.clone() }),
+        "options": options,
     });
     let mut writer = BtfWriter::create_for_job(out, meta, opt.dtype, opt.resume, job)?;
     let partial = writer.dir().to_owned();
     btf_core::zarr::ensure_record_group(&partial, "registration")?;
-    let result = run_slots(&layout, &writer, &grid, opt, tick);
+    btf_core::zarr::ensure_record_group(&partial, TILT)?;
+    let views = 0..layout.sampling.len();
+    let result = run_slots(&layout, &writer, &grid, opt, views, tick);
     let outcome = result.and_then(|(regs, written, kept)| {
-        writer.set_provenance(provenance(&layout, &grid, opt, &regs));
+        // From the records, as the finaliser of a sharded job reads them: the provenance
+        // is then the same to the last digit whichever way the store was made.
+        let base = provenance_base(&layout, &grid, opt);
+        assemble_provenance(&mut writer, out, base)?;
         writer.finish()?;
         Ok(ProcessReport { images_written: written, images_kept: kept, registrations: regs, grid })
     });
@@ -334,19 +366,72 @@ pub fn process(
     outcome
 }
 
+/// The record group where shards keep each view slot's plate tilt for the finaliser
+/// (removed when the store is committed).
+const TILT: &str = "capture_tilt";
+
+/// Commits the store that the shards of a `btf capture process` job filled at `out`: every
+/// image must be in and sound and every slot's registration recorded; the provenance is
+/// assembled from the job's record and the slots' records as one process would have
+/// written it. `Ok(true)` when it was committed already (safe to run twice).
+pub fn finalize_shards(out: &Path) -> Result<bool> {
+    let Some((writer, record)) = BtfWriter::reopen_for_commit(out)? else {
+        btf_core::store::BtfStore::open(out)?;
+        return Ok(true);
+    };
+    writer.check_complete(out)?;
+    let mut writer = writer;
+    assemble_provenance(&mut writer, out, record["job"]["provenance"].clone())?;
+    writer.finish()?;
+    Ok(false)
+}
+
+/// Sets the store's provenance from `base` and every slot's registration and plate-tilt
+/// records, then removes the tilt records (they were only for this).
+fn assemble_provenance(writer: &mut BtfWriter, out: &Path, base: serde_json::Value) -> Result<()> {
+    let n = writer.meta().n_views();
+    let mut regs = Vec::with_capacity(n);
+    let mut tilts = Vec::with_capacity(n);
+    for view in 0..n {
+        let side = sidecar(view);
+        let missing = |what: &str| {
+            crate::Error::invalid(
+                &out.join(what).display().to_string(),
+                &side,
+                format!("view slot {view} has no {what} record; run its shard again"),
+            )
+        };
+        regs.push(
+            btf_core::zarr::read_record(writer.dir(), "registration", &side)
+                .ok_or_else(|| missing("registration"))?,
+        );
+        let tilt = btf_core::zarr::read_record(writer.dir(), TILT, &side)
+            .map(|t| t["tilt_deg"].clone())
+            .ok_or_else(|| missing(TILT))?;
+        tilts.push(tilt);
+    }
+    writer.set_provenance(provenance_with(base, regs, tilts));
+    let tilt_dir = writer.dir().join(TILT);
+    std::fs::remove_dir_all(&tilt_dir).map_err(|e| btf_core::Error::io(&tilt_dir, e))?;
+    Ok(())
+}
+
 fn run_slots(
     layout: &CaptureLayout,
     writer: &BtfWriter,
     grid: &Grid,
     opt: &ProcessOptions,
+    views: std::ops::Range<usize>,
     tick: &(dyn Fn() + Sync),
 ) -> Result<(Vec<Registration>, usize, usize)> {
     let n = layout.sampling.len();
-    let results: Vec<(Registration, usize)> = (0..n)
+    let results: Vec<(Registration, usize)> = views
+        .clone()
         .into_par_iter()
         .map(|view| -> Result<(Registration, usize)> {
             let side = sidecar(view);
-            let done = (0..n).all(|l| writer.has_image(view, l));
+            let done = (0..n).all(|l| writer.has_image(view, l))
+                && btf_core::zarr::read_record(writer.dir(), TILT, &side).is_some();
             if done
                 && let Some(record) =
                     btf_core::zarr::read_record(writer.dir(), "registration", &side)
@@ -373,11 +458,13 @@ fn run_slots(
                 tick();
             }
             write_sidecar(writer.dir(), &side, &reg)?;
+            let tilt = super::incidence::tilt_deg(layout, view, &reg.matrix());
+            btf_core::zarr::write_record(writer.dir(), TILT, &side, &json!({ "tilt_deg": tilt }))?;
             Ok((reg, written))
         })
         .collect::<Result<_>>()?;
     let written: usize = results.iter().map(|r| r.1).sum();
-    Ok((results.into_iter().map(|r| r.0).collect(), written, n * n - written))
+    Ok((results.into_iter().map(|r| r.0).collect(), written, views.len() * n - written))
 }
 
 /// Whether a registration sidecar left by an interrupted run can be kept: it is the view's
@@ -392,12 +479,8 @@ fn write_sidecar(dir: &Path, name: &str, reg: &Registration) -> Result<()> {
     Ok(btf_core::zarr::write_record(dir, "registration", name, &record)?)
 }
 
-fn provenance(
-    layout: &CaptureLayout,
-    grid: &Grid,
-    opt: &ProcessOptions,
-    regs: &[Registration],
-) -> serde_json::Value {
+/// What the provenance says of the job, before any slot is registered.
+fn provenance_base(layout: &CaptureLayout, grid: &Grid, opt: &ProcessOptions) -> serde_json::Value {
     json!({
         "generator": "btf capture process",
         "raw_dir": layout.dir.display().to_string(),
@@ -407,13 +490,29 @@ fn provenance(
         "blend_width": opt.blend_width,
         "rectified_size": opt.rectified_size,
         "light_incidence_correction": opt.correct_light_incidence,
-        "plate_tilt_deg": regs.iter().map(|r| super::incidence::tilt_deg(layout, r.view, &r.matrix())).collect::<Vec<_>>(),
         "grid": {"origin_mm": grid.origin_mm, "texel_mm": grid.texel_mm, "n": grid.n},
         "radiometry": match layout.radiometry {
             Some(r) => json!({"reference_white_dn": r.reference_white_dn, "vignetting_cos_power": r.vignetting_cos_power}),
             None => json!("none in capture.toml: values are DN / full scale"),
         },
-        "fallback_views": regs.iter().filter(|r| r.fallback_nominal).map(|r| r.view).collect::<Vec<_>>(),
-        "registration": regs,
     })
+}
+
+/// The provenance: [`provenance_base`] with every slot's registration record (in view
+/// order), plate tilt and the slots registered from the nominal pose — the same for one
+/// process and for the finaliser of a sharded job.
+fn provenance_with(
+    mut base: serde_json::Value,
+    registrations: Vec<serde_json::Value>,
+    tilts: Vec<serde_json::Value>,
+) -> serde_json::Value {
+    let fallback: Vec<u64> = registrations
+        .iter()
+        .filter(|r| r["fallback_nominal"] == json!(true))
+        .filter_map(|r| r["view"].as_u64())
+        .collect();
+    base["plate_tilt_deg"] = json!(tilts);
+    base["fallback_views"] = json!(fallback);
+    base["registration"] = json!(registrations);
+    base
 }

@@ -1,6 +1,7 @@
 //! Writes a synthetic material as a BTF store: every (view slot, light) normtexture, in
 //! parallel over view slots (each slot's view-ray hits are computed once and shared by its
-//! lights), deterministic for a seed, resumable and with a progress bar.
+//! lights), deterministic for a seed, resumable and with a progress bar; or one shard's
+//! view slots of it, into the store every shard of the job fills (issue #23).
 
 use super::{Material, MaterialSpec};
 use crate::Result;
@@ -21,11 +22,14 @@ pub struct GenerateOptions {
     pub progress: bool,
     /// Element type on disk (`F32` or `F16`).
     pub dtype: DType,
+    /// Write only this shard's view slots into the store that every shard fills
+    /// (issue #23); the store is committed by `btf finalize`, not here.
+    pub shard: Option<btf_core::shard::Shard>,
 }
 
 impl Default for GenerateOptions {
     fn default() -> Self {
-        GenerateOptions { resume: false, progress: false, dtype: DType::F32 }
+        GenerateOptions { resume: false, progress: false, dtype: DType::F32, shard: None }
     }
 }
 
@@ -56,18 +60,33 @@ pub fn generate(spec: &MaterialSpec, out: &Path, opts: &GenerateOptions) -> Resu
         "model": "height field; view ray marched (parallax, masking), light ray marched \
                   (self-shadowing), Lambert + GGX + Charlie sheen, energy-conserving coupling",
     });
-    let writer = BtfWriter::create(out, meta, opts.dtype, opts.resume)?;
     let n = sampling.len();
-    let bar = if opts.progress { ProgressBar::new((n * n) as u64) } else { ProgressBar::hidden() };
+    let (writer, views) = match opts.shard {
+        Some(shard) => {
+            let job = json!({ "shards": shard.count });
+            (BtfWriter::join_for_job(out, meta, opts.dtype, job)?, shard.range(n))
+        }
+        None => (BtfWriter::create(out, meta, opts.dtype, opts.resume)?, 0..n),
+    };
+    let bar = if opts.progress {
+        ProgressBar::new((views.len() * n) as u64)
+    } else {
+        ProgressBar::hidden()
+    };
     bar.set_style(
         ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} images, {elapsed} (eta {eta})")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     bar.set_message(format!("{} {}²", spec.kind.name(), spec.size));
-    let counts = (0..n)
+    let counts = views
         .into_par_iter()
         .map(|view| -> Result<(usize, usize)> {
-            let missing: Vec<usize> = (0..n).filter(|&l| !writer.has_image(view, l)).collect();
+            // A shard checks the checksums of what an earlier run of it left.
+            let kept = |l: usize| match opts.shard {
+                Some(_) => writer.has_sound_image(view, l),
+                None => writer.has_image(view, l),
+            };
+            let missing: Vec<usize> = (0..n).filter(|&l| !kept(l)).collect();
             bar.inc((n - missing.len()) as u64);
             if missing.is_empty() {
                 return Ok((0, n));
@@ -87,7 +106,9 @@ pub fn generate(spec: &MaterialSpec, out: &Path, opts: &GenerateOptions) -> Resu
             Ok((missing.len(), n - missing.len()))
         })
         .collect::<Result<Vec<_>>>()?;
-    writer.finish()?;
+    if opts.shard.is_none() {
+        writer.finish()?;
+    }
     bar.finish_and_clear();
     let (written, skipped) = counts.iter().fold((0, 0), |a, c| (a.0 + c.0, a.1 + c.1));
     Ok(GenerateReport {
