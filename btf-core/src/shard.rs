@@ -14,9 +14,14 @@
 //!   the first differing field named ([`crate::store::first_difference`]).
 //! - **Fingerprint.** A store is identified by its content, not its path or inode (shards on
 //!   different machines mount the shared volume at different places): every metadata
-//!   document and every file up to 64 KiB whole, and every larger chunk's name, length and
-//!   stored crc32c (its last four bytes), hashed in name order. Reading four bytes per
-//!   large chunk makes it cheap on an 80 GB store.
+//!   document and every file up to 64 KiB whole, every larger chunk's name and length (from
+//!   the directory listing), and the stored crc32c (last four bytes) of at most
+//!   [`MAX_TAILS`] of the larger chunks, evenly spaced in name order, hashed in name order.
+//!   Opening every chunk of a 6 561-image store cost each shard 0.47 s of CPU (+15 % on a
+//!   12.6 s compression split four ways); the listing and 256 tails cost a tenth of that.
+//!   Two stores of one shape whose chunks differ only outside the sampled tails and keep
+//!   their lengths (uncompressed stores) are taken for the same; a job record also names
+//!   the parameters, so this is the one case a fingerprint does not catch.
 
 use crate::{Error, Result};
 use serde_json::Value;
@@ -134,35 +139,46 @@ pub fn check_agrees(path: &Path, record: &Value) -> Result<()> {
 /// Files up to this size are hashed whole by [`fingerprint`].
 const SMALL_FILE: u64 = 64 << 10;
 
+/// The most large chunks whose stored checksum [`fingerprint`] reads.
+pub const MAX_TAILS: usize = 256;
+
 /// The content fingerprint of a store folder (see the module docs), as 16 hex digits.
 pub fn fingerprint(store: &Path) -> Result<String> {
     let mut files = Vec::new();
     collect_files(store, store, &mut files)?;
     files.sort();
+    let is_small = |(rel, len): &(PathBuf, u64)| {
+        let name = rel.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        *len <= SMALL_FILE || name.ends_with(".json") && *len <= 64 << 20
+    };
+    let large = files.iter().filter(|f| !is_small(f)).count();
+    let every = large.div_ceil(MAX_TAILS).max(1);
     let mut h = Fnv::new();
-    for rel in &files {
+    let mut k = 0;
+    for f in &files {
+        let (rel, len) = f;
         let path = store.join(rel);
         h.eat(rel.to_string_lossy().as_bytes());
-        let name = rel.file_name().and_then(|n| n.to_str()).unwrap_or("");
-        let mut f = fs::File::open(&path).map_err(|e| Error::io(&path, e))?;
-        let len = f.metadata().map_err(|e| Error::io(&path, e))?.len();
-        if len <= SMALL_FILE || name.ends_with(".json") && len <= 64 << 20 {
-            let mut bytes = Vec::with_capacity(len as usize);
-            f.read_to_end(&mut bytes).map_err(|e| Error::io(&path, e))?;
+        if is_small(f) {
+            let bytes = fs::read(&path).map_err(|e| Error::io(&path, e))?;
             h.eat(&bytes);
-        } else {
-            h.eat(&len.to_le_bytes());
+            continue;
+        }
+        h.eat(&len.to_le_bytes());
+        if k % every == 0 {
+            let mut file = fs::File::open(&path).map_err(|e| Error::io(&path, e))?;
             let mut tail = [0u8; 4];
-            let n = len.min(4);
-            f.seek(SeekFrom::Start(len - n)).map_err(|e| Error::io(&path, e))?;
-            f.read_exact(&mut tail[..n as usize]).map_err(|e| Error::io(&path, e))?;
+            let n = (*len).min(4);
+            file.seek(SeekFrom::Start(len - n)).map_err(|e| Error::io(&path, e))?;
+            file.read_exact(&mut tail[..n as usize]).map_err(|e| Error::io(&path, e))?;
             h.eat(&tail);
         }
+        k += 1;
     }
     Ok(format!("{:016x}", h.0))
 }
 
-fn collect_files(root: &Path, dir: &Path, out: &mut Vec<PathBuf>) -> Result<()> {
+fn collect_files(root: &Path, dir: &Path, out: &mut Vec<(PathBuf, u64)>) -> Result<()> {
     for entry in fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
         let entry = entry.map_err(|e| Error::io(dir, e))?;
         let path = entry.path();
@@ -170,10 +186,11 @@ fn collect_files(root: &Path, dir: &Path, out: &mut Vec<PathBuf>) -> Result<()> 
         if crate::fs::is_temp_name(&name.to_string_lossy()) {
             continue;
         }
-        if entry.file_type().map_err(|e| Error::io(&path, e))?.is_dir() {
+        let meta = entry.metadata().map_err(|e| Error::io(&path, e))?;
+        if meta.is_dir() {
             collect_files(root, &path, out)?;
         } else {
-            out.push(path.strip_prefix(root).unwrap_or(&path).to_owned());
+            out.push((path.strip_prefix(root).unwrap_or(&path).to_owned(), meta.len()));
         }
     }
     Ok(())
