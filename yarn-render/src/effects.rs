@@ -144,7 +144,7 @@ pub struct EffectsRaw {
     /// The cross-section extinction σ (ply-symmetrised): first value, cells per side,
     /// present, unused.
     pub sigma: [u32; 4],
-    /// σ grid half width (m), ply pitch α_ply (signed, m), unused ×2.
+    /// σ grid half width (m), the yarn's ply pitch α_ply (signed, m; always set), unused ×2.
     pub sigma_f: [f32; 4],
 }
 
@@ -162,6 +162,7 @@ pub struct PackedEffects {
 pub fn pack(
     pre: &[Option<Arc<Precomputed>>],
     sigma: &[Option<(yarn_precompute::SigmaField, f64)>],
+    ply_pitches: &[f64],
     bcsdf: &FiberBcsdf,
     entries: usize,
 ) -> Result<PackedEffects> {
@@ -209,6 +210,8 @@ pub fn pack(
                 if c.core_fibers > 0 { 1.0 } else { 0.0 },
             ];
         }
+        // The ply pitch is always there: shadow hiding's helix parting reads it.
+        h.sigma_f[1] = ply_pitches.get(k).copied().unwrap_or(0.0) as f32;
         if let Some(Some((field, ply_pitch))) = sigma.get(k) {
             // The rotational mean baked into a plain grid: the shader's bilinear lookup
             // is then `SigmaField::at`.

@@ -195,7 +195,8 @@ impl FiberRenderer {
                 Ok(Some((f, p.ply_pitch)))
             })
             .collect::<Result<Vec<_>>>()?;
-        let fx = effects::pack(&pre, &sigma, bcsdf, 256)?;
+        let pitches: Vec<f64> = packed.yarn_params.iter().map(|p| p.ply_pitch).collect();
+        let fx = effects::pack(&pre, &sigma, &pitches, bcsdf, 256)?;
         let max_binding = dev.limits().max_storage_buffer_binding_size;
         let capacity = (settings.capacity.max(1) as u64).min(max_binding / 8) as u32;
         let (lo, hi) = packed.bounds;

@@ -467,8 +467,8 @@ fn self_transmittance(e: Effects, in: VertexOut, wi: vec3<f32>, wo: vec3<f32>) -
                 // The fibers are helices, not lines: rays that differ along the yarn part
                 // at tan(tilt) per unit length too (tilt of the outer fibers about the
                 // yarn axis, 2π·R_yarn/|α_ply|).
-                let cp = curves[segments[0].ids.x].pitch.x;
-                let tan_tilt = TAU * pr.c.z / max(abs(cp), 1e-9);
+                // This yarn's ply pitch (its effect header), not another curve's.
+                let tan_tilt = TAU * pr.c.z / max(abs(e.sigma_f.y), 1e-9);
                 let t_axis = normalize(cross(ns, bs));
                 let along = abs(dot(wi - wo, t_axis));
                 let rate = sin_d + tan_tilt * along;
