@@ -31,6 +31,9 @@ pub enum KnitCmd {
     Render(Box<super::knit_render::RenderArgs>),
     /// What accuracy costs in time: GPU fibers over LoD × shading against the reference.
     Sweep(Box<super::knit_sweep::SweepArgs>),
+    /// The headline study: a knit garment as reference fibers, GPU fibers, the yarn BTF
+    /// and the baselines, scored against the reference at three camera distances.
+    Compare(Box<super::knit_compare::CompareArgs>),
 }
 
 /// `btf knit chart`.
@@ -141,6 +144,7 @@ pub fn run(cmd: KnitCmd) -> Result<()> {
         KnitCmd::Ref(a) => ref_cmd(*a),
         KnitCmd::Render(a) => super::knit_render::run(*a),
         KnitCmd::Sweep(a) => super::knit_sweep::run(*a),
+        KnitCmd::Compare(a) => super::knit_compare::run(*a),
     }
 }
 

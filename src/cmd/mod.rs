@@ -8,6 +8,8 @@ pub mod garment;
 pub mod import;
 pub mod inspect;
 pub mod knit;
+pub mod knit_compare;
+pub mod knit_compare_report;
 pub mod knit_render;
 pub mod knit_sweep;
 pub mod knit_sweep_report;

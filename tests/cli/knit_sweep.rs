@@ -142,3 +142,85 @@ fn knit_gpu_refusals_name_the_flag() {
     // Nothing was written for a refused sweep.
     assert!(!d.path("o").exists());
 }
+
+/// `btf knit compare` (DESIGN §4.2's headline study) on a tiny garment: a 5 × 5 yarn BTF at
+/// 8², 8 wales on the drape, one 64² camera. Every representation has its row with finite
+/// errors, the plain texture is its own time unit, the BTF made by the reference keeps the
+/// reference's mean radiance on the garment, and one bounce is darker than eight.
+#[test]
+fn knit_compare_scores_every_representation_against_the_reference() {
+    let d = Dir::new();
+    d.ok(&[
+        "synth",
+        "material",
+        "--kind",
+        "yarn",
+        "--chart",
+        "stockinette",
+        "--yarn",
+        "fine-2ply",
+        "--size",
+        "8",
+        "--sampling",
+        "rings:0x1,45x4",
+        "--spp",
+        "2",
+        "--bounces",
+        "3",
+        "-o",
+        "y.btf",
+    ]);
+    let args = [
+        "knit",
+        "compare",
+        "--btf",
+        "y.btf",
+        "--wales",
+        "8",
+        "--size",
+        "64,64",
+        "--distances",
+        "6",
+        "--spp",
+        "2",
+        "--lod",
+        "2",
+        "--components",
+        "2",
+        "--repeat",
+        "1",
+        "-o",
+        "cmp",
+    ];
+    let Some(out) = run_gpu(&d, &args) else { return };
+    assert!(out.contains("Multiple-scattering gap"), "{out}");
+    let csv = std::fs::read_to_string(d.path("cmp/compare.csv")).unwrap();
+    let rows: Vec<Vec<String>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|s| s.trim_matches('"').to_owned()).collect())
+        .collect();
+    let reprs: Vec<&str> = rows.iter().map(|r| r[1].as_str()).collect();
+    assert_eq!(reprs, ["R1", "R1", "R5", "R4", "R5"], "{csv}");
+    let num = |r: &Vec<String>, k: usize| r[k].parse::<f64>().unwrap();
+    for r in &rows {
+        // interior, band, stitch scale, mean ratio against R0; frame-time ratio; prep; bytes.
+        for k in [3, 4, 5, 6, 10, 11] {
+            assert!(num(r, k).is_finite() && num(r, k) > 0.0, "column {k} of {r:?}");
+        }
+    }
+    let plain = rows.iter().find(|r| r[2].starts_with("plain texture")).unwrap();
+    assert_eq!(num(plain, 11), 1.0, "the plain texture is the time unit");
+    let btf = rows.iter().find(|r| r[2].starts_with("BTF")).unwrap();
+    let ratio = num(btf, 6);
+    assert!((0.6..1.6).contains(&ratio), "BTF mean radiance / reference {ratio}");
+    for f in ["report.md", "pareto.png", "sheet-6px.png", "images/R0-6px.exr", "garment.obj"] {
+        assert!(d.path("cmp").join(f).is_file(), "{f}");
+    }
+    // Refusals: a BTF that is not a yarn BTF; wales that do not repeat the chart.
+    crate::common::write_test_btf(&d.path("plain.btf"), 8);
+    let e = d.fails(&["knit", "compare", "--btf", "plain.btf", "-o", "c2"]);
+    assert!(e.contains("provenance"), "{e}");
+    let e = d.fails(&["knit", "compare", "--btf", "y.btf", "--wales", "3", "-o", "c3"]);
+    assert!(e.contains("--wales 3"), "{e}");
+}

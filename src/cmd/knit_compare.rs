@@ -1,0 +1,601 @@
+//! `btf knit compare --btf YARN.btf -o DIR`: the headline study of DESIGN §4.2 (issue #19's
+//! first comparison table) — one knit garment, three camera distances, every
+//! representation scored against the path-traced fibers:
+//!
+//! - **R0** the reference: the explicit fibers of the whole garment path traced by
+//!   `yarn-ref` (the same yarn, chart, seed, flyaways, Khungurn BCSDF and bounces that
+//!   made the yarn BTF), and **R0-direct**, one bounce, which the real-time methods model
+//!   (the gap between the two is the multiple-scattering gap, reported separately);
+//! - **R1** [W19]'s fibers on the GPU (`yarn-render`) at full detail and at
+//!   ω^LoD ∈ `--lod` ([W19 eq. 4]);
+//! - **R4** the BTF on the garment: the yarn BTF made by the reference
+//!   (`btf synth material --kind yarn`), compressed per view ([S03]'s PCA) to each
+//!   `--components`, rendered by `btf-render` per pixel with four-light/four-view blending
+//!   and shadow maps;
+//! - **R5** the baselines: the plain texture of the BTF mean (`btf-render`'s `plain`
+//!   baseline) and plain tubes of the yarn radius (`yarn-render`).
+//!
+//! The garment is `datasets`' drape (a cloth dropped over a sphere) scaled so that its
+//! `--wales` stitches have the yarn's natural spacing; the chart is laid out on it through
+//! its UVs ([`yarn::knit::StitchMesh::on_surface`]), courses running *down* the texture
+//! (towards increasing texture rows) so that the BTF's rows (`+y` = courses of the flat
+//! patch, DESIGN §3) and the yarns on the garment are the same map. The cameras look at
+//! the UV centre along `--view` from where a stitch covers `--distances` pixels.
+//!
+//! Per cell ([`super::knit_compare_report`]): rel. RMSE `√(Σ(x−r)²/Σr²)` on the interior
+//! mask (the garment's rasterised silhouette eroded by the yarn reach) and on the
+//! silhouette band (dilated minus eroded), the mean-radiance ratio, the median GPU frame
+//! time as a ratio to the plain texture drawn in the same run, preprocessing seconds and
+//! memory, and whether the representation follows deformation. Writes `compare.csv`,
+//! `report.md`, `pareto.png`, per-distance contact sheets and every image as EXR.
+
+use super::knit_compare_report::{self as report, Cell, Distance};
+use super::knit_render::fiber_light;
+use crate::guard::{self, outln};
+use anyhow::{Context, Result, bail};
+use btf_core::compress::CompressParams;
+use btf_core::eigen::Quantization;
+use btf_core::store::BtfStore;
+use btf_image::write::{write_exr_rgb, write_png, write_text};
+use clap::Args;
+use datasets::mesh::{Mesh, MeshKind, Resolution};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+use yarn::bcsdf::{FiberBcsdf, KhungurnParams};
+use yarn::fiber::{GenOptions, generate_fibers};
+use yarn::knit::{Chart, SkeletonParams, StitchMesh, SurfaceMesh, UvLayout, chen_skeleton};
+use yarn::params::YarnParams;
+use yarn_render::{
+    FiberCamera, FiberLight, FiberRenderer, FiberSettings, PackOptions, PackedYarns,
+};
+
+/// `btf knit compare`.
+#[derive(Args)]
+pub struct CompareArgs {
+    /// The yarn BTF made by the reference (`btf synth material --kind yarn`): its
+    /// provenance gives the chart, yarn, seed, colour, flyaways and bounces of every
+    /// representation.
+    #[arg(long)]
+    pub btf: PathBuf,
+    /// Output folder (compare.csv, report.md, pareto.png, sheet-*.png, images/).
+    #[arg(short = 'o', long = "out", alias = "output")]
+    pub output: PathBuf,
+    /// Wales across the garment (a multiple of the chart's width); the courses follow
+    /// from the yarn's spacing and the garment's shape.
+    #[arg(long, default_value_t = 32)]
+    pub wales: usize,
+    /// Image size W,H.
+    #[arg(long, default_value = "128,128")]
+    pub size: String,
+    /// Camera distances as the on-screen width of a stitch at the target, in pixels.
+    #[arg(long, value_delimiter = ',', default_value = "40,8,2")]
+    pub distances: Vec<f64>,
+    /// Viewing direction THETA,PHI (degrees, from the target towards the camera).
+    #[arg(long, default_value = "35,250")]
+    pub view: String,
+    /// The directional light dir:THETA,PHI[,E] (perpendicular irradiance E, default 1).
+    #[arg(long, default_value = "dir:40,300")]
+    pub light: String,
+    /// Samples per pixel of the reference.
+    #[arg(long, default_value_t = 16)]
+    pub spp: u32,
+    /// LoD thresholds ω^LoD of the GPU fibers in pixels (0 = full detail, always drawn).
+    #[arg(long, value_delimiter = ',', default_value = "0.5,1,2")]
+    pub lod: Vec<f32>,
+    /// PCA components of the BTF on the garment.
+    #[arg(long, value_delimiter = ',', default_value = "4,8,16,32")]
+    pub components: Vec<usize>,
+    /// Timed frames per GPU cell (interleaved; the median is reported).
+    #[arg(long, default_value_t = 5)]
+    pub repeat: u32,
+    /// Replace an output folder a previous compare wrote.
+    #[arg(long)]
+    pub fresh: bool,
+}
+
+/// Field of view of every camera (degrees, vertical).
+const FOV_DEG: f64 = 30.0;
+
+/// What the yarn BTF was made from, read back from its provenance.
+struct BtfSource {
+    chart: Chart,
+    params: YarnParams,
+    seed: u64,
+    hairs: bool,
+    bounces: u32,
+    color: [f32; 3],
+    bcsdf: FiberBcsdf,
+    size: usize,
+}
+
+fn btf_source(path: &Path) -> Result<BtfSource> {
+    let store =
+        BtfStore::open(path).with_context(|| format!("opening --btf {}", path.display()))?;
+    let p = &store.meta().provenance;
+    let field = |k: &str| {
+        p.get(k).ok_or_else(|| {
+            anyhow::anyhow!("--btf {}: provenance has no '{k}' (not a yarn BTF?)", path.display())
+        })
+    };
+    let text = |k: &str| -> Result<String> {
+        field(k)?.as_str().map(str::to_owned).ok_or_else(|| {
+            anyhow::anyhow!("--btf {}: provenance '{k}' is not text", path.display())
+        })
+    };
+    if text("kind")? != "yarn" {
+        bail!("--btf {}: provenance kind is not 'yarn'", path.display());
+    }
+    if text("method")? != "reference" {
+        bail!(
+            "--btf {}: made by '{}', but the study needs the reference's BTF (R4 is scored \
+             against the reference that made it)",
+            path.display(),
+            text("method")?
+        );
+    }
+    let chart_text = field("chart")?.get("text").and_then(|t| t.as_str()).ok_or_else(|| {
+        anyhow::anyhow!("--btf {}: provenance 'chart.text' missing", path.display())
+    })?;
+    let chart = Chart::parse(chart_text, "the BTF's provenance")?;
+    let yarn_text = field("yarn")?.get("params").and_then(|t| t.as_str()).ok_or_else(|| {
+        anyhow::anyhow!("--btf {}: provenance 'yarn.params' missing", path.display())
+    })?;
+    let params = YarnParams::from_toml(yarn_text, "the BTF's provenance")?;
+    let num = |k: &str| -> Result<f64> {
+        field(k)?.as_f64().ok_or_else(|| {
+            anyhow::anyhow!("--btf {}: provenance '{k}' is not a number", path.display())
+        })
+    };
+    let color: Vec<f64> = field("color")?
+        .as_array()
+        .map(|a| a.iter().filter_map(|v| v.as_f64()).collect())
+        .unwrap_or_default();
+    if color.len() != 3 {
+        bail!("--btf {}: provenance 'color' is not three numbers", path.display());
+    }
+    let bcsdf = FiberBcsdf::khungurn(&KhungurnParams::default())?;
+    let expected = yarn_ref::Shading::Fiber { bcsdf: Arc::new(bcsdf.clone()), tint: true }.name();
+    if text("shading")? != expected {
+        bail!(
+            "--btf {}: shading '{}', but the GPU fibers model '{expected}' only",
+            path.display(),
+            text("shading")?
+        );
+    }
+    Ok(BtfSource {
+        chart,
+        params,
+        seed: num("seed")? as u64,
+        hairs: field("hairs")?.as_bool().unwrap_or(true),
+        bounces: num("bounces")? as u32,
+        color: [color[0] as f32, color[1] as f32, color[2] as f32],
+        bcsdf,
+        size: num("size")? as usize,
+    })
+}
+
+/// The knit garment: the drape scaled to the stitches, its UVs in periods of the chart
+/// (`uv_scale = 1` tiles the BTF once per period), and its yarn curves.
+struct Garment {
+    mesh: Mesh,
+    yarns: yarn::curve::YarnSet,
+    wales: usize,
+    courses: usize,
+    /// Wale spacing (metres), the unit of the camera distances.
+    ws: f64,
+    /// UV centre: point and normal.
+    centre: ([f64; 3], [f64; 3]),
+}
+
+fn garment(src: &BtfSource, wales: usize) -> Result<Garment> {
+    let chart = &src.chart;
+    let r = src.params.yarn_radius();
+    let mut sk = SkeletonParams::new(r);
+    sk.color = src.color;
+    let (ws, cs) = sk.default_spacing();
+    let mut mesh = datasets::synth_mesh(MeshKind::Drape, Resolution::High)?;
+    let (lo, hi) = uv_bounds(&mesh);
+    // The drape is 1 m of cloth per unit of UV; scale it so `wales` stitches span u.
+    let s = wales as f64 * ws / (hi[0] - lo[0]);
+    for p in &mut mesh.positions {
+        *p = p.map(|x| x * s);
+    }
+    let courses_f = s * (hi[1] - lo[1]) / cs;
+    let courses = ((courses_f / chart.height as f64).floor() as usize).max(1) * chart.height;
+    // Courses from the top of the texture down: +course = increasing texture row.
+    let layout = UvLayout {
+        origin: [lo[0], hi[1]],
+        wale_du: (hi[0] - lo[0]) / wales as f64,
+        // Whole courses over the whole cloth: the stitch aspect changes by < chart.height /
+        // courses (under 12 % at 32 wales), the same for the yarns and the BTF.
+        course_dv: -(hi[1] - lo[1]) / courses as f64,
+        wales,
+        courses,
+    };
+    let surface = SurfaceMesh {
+        positions: mesh.positions.clone(),
+        normals: mesh.normals.clone(),
+        uvs: mesh.uvs.clone(),
+        triangles: mesh.triangles.clone(),
+        triangle_uvs: mesh.triangle_uvs.clone(),
+    };
+    let stitches = StitchMesh::on_surface(&surface, chart, &layout)?;
+    let yarns = chen_skeleton(&stitches, &sk)?;
+    let centre_uv = [
+        lo[0] + 0.5 * wales as f64 * layout.wale_du,
+        hi[1] + 0.5 * courses as f64 * layout.course_dv,
+    ];
+    let centre = yarn::knit::UvLocator::new(&surface)?
+        .sample(centre_uv)
+        .ok_or_else(|| anyhow::anyhow!("the drape has no point at its UV centre"))?;
+    // UVs in chart periods: u grows with wales, v with courses upward (texture rows
+    // grow downward, DESIGN §3), both starting at the corner (course 0, wale 0).
+    for uv in &mut mesh.uvs {
+        let w = (uv[0] - lo[0]) / layout.wale_du;
+        let c = (uv[1] - hi[1]) / layout.course_dv;
+        *uv = [w / chart.width as f64, -c / chart.height as f64];
+    }
+    Ok(Garment { mesh, yarns, wales, courses, ws, centre })
+}
+
+fn uv_bounds(mesh: &Mesh) -> ([f64; 2], [f64; 2]) {
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    for uv in &mesh.uvs {
+        for k in 0..2 {
+            lo[k] = lo[k].min(uv[k]);
+            hi[k] = hi[k].max(uv[k]);
+        }
+    }
+    (lo, hi)
+}
+
+/// One camera of the study.
+struct Cam {
+    stitch_px: f64,
+    eye: [f64; 3],
+    target: [f64; 3],
+}
+
+const UP: [f64; 3] = [0.0, 0.0, 1.0];
+
+/// Distance at which a stitch of width `ws` covers `px` pixels of an `h`-pixel-high frame.
+fn eye_for(target: [f64; 3], view: [f64; 3], ws: f64, px: f64, h: u32) -> [f64; 3] {
+    let f_px = 0.5 * h as f64 / (0.5 * FOV_DEG.to_radians()).tan();
+    let d = ws * f_px / px;
+    [0, 1, 2].map(|k| target[k] + d * view[k])
+}
+
+pub fn run(a: CompareArgs) -> Result<()> {
+    guard::refuse_overlap(&[("-o", &a.output)], &[("--btf", &a.btf)])?;
+    let [w, h] = crate::args::numbers::<u32, 2>(&a.size, "--size")?;
+    if w == 0 || h == 0 || w > 2048 || h > 2048 {
+        bail!("--size {w},{h}: each side must be 1..=2048");
+    }
+    let [vt, vp] = crate::args::numbers::<f64, 2>(&a.view, "--view")?;
+    if !(1.0..80.0).contains(&vt) || !vp.is_finite() {
+        bail!("--view {}: THETA in [1, 80) degrees, PHI finite", a.view);
+    }
+    if a.distances.is_empty() || a.distances.iter().any(|d| !(d.is_finite() && *d > 0.0)) {
+        bail!("--distances {:?}: stitch widths in pixels, > 0", a.distances);
+    }
+    if a.lod.iter().any(|l| !(l.is_finite() && *l > 0.0)) {
+        bail!("--lod {:?}: thresholds in pixels, > 0 (full detail is always drawn)", a.lod);
+    }
+    if a.components.iter().any(|c| *c == 0 || *c > 256) {
+        bail!("--components {:?}: each 1..=256", a.components);
+    }
+    if a.spp == 0 || a.repeat == 0 {
+        bail!("--spp and --repeat must be ≥ 1");
+    }
+    let FiberLight::Directional { to_light, irradiance } = fiber_light(&a.light)? else {
+        bail!("--light {}: the study uses one directional light (dir:THETA,PHI[,E])", a.light);
+    };
+    let view = btf_core::Direction::new(vt, vp).to_vector();
+    let src = btf_source(&a.btf)?;
+    let cw = src.chart.width;
+    if a.wales == 0 || a.wales % cw != 0 || a.wales > 512 {
+        bail!("--wales {}: a multiple of the chart's width {cw} up to 512", a.wales);
+    }
+    let gpu = btf_render::Gpu::new().context("creating a headless GPU device")?;
+    guard::output_folder(&a.output, "knit compare", a.fresh, &guard::report_output)?;
+    let images = a.output.join("images");
+    std::fs::create_dir_all(&images)?;
+
+    let t0 = Instant::now();
+    let g = garment(&src, a.wales)?;
+    let garment_s = t0.elapsed().as_secs_f64();
+    let obj = a.output.join("garment.obj");
+    datasets::write_obj(&g.mesh, &obj, "btf knit compare: the drape, UVs in chart periods")?;
+    eprintln!(
+        "knit compare: {} × {} stitches on the drape ({:.3} m wide), {} yarn curves, {:.1} s",
+        g.wales,
+        g.courses,
+        g.wales as f64 * g.ws,
+        g.yarns.curves.len(),
+        garment_s
+    );
+    let lift = 2.0 * src.params.yarn_radius();
+    let target = [0, 1, 2].map(|k| g.centre.0[k] + 0.5 * lift * g.centre.1[k]);
+    let cams: Vec<Cam> = a
+        .distances
+        .iter()
+        .map(|&px| Cam { stitch_px: px, eye: eye_for(target, view, g.ws, px, h), target })
+        .collect();
+    let reach = 2.0 * src.params.yarn_radius() + yarn_render::pack::flyaway_reach(&src.params);
+
+    // R0: the reference, once with every bounce of the BTF and once direct only.
+    let t1 = Instant::now();
+    let gen_opts = GenOptions { seed: src.seed, hairs: src.hairs, ..GenOptions::default() };
+    let fibers = generate_fibers(&g.yarns, std::slice::from_ref(&src.params), &gen_opts)?;
+    let scene = yarn_ref::FiberScene::new(&fibers, &yarn_ref::SceneOptions::default())?;
+    let r0_prep = t1.elapsed().as_secs_f64();
+    eprintln!(
+        "  reference: {} fibers, {} segments, {:.0} MiB, built in {:.1} s",
+        fibers.fiber_count(),
+        scene.segment_count(),
+        scene.bytes() as f64 / 1048576.0,
+        r0_prep
+    );
+    let r0_bytes = scene.bytes() as u64;
+    drop(fibers);
+    let shading = yarn_ref::Shading::Fiber { bcsdf: Arc::new(src.bcsdf.clone()), tint: true };
+    let ref_light = [yarn_ref::Light::directional(to_light, irradiance)];
+    let sc = yarn_ref::Scene { fibers: &scene, lights: &ref_light, shading: &shading };
+    let (wu, hu) = (w as usize, h as usize);
+    let bar = crate::progress::bar((2 * cams.len() * hu) as u64, "reference rows");
+    let mut refs = Vec::new();
+    for (k, cam) in cams.iter().enumerate() {
+        let camera = yarn_ref::Camera::perspective(cam.eye, cam.target, UP, FOV_DEG)?;
+        let mut pair = Vec::new();
+        for bounces in [src.bounces, 1] {
+            let mut s = yarn_ref::RenderSettings::new(wu, hu, a.spp);
+            s.seed = src.seed + k as u64;
+            s.path.max_bounces = bounces;
+            let t = Instant::now();
+            let (img, _) = yarn_ref::render_with(&sc, &camera, &s, &|| bar.inc(1))?;
+            pair.push((img.rgb, t.elapsed().as_secs_f64()));
+        }
+        refs.push(pair);
+    }
+    bar.finish_and_clear();
+    drop(scene);
+
+    // R4 and R5-plain: the BTF compressed to each c.
+    let store = BtfStore::open(&a.btf)?;
+    let mut eigs = Vec::new();
+    let mut comps = a.components.clone();
+    comps.sort_unstable();
+    comps.dedup();
+    for &c in &comps {
+        let out = a.output.join(format!("btf-c{c}.eig"));
+        let params =
+            CompressParams { components: c, quantization: Quantization::F16, resume: false };
+        let r = btf_core::compress::compress(&store, &out, params, &|| ())
+            .with_context(|| format!("compressing --btf to {c} components"))?;
+        eprintln!("  BTF c = {c}: rel. RMSE {:.3} in {:.2} s", r.rel_rmse, r.seconds);
+        eigs.push((c, out, r.seconds, r.rel_rmse));
+    }
+
+    // The GPU cells: every representation at every distance, then interleaved timing.
+    let packed = PackedYarns::new(
+        &g.yarns,
+        std::slice::from_ref(&src.params),
+        &PackOptions { seed: src.seed, frame_samples_per_segment: 16, tiles: [1, 1] },
+    )?;
+    let fiber_lights = [FiberLight::Directional { to_light, irradiance }];
+    let mut lods = vec![0.0f32];
+    lods.extend(a.lod.iter().copied());
+    lods.dedup();
+    let mut cells: Vec<Cell> = Vec::new();
+    let mut jobs: Vec<Job> = Vec::new();
+    let n_cells = cams.len() * (lods.len() + 1 + eigs.len() + 1);
+    let bar = crate::progress::bar((n_cells * (1 + a.repeat as usize)) as u64, "GPU cells");
+    for (ci, cam) in cams.iter().enumerate() {
+        let fcam = FiberCamera::perspective(cam.eye, cam.target, UP, FOV_DEG);
+        for (k, &lod) in lods.iter().chain([-1.0f32].iter()).enumerate() {
+            let tubes = lod < 0.0;
+            let t = Instant::now();
+            let settings =
+                FiberSettings { lod_px: lod.max(0.0), tubes, msaa: 4, ..FiberSettings::default() };
+            let r = FiberRenderer::new(&gpu, &packed, &src.bcsdf, settings)?;
+            let prep = t.elapsed().as_secs_f64();
+            let img = r.render(&gpu, &fcam, &fiber_lights, (w, h), [0.0; 4])?;
+            if img.stats.overflow > 0 {
+                eprintln!("warning: {} fiber instances overflowed", img.stats.overflow);
+            }
+            let rgb: Vec<f32> = img.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+            let (repr, name) = if tubes {
+                ("R5", "plain tubes".to_string())
+            } else if k == 0 {
+                ("R1", "fibers full detail".to_string())
+            } else {
+                ("R1", format!("fibers LoD {lod} px"))
+            };
+            cells.push(Cell::new(repr, &name, ci, rgb, prep, img.stats.yarn_bytes, true));
+            jobs.push(Job::Fibers(r, fcam.clone()));
+            bar.inc(1);
+        }
+        for (c, eig, pca_s, _) in &eigs {
+            let scene = btf_scene(&a.output, &obj, eig, cam, (w, h), to_light, irradiance)?;
+            let t = Instant::now();
+            let mut r = btf_render::Renderer::new(&gpu, &scene, Default::default())?;
+            let prep = t.elapsed().as_secs_f64() + pca_s;
+            let frame = r.render(&gpu)?;
+            let bytes = r.material_bytes();
+            cells.push(Cell::new("R4", &format!("BTF c = {c}"), ci, frame.rgb, prep, bytes, false));
+            jobs.push(Job::Btf(Box::new(r)));
+            bar.inc(1);
+        }
+        // R5: the plain texture of the BTF mean, from the smallest store.
+        let (_, eig, pca_s, _) = &eigs[0];
+        let scene = btf_scene(&a.output, &obj, eig, cam, (w, h), to_light, irradiance)?;
+        let t = Instant::now();
+        let opts = btf_render::RenderOptions {
+            baseline: Some(btf_render::Baseline::Plain),
+            ..Default::default()
+        };
+        let mut r = btf_render::Renderer::new(&gpu, &scene, opts)?;
+        let prep = t.elapsed().as_secs_f64() + pca_s;
+        let frame = r.render(&gpu)?;
+        let bytes = r.material_bytes();
+        cells.push(Cell::new("R5", "plain texture (BTF mean)", ci, frame.rgb, prep, bytes, false));
+        jobs.push(Job::Btf(Box::new(r)));
+        bar.inc(1);
+    }
+    let mut times = vec![Vec::new(); jobs.len()];
+    for _ in 0..a.repeat {
+        for (k, job) in jobs.iter_mut().enumerate() {
+            let t = Instant::now();
+            match job {
+                Job::Fibers(r, cam) => {
+                    let img = r.render(&gpu, cam, &fiber_lights, (w, h), [0.0; 4])?;
+                    std::hint::black_box(img.pixels.len());
+                }
+                Job::Btf(r) => {
+                    let f = r.render(&gpu)?;
+                    std::hint::black_box(f.rgb.len());
+                }
+            }
+            times[k].push(t.elapsed().as_secs_f64() * 1e3);
+            bar.inc(1);
+        }
+    }
+    bar.finish_and_clear();
+    for (c, t) in cells.iter_mut().zip(times) {
+        c.ms = report::median(t);
+    }
+
+    // Masks, errors, images.
+    let mut dists = Vec::new();
+    for (ci, cam) in cams.iter().enumerate() {
+        let mask = report::raster_mask(&g.mesh, cam.eye, cam.target, UP, FOV_DEG, (w, h));
+        let px_m = 2.0 * dist(cam.eye, cam.target) * (0.5 * FOV_DEG.to_radians()).tan() / h as f64;
+        let band_px = ((reach / px_m).ceil() as usize).max(2) + 1;
+        let (interior, band) = report::interior_and_band(&mask, (wu, hu), band_px);
+        let (full, direct) = (&refs[ci][0], &refs[ci][1]);
+        let tag = format!("{}px", cam.stitch_px);
+        write_exr_rgb(&images.join(format!("R0-{tag}.exr")), wu, hu, &full.0)?;
+        write_exr_rgb(&images.join(format!("R0-direct-{tag}.exr")), wu, hu, &direct.0)?;
+        let support: Vec<bool> = interior.iter().zip(&band).map(|(i, b)| *i || *b).collect();
+        let k = (0.5 * cam.stitch_px).round() as usize;
+        let score =
+            |x: &[f32], r: &[f32]| report::scores(x, r, &interior, &band, &support, (wu, hu), k);
+        let gap = score(&direct.0, &full.0);
+        let ms_plain = cells
+            .iter()
+            .find(|c| c.distance == ci && c.name.starts_with("plain texture"))
+            .map_or(f64::NAN, |c| c.ms);
+        for c in cells.iter_mut().filter(|c| c.distance == ci) {
+            c.vs_full = score(&c.rgb, &full.0);
+            c.vs_direct = score(&c.rgb, &direct.0);
+            c.ms_plain = ms_plain;
+            write_exr_rgb(&images.join(format!("{}-{tag}.exr", c.file_name())), wu, hu, &c.rgb)?;
+        }
+        dists.push(Distance {
+            stitch_px: cam.stitch_px,
+            band_px,
+            interior_px: interior.iter().filter(|m| **m).count(),
+            band_count: band.iter().filter(|m| **m).count(),
+            ref_s: full.1,
+            direct_s: direct.1,
+            ms_gap: gap,
+        });
+        let sheet = report::contact_sheet(&cells, ci, &full.0, &direct.0, (w, h), &mask);
+        write_png(&a.output.join(format!("sheet-{tag}.png")), &sheet)?;
+    }
+    let info = report::Info {
+        btf: a.btf.display().to_string(),
+        btf_size: src.size,
+        wales: g.wales,
+        courses: g.courses,
+        width_m: g.wales as f64 * g.ws,
+        size: (w, h),
+        spp: a.spp,
+        bounces: src.bounces,
+        view: a.view.clone(),
+        light: a.light.clone(),
+        r0_prep_s: r0_prep,
+        r0_bytes,
+        adapter: gpu.info.name.clone(),
+        eig_errors: eigs.iter().map(|(c, _, s, e)| (*c, *s, *e)).collect(),
+    };
+    write_text(&a.output.join("compare.csv"), &report::csv(&cells, &dists))?;
+    let md = report::markdown(&info, &cells, &dists);
+    write_text(&a.output.join("report.md"), &md)?;
+    write_png(
+        &a.output.join("pareto.png"),
+        &btf_image::plot::render(&report::pareto(&cells, &dists)),
+    )?;
+    outln!("{md}");
+    outln!("written to {}", a.output.join("report.md").display());
+    Ok(())
+}
+
+fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()
+}
+
+/// A GPU cell kept for the timed repeats.
+enum Job {
+    Fibers(FiberRenderer, FiberCamera),
+    Btf(Box<btf_render::Renderer>),
+}
+
+/// The `btf-render` scene of the BTF on the garment for one camera, written beside the
+/// study so that `btf render SCENE` reproduces the cell.
+fn btf_scene(
+    dir: &Path,
+    obj: &Path,
+    eig: &Path,
+    cam: &Cam,
+    (w, h): (u32, u32),
+    to_light: [f64; 3],
+    e: [f64; 3],
+) -> Result<btf_render::Scene> {
+    let name = eig.file_stem().and_then(|s| s.to_str()).unwrap_or("btf");
+    let path = dir.join(format!("scene-{name}-{}px.toml", cam.stitch_px));
+    let f = |v: [f64; 3]| format!("[{:.6}, {:.6}, {:.6}]", v[0], v[1], v[2]);
+    let text = format!(
+        r#"# Written by `btf knit compare`: R4, the yarn BTF on the garment.
+[output]
+width = {w}
+height = {h}
+exposure = 1.0
+background = [0.0, 0.0, 0.0]
+
+[[meshes]]
+path = "{obj}"
+
+[[materials]]
+store = "{eig}"
+uv_scale = 1.0
+
+[camera]
+eye = {eye}
+target = {target}
+up = [0.0, 0.0, 1.0]
+fov_y_deg = {FOV_DEG}
+
+[[lights]]
+kind = "directional"
+direction = {dir}
+irradiance = {irr}
+
+[effects]
+evaluation = "per-pixel"
+light_interp = "four"
+view_blend = "four"
+shadows = "map"
+"#,
+        obj = obj.file_name().and_then(|s| s.to_str()).unwrap_or("garment.obj"),
+        eig = eig.file_name().and_then(|s| s.to_str()).unwrap_or("btf.eig"),
+        eye = f(cam.eye),
+        target = f(cam.target),
+        dir = f(to_light),
+        irr = f(e),
+    );
+    write_text(&path, &text)?;
+    Ok(btf_render::Scene::from_toml(&text, &path)?)
+}
