@@ -19,8 +19,16 @@
 //! `--wales` stitches have the yarn's natural spacing; the chart is laid out on it through
 //! its UVs ([`yarn::knit::StitchMesh::on_surface`]), courses running *down* the texture
 //! (towards increasing texture rows) so that the BTF's rows (`+y` = courses of the flat
-//! patch, DESIGN §3) and the yarns on the garment are the same map. The cameras look at
-//! the UV centre along `--view` from where a stitch covers `--distances` pixels.
+//! patch, DESIGN §3) and the yarns on the garment are the same map. That map is a
+//! reflection of the flat patch (`+u` × rows points into the cloth), applied to the yarns'
+//! loops and to the BTF alike; only the plies' twist, which the fiber generator builds in
+//! each curve's right-handed frame, keeps its chirality on the garment while the BTF shows
+//! it mirrored — a highlight-orientation difference at close range that no choice of UV
+//! direction avoids under DESIGN §3's tangent frame. To fill the cloth with whole courses
+//! the stitch aspect changes by less than `chart.height / courses` (for yarns and BTF
+//! alike). The cameras look at the UV centre along `--view` from where a stitch covers
+//! `--distances` pixels. The reference BTF has `S` texels per period (the study asks for
+//! `S = 64`; the one measured has 32): at 40 px per stitch it is magnified ~5×.
 //!
 //! Per cell ([`super::knit_compare_report`]): rel. RMSE `√(Σ(x−r)²/Σr²)` on the interior
 //! mask (the garment's rasterised silhouette eroded by the yarn reach) and on the
