@@ -5,10 +5,15 @@
 #   benches/shards.sh [BTF_BINARY]        (default target/release/btf)
 # Knobs: ROTATIONS (per environment, 2 environments; default 100 → 200 frames),
 #        FRAME (frame size, default 128), TEX (material size, default 32),
-#        STORE (compression store size, default 64), ROUNDS (default 2),
-#        KINDS (default "relight compress"), LP_NUM_THREADS (lavapipe's threads per process).
+#        STORE (compression store size, default 64), DTYPE (its dtype, default f32),
+#        ROUNDS (default 2; the configurations are interleaved round by round),
+#        KINDS (default "relight compress"), LP_NUM_THREADS (lavapipe's threads per process),
+#        BIG_STORE (compress this existing store instead of synthesising one).
 # Prints one line per run: wall seconds, CPU seconds (user + sys summed over every
-# process of the run), frames or slots per wall second, CPU overhead against one process.
+# process of the run), frames or slots per wall second; then per configuration the median
+# CPU and wall over the rounds with their range, and the median CPU against one process.
+# The 256² compression of BENCHMARKS.md (#23):
+#   KINDS=compress STORE=256 DTYPE=f16 ROUNDS=3 benches/shards.sh
 set -euo pipefail
 bin=$(realpath "${1:-${CARGO_TARGET_DIR:-target}/release/btf}")
 rotations=${ROTATIONS:-100}; frame=${FRAME:-128}; tex=${TEX:-32}; store=${STORE:-64}
@@ -23,7 +28,8 @@ q compress mat.btf -c 8 -o mat.eig
 q synth mesh --kind sphere -o sphere.obj
 q synth env --kind sky --width 128 -o sky.exr
 q synth env --kind studio --width 128 -o studio.exr
-case " ${KINDS:-compress} " in *" compress "*) q synth material --kind corduroy --size "$store" -o big.btf ;; esac
+if [ -n "${BIG_STORE:-}" ]; then ln -s "$(realpath "$BIG_STORE")" big.btf  # an existing store
+else case " ${KINDS:-compress} " in *" compress "*) q synth material --kind corduroy --size "$store" --dtype "${DTYPE:-f32}" -o big.btf ;; esac; fi
 cat > scene.toml <<TOML
 [output]
 width = $frame
@@ -96,9 +102,12 @@ for kind in os.environ.get("KINDS", "relight compress").split():
     for l in open(f"{kind}.cpu"):
         n, cpu, wall = l.split()
         runs[int(n)].append((float(cpu), float(wall)))
-    base = min(c for c, _ in runs[0])
+    med = lambda xs: sorted(xs)[len(xs) // 2] if len(xs) % 2 else sum(sorted(xs)[len(xs) // 2 - 1:len(xs) // 2 + 1]) / 2
+    base = med([c for c, _ in runs[0]])
     for n in sorted(runs):
-        cpu = min(c for c, _ in runs[n]); wall = min(w for _, w in runs[n])
+        cs = [c for c, _ in runs[n]]; ws = [w for _, w in runs[n]]
+        cpu, wall = med(cs), med(ws)
         label = "one process" if n == 0 else f"{n} shard(s)"
-        print(f"{kind:8} {label:12} best cpu {cpu:7.2f} s ({100 * (cpu / base - 1):+5.1f} %), best wall {wall:7.2f} s")
+        print(f"{kind:8} {label:12} median cpu {cpu:7.2f} s [{min(cs):.2f}-{max(cs):.2f}] "
+              f"({100 * (cpu / base - 1):+5.1f} %), median wall {wall:7.2f} s [{min(ws):.2f}-{max(ws):.2f}]")
 PY

@@ -315,11 +315,14 @@ fn compress_views(
     let meta = input.meta().clone();
     let c = writer.meta().components;
     // One worker per thread, each with its own slot buffers for the whole run (a slot is
-    // 64 MB at 256²: allocating and faulting it in per slot would cost more than reading it).
+    // 64 MB at 256² in f32, 32 MB in f16: allocating and faulting it in per slot would cost
+    // more than reading it; a process faults it in once per worker, a sharded job once per
+    // worker of every shard, which is why a compressed f16 slot stays f16).
     // A finished slot goes to the writer thread (its chunks written by direct I/O, which
     // waits for the disk), so the workers go on computing meanwhile.
     let one = |v: usize,
                slot: &mut SlotData,
+               halves: &mut Vec<f16>,
                raw: &mut Vec<u8>,
                scratch: &mut PcaScratch|
      -> Result<(SlotReport, Option<QuantizedSlot>)> {
@@ -346,11 +349,12 @@ fn compress_views(
         };
         let q = params.quantization;
         // f32 and f16 chunks are mapped and read in place (widened to f64 as they are
-        // loaded), their checksums folded into the first pass; other dtypes are decoded
-        // into the worker's buffer.
+        // loaded), their checksums folded into the first pass; compressed f16 chunks are
+        // decoded into the worker's f16 buffer (widened as they are loaded, the same
+        // values), other dtypes into its f32 buffer.
+        let m = meta.texel_values();
         let r = if let Some(mapped) = input.map_slot(v)? {
             let check = |crcs: &[u32]| mapped.verify(crcs);
-            let m = meta.texel_values();
             if input.dtype() == DType::F16 {
                 let rows = SlotRows::<f16> { view: v, rows: mapped.rows()?, texel_values: m };
                 pca_rows_in(&rows, c, q, scratch, Some(&check))
@@ -358,6 +362,13 @@ fn compress_views(
                 let rows = SlotRows::<f32> { view: v, rows: mapped.rows()?, texel_values: m };
                 pca_rows_in(&rows, c, q, scratch, Some(&check))
             }
+        } else if input.read_slot_f16_into(v, halves)? {
+            let rows = SlotRows::<f16> {
+                view: v,
+                rows: halves.chunks_exact(m).collect(),
+                texel_values: m,
+            };
+            pca_rows_in(&rows, c, q, scratch, None)
         } else {
             input.read_slot_into_unchecked(v, slot, raw)?;
             pca_slot_in(slot, c, q, scratch)
@@ -385,7 +396,7 @@ fn compress_views(
     let spent = Mutex::new(Vec::<Vec<u8>>::new());
     let work = |to_writer: &mpsc::SyncSender<_>| -> Result<Vec<(SlotReport, bool)>> {
         let mut slot = SlotData { view: 0, n_lights: 0, texel_values: 0, data: Vec::new() };
-        let (mut raw, mut scratch) = (Vec::new(), PcaScratch::for_isa(isa));
+        let (mut halves, mut raw, mut scratch) = (Vec::new(), Vec::new(), PcaScratch::for_isa(isa));
         let mut done = Vec::new();
         loop {
             let v = next.fetch_add(1, Ordering::Relaxed);
@@ -395,16 +406,17 @@ fn compress_views(
             if let Some(bytes) = spent.lock().ok().and_then(|mut p| p.pop()) {
                 scratch.recycle(bytes);
             }
-            let sent = one(v, &mut slot, &mut raw, &mut scratch).and_then(|(r, stored)| {
-                let resumed = stored.is_none();
-                if let Some(stored) = stored {
-                    // A refusal means the writer stopped on an error, which it reports.
-                    to_writer
-                        .send((r.clone(), stored))
-                        .map_err(|_| Error::Invalid("the writer stopped".into()))?;
-                }
-                Ok((r, resumed))
-            });
+            let sent =
+                one(v, &mut slot, &mut halves, &mut raw, &mut scratch).and_then(|(r, stored)| {
+                    let resumed = stored.is_none();
+                    if let Some(stored) = stored {
+                        // A refusal means the writer stopped on an error, which it reports.
+                        to_writer
+                            .send((r.clone(), stored))
+                            .map_err(|_| Error::Invalid("the writer stopped".into()))?;
+                    }
+                    Ok((r, resumed))
+                });
             match sent {
                 Ok(r) => done.push(r),
                 Err(e) => {

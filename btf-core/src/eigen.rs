@@ -349,7 +349,7 @@ impl EigenWriter {
     }
 
     /// The state of slot `view` in the store being written: every chunk present with a
-    /// valid crc32c ([`zarr::ZarrArray::read_chunk`]) and its statistics recorded, some
+    /// valid crc32c ([`zarr::ZarrArray::verify_chunk`]) and its statistics recorded, some
     /// chunk missing, or a chunk failing its check (the error names the file).
     pub fn slot_state(&self, view: usize) -> SlotState {
         let v = view as u64;
@@ -367,7 +367,7 @@ impl EigenWriter {
             }
         }
         for (arr, idx) in &chunks {
-            if let Err(e) = arr.read_chunk(idx) {
+            if let Err(e) = arr.verify_chunk(idx) {
                 return SlotState::Corrupt(e.to_string());
             }
         }

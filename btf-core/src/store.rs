@@ -613,7 +613,7 @@ impl BtfWriter {
             return SlotState::Missing;
         }
         for l in 0..n_l {
-            if let Err(e) = self.arr.read_chunk(&idx(l)) {
+            if let Err(e) = self.arr.verify_chunk(&idx(l)) {
                 return SlotState::Corrupt(e.to_string());
             }
         }
@@ -640,7 +640,7 @@ impl BtfWriter {
     /// True when image `(view, light)` is written and passes its size and checksum check
     /// (what a shard keeps of an earlier run; a damaged image is written again).
     pub fn has_sound_image(&self, view: usize, light: usize) -> bool {
-        self.arr.read_chunk(&[view as u64, light as u64, 0, 0, 0]).is_ok()
+        self.arr.verify_chunk(&[view as u64, light as u64, 0, 0, 0]).is_ok()
     }
 
     /// True when image `(view, light)` is already written (for resuming).
@@ -1007,6 +1007,32 @@ impl BtfStore {
         raw: &mut Vec<u8>,
     ) -> Result<()> {
         self.read_slot_checked(view, slot, raw, false)
+    }
+
+    /// Reads the light images of view slot `view` as the `f16` values the store holds, row
+    /// after row into `halves` (reused from slot to slot), checksums verified and values
+    /// not checked (the PCA checks every one in its first pass): half the memory of the
+    /// `f32` slot of [`BtfStore::read_slot_into`], so half the pages each process faults
+    /// in, and no widening pass. `Ok(false)`, nothing read, unless the store holds
+    /// little-endian `f16`.
+    pub fn read_slot_f16_into(&self, view: usize, halves: &mut Vec<half::f16>) -> Result<bool> {
+        if self.dtype() != DType::F16 || !cfg!(target_endian = "little") {
+            return Ok(false);
+        }
+        let n = self.meta.texel_values();
+        let n_l = self.meta.n_lights();
+        self.check_claim(view, 0..n_l, (n as u64).saturating_mul(n_l as u64))?;
+        halves.resize(n * n_l, half::f16::ZERO);
+        for (l, row) in halves.chunks_exact_mut(n).enumerate() {
+            let idx = [view as u64, l as u64, 0, 0, 0];
+            self.arr.read_chunk_to(&idx, bytemuck::cast_slice_mut(row)).map_err(|e| match e {
+                Error::Corrupt { path, what } => {
+                    Error::Corrupt { path, what: format!("view slot {view}, light {l}: {what}") }
+                }
+                other => other,
+            })?;
+        }
+        Ok(true)
     }
 
     fn read_slot_checked(

@@ -593,6 +593,22 @@ impl ZarrArray {
         Ok(())
     }
 
+    /// Checks chunk `idx` without decoding it: its size against the metadata, for a
+    /// compressed chunk the decoded size its zstd frame header records, and its stored
+    /// crc32c against its bytes (streamed through a fixed buffer). A chunk that passes holds
+    /// exactly the bytes its writer checksummed — what [`ZarrArray::read_chunk`] checks
+    /// short of decompressing them, at a fraction of the cost (`btf finalize` checks every
+    /// chunk of an eigen store this way: 0.5 s of zstd decoding less at 256²).
+    pub fn verify_chunk(&self, idx: &[u64]) -> Result<()> {
+        self.check_chunk_file(idx)?;
+        let path = self.chunk_path(idx);
+        let len = fs::metadata(&path).map_err(|e| Error::io(&path, e))?.len();
+        if !self.stored_crc_matches(&path, len)? {
+            return Err(Error::Corrupt { path, what: "crc32c checksum mismatch".into() });
+        }
+        Ok(())
+    }
+
     /// Whether the chunk file's trailing crc32c matches its other bytes (streamed through a
     /// fixed buffer: nothing is allocated by the file's claim).
     fn stored_crc_matches(&self, path: &Path, len: u64) -> Result<bool> {
