@@ -122,20 +122,25 @@ pub(crate) fn feature_kernels(ppd: f32) -> FeatureKernels {
     FeatureKernels { g: g.into_iter().map(|t| t / g_sum).collect(), dg: lobes(dg), ddg: lobes(ddg) }
 }
 
-/// Correlates every row of `src` (`w × h`, row-major) with `kernel`, borders clamped.
+/// Correlates every row of `src` (`w × h`, row-major) with `kernel`, borders clamped. Each
+/// row is copied into a buffer padded with its edge values so that the tap loop is outer
+/// and the pixel loop inner (vectorised); every pixel still sums its taps in kernel order.
 pub(crate) fn horizontal(src: &[f32], w: usize, kernel: &[f32]) -> Vec<f32> {
     let r = kernel.len() / 2;
     let mut dst = vec![0f32; src.len()];
-    dst.par_chunks_mut(w).zip(src.par_chunks(w)).for_each(|(out, row)| {
-        for (x, o) in out.iter_mut().enumerate() {
-            let mut acc = 0f32;
+    dst.par_chunks_mut(w).zip(src.par_chunks(w)).for_each_init(
+        || vec![0f32; w + 2 * r],
+        |padded, (out, row)| {
+            padded[..r].fill(row[0]);
+            padded[r..r + w].copy_from_slice(row);
+            padded[r + w..].fill(row[w - 1]);
             for (k, &wk) in kernel.iter().enumerate() {
-                let xx = (x + k).saturating_sub(r).min(w - 1);
-                acc += wk * row[xx];
+                for (o, &v) in out.iter_mut().zip(&padded[k..k + w]) {
+                    *o += wk * v;
+                }
             }
-            *o = acc;
-        }
-    });
+        },
+    );
     dst
 }
 
