@@ -1,7 +1,7 @@
 //! Error heat maps between a reference and an approximation (linear RGB images): per
 //! pixel, the length of the RGB difference over a full scale, drawn with the one ramp of
 //! [`crate::color::heat_ramp`] — the pictures of `[S03 Fig. 6, 13]` — and the colour bar that
-//! reads them.
+//! reads them; scalar maps (ꟻLIP, [`crate::flip`]) through the same ramp.
 
 use crate::color::heat_ramp;
 
@@ -43,6 +43,28 @@ pub fn error_heatmap_image(
         error_heatmap(reference, approx, full_scale, mask),
     )
     .expect("two RGB images of w × h pixels")
+}
+
+/// Per pixel `value / full_scale` through the ramp, as an image (`w × h`, `values`
+/// row-major): scalar error maps such as ꟻLIP (full scale 1). Pixels where `mask` is false
+/// are drawn black.
+pub fn value_heatmap_image(
+    w: usize,
+    h: usize,
+    values: &[f32],
+    full_scale: f32,
+    mask: Option<&[bool]>,
+) -> image::RgbImage {
+    let scale = full_scale.max(f32::MIN_POSITIVE) as f64;
+    let rgb =
+        values
+            .iter()
+            .enumerate()
+            .flat_map(|(i, &v)| {
+                if mask.is_some_and(|m| !m[i]) { [0, 0, 0] } else { heat_ramp(v as f64 / scale) }
+            })
+            .collect();
+    image::RgbImage::from_raw(w as u32, h as u32, rgb).expect("w × h values")
 }
 
 /// A horizontal colour bar of the ramp, `width` pixels wide: the ramp from `t = 0` to
@@ -100,5 +122,7 @@ mod tests {
         assert_eq!(error_heatmap(&r, &a, 2.0, Some(&mask)), vec![0, 0, 0, 0, 255, 0, 255, 0, 0]);
         assert_eq!(&error_heatmap(&r, &a, 4.0, None)[..6], &[0, 255, 0, 0, 255, 0]);
         assert_eq!(&error_heatmap(&r, &a, 4.0, None)[6..], &[255, 255, 0]);
+        let img = value_heatmap_image(3, 1, &[0.0, 0.5, 1.0], 1.0, Some(&[true, true, false]));
+        assert_eq!(img.into_raw(), vec![0, 255, 0, 255, 255, 0, 0, 0, 0]);
     }
 }

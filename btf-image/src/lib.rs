@@ -12,6 +12,8 @@
 //! - [`exr_limits`]: what an EXR header may claim (channels, block bytes) before any
 //!   reader allocates for it;
 //! - [`heatmap`]: per-pixel error heat maps between two linear images;
+//! - [`flip`]: the ꟻLIP perceptual difference map, LDR and HDR (`[A20]`, `[A21]`),
+//!   following NVIDIA's reference implementation;
 //! - [`compose`]: images side by side and enlarged, for reports and contact sheets;
 //! - [`plot`]: line plots drawn straight into images (axes, ticks, legend, log axes) so
 //!   reports need no plotting toolchain or system fonts;
@@ -25,6 +27,7 @@ pub mod compose;
 pub mod envmap;
 pub mod error;
 pub mod exr_limits;
+pub mod flip;
 pub mod heatmap;
 pub mod plot;
 pub mod text;
