@@ -108,6 +108,14 @@ pub struct FiberImage {
     pub stats: FiberStats,
 }
 
+/// The per-frame bindings of [`FiberRenderer::bindings`].
+struct FrameBindings {
+    g_lod: wgpu::BindGroup,
+    g_draw: wgpu::BindGroup,
+    maps: wgpu::Texture,
+    passes: Vec<ShadowPassRaw>,
+}
+
 /// The renderer of one packed yarn set.
 pub struct FiberRenderer {
     data: YarnBuffers,
@@ -337,18 +345,16 @@ impl FiberRenderer {
         Ok((passes, views))
     }
 
-    /// Renders one `width × height` frame over a background of `clear` (linear RGBA).
-    pub fn render(
+    /// The frame uniform, shadow maps and bind groups of one frame.
+    fn bindings(
         &self,
         gpu: &Gpu,
         cam: &FiberCamera,
         lights: &[FiberLight],
-        (width, height): (u32, u32),
-        clear: [f64; 4],
-    ) -> Result<FiberImage> {
-        gpu.check_frame(width, height, self.settings.msaa)?;
+        size: (u32, u32),
+    ) -> Result<FrameBindings> {
         let dev = &gpu.device;
-        let raw = self.view_raw(cam, lights, (width, height))?;
+        let raw = self.view_raw(cam, lights, size)?;
         let ubuf = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("fiber view"),
             contents: bytemuck::bytes_of(&raw),
@@ -360,12 +366,12 @@ impl FiberRenderer {
             entries: &[entry(0, &ubuf), entry(1, &self.instances), entry(2, &self.args)],
         });
         let (passes, views) = self.shadow_views(lights)?;
-        let size = self.settings.shadow_map;
+        let side = self.settings.shadow_map;
         let maps = dev.create_texture(&wgpu::TextureDescriptor {
             label: Some("yarn shadow maps"),
             size: wgpu::Extent3d {
-                width: size,
-                height: size,
+                width: side,
+                height: side,
                 depth_or_array_layers: passes.len().max(1) as u32,
             },
             mip_level_count: 1,
@@ -405,6 +411,81 @@ impl FiberRenderer {
                 entry(8, &vbuf),
             ],
         });
+        Ok(FrameBindings { g_lod, g_draw, maps, passes })
+    }
+
+    /// Records the shadow, LoD and draw passes of one frame into `enc`.
+    fn record(
+        &self,
+        gpu: &Gpu,
+        enc: &mut wgpu::CommandEncoder,
+        b: &FrameBindings,
+        targets: (&wgpu::TextureView, Option<&wgpu::TextureView>, &wgpu::TextureView),
+        clear: Option<[f64; 4]>,
+    ) {
+        self.shadow.encode(gpu, enc, &self.data, &b.maps, &b.passes);
+        self.lod.encode(gpu, enc, &self.data, &b.g_lod, &self.args, self.settings.n_sub);
+        self.draw.encode(enc, &self.data, &b.g_draw, &self.args, targets, clear);
+    }
+
+    /// Records one frame into another renderer's targets — `color` (multisampled under
+    /// MSAA, resolved into `resolve`) and `depth`, both *loaded*, so that fibers behind
+    /// what is already drawn stay hidden and fibers in front hide it — with that renderer's
+    /// camera ([`FiberCamera::Matrix`]). The targets must have [`color_format`] and
+    /// [`DEPTH`] at [`FiberSettings::msaa`] samples and be `size` pixels. Nothing is
+    /// submitted: the LoD pass resets its arguments with `queue.write_buffer`, so submit
+    /// `enc` before recording the next frame of this renderer.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_into(
+        &self,
+        gpu: &Gpu,
+        enc: &mut wgpu::CommandEncoder,
+        (color, resolve, depth): (&wgpu::TextureView, Option<&wgpu::TextureView>, &wgpu::TextureView),
+        size: (u32, u32),
+        cam: &FiberCamera,
+        lights: &[FiberLight],
+    ) -> Result<()> {
+        let samples = self.settings.msaa;
+        let c = color.texture();
+        let d = depth.texture();
+        let fits = |t: &wgpu::Texture, format| {
+            (t.width(), t.height()) == size && t.sample_count() == samples && t.format() == format
+        };
+        if !fits(c, color_format(samples)) || !fits(d, DEPTH) || (samples > 1) != resolve.is_some()
+        {
+            return Err(Error::Invalid(format!(
+                "encode_into: targets {:?} {}×{} ×{} and {:?} ×{} for a {}×{} frame of {:?}/{:?} at {samples} samples",
+                c.format(),
+                c.width(),
+                c.height(),
+                c.sample_count(),
+                d.format(),
+                d.sample_count(),
+                size.0,
+                size.1,
+                color_format(samples),
+                DEPTH
+            )));
+        }
+        let b = self.bindings(gpu, cam, lights, size)?;
+        gpu.scoped("fiber frame (into targets)", || {
+            self.record(gpu, enc, &b, (color, resolve, depth), None)
+        })?;
+        Ok(())
+    }
+
+    /// Renders one `width × height` frame over a background of `clear` (linear RGBA).
+    pub fn render(
+        &self,
+        gpu: &Gpu,
+        cam: &FiberCamera,
+        lights: &[FiberLight],
+        (width, height): (u32, u32),
+        clear: [f64; 4],
+    ) -> Result<FiberImage> {
+        gpu.check_frame(width, height, self.settings.msaa)?;
+        let dev = &gpu.device;
+        let b = self.bindings(gpu, cam, lights, (width, height))?;
         let samples = self.settings.msaa;
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
         let format = color_format(samples);
@@ -436,13 +517,11 @@ impl FiberRenderer {
         });
         gpu.scoped("fiber frame", || {
             let mut enc = dev.create_command_encoder(&Default::default());
-            self.shadow.encode(gpu, &mut enc, &self.data, &maps, &passes);
-            self.lod.encode(gpu, &mut enc, &self.data, &g_lod, &self.args, self.settings.n_sub);
             let targets = match &mv {
                 Some(m) => (m, Some(&rv), &dv),
                 None => (&rv, None, &dv),
             };
-            self.draw.encode(&mut enc, &self.data, &g_draw, &self.args, targets, clear);
+            self.record(gpu, &mut enc, &b, targets, Some(clear));
             enc.copy_buffer_to_buffer(&self.args, 0, &readback, 0, readback.size());
             gpu.queue.submit([enc.finish()]);
         })?;

@@ -8,11 +8,13 @@
 mod effects;
 mod light;
 mod transmission;
+mod yarns;
 
 pub use crate::uniforms::MAX_LIGHTS;
 pub use effects::{Effects, Evaluation, Shadows};
 pub use light::{EigenSets, EnvironmentLight, Light};
 pub use transmission::{Albedo, MAX_TAU, PhaseDesc, TauTexture, TransmissionDesc};
+pub use yarns::{MAX_STITCHES, MAX_WALES, YarnAo, YarnMethod, YarnsDesc, names_file};
 
 use crate::{Error, Result};
 use btf_light::mesh::PlanarUv;
@@ -38,6 +40,10 @@ pub struct Scene {
     /// What to compute and how.
     #[serde(default)]
     pub effects: Effects,
+    /// Knit patches drawn as fiber-level yarns next to the meshes (data here; drawn by
+    /// `yarn-render` through [`crate::renderer::Overlay`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub yarns: Vec<YarnsDesc>,
 }
 
 /// Image output parameters.
@@ -165,6 +171,9 @@ impl Scene {
                 t.resolve(dir);
             }
         }
+        for y in &mut scene.yarns {
+            y.resolve(dir);
+        }
         for l in &mut scene.lights {
             if let Light::Environment(e) = l {
                 e.path = dir.join(&e.path);
@@ -194,6 +203,9 @@ impl Scene {
             if let Light::Environment(e) = l {
                 out.push((format!("[[lights]] {i} path"), e.path.clone()));
             }
+        }
+        for (i, y) in self.yarns.iter().enumerate() {
+            y.input_paths(i, &mut out);
         }
         out
     }
@@ -297,6 +309,20 @@ impl Scene {
         }
         if o.show_environment && self.environment().is_none() {
             return bad("output.show_environment".into(), "needs an environment light");
+        }
+        for (i, y) in self.yarns.iter().enumerate() {
+            if let Err((key, what)) = y.validate(&format!("yarns[{i}]")) {
+                return bad(key, &what);
+            }
+        }
+        if !self.yarns.is_empty()
+            && let Some(i) = self.materials.iter().position(|m| m.transmission.is_some())
+        {
+            return bad(
+                format!("materials[{i}].transmission"),
+                "thin cloth in a scene with [[yarns]] is not supported yet (the yarns would be \
+                 drawn over the blended cloth)",
+            );
         }
         Ok(())
     }

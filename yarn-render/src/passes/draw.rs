@@ -135,8 +135,9 @@ impl DrawPass {
         Ok(DrawPass { pipeline, layout, samples })
     }
 
-    /// Records the draw into `color`/`depth` (cleared to `clear`), reading the instance
-    /// count from `args` at offset 0.
+    /// Records the draw into `color`/`depth`, cleared to `clear` (depth discarded after) or,
+    /// with `None`, loaded — another renderer's targets, whose depth the strips test against
+    /// and keep — reading the instance count from `args` at offset 0.
     pub fn encode(
         &self,
         enc: &mut wgpu::CommandEncoder,
@@ -144,31 +145,28 @@ impl DrawPass {
         group1: &wgpu::BindGroup,
         args: &wgpu::Buffer,
         targets: (&wgpu::TextureView, Option<&wgpu::TextureView>, &wgpu::TextureView),
-        clear: [f64; 4],
+        clear: Option<[f64; 4]>,
     ) {
         let (color, resolve, depth) = targets;
+        let (color_load, depth_load, depth_store) = match clear {
+            Some(c) => (
+                wgpu::LoadOp::Clear(wgpu::Color { r: c[0], g: c[1], b: c[2], a: c[3] }),
+                wgpu::LoadOp::Clear(1.0),
+                wgpu::StoreOp::Discard,
+            ),
+            None => (wgpu::LoadOp::Load, wgpu::LoadOp::Load, wgpu::StoreOp::Store),
+        };
         let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("fiber_draw"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                 view: color,
                 depth_slice: None,
                 resolve_target: resolve,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color {
-                        r: clear[0],
-                        g: clear[1],
-                        b: clear[2],
-                        a: clear[3],
-                    }),
-                    store: wgpu::StoreOp::Store,
-                },
+                ops: wgpu::Operations { load: color_load, store: wgpu::StoreOp::Store },
             })],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Discard,
-                }),
+                depth_ops: Some(wgpu::Operations { load: depth_load, store: depth_store }),
                 stencil_ops: None,
             }),
             timestamp_writes: None,
