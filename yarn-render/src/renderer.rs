@@ -268,6 +268,13 @@ impl FiberRenderer {
         &self.settings
     }
 
+    /// Sets the constant ambient radiance (linear RGB, [W19 eq. 7–8]) of the next frames;
+    /// negative or non-finite channels count as zero.
+    pub fn set_ambient(&mut self, radiance: [f32; 3]) {
+        self.settings.effects.ambient =
+            radiance.map(|x| if x.is_finite() && x > 0.0 { x } else { 0.0 });
+    }
+
     /// The frame uniform for `cam` and `lights` at `size`.
     pub fn view_raw(
         &self,

@@ -132,8 +132,9 @@ impl YarnsDesc {
         }
     }
 
-    /// Checks ranges; `Err((key, what))` names the key as `yarns[i].key`.
-    pub(crate) fn validate(&self, key: &str) -> std::result::Result<(), (String, String)> {
+    /// Checks ranges; `Err((key, what))` names the key as `{key}.field` (`key` is
+    /// `yarns[i]`).
+    pub fn validate(&self, key: &str) -> std::result::Result<(), (String, String)> {
         let bad = |k: &str, what: String| Err((format!("{key}.{k}"), what));
         match self.method {
             YarnMethod::Fibers => {}
