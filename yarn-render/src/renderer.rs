@@ -447,7 +447,11 @@ impl FiberRenderer {
         &self,
         gpu: &Gpu,
         enc: &mut wgpu::CommandEncoder,
-        (color, resolve, depth): (&wgpu::TextureView, Option<&wgpu::TextureView>, &wgpu::TextureView),
+        (color, resolve, depth): (
+            &wgpu::TextureView,
+            Option<&wgpu::TextureView>,
+            &wgpu::TextureView,
+        ),
         size: (u32, u32),
         cam: &FiberCamera,
         lights: &[FiberLight],

@@ -79,7 +79,12 @@ pub struct RenderOptions {
 }
 
 /// The camera of `scene` around the mesh and the overlays' bounds.
-fn camera_setup(scene: &Scene, mesh: &btf_light::mesh::Mesh, options: &RenderOptions, extra_depth: f32) -> CameraSetup {
+fn camera_setup(
+    scene: &Scene,
+    mesh: &btf_light::mesh::Mesh,
+    options: &RenderOptions,
+    extra_depth: f32,
+) -> CameraSetup {
     let (mut lo, mut hi) = mesh.bounds();
     if let Some((a, b)) = options.extra_bounds {
         for k in 0..3 {

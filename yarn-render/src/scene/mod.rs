@@ -77,7 +77,8 @@ pub fn build(scene: &Scene, scene_path: &Path) -> Result<Vec<SceneYarn>> {
 
 fn load_chart(value: &str) -> std::result::Result<Chart, String> {
     if btf_render::scene::names_file(value) {
-        let text = std::fs::read_to_string(value).map_err(|e| format!("chart file {value}: {e}"))?;
+        let text =
+            std::fs::read_to_string(value).map_err(|e| format!("chart file {value}: {e}"))?;
         Chart::parse(&text, value).map_err(|e| e.to_string())
     } else {
         Chart::builtin(value).map_err(|e| e.to_string())
@@ -97,8 +98,7 @@ fn load_yarn(value: &str) -> std::result::Result<YarnParams, String> {
 /// scene's meshes.
 fn carrier(scene: &Scene, d: &YarnsDesc) -> std::result::Result<SurfaceMesh, String> {
     let same = |p: &Path| {
-        p == d.mesh
-            || matches!((p.canonicalize(), d.mesh.canonicalize()), (Ok(a), Ok(b)) if a == b)
+        p == d.mesh || matches!((p.canonicalize(), d.mesh.canonicalize()), (Ok(a), Ok(b)) if a == b)
     };
     let planar = match scene.meshes.iter().find(|m| same(&m.path)) {
         Some(m) => m.planar_uv,

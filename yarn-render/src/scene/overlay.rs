@@ -113,7 +113,14 @@ impl YarnOverlay {
             .map(|y| {
                 let d = &scene.yarns[y.index];
                 let bake = yarn_precompute::BakeSettings { seed: d.seed, ..Default::default() };
-                FiberRenderer::with_bake(gpu, &y.packed, &bcsdf, settings(scene, d), &bake, cache_dir)
+                FiberRenderer::with_bake(
+                    gpu,
+                    &y.packed,
+                    &bcsdf,
+                    settings(scene, d),
+                    &bake,
+                    cache_dir,
+                )
             })
             .collect::<Result<_>>()?;
         Ok(YarnOverlay { renderers })
