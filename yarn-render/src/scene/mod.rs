@@ -194,3 +194,6 @@ fn build_one(scene: &Scene, path: &Path, i: usize, d: &YarnsDesc) -> Result<Scen
     let packed = PackedYarns::new(&set, std::slice::from_ref(&params), &opts)?;
     Ok(SceneYarn { index: i, params, set, packed, stitch_uv })
 }
+
+#[cfg(test)]
+mod tests;
