@@ -249,14 +249,14 @@ impl ViewSetup {
         let (forward, px_per_metre, orthographic) = match ortho_to_camera {
             Some(d) => {
                 let d = Vector3::new(d[0], d[1], d[2]);
-                if !(d.norm() > 0.0) {
+                if d.norm() <= 0.0 || !d.norm().is_finite() {
                     return Err(Error::Invalid("fiber camera: zero ortho direction".into()));
                 }
                 (-d.normalize(), 0.5 * height as f64 * up_scale, true)
             }
             None => {
                 let f = xyz(3);
-                if !(f.norm() > 0.0) {
+                if f.norm() <= 0.0 || !f.norm().is_finite() {
                     return Err(Error::Invalid(
                         "fiber camera: a perspective matrix needs a forward row".into(),
                     ));

@@ -133,7 +133,7 @@ pub fn mean_uv_scale(s: &SurfaceMesh) -> Option<[f64; 2]> {
         let (du1, dv1) = (q[1][0] - q[0][0], q[1][1] - q[0][1]);
         let (du2, dv2) = (q[2][0] - q[0][0], q[2][1] - q[0][1]);
         let det = du1 * dv2 - du2 * dv1;
-        if !(det.abs() > 1e-300) {
+        if det.abs() <= 1e-300 || !det.is_finite() {
             continue;
         }
         let dpu = [0, 1, 2].map(|k| (e1[k] * dv2 - e2[k] * dv1) / det);
