@@ -139,3 +139,52 @@ fn bad_yarns_entries_are_refused_by_the_binary_naming_the_key() {
         assert!(!d.path("bad.png").exists(), "{to}: an image was written");
     }
 }
+
+#[test]
+fn btf_relight_draws_the_yarns_in_every_rotation() {
+    let d = Dir::new();
+    example(&d);
+    d.ok(&["synth", "env", "--kind", "sky", "--width", "32", "-o", "sky.exr"]);
+    let text = std::fs::read_to_string(d.path("knit-swatch.toml")).unwrap();
+    let start = text.find("\n[[yarns]]\n").unwrap();
+    let end = text.find("\n[camera]\n").unwrap();
+    let bare = format!("{}{}", &text[..start], &text[end..]);
+    std::fs::write(d.path("bare.toml"), bare).unwrap();
+    let mut frames = Vec::new();
+    for (scene, out) in [("knit-swatch.toml", "with"), ("bare.toml", "without")] {
+        let o = d.btf(&[
+            "relight",
+            scene,
+            "--env",
+            "sky.exr",
+            "--rotations",
+            "2",
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "--exr",
+            "-o",
+            out,
+        ]);
+        if String::from_utf8_lossy(&o.stderr).contains("no GPU adapter") {
+            assert!(std::env::var("BTF_REQUIRE_GPU").as_deref() != Ok("1"), "no GPU adapter");
+            return;
+        }
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        for r in 0..2 {
+            frames.push(read_exr(&d.path(&format!("{out}/sky_r00{r}.exr"))).2);
+        }
+    }
+    let n = 32 * 32;
+    for r in 0..2 {
+        let (with, without) = (&frames[r], &frames[2 + r]);
+        let yarn =
+            (0..n).filter(|&i| (0..3).any(|c| with[3 * i + c] != without[3 * i + c])).count();
+        let finite = with.iter().all(|v| v.is_finite());
+        eprintln!("rotation {r}: {yarn} of {n} pixels differ from the scene without [[yarns]]");
+        assert!(finite);
+        // The swatch covers about a tenth of the frame at 64² (799 of 4096 pixels touched).
+        assert!(yarn > n / 20 && yarn < n / 2, "{yarn}");
+    }
+}
