@@ -239,7 +239,7 @@ impl FiberRenderer {
             instances: dev.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("fiber instances"),
                 size: capacity as u64 * 8,
-                usage: wgpu::BufferUsages::STORAGE,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             }),
             args: dev.create_buffer(&wgpu::BufferDescriptor {
@@ -483,6 +483,97 @@ impl FiberRenderer {
             self.record(gpu, enc, &b, (color, resolve, depth), None)
         })?;
         Ok(())
+    }
+
+    /// The pull = expand probe (DESIGN §2.5): the instance list `fiber_lod` makes for
+    /// `cam`, and every strip vertex's fiber point as the *vertex stage* of `fiber_draw`
+    /// evaluates it (`vs_probe`: `vs_main`'s decoding and generator call), one `vec4` per
+    /// (instance, k ≤ n_sub), origin-relative — for comparing bit for bit with
+    /// `fiber_expand` on the same list. Needs one subdivision count for every instance
+    /// (`lod_px ≤ 0`) and no core strips (their vertices are not fiber points).
+    pub fn pulled_points(
+        &self,
+        gpu: &Gpu,
+        cam: &FiberCamera,
+        lights: &[FiberLight],
+    ) -> Result<(Vec<[u32; 2]>, Vec<[f32; 4]>)> {
+        let s = &self.settings;
+        if s.lod_px > 0.0 || s.effects.core || s.tubes {
+            return Err(Error::Invalid(
+                "pulled_points: needs lod_px ≤ 0, no core strips and no tubes".into(),
+            ));
+        }
+        let dev = &gpu.device;
+        let per = s.n_sub as u64 + 1;
+        let b = self.bindings(gpu, cam, lights, (256, 1))?;
+        let args_read = dev.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("probe args"),
+            size: size_of::<DrawArgsRaw>() as u64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut enc = dev.create_command_encoder(&Default::default());
+        self.lod.encode(gpu, &mut enc, &self.data, &b.g_lod, &self.args, s.n_sub);
+        enc.copy_buffer_to_buffer(&self.args, 0, &args_read, 0, args_read.size());
+        gpu.queue.submit([enc.finish()]);
+        let args: DrawArgsRaw = *bytemuck::from_bytes(&gpu.read_buffer(&args_read)?);
+        let n = args.instance_count as u64;
+        if n == 0 {
+            return Ok((Vec::new(), Vec::new()));
+        }
+        let inst_read = dev.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("probe instances"),
+            size: n * 8,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let height = (n * per).div_ceil(256) as u32;
+        gpu.check_frame(256, height, 1)?;
+        // The same list again (LoD with the probe's viewport; LoD is off, so only culling
+        // depends on the view, and the camera is the same).
+        let b = self.bindings(gpu, cam, lights, (256, height))?;
+        let target = gpu.target(
+            "pull probe",
+            (256, height),
+            1,
+            wgpu::TextureFormat::Rgba32Float,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        );
+        let view = target.create_view(&Default::default());
+        let pipeline = self.draw.probe_pipeline(gpu, &self.data)?;
+        gpu.scoped("pull probe", || {
+            let mut enc = dev.create_command_encoder(&Default::default());
+            self.lod.encode(gpu, &mut enc, &self.data, &b.g_lod, &self.args, s.n_sub);
+            enc.copy_buffer_to_buffer(&self.instances, 0, &inst_read, 0, n * 8);
+            {
+                let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("pull probe"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: None,
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                pass.set_pipeline(&pipeline);
+                pass.set_bind_group(0, &self.data.bind_group, &[]);
+                pass.set_bind_group(1, &b.g_draw, &[]);
+                pass.draw_indirect(&self.args, 0);
+            }
+            gpu.queue.submit([enc.finish()]);
+        })?;
+        let inst: Vec<[u32; 2]> = bytemuck::cast_slice(&gpu.read_buffer(&inst_read)?).to_vec();
+        let texels = gpu.read_texture(&target, 16)?;
+        let pts: Vec<[f32; 4]> =
+            bytemuck::cast_slice::<u8, [f32; 4]>(&texels)[..(n * per) as usize].to_vec();
+        Ok((inst, pts))
     }
 
     /// Renders one `width × height` frame over a background of `clear` (linear RGBA).

@@ -135,6 +135,53 @@ impl DrawPass {
         Ok(DrawPass { pipeline, layout, samples })
     }
 
+    /// The pull = expand probe (tests, DESIGN §2.5): `vs_probe`/`fs_probe` of the same
+    /// module and layouts, a point per strip vertex into an `Rgba32Float` target (see the
+    /// WGSL).
+    pub fn probe_pipeline(&self, gpu: &Gpu, data: &YarnBuffers) -> Result<wgpu::RenderPipeline> {
+        let dev = &gpu.device;
+        gpu.scoped("fiber_draw probe pipeline", || {
+            let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("fiber_draw.wgsl (probe)"),
+                source: wgpu::ShaderSource::Wgsl(source().into()),
+            });
+            let pl = dev.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("fiber_draw probe"),
+                bind_group_layouts: &[Some(&data.layout), Some(&self.layout)],
+                immediate_size: 0,
+            });
+            dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("fiber_draw probe"),
+                layout: Some(&pl),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_probe"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: wgpu::PrimitiveState {
+                    topology: wgpu::PrimitiveTopology::PointList,
+                    ..Default::default()
+                },
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_probe"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: wgpu::TextureFormat::Rgba32Float,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        })
+        .map_err(|e| Error::Gpu(e.to_string()))
+    }
+
     /// Records the draw into `color`/`depth`, cleared to `clear` (depth discarded after) or,
     /// with `None`, loaded — another renderer's targets, whose depth the strips test against
     /// and keep — reading the instance count from `args` at offset 0.
