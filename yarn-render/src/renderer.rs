@@ -108,6 +108,10 @@ pub struct FiberImage {
     pub stats: FiberStats,
 }
 
+/// [`FiberRenderer::pulled_points`]: the instance records and, per instance, its
+/// `n_sub + 1` fiber points as the vertex stage evaluates them (origin-relative, w = 1).
+pub type PulledPoints = (Vec<[u32; 2]>, Vec<[f32; 4]>);
+
 /// The per-frame bindings of [`FiberRenderer::bindings`].
 struct FrameBindings {
     g_lod: wgpu::BindGroup,
@@ -496,7 +500,7 @@ impl FiberRenderer {
         gpu: &Gpu,
         cam: &FiberCamera,
         lights: &[FiberLight],
-    ) -> Result<(Vec<[u32; 2]>, Vec<[f32; 4]>)> {
+    ) -> Result<PulledPoints> {
         let s = &self.settings;
         if s.lod_px > 0.0 || s.effects.core || s.tubes {
             return Err(Error::Invalid(
