@@ -12,6 +12,7 @@ mod progress;
 #[cfg(test)]
 mod readme_commands;
 mod report;
+mod scene_yarns;
 mod view;
 
 use cmd::{

@@ -372,6 +372,12 @@ impl SceneEnvironment {
         self.vertices
     }
 
+    /// `∫ L_env dω` per channel of the current map (before the exposure; rotation does not
+    /// change it).
+    pub fn total_power(&self) -> [f64; 3] {
+        self.env.total()
+    }
+
     /// Changes with every new environment map (not with rotation or exposure).
     pub fn revision(&self) -> u64 {
         self.revision

@@ -23,8 +23,14 @@ impl CameraSetup {
     /// The scene's camera for `mesh`, with the far plane `extra_depth` further back (shadow
     /// volumes' back caps; 0 otherwise).
     pub fn new(scene: &Scene, mesh: &Mesh, extra_depth: f32) -> CameraSetup {
-        let c = &scene.camera;
         let (lo, hi) = mesh.bounds();
+        Self::with_bounds(scene, (lo, hi), extra_depth)
+    }
+
+    /// The scene's camera with near and far planes around the box `(lo, hi)` (the mesh's
+    /// bounds, grown by what overlays draw), the far plane `extra_depth` further back.
+    pub fn with_bounds(scene: &Scene, (lo, hi): ([f32; 3], [f32; 3]), extra_depth: f32) -> Self {
+        let c = &scene.camera;
         let center = (v3(lo) + v3(hi)) * 0.5;
         let radius = ((v3(hi) - v3(lo)).norm() * 0.5).max(1e-6);
         let (eye, target) = (v3(c.eye), v3(c.target));

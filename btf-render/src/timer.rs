@@ -103,6 +103,35 @@ impl<'a> PassTimer<'a> {
         Ok(())
     }
 
+    /// Records work that encodes passes of its own into the encoder (an overlay's compute
+    /// and render passes): timed by a submit and wait under [`Clock::SubmitEach`], else
+    /// reported untimed (the passes carry no timestamp writes of ours).
+    pub fn encoded(
+        &mut self,
+        name: &str,
+        f: impl FnOnce(&mut wgpu::CommandEncoder) -> Result<()>,
+    ) -> Result<()> {
+        let time = match &self.clock {
+            Clock::SubmitEach => {
+                let t = Instant::now();
+                f(self.encoder)?;
+                let label = wgpu::CommandEncoderDescriptor { label: Some("frame") };
+                let next = self.gpu.device.create_command_encoder(&label);
+                let done = std::mem::replace(&mut *self.encoder, next);
+                self.gpu.queue.submit([done.finish()]);
+                self.gpu.wait()?;
+                Time::Cpu(t.elapsed().as_secs_f64() * 1e3)
+            }
+            _ => {
+                f(self.encoder)?;
+                Time::None
+            }
+        };
+        self.names.push(name.into());
+        self.times.push(time);
+        Ok(())
+    }
+
     /// Ends the frame's record: with timestamps, resolves them into `resolve` and copies
     /// them to `read` (both at least `16 ·` [`MAX_TIMED_PASSES`] bytes) in the encoder.
     pub fn finish(self, buffers: Option<(&wgpu::Buffer, &wgpu::Buffer)>) -> PassRecord {

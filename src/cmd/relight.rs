@@ -140,6 +140,11 @@ pub fn run(args: RelightArgs) -> Result<()> {
     }
     let first = jobs.iter().position(|j| !j.is_done()).unwrap_or(0);
     set_env_path(&mut scene, env_index, &jobs[first].path);
+    let yarns = crate::scene_yarns::SceneYarns::build(
+        &scene,
+        &args.scene.scene,
+        Some(args.output.join("cache").join("yarns")),
+    )?;
     let gpu = Gpu::new().context("creating a headless GPU device")?;
     // With eigenweightsets, the PCA of `U` over rotations takes every vertex side, so the
     // frames would depend on which sides' visibility happens to be cached (the report
@@ -147,7 +152,7 @@ pub fn run(args: RelightArgs) -> Result<()> {
     // shard started at any time renders the very same frames.
     let eigen = scene.environment().and_then(|(_, e)| e.eigenweightsets).is_some();
     let options = RenderOptions { all_env_sides: eigen, ..RenderOptions::default() };
-    let mut renderer = Renderer::new(&gpu, &scene, options).with_context(|| {
+    let mut renderer = yarns.renderer(&gpu, &scene, options).with_context(|| {
         format!("preparing {} with {}", args.scene.scene.display(), jobs[first].path.display())
     })?;
     let bar = crate::progress::bar(pending as u64, "relight");

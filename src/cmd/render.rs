@@ -4,7 +4,7 @@
 //! linear EXR.
 
 use anyhow::{Context, Result, bail};
-use btf_render::{Baseline, Gpu, ReadForm, RenderOptions, Renderer, Stats};
+use btf_render::{Baseline, Gpu, ReadForm, RenderOptions, Stats};
 use std::path::PathBuf;
 
 /// Arguments of `btf render`.
@@ -58,6 +58,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         crate::guard::check_file(exr, btf_core::fs::EXR)?;
     }
     crate::guard::check_file(&args.output, btf_core::fs::PNG)?;
+    let yarns = crate::scene_yarns::SceneYarns::build(&scene, &args.scene.scene, None)?;
     let gpu = Gpu::new().context("creating a headless GPU device")?;
     let baseline = match args.baseline.as_deref() {
         None => None,
@@ -65,7 +66,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
         Some(name) => {
             let form = if name == "read-bound" { ReadForm::Loop } else { ReadForm::Groups };
             let counting = RenderOptions { count_reads: true, ..Default::default() };
-            let counted = Renderer::new(&gpu, &scene, counting)
+            let counted = yarns
+                .renderer(&gpu, &scene, counting)
                 .with_context(|| format!("preparing {}", args.scene.scene.display()))?
                 .render(&gpu)?;
             let reads_per_pixel = counted.stats.reads_per_pixel.unwrap_or(0.0);
@@ -73,7 +75,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
         }
     };
     let options = RenderOptions { count_reads: args.count_reads, baseline, ..Default::default() };
-    let mut renderer = Renderer::new(&gpu, &scene, options)
+    let mut renderer = yarns
+        .renderer(&gpu, &scene, options)
         .with_context(|| format!("preparing {}", args.scene.scene.display()))?;
     let mut frame = renderer.render(&gpu)?;
     for _ in 1..args.repeat {

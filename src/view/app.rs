@@ -242,6 +242,7 @@ impl Running {
         let viewer = Viewer::new(
             &gpu,
             scene,
+            &args.scene,
             args.env.clone(),
             args.env_exposure == super::EnvExposure::Auto,
         );

@@ -159,11 +159,25 @@ pub struct Viewer {
     pending_env: Option<usize>,
     needs_rebuild: bool,
     applied: (Effects, usize),
+    /// The scene's `[[yarns]]`, built once and drawn by every renderer made.
+    yarns: crate::scene_yarns::SceneYarns,
 }
 
 impl Viewer {
     /// Builds the renderer for `scene`; a failure is kept as a panel error, not returned.
-    pub fn new(gpu: &Gpu, scene: Scene, env_files: Vec<PathBuf>, auto_exposure: bool) -> Viewer {
+    pub fn new(
+        gpu: &Gpu,
+        scene: Scene,
+        scene_path: &std::path::Path,
+        env_files: Vec<PathBuf>,
+        auto_exposure: bool,
+    ) -> Viewer {
+        let mut errors = Vec::new();
+        let yarns =
+            crate::scene_yarns::SceneYarns::build(&scene, scene_path, None).unwrap_or_else(|e| {
+                errors.push(format!("{e:#}"));
+                crate::scene_yarns::SceneYarns::none()
+            });
         let mut v = Viewer {
             orbit: Orbit::new(&scene.camera),
             lights: scene.lights.clone(),
@@ -173,7 +187,7 @@ impl Viewer {
             env: Environments::new(env_files, &scene, auto_exposure),
             renderer: None,
             shown: None,
-            errors: Vec::new(),
+            errors,
             last: None,
             frames: 0,
             stored_components: scene
@@ -187,6 +201,7 @@ impl Viewer {
             needs_rebuild: false,
             applied: (scene.effects.clone(), 0),
             base: scene,
+            yarns,
         };
         v.rebuild(gpu);
         v.pending_env = v.env.next_index();
@@ -264,13 +279,13 @@ impl Viewer {
         // The camera orbits: every vertex side's visibility, once, instead of recomputing
         // the sides a new camera shows after each move.
         let options = RenderOptions { all_env_sides: true, ..Default::default() };
-        match Renderer::new(gpu, &self.scene_now(), options) {
+        match self.yarns.renderer(gpu, &self.scene_now(), options) {
             Ok(r) => {
                 self.renderer = Some(r);
                 self.applied = (self.effects.clone(), self.fabric);
             }
             Err(e) => {
-                self.errors.push(format!("{e}"));
+                self.errors.push(format!("{e:#}"));
                 (self.effects, self.fabric) = self.applied.clone();
             }
         }

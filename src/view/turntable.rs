@@ -22,8 +22,13 @@ use std::path::Path;
 
 fn start(args: &ViewArgs, scene: Scene) -> Result<(Gpu, Viewer)> {
     let gpu = Gpu::new().context("creating a headless GPU device")?;
-    let mut v =
-        Viewer::new(&gpu, scene, args.env.clone(), args.env_exposure == super::EnvExposure::Auto);
+    let mut v = Viewer::new(
+        &gpu,
+        scene,
+        &args.scene,
+        args.env.clone(),
+        args.env_exposure == super::EnvExposure::Auto,
+    );
     v.update(&gpu);
     if let Some(e) = v.errors.first() {
         bail!("{}: {e}", args.scene.display());

@@ -22,6 +22,7 @@ mod knit_sweep;
 mod python;
 mod relight;
 mod render;
+mod render_yarns;
 mod shards;
 mod synth;
 mod thin;

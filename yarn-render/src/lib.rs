@@ -17,6 +17,7 @@
 //! | [`view`] | camera, lights, frustum planes in f64 about the origin | — |
 //! | [`btf`] | the yarn BTF of DESIGN §4.2 rendered with fibers (`--method fibers`) | DESIGN §4.2 |
 //! | [`renderer`] | `FiberRenderer`: the passes of one frame, stats | [W19 §3.3, §5] |
+//! | [`scene`] | a btf-render scene's `[[yarns]]`: chart on the mesh's UVs, skeleton, pack; drawn into its frame | [C03 §3], [W19 §5] |
 //!
 //! The WGSL generator (`shaders/fiber_gen.wgsl`) mirrors `yarn::fiber::FiberModel`
 //! function for function; `tests/gpu.rs` holds the two to 1e-5 of the yarn radius.
@@ -33,6 +34,7 @@ pub mod gpu_data;
 pub mod pack;
 pub mod passes;
 pub mod renderer;
+pub mod scene;
 pub mod view;
 
 pub use effects::{AoMode, FiberEffects};

@@ -108,6 +108,18 @@ pub struct FiberImage {
     pub stats: FiberStats,
 }
 
+/// [`FiberRenderer::pulled_points`]: the instance records and, per instance, its
+/// `n_sub + 1` fiber points as the vertex stage evaluates them (origin-relative, w = 1).
+pub type PulledPoints = (Vec<[u32; 2]>, Vec<[f32; 4]>);
+
+/// The per-frame bindings of [`FiberRenderer::bindings`].
+struct FrameBindings {
+    g_lod: wgpu::BindGroup,
+    g_draw: wgpu::BindGroup,
+    maps: wgpu::Texture,
+    passes: Vec<ShadowPassRaw>,
+}
+
 /// The renderer of one packed yarn set.
 pub struct FiberRenderer {
     data: YarnBuffers,
@@ -231,7 +243,7 @@ impl FiberRenderer {
             instances: dev.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("fiber instances"),
                 size: capacity as u64 * 8,
-                usage: wgpu::BufferUsages::STORAGE,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             }),
             args: dev.create_buffer(&wgpu::BufferDescriptor {
@@ -258,6 +270,13 @@ impl FiberRenderer {
     /// The settings in use.
     pub fn settings(&self) -> &FiberSettings {
         &self.settings
+    }
+
+    /// Sets the constant ambient radiance (linear RGB, [W19 eq. 7–8]) of the next frames;
+    /// negative or non-finite channels count as zero.
+    pub fn set_ambient(&mut self, radiance: [f32; 3]) {
+        self.settings.effects.ambient =
+            radiance.map(|x| if x.is_finite() && x > 0.0 { x } else { 0.0 });
     }
 
     /// The frame uniform for `cam` and `lights` at `size`.
@@ -337,18 +356,16 @@ impl FiberRenderer {
         Ok((passes, views))
     }
 
-    /// Renders one `width × height` frame over a background of `clear` (linear RGBA).
-    pub fn render(
+    /// The frame uniform, shadow maps and bind groups of one frame.
+    fn bindings(
         &self,
         gpu: &Gpu,
         cam: &FiberCamera,
         lights: &[FiberLight],
-        (width, height): (u32, u32),
-        clear: [f64; 4],
-    ) -> Result<FiberImage> {
-        gpu.check_frame(width, height, self.settings.msaa)?;
+        size: (u32, u32),
+    ) -> Result<FrameBindings> {
         let dev = &gpu.device;
-        let raw = self.view_raw(cam, lights, (width, height))?;
+        let raw = self.view_raw(cam, lights, size)?;
         let ubuf = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("fiber view"),
             contents: bytemuck::bytes_of(&raw),
@@ -360,12 +377,12 @@ impl FiberRenderer {
             entries: &[entry(0, &ubuf), entry(1, &self.instances), entry(2, &self.args)],
         });
         let (passes, views) = self.shadow_views(lights)?;
-        let size = self.settings.shadow_map;
+        let side = self.settings.shadow_map;
         let maps = dev.create_texture(&wgpu::TextureDescriptor {
             label: Some("yarn shadow maps"),
             size: wgpu::Extent3d {
-                width: size,
-                height: size,
+                width: side,
+                height: side,
                 depth_or_array_layers: passes.len().max(1) as u32,
             },
             mip_level_count: 1,
@@ -405,6 +422,176 @@ impl FiberRenderer {
                 entry(8, &vbuf),
             ],
         });
+        Ok(FrameBindings { g_lod, g_draw, maps, passes })
+    }
+
+    /// Records the shadow, LoD and draw passes of one frame into `enc`.
+    fn record(
+        &self,
+        gpu: &Gpu,
+        enc: &mut wgpu::CommandEncoder,
+        b: &FrameBindings,
+        targets: (&wgpu::TextureView, Option<&wgpu::TextureView>, &wgpu::TextureView),
+        clear: Option<[f64; 4]>,
+    ) {
+        self.shadow.encode(gpu, enc, &self.data, &b.maps, &b.passes);
+        self.lod.encode(gpu, enc, &self.data, &b.g_lod, &self.args, self.settings.n_sub);
+        self.draw.encode(enc, &self.data, &b.g_draw, &self.args, targets, clear);
+    }
+
+    /// Records one frame into another renderer's targets — `color` (multisampled under
+    /// MSAA, resolved into `resolve`) and `depth`, both *loaded*, so that fibers behind
+    /// what is already drawn stay hidden and fibers in front hide it — with that renderer's
+    /// camera ([`FiberCamera::Matrix`]). The targets must have [`color_format`] and
+    /// [`DEPTH`] at [`FiberSettings::msaa`] samples and be `size` pixels. Nothing is
+    /// submitted: the LoD pass resets its arguments with `queue.write_buffer`, so submit
+    /// `enc` before recording the next frame of this renderer.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode_into(
+        &self,
+        gpu: &Gpu,
+        enc: &mut wgpu::CommandEncoder,
+        (color, resolve, depth): (
+            &wgpu::TextureView,
+            Option<&wgpu::TextureView>,
+            &wgpu::TextureView,
+        ),
+        size: (u32, u32),
+        cam: &FiberCamera,
+        lights: &[FiberLight],
+    ) -> Result<()> {
+        let samples = self.settings.msaa;
+        let c = color.texture();
+        let d = depth.texture();
+        let fits = |t: &wgpu::Texture, format| {
+            (t.width(), t.height()) == size && t.sample_count() == samples && t.format() == format
+        };
+        if !fits(c, color_format(samples)) || !fits(d, DEPTH) || (samples > 1) != resolve.is_some()
+        {
+            return Err(Error::Invalid(format!(
+                "encode_into: targets {:?} {}×{} ×{} and {:?} ×{} for a {}×{} frame of {:?}/{:?} at {samples} samples",
+                c.format(),
+                c.width(),
+                c.height(),
+                c.sample_count(),
+                d.format(),
+                d.sample_count(),
+                size.0,
+                size.1,
+                color_format(samples),
+                DEPTH
+            )));
+        }
+        let b = self.bindings(gpu, cam, lights, size)?;
+        gpu.scoped("fiber frame (into targets)", || {
+            self.record(gpu, enc, &b, (color, resolve, depth), None)
+        })?;
+        Ok(())
+    }
+
+    /// The pull = expand probe (DESIGN §2.5): the instance list `fiber_lod` makes for
+    /// `cam`, and every strip vertex's fiber point as the *vertex stage* of `fiber_draw`
+    /// evaluates it (`vs_probe`: `vs_main`'s decoding and generator call), one `vec4` per
+    /// (instance, k ≤ n_sub), origin-relative — for comparing bit for bit with
+    /// `fiber_expand` on the same list. Needs one subdivision count for every instance
+    /// (`lod_px ≤ 0`) and no core strips (their vertices are not fiber points).
+    pub fn pulled_points(
+        &self,
+        gpu: &Gpu,
+        cam: &FiberCamera,
+        lights: &[FiberLight],
+    ) -> Result<PulledPoints> {
+        let s = &self.settings;
+        if s.lod_px > 0.0 || s.effects.core || s.tubes {
+            return Err(Error::Invalid(
+                "pulled_points: needs lod_px ≤ 0, no core strips and no tubes".into(),
+            ));
+        }
+        let dev = &gpu.device;
+        let per = s.n_sub as u64 + 1;
+        let b = self.bindings(gpu, cam, lights, (256, 1))?;
+        let args_read = dev.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("probe args"),
+            size: size_of::<DrawArgsRaw>() as u64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut enc = dev.create_command_encoder(&Default::default());
+        self.lod.encode(gpu, &mut enc, &self.data, &b.g_lod, &self.args, s.n_sub);
+        enc.copy_buffer_to_buffer(&self.args, 0, &args_read, 0, args_read.size());
+        gpu.queue.submit([enc.finish()]);
+        let args: DrawArgsRaw = *bytemuck::from_bytes(&gpu.read_buffer(&args_read)?);
+        let n = args.instance_count as u64;
+        if n == 0 {
+            return Ok((Vec::new(), Vec::new()));
+        }
+        let inst_read = dev.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("probe instances"),
+            size: n * 8,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let height = (n * per).div_ceil(256) as u32;
+        gpu.check_frame(256, height, 1)?;
+        // The same list again (LoD with the probe's viewport; LoD is off, so only culling
+        // depends on the view, and the camera is the same).
+        let b = self.bindings(gpu, cam, lights, (256, height))?;
+        let target = gpu.target(
+            "pull probe",
+            (256, height),
+            1,
+            wgpu::TextureFormat::Rgba32Float,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        );
+        let view = target.create_view(&Default::default());
+        let pipeline = self.draw.probe_pipeline(gpu, &self.data)?;
+        gpu.scoped("pull probe", || {
+            let mut enc = dev.create_command_encoder(&Default::default());
+            self.lod.encode(gpu, &mut enc, &self.data, &b.g_lod, &self.args, s.n_sub);
+            enc.copy_buffer_to_buffer(&self.instances, 0, &inst_read, 0, n * 8);
+            {
+                let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("pull probe"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: None,
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                pass.set_pipeline(&pipeline);
+                pass.set_bind_group(0, &self.data.bind_group, &[]);
+                pass.set_bind_group(1, &b.g_draw, &[]);
+                pass.draw_indirect(&self.args, 0);
+            }
+            gpu.queue.submit([enc.finish()]);
+        })?;
+        let inst: Vec<[u32; 2]> = bytemuck::cast_slice(&gpu.read_buffer(&inst_read)?).to_vec();
+        let texels = gpu.read_texture(&target, 16)?;
+        let pts: Vec<[f32; 4]> =
+            bytemuck::cast_slice::<u8, [f32; 4]>(&texels)[..(n * per) as usize].to_vec();
+        Ok((inst, pts))
+    }
+
+    /// Renders one `width × height` frame over a background of `clear` (linear RGBA).
+    pub fn render(
+        &self,
+        gpu: &Gpu,
+        cam: &FiberCamera,
+        lights: &[FiberLight],
+        (width, height): (u32, u32),
+        clear: [f64; 4],
+    ) -> Result<FiberImage> {
+        gpu.check_frame(width, height, self.settings.msaa)?;
+        let dev = &gpu.device;
+        let b = self.bindings(gpu, cam, lights, (width, height))?;
         let samples = self.settings.msaa;
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
         let format = color_format(samples);
@@ -436,13 +623,11 @@ impl FiberRenderer {
         });
         gpu.scoped("fiber frame", || {
             let mut enc = dev.create_command_encoder(&Default::default());
-            self.shadow.encode(gpu, &mut enc, &self.data, &maps, &passes);
-            self.lod.encode(gpu, &mut enc, &self.data, &g_lod, &self.args, self.settings.n_sub);
             let targets = match &mv {
                 Some(m) => (m, Some(&rv), &dv),
                 None => (&rv, None, &dv),
             };
-            self.draw.encode(&mut enc, &self.data, &g_draw, &self.args, targets, clear);
+            self.record(gpu, &mut enc, &b, targets, Some(clear));
             enc.copy_buffer_to_buffer(&self.args, 0, &readback, 0, readback.size());
             gpu.queue.submit([enc.finish()]);
         })?;

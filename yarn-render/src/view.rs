@@ -38,6 +38,17 @@ pub enum FiberCamera {
         /// Size of that rectangle.
         extent: [f64; 2],
     },
+    /// Another renderer's camera, as its world → clip matrix (wgpu depth `[0, 1]`), so that
+    /// fibers share its depth buffer (`btf render`'s `[[yarns]]`): frustum, LoD scale and
+    /// depth all come from this matrix, near and far planes included.
+    Matrix {
+        /// World → clip, row-major (`clip = view_proj · (p, 1)`).
+        view_proj: [[f64; 4]; 4],
+        /// Eye position (perspective).
+        eye: [f64; 3],
+        /// Unit direction towards the camera when the projection is orthographic.
+        ortho_to_camera: Option<[f64; 3]>,
+    },
 }
 
 impl FiberCamera {
@@ -150,6 +161,9 @@ impl ViewSetup {
             FiberCamera::Oblique { view, z_ref, origin: o, extent } => {
                 return Self::oblique(view, z_ref, o, extent, origin, centre, radius, width);
             }
+            FiberCamera::Matrix { view_proj, eye, ortho_to_camera } => {
+                return Self::matrix(&view_proj, eye, ortho_to_camera, origin, height);
+            }
         };
         let rel = |p: [f64; 3]| Vector3::new(p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]);
         let eye = rel(eye);
@@ -211,6 +225,47 @@ impl ViewSetup {
             }
         };
         Ok(ViewSetup { view_proj: proj * view, eye, forward: f, px_per_metre, orthographic })
+    }
+
+    /// A given world → clip matrix moved to origin-relative coordinates,
+    /// `M · T(origin)`, in f64. Pixels per metre from its rows: perspective
+    /// `½ h · |row₁.xyz| / |row₃.xyz|` (row 1 is `f_y · up`, row 3 the unit forward),
+    /// orthographic `½ h · |row₁.xyz|` (row 1 is `2/H · up`).
+    fn matrix(
+        m: &[[f64; 4]; 4],
+        eye: [f64; 3],
+        ortho_to_camera: Option<[f64; 3]>,
+        origin: [f64; 3],
+        height: u32,
+    ) -> Result<Self> {
+        if !(m.iter().flatten().all(|x| x.is_finite()) && eye.iter().all(|x| x.is_finite())) {
+            return Err(Error::Invalid("fiber camera: non-finite matrix or eye".into()));
+        }
+        let world = Matrix4::from_fn(|r, c| m[r][c]);
+        let shift = Matrix4::new_translation(&Vector3::new(origin[0], origin[1], origin[2]));
+        let view_proj = world * shift;
+        let xyz = |r: usize| Vector3::new(m[r][0], m[r][1], m[r][2]);
+        let up_scale = xyz(1).norm();
+        let (forward, px_per_metre, orthographic) = match ortho_to_camera {
+            Some(d) => {
+                let d = Vector3::new(d[0], d[1], d[2]);
+                if d.norm() <= 0.0 || !d.norm().is_finite() {
+                    return Err(Error::Invalid("fiber camera: zero ortho direction".into()));
+                }
+                (-d.normalize(), 0.5 * height as f64 * up_scale, true)
+            }
+            None => {
+                let f = xyz(3);
+                if f.norm() <= 0.0 || !f.norm().is_finite() {
+                    return Err(Error::Invalid(
+                        "fiber camera: a perspective matrix needs a forward row".into(),
+                    ));
+                }
+                (f.normalize(), 0.5 * height as f64 * up_scale / f.norm(), false)
+            }
+        };
+        let eye = Vector3::new(eye[0] - origin[0], eye[1] - origin[1], eye[2] - origin[2]);
+        Ok(ViewSetup { view_proj, eye, forward, px_per_metre, orthographic })
     }
 
     /// The oblique camera's matrix: clip x, y from the reference-plane entry, depth from

@@ -29,6 +29,7 @@ mod environment;
 mod frame_group;
 mod geometry;
 mod materials;
+mod overlay;
 mod passes;
 mod targets;
 mod vertex_buffers;
@@ -52,6 +53,7 @@ use environment::{EnvInputs, EnvState};
 use frame_group::FrameGroup;
 use geometry::SceneGeometry;
 use materials::Materials;
+pub use overlay::{Overlay, OverlayEnvironment, OverlayTargets, OverlayView};
 use passes::Passes;
 use std::time::Instant;
 use targets::FrameTargets;
@@ -71,6 +73,26 @@ pub struct RenderOptions {
     /// Keep the full RGB per-vertex layout where the separable one applies (per-vertex mode
     /// under point and directional lights; `per_vertex.rs`): for comparing the two, slower.
     pub full_vertex_layout: bool,
+    /// World bounds `(lo, hi)` of what overlays will draw ([`Renderer::add_overlay`]), so
+    /// that the camera's near and far planes cover it as well as the meshes.
+    pub extra_bounds: Option<([f32; 3], [f32; 3])>,
+}
+
+/// The camera of `scene` around the mesh and the overlays' bounds.
+fn camera_setup(
+    scene: &Scene,
+    mesh: &btf_light::mesh::Mesh,
+    options: &RenderOptions,
+    extra_depth: f32,
+) -> CameraSetup {
+    let (mut lo, mut hi) = mesh.bounds();
+    if let Some((a, b)) = options.extra_bounds {
+        for k in 0..3 {
+            lo[k] = lo[k].min(a[k]);
+            hi[k] = hi[k].max(b[k]);
+        }
+    }
+    CameraSetup::with_bounds(scene, (lo, hi), extra_depth)
 }
 
 /// A scene ready to render.
@@ -89,6 +111,8 @@ pub struct Renderer {
     targets: Option<FrameTargets>,
     /// The passes of the last frame encoded.
     last: PassRecord,
+    /// Geometry drawn after the BTF pass into the same targets (`[[yarns]]`).
+    overlays: Vec<Box<dyn Overlay>>,
 }
 
 /// The BTF pass's key for `scene`: evaluation, blending, shadows, lights, constant group
@@ -123,7 +147,7 @@ impl Renderer {
         materials.upload(gpu, scene, &btf)?;
         let geometry = SceneGeometry::build(gpu, mesh, &tri_desc, materials.slot_of_desc());
         let passes = Passes::build(gpu, scene, &options, btf, &materials, &geometry)?;
-        let camera = CameraSetup::new(scene, &geometry.mesh, passes.extra_camera_depth());
+        let camera = camera_setup(scene, &geometry.mesh, &options, passes.extra_camera_depth());
         let blur = fx.terminator_blur;
         let frame = FrameGroup::new(gpu, &passes.btf, passes.shadowing.as_ref(), blur);
         let mut renderer = Renderer {
@@ -138,6 +162,7 @@ impl Renderer {
             camera,
             targets: None,
             last: PassRecord::default(),
+            overlays: Vec::new(),
         };
         if scene.environment().is_some() {
             // the corner-id pass reads this camera from the frame uniform
@@ -156,6 +181,18 @@ impl Renderer {
             renderer.environment = EnvState::build(gpu, &input)?;
         }
         Ok(renderer)
+    }
+
+    /// Adds geometry drawn after the BTF pass into the frame's colour and depth targets with
+    /// the same camera (see [`Overlay`]); its bounds belong in
+    /// [`RenderOptions::extra_bounds`]. The BTF pass then keeps its depth for it.
+    pub fn add_overlay(&mut self, overlay: Box<dyn Overlay>) {
+        self.overlays.push(overlay);
+    }
+
+    /// Overlays added.
+    pub fn overlay_count(&self) -> usize {
+        self.overlays.len()
     }
 
     /// The BTF pass's pipeline key: which variant the scene built (evaluation, blending,
@@ -358,6 +395,7 @@ impl Renderer {
         let frame_group = &self.frame.group;
         let corners = &self.geometry.corner_buffer;
         let name = passes.main_name().to_string();
+        let keep_depth = !self.overlays.is_empty();
         gpu.scoped("BTF pass", || {
             timer.pass(&name, |enc, ts| {
                 let ms = color_ms.as_ref();
@@ -369,7 +407,7 @@ impl Renderer {
                         resolve_target: ms.map(|_| target),
                         ops: wgpu::Operations { load, store: wgpu::StoreOp::Store },
                     })],
-                    depth_stencil_attachment: Some(cleared_depth(&depth, false)),
+                    depth_stencil_attachment: Some(cleared_depth(&depth, keep_depth)),
                     timestamp_writes: ts,
                     occlusion_query_set: None,
                     multiview_mask: None,
@@ -384,6 +422,44 @@ impl Renderer {
         })??;
         if self.options.count_reads {
             timer.encoder().copy_buffer_to_buffer(&self.frame.counters, 0, &counters_read, 0, 16);
+        }
+        self.encode_overlays(gpu, timer, target, color_ms.as_ref(), &depth)
+    }
+
+    /// Draws the overlays into the frame's targets after the BTF pass.
+    fn encode_overlays(
+        &mut self,
+        gpu: &Gpu,
+        timer: &mut PassTimer,
+        target: &wgpu::TextureView,
+        color_ms: Option<&wgpu::TextureView>,
+        depth: &wgpu::TextureView,
+    ) -> Result<()> {
+        if self.overlays.is_empty() {
+            return Ok(());
+        }
+        let msaa = self.scene.effects.msaa;
+        let targets = OverlayTargets {
+            color: color_ms.unwrap_or(target),
+            resolve: color_ms.map(|_| target),
+            depth,
+            format: self.target_format(),
+            samples: msaa,
+            size: self.size(),
+        };
+        let environment = self.environment.as_ref().map(|e| {
+            let env = e.env();
+            OverlayEnvironment {
+                total_power: env.total_power(),
+                exposure: env.exposure(),
+                rotation_deg: env.rotation_deg(),
+                revision: env.revision(),
+            }
+        });
+        let view = OverlayView { camera: &self.camera, scene: &self.scene, environment };
+        for o in &mut self.overlays {
+            let name = o.name().to_string();
+            timer.encoded(&name, |enc| o.encode(gpu, enc, &targets, &view))?;
         }
         Ok(())
     }
@@ -611,7 +687,7 @@ impl Renderer {
     pub fn set_camera(&mut self, camera: &Camera) -> Result<()> {
         self.scene.camera = camera.clone();
         let extra_depth = self.passes.extra_camera_depth();
-        let setup = CameraSetup::new(&self.scene, &self.geometry.mesh, extra_depth);
+        let setup = camera_setup(&self.scene, &self.geometry.mesh, &self.options, extra_depth);
         if setup != self.camera
             && let Some(e) = self.environment.as_mut()
         {
@@ -631,7 +707,7 @@ impl Renderer {
         gpu.check_frame(width, height, self.scene.effects.msaa)?;
         (self.scene.output.width, self.scene.output.height) = (width, height);
         let extra_depth = self.passes.extra_camera_depth();
-        self.camera = CameraSetup::new(&self.scene, &self.geometry.mesh, extra_depth);
+        self.camera = camera_setup(&self.scene, &self.geometry.mesh, &self.options, extra_depth);
         if self.passes.shadowing.as_ref().is_some_and(Shadowing::sized_by_frame) {
             let shadowing = Shadowing::new(gpu, &self.scene, &self.geometry.mesh)?;
             let blur = self.scene.effects.terminator_blur;

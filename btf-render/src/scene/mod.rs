@@ -8,11 +8,13 @@
 mod effects;
 mod light;
 mod transmission;
+mod yarns;
 
 pub use crate::uniforms::MAX_LIGHTS;
 pub use effects::{Effects, Evaluation, Shadows};
 pub use light::{EigenSets, EnvironmentLight, Light};
 pub use transmission::{Albedo, MAX_TAU, PhaseDesc, TauTexture, TransmissionDesc};
+pub use yarns::{MAX_STITCHES, MAX_WALES, YarnAo, YarnMethod, YarnsDesc, names_file};
 
 use crate::{Error, Result};
 use btf_light::mesh::PlanarUv;
@@ -38,6 +40,10 @@ pub struct Scene {
     /// What to compute and how.
     #[serde(default)]
     pub effects: Effects,
+    /// Knit patches drawn as fiber-level yarns next to the meshes (data here; drawn by
+    /// `yarn-render` through [`crate::renderer::Overlay`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub yarns: Vec<YarnsDesc>,
 }
 
 /// Image output parameters.
@@ -165,6 +171,9 @@ impl Scene {
                 t.resolve(dir);
             }
         }
+        for y in &mut scene.yarns {
+            y.resolve(dir);
+        }
         for l in &mut scene.lights {
             if let Light::Environment(e) = l {
                 e.path = dir.join(&e.path);
@@ -194,6 +203,9 @@ impl Scene {
             if let Light::Environment(e) = l {
                 out.push((format!("[[lights]] {i} path"), e.path.clone()));
             }
+        }
+        for (i, y) in self.yarns.iter().enumerate() {
+            y.input_paths(i, &mut out);
         }
         out
     }
@@ -298,6 +310,20 @@ impl Scene {
         if o.show_environment && self.environment().is_none() {
             return bad("output.show_environment".into(), "needs an environment light");
         }
+        for (i, y) in self.yarns.iter().enumerate() {
+            if let Err((key, what)) = y.validate(&format!("yarns[{i}]")) {
+                return bad(key, &what);
+            }
+        }
+        if !self.yarns.is_empty()
+            && let Some(i) = self.materials.iter().position(|m| m.transmission.is_some())
+        {
+            return bad(
+                format!("materials[{i}].transmission"),
+                "thin cloth in a scene with [[yarns]] is not supported yet (the yarns would be \
+                 drawn over the blended cloth)",
+            );
+        }
         Ok(())
     }
 
@@ -398,5 +424,64 @@ mod tests {
         assert!(e.contains("sharpness"), "{e}");
         let e = load(&format!("{MINIMAL}{ENV}{ENV}")).unwrap_err().to_string();
         assert!(e.contains("at most one environment light"), "{e}");
+    }
+
+    const YARNS: &str =
+        "[[yarns]]\nchart = \"stockinette\"\nmesh = \"plane.obj\"\nwales = 4\ncourses = 4\n";
+
+    #[test]
+    fn yarns_entries_get_defaults_and_resolved_paths() {
+        let s = load(
+            &format!("{MINIMAL}{YARNS}chart = \"charts/rib.chart\"\n")
+                .replace("chart = \"stockinette\"\n", ""),
+        )
+        .unwrap();
+        let y = &s.yarns[0];
+        assert!(y.mesh.is_absolute() && y.mesh.ends_with("plane.obj"));
+        assert!(Path::new(&y.chart).is_absolute(), "{}", y.chart);
+        assert_eq!(
+            (y.yarn.as_str(), y.lod_px, y.seed, y.method),
+            ("cotton-2ply", 1.0, 1, YarnMethod::Fibers)
+        );
+        assert!(s.input_paths().iter().any(|(k, _)| k == "[[yarns]] 0 chart"));
+        let s = load(&format!("{MINIMAL}{YARNS}")).unwrap();
+        assert_eq!(s.yarns[0].chart, "stockinette");
+        assert!(load(MINIMAL).unwrap().yarns.is_empty());
+    }
+
+    #[test]
+    fn bad_yarns_keys_are_named() {
+        let cases = [
+            ("wales = 4", "wales = 0", "yarns[0].wales"),
+            ("courses = 4", "courses = 5000", "yarns[0].courses"),
+            ("wales = 4\ncourses = 4", "wales = 4096\ncourses = 4096", "yarns[0].wales"),
+            ("wales = 4", "wales = 4\nstitch_uv = [0.0, 0.1]", "yarns[0].stitch_uv"),
+            ("wales = 4", "wales = 4\nstitch_uv = [0.1, -0.1]", "yarns[0].stitch_uv"),
+            ("wales = 4", "wales = 4\nmethod = \"strips\"", "yarns[0].method"),
+            ("wales = 4", "wales = 4\nmethod = \"lumislice\"", "yarns[0].method"),
+            ("wales = 4", "wales = 4\nlod_px = -1", "yarns[0].lod_px"),
+            ("wales = 4", "wales = 4\nalbedo = [2, 0, 0]", "yarns[0].albedo"),
+        ];
+        for (from, to, key) in cases {
+            let e = load(&format!("{MINIMAL}{YARNS}").replace(from, to)).unwrap_err().to_string();
+            assert!(e.contains(key), "{to}: {e}");
+        }
+        let e = load(
+            &format!("{MINIMAL}{YARNS}").replace("wales = 4", "wales = 4\nmethod = \"splines\""),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("method") && e.contains("splines"), "{e}");
+        let e = load(&format!("{MINIMAL}{YARNS}").replace("wales = 4", "wales = 10000000000"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("wales"), "{e}");
+        let e = load(&format!("{MINIMAL}{YARNS}colour = 1\n")).unwrap_err().to_string();
+        assert!(e.contains("colour"), "{e}");
+        let thin = MINIMAL
+            .replace("store = \"m.eigen\"", "store = \"m.eigen\"\ntransmission = { tau = 0.1 }");
+        load(&thin).unwrap();
+        let e = load(&format!("{thin}{YARNS}")).unwrap_err().to_string();
+        assert!(e.contains("materials[0].transmission") && e.contains("[[yarns]]"), "{e}");
     }
 }

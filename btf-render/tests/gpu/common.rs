@@ -369,6 +369,7 @@ impl SceneBuilder {
                 // pixel centres (the scene default, 4 samples, averages silhouettes); the
                 // tests that are about MSAA ask for it.
                 effects: Effects { msaa: 1, ..Effects::default() },
+                yarns: Vec::new(),
             },
         };
         b = b.ortho(OVER_PLANE);

@@ -135,8 +135,56 @@ impl DrawPass {
         Ok(DrawPass { pipeline, layout, samples })
     }
 
-    /// Records the draw into `color`/`depth` (cleared to `clear`), reading the instance
-    /// count from `args` at offset 0.
+    /// The pull = expand probe (tests, DESIGN §2.5): `vs_probe`/`fs_probe` of the same
+    /// module and layouts, a point per strip vertex into an `Rgba32Float` target (see the
+    /// WGSL).
+    pub fn probe_pipeline(&self, gpu: &Gpu, data: &YarnBuffers) -> Result<wgpu::RenderPipeline> {
+        let dev = &gpu.device;
+        gpu.scoped("fiber_draw probe pipeline", || {
+            let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("fiber_draw.wgsl (probe)"),
+                source: wgpu::ShaderSource::Wgsl(source().into()),
+            });
+            let pl = dev.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("fiber_draw probe"),
+                bind_group_layouts: &[Some(&data.layout), Some(&self.layout)],
+                immediate_size: 0,
+            });
+            dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("fiber_draw probe"),
+                layout: Some(&pl),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_probe"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: wgpu::PrimitiveState {
+                    topology: wgpu::PrimitiveTopology::PointList,
+                    ..Default::default()
+                },
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_probe"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: wgpu::TextureFormat::Rgba32Float,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        })
+        .map_err(|e| Error::Gpu(e.to_string()))
+    }
+
+    /// Records the draw into `color`/`depth`, cleared to `clear` (depth discarded after) or,
+    /// with `None`, loaded — another renderer's targets, whose depth the strips test against
+    /// and keep — reading the instance count from `args` at offset 0.
     pub fn encode(
         &self,
         enc: &mut wgpu::CommandEncoder,
@@ -144,31 +192,28 @@ impl DrawPass {
         group1: &wgpu::BindGroup,
         args: &wgpu::Buffer,
         targets: (&wgpu::TextureView, Option<&wgpu::TextureView>, &wgpu::TextureView),
-        clear: [f64; 4],
+        clear: Option<[f64; 4]>,
     ) {
         let (color, resolve, depth) = targets;
+        let (color_load, depth_load, depth_store) = match clear {
+            Some(c) => (
+                wgpu::LoadOp::Clear(wgpu::Color { r: c[0], g: c[1], b: c[2], a: c[3] }),
+                wgpu::LoadOp::Clear(1.0),
+                wgpu::StoreOp::Discard,
+            ),
+            None => (wgpu::LoadOp::Load, wgpu::LoadOp::Load, wgpu::StoreOp::Store),
+        };
         let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("fiber_draw"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                 view: color,
                 depth_slice: None,
                 resolve_target: resolve,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color {
-                        r: clear[0],
-                        g: clear[1],
-                        b: clear[2],
-                        a: clear[3],
-                    }),
-                    store: wgpu::StoreOp::Store,
-                },
+                ops: wgpu::Operations { load: color_load, store: wgpu::StoreOp::Store },
             })],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Discard,
-                }),
+                depth_ops: Some(wgpu::Operations { load: depth_load, store: depth_store }),
                 stencil_ops: None,
             }),
             timestamp_writes: None,

@@ -175,6 +175,45 @@ fn lod_lambda_draw(w_fiber: f32, w_ply: f32, w_lod: f32) -> f32 {
     return clamp((w_fiber / w_lod) * (w_ply - w_lod) / (w_ply - w_fiber), 0.0, 1.0);
 }
 
+// The segment parameter of strip vertex `vi` of instance record `rec`: vertex pair k at
+// u = k/n_sub, pairs beyond the instance's n_sub collapsed onto its end.
+fn strip_t(rec: vec2<u32>, vi: u32) -> f32 {
+    let n_sub = max(rec.y >> 24u, 1u);
+    return f32(min(vi / 2u, n_sub)) / f32(n_sub);
+}
+
+// ---- pull = expand probe (tests, DESIGN §2.5): the vertex stage's fiber point of strip
+// vertex vi of instance ii — the same decoding (strip_t) and generator call
+// (fiber_sample) as vs_main — drawn as a point into texel ii·(n_sub + 1) + vi/2 of a
+// viewport-sized Rgba32Float target. ----
+
+struct ProbeOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) @interpolate(flat) p: vec4<f32>,
+}
+
+@vertex
+fn vs_probe(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> ProbeOut {
+    let rec = instances[ii];
+    let n_sub = max(rec.y >> 24u, 1u);
+    let slot = ii * (n_sub + 1u) + min(vi / 2u, n_sub);
+    let w = u32(view.viewport.x);
+    let h = u32(view.viewport.y);
+    let px = (f32(slot % w) + 0.5) / f32(w);
+    let py = (f32(slot / w) + 0.5) / f32(h);
+    let loops = (view.lod.z & 2u) != 0u;
+    let fs = fiber_sample(rec.x, (rec.y >> 16u) & 0xffu, rec.y & 0xffffu, strip_t(rec, vi), loops);
+    var out: ProbeOut;
+    out.clip = vec4<f32>(2.0 * px - 1.0, 1.0 - 2.0 * py, 0.5, 1.0);
+    out.p = vec4<f32>(fs.pos, 1.0);
+    return out;
+}
+
+@fragment
+fn fs_probe(in: ProbeOut) -> @location(0) vec4<f32> {
+    return in.p;
+}
+
 @vertex
 fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> VertexOut {
     let rec = instances[ii];
@@ -182,9 +221,8 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     let fib = rec.y & 0xffffu;
     let ply = (rec.y >> 16u) & 0xffu;
     let n_sub = max(rec.y >> 24u, 1u);
-    let k = min(vi / 2u, n_sub);
     let side = select(-1.0, 1.0, (vi & 1u) == 1u);
-    let t = f32(k) / f32(n_sub);
+    let t = strip_t(rec, vi);
     let loops = (view.lod.z & 2u) != 0u;
     let tube = fib == 0xffffu;
     // Tangent from a neighbour a quarter subdivision away (backwards at the end).

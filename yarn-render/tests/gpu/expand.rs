@@ -75,3 +75,57 @@ fn every_wgsl_file_is_valid() {
         btf_render::gpu::validate_wgsl(name, &src).unwrap();
     }
 }
+
+/// DESIGN §2.5 "pull = expand": the fiber points the vertex stage of `fiber_draw`
+/// evaluates (its decoding and generator call, rasterised as points into an f32 target by
+/// `FiberRenderer::pulled_points`) equal `fiber_expand`'s on the same instance list, bit
+/// for bit.
+#[test]
+fn pulled_fiber_points_equal_the_expand_pass_bit_for_bit() {
+    let Some(gpu) = Gpu::for_tests("pulled_fiber_points_equal_the_expand_pass") else { return };
+    let p = cotton();
+    let opts = PackOptions { seed: 7, frame_samples_per_segment: 4, tiles: [1, 1] };
+    let packed = PackedYarns::new(&crane_patch(2, 2), std::slice::from_ref(&p), &opts).unwrap();
+    let n_sub = 6;
+    let settings = yarn_render::FiberSettings {
+        n_sub,
+        lod_px: 0.0,
+        cull: false,
+        msaa: 1,
+        effects: yarn_render::FiberEffects::none(),
+        ..Default::default()
+    };
+    let bcsdf = yarn::bcsdf::FiberBcsdf::khungurn(&Default::default()).unwrap();
+    let r = yarn_render::FiberRenderer::new(&gpu, &packed, &bcsdf, settings).unwrap();
+    let c = [0, 1, 2].map(|a| 0.5 * (packed.bounds.0[a] + packed.bounds.1[a]));
+    let cam = yarn_render::FiberCamera::perspective(
+        [c[0], c[1] - 0.03, c[2] + 0.03],
+        c,
+        [0.0, 0.0, 1.0],
+        40.0,
+    );
+    let (inst, pulled) = r.pulled_points(&gpu, &cam, &[]).unwrap();
+    let data = YarnBuffers::new(&gpu, &packed).unwrap();
+    let expanded =
+        ExpandPass::new(&gpu, &data).unwrap().read(&gpu, &data, &inst, n_sub, true).unwrap();
+    assert_eq!(pulled.len(), expanded.len());
+    let differ = pulled
+        .iter()
+        .zip(&expanded)
+        .filter(|(a, b)| (0..3).any(|k| a[k].to_bits() != b[k].to_bits()))
+        .count();
+    let worst = pulled
+        .iter()
+        .zip(&expanded)
+        .flat_map(|(a, b)| (0..3).map(move |k| (a[k] - b[k]).abs()))
+        .fold(0.0f32, f32::max);
+    eprintln!(
+        "{} instances × {} points: {differ} of {} points differ in any bit (worst {worst:e} m)",
+        inst.len(),
+        n_sub + 1,
+        pulled.len()
+    );
+    assert!(inst.len() > 100, "{}", inst.len());
+    assert!(pulled.iter().all(|q| q[3] == 1.0), "every probe texel written");
+    assert_eq!(differ, 0, "worst {worst:e}");
+}

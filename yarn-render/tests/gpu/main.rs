@@ -9,3 +9,4 @@ mod expand;
 mod lod;
 mod oblique;
 mod reference;
+mod scene;

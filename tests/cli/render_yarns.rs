@@ -1,0 +1,190 @@
+//! `btf render` of a scene with `[[yarns]]`: the example scene `examples/scenes/knit-swatch.toml`
+//! (a rib swatch of fiber-level yarns above a corduroy BTF floor) rendered by the binary,
+//! measured against the standalone fiber renderer of the same yarns, camera and lights; and
+//! bad `[[yarns]]` entries refused by the binary naming the key, before any GPU work and
+//! without writing an image. GPU checks skip without an adapter unless `BTF_REQUIRE_GPU=1`.
+
+use crate::common::{Dir, read_exr};
+use btf_render::{Gpu, RenderOptions, Renderer, Scene};
+use std::path::Path;
+use yarn_render::FiberRenderer;
+use yarn_render::scene::overlay::{scene_bcsdf, settings};
+use yarn_render::scene::{bounds_f32, fiber_camera, fiber_lights};
+
+const EXAMPLES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/scenes");
+const SIZE: u32 = 64;
+
+/// The example scene, its meshes and a small corduroy store in a temporary folder.
+fn example(d: &Dir) {
+    for f in ["knit-swatch.toml", "plane.obj", "swatch.obj"] {
+        std::fs::copy(Path::new(EXAMPLES).join(f), d.path(f)).unwrap();
+    }
+    d.ok(&["synth", "material", "--kind", "corduroy", "--size", "8", "-o", "corduroy.btf"]);
+    d.ok(&["compress", "corduroy.btf", "-o", "corduroy.eigen", "--components", "8"]);
+}
+
+#[test]
+fn the_knit_swatch_example_renders_its_yarns_as_the_standalone_fiber_renderer_does() {
+    let d = Dir::new();
+    example(&d);
+    let size = SIZE.to_string();
+    let o = d.btf(&[
+        "render",
+        "knit-swatch.toml",
+        "--width",
+        &size,
+        "--height",
+        &size,
+        "-o",
+        "ks.png",
+        "--exr",
+        "ks.exr",
+    ]);
+    if String::from_utf8_lossy(&o.stderr).contains("no GPU adapter") {
+        assert!(std::env::var("BTF_REQUIRE_GPU").as_deref() != Ok("1"), "no GPU adapter");
+        return;
+    }
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(d.path("ks.png").is_file());
+    let (w, h, cli) = read_exr(&d.path("ks.exr"));
+    assert_eq!((w, h), (SIZE as usize, SIZE as usize));
+    // The same yarns, camera and lights through FiberRenderer alone.
+    let Some(gpu) = Gpu::for_tests("knit_swatch_example") else { return };
+    let path = d.path("knit-swatch.toml");
+    let mut scene = Scene::load(&path).unwrap();
+    (scene.output.width, scene.output.height) = (SIZE, SIZE);
+    let yarns = yarn_render::scene::build(&scene, &path).unwrap();
+    let options = RenderOptions { extra_bounds: bounds_f32(&yarns), ..Default::default() };
+    let camera = *Renderer::new(&gpu, &scene, options).unwrap().camera();
+    let y = &scene.yarns[0];
+    let bake = yarn_precompute::BakeSettings { seed: y.seed, ..Default::default() };
+    let fibers = FiberRenderer::with_bake(
+        &gpu,
+        &yarns[0].packed,
+        &scene_bcsdf().unwrap(),
+        settings(&scene, y),
+        &bake,
+        None,
+    )
+    .unwrap();
+    let lights = fiber_lights(&scene.lights);
+    let img = fibers.render(&gpu, &fiber_camera(&camera), &lights, (SIZE, SIZE), [0.0; 4]).unwrap();
+    let floor = Renderer::new(&gpu, &scene, options).unwrap().render(&gpu).unwrap();
+    // MSAA resolves the mean of a pixel's samples, and both passes shade once per pixel:
+    // where the standalone yarns cover a fraction α of the samples (over a clear of 0), the
+    // binary's pixel is their sum plus (1 − α) of the floor alone, to f16 rounding.
+    let n = (SIZE * SIZE) as usize;
+    let yarn: Vec<usize> = (0..n).filter(|&i| img.pixels[i][3] > 0.0).collect();
+    let expected = |i: usize, c: usize| {
+        img.pixels[i][c] as f64 + (1.0 - img.pixels[i][3] as f64) * floor.rgb[3 * i + c] as f64
+    };
+    let (mut got, mut want, mut worst) = (0.0, 0.0, 0.0f64);
+    for &i in &yarn {
+        for c in 0..3 {
+            got += cli[3 * i + c] as f64;
+            want += expected(i, c);
+            worst = worst.max((cli[3 * i + c] as f64 - expected(i, c)).abs());
+        }
+    }
+    let ratio = got / want;
+    // Coverage: pixels the binary changed from the floor alone against the yarn's pixels.
+    let changed = (0..n)
+        .filter(|&i| (0..3).any(|c| (cli[3 * i + c] - floor.rgb[3 * i + c]).abs() > 1e-3))
+        .count();
+    let coverage: f64 = yarn.iter().map(|&i| img.pixels[i][3] as f64).sum::<f64>() / n as f64;
+    eprintln!(
+        "{} of {n} pixels with yarn (mean coverage {coverage:.4}), {changed} changed from the \
+         floor alone; yarn-region mean radiance binary / (standalone + (1 − α) floor) = \
+         {ratio:.6}, worst pixel difference {worst:.2e}",
+        yarn.len()
+    );
+    assert!(yarn.len() > n / 10, "the swatch must cover part of the frame: {}", yarn.len());
+    assert!((ratio - 1.0).abs() < 1e-3, "{ratio}");
+    // f16: 2⁻¹¹ of values below 2, summed over two terms.
+    assert!(worst < 2e-3, "{worst}");
+    assert!(changed <= yarn.len() && changed * 10 >= yarn.len() * 9, "{changed}");
+}
+
+#[test]
+fn bad_yarns_entries_are_refused_by_the_binary_naming_the_key() {
+    let d = Dir::new();
+    for f in ["knit-swatch.toml", "plane.obj", "swatch.obj"] {
+        std::fs::copy(Path::new(EXAMPLES).join(f), d.path(f)).unwrap();
+    }
+    let text = std::fs::read_to_string(d.path("knit-swatch.toml")).unwrap();
+    let cases = [
+        ("yarn = \"cotton-2ply\"", "yarn = \"silk-9ply\"", vec!["yarns[0].yarn", "silk-9ply"]),
+        ("chart = \"rib2x2\"", "chart = \"argyle\"", vec!["yarns[0].chart", "argyle"]),
+        ("method = \"fibers\"", "method = \"strips\"", vec!["yarns[0].method", "not implemented"]),
+        ("wales = 8", "wales = 0", vec!["yarns[0].wales"]),
+        (
+            "wales = 8\ncourses = 8",
+            "wales = 4096\ncourses = 4096",
+            vec!["yarns[0].wales", "stitches"],
+        ),
+        (
+            "uv_origin = [0.05, 0.1]",
+            "uv_origin = [0.5, 0.1]",
+            vec!["yarns[0].uv_origin", "stitch cell (course 0, wale", "uv (", "no preimage"],
+        ),
+        ("mesh = \"swatch.obj\"", "mesh = \"gone.obj\"", vec!["yarns[0].mesh", "gone.obj"]),
+    ];
+    for (from, to, wanted) in cases {
+        assert!(text.contains(from), "{from}");
+        std::fs::write(d.path("bad.toml"), text.replace(from, to)).unwrap();
+        let err = d.fails(&["render", "bad.toml", "-o", "bad.png"]);
+        for w in wanted {
+            assert!(err.contains(w), "{to}: '{w}' not in: {err}");
+        }
+        assert!(!d.path("bad.png").exists(), "{to}: an image was written");
+    }
+}
+
+#[test]
+fn btf_relight_draws_the_yarns_in_every_rotation() {
+    let d = Dir::new();
+    example(&d);
+    d.ok(&["synth", "env", "--kind", "sky", "--width", "32", "-o", "sky.exr"]);
+    let text = std::fs::read_to_string(d.path("knit-swatch.toml")).unwrap();
+    let start = text.find("\n[[yarns]]\n").unwrap();
+    let end = text.find("\n[camera]\n").unwrap();
+    let bare = format!("{}{}", &text[..start], &text[end..]);
+    std::fs::write(d.path("bare.toml"), bare).unwrap();
+    let mut frames = Vec::new();
+    for (scene, out) in [("knit-swatch.toml", "with"), ("bare.toml", "without")] {
+        let o = d.btf(&[
+            "relight",
+            scene,
+            "--env",
+            "sky.exr",
+            "--rotations",
+            "2",
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "--exr",
+            "-o",
+            out,
+        ]);
+        if String::from_utf8_lossy(&o.stderr).contains("no GPU adapter") {
+            assert!(std::env::var("BTF_REQUIRE_GPU").as_deref() != Ok("1"), "no GPU adapter");
+            return;
+        }
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        for r in 0..2 {
+            frames.push(read_exr(&d.path(&format!("{out}/sky_r00{r}.exr"))).2);
+        }
+    }
+    let n = 32 * 32;
+    for r in 0..2 {
+        let (with, without) = (&frames[r], &frames[2 + r]);
+        let yarn =
+            (0..n).filter(|&i| (0..3).any(|c| with[3 * i + c] != without[3 * i + c])).count();
+        let finite = with.iter().all(|v| v.is_finite());
+        eprintln!("rotation {r}: {yarn} of {n} pixels differ from the scene without [[yarns]]");
+        assert!(finite);
+        // The swatch covers about a tenth of the frame at 64² (799 of 4096 pixels touched).
+        assert!(yarn > n / 20 && yarn < n / 2, "{yarn}");
+    }
+}

@@ -1,0 +1,167 @@
+//! [`YarnOverlay`]: a scene's `[[yarns]]` drawn by the fiber renderer of [W19] (§5: fibers
+//! generated from the control points every frame, LoD of [W19 eq. 4], the fiber BCSDF of
+//! [W19 eq. 5–6]) into btf-render's own colour and depth targets, after its BTF pass, with
+//! its camera matrix and the scene's lights.
+//!
+//! **How the two renderers meet — choice (a), drawing into shared targets.** btf-render
+//! keeps its depth buffer when an overlay is present and hands the overlay its colour
+//! target (multisampled under MSAA, with the resolve target), depth buffer and camera
+//! ([`btf_render::renderer::Overlay`]); [`crate::FiberRenderer::encode_into`] loads both and
+//! depth-tests its strips against the meshes with the very matrix the meshes were drawn
+//! with ([`crate::FiberCamera::Matrix`]). Both use `Depth32Float`, `Less`, depth in
+//! `[0, 1]`, the same colour format (`Rgba32Float`, `Rgba16Float` under MSAA) and sample
+//! count, so hiding works both ways per sample, and MSAA edges between yarn and mesh
+//! resolve together. The alternative (b) — two images with depth, composited per pixel —
+//! would need a second colour and depth target, a resolve of depth (not defined for MSAA
+//! depth in WebGPU) and would lose the per-sample hiding at edges; (a) costs one
+//! `StoreOp::Store` of the depth buffer.
+//!
+//! **Radiometry.** Both write linear radiance; the exposure is applied once, when the frame
+//! is written. Directional lights give perpendicular irradiance `E` and point lights
+//! intensity `I` in both renderers (DESIGN §3). The environment light becomes the fiber
+//! renderer's constant ambient term ([W19 eq. 7–8] with AO): the uniform radiance of the
+//! same power, `f · (1/4π) ∫ L_env dω`. It does not change with the environment's rotation
+//! about `+z` (only a new map or exposure changes it), and it has no visibility of the
+//! meshes. Yarns and meshes do not shadow each other (each casts shadows on itself only).
+
+use super::SceneYarn;
+use crate::{AoMode, FiberCamera, FiberEffects, FiberLight, FiberRenderer, FiberSettings, Result};
+use btf_render::Gpu;
+use btf_render::camera::CameraSetup;
+use btf_render::renderer::{Overlay, OverlayEnvironment, OverlayTargets, OverlayView};
+use btf_render::scene::{Light, Scene, YarnAo, YarnsDesc};
+use std::path::Path;
+use yarn::bcsdf::{FiberBcsdf, KhungurnParams};
+
+/// The fiber renderer's camera for btf-render's: the same world → clip matrix.
+pub fn fiber_camera(cam: &CameraSetup) -> FiberCamera {
+    let m = &cam.view_proj;
+    let view_proj = std::array::from_fn(|r| std::array::from_fn(|c| m[(r, c)] as f64));
+    FiberCamera::Matrix {
+        view_proj,
+        eye: [cam.eye.x, cam.eye.y, cam.eye.z].map(f64::from),
+        ortho_to_camera: cam.ortho_to_camera.map(|d| [d.x, d.y, d.z].map(f64::from)),
+    }
+}
+
+/// The scene's point and directional lights (the environment is the ambient term).
+pub fn fiber_lights(lights: &[Light]) -> Vec<FiberLight> {
+    let f = |v: &[f32; 3]| v.map(f64::from);
+    lights
+        .iter()
+        .filter_map(|l| match l {
+            Light::Directional { direction, irradiance, .. } => {
+                Some(FiberLight::Directional { to_light: f(direction), irradiance: f(irradiance) })
+            }
+            Light::Point { position, intensity, .. } => {
+                Some(FiberLight::Point { position: f(position), intensity: f(intensity) })
+            }
+            Light::Environment(_) => None,
+        })
+        .collect()
+}
+
+/// The constant ambient radiance standing in for the environment light (see the module
+/// documentation).
+pub fn ambient(env: Option<OverlayEnvironment>) -> [f32; 3] {
+    env.map_or([0.0; 3], |e| e.mean_radiance().map(|x| x as f32))
+}
+
+/// The fiber settings of one `[[yarns]]` entry in `scene` (MSAA of the scene, the entry's
+/// LoD threshold, shadows and AO).
+pub fn settings(scene: &Scene, d: &YarnsDesc) -> FiberSettings {
+    let effects = FiberEffects {
+        self_shadow: d.shadows,
+        yarn_shadows: d.shadows,
+        ao: match d.ao {
+            YarnAo::Off => AoMode::Off,
+            YarnAo::Cubic => AoMode::Cubic,
+            YarnAo::Texture => AoMode::Texture,
+        },
+        ..FiberEffects::default()
+    };
+    FiberSettings {
+        lod_px: d.lod_px,
+        msaa: scene.effects.msaa,
+        effects,
+        ..FiberSettings::default()
+    }
+}
+
+/// The fiber BCSDF of scene yarns: Khungurn's R + TT lobes with a diffuse part ([W19 eq. 6]).
+pub fn scene_bcsdf() -> Result<FiberBcsdf> {
+    Ok(FiberBcsdf::khungurn(&KhungurnParams::default())?)
+}
+
+/// The fiber renderers of a scene's `[[yarns]]`, drawn after its BTF pass.
+pub struct YarnOverlay {
+    renderers: Vec<FiberRenderer>,
+}
+
+impl YarnOverlay {
+    /// Uploads `yarns` (built by [`super::build`] from `scene`) and compiles their passes;
+    /// the effects' bakes are cached in `cache_dir` when given.
+    pub fn new(
+        gpu: &Gpu,
+        scene: &Scene,
+        yarns: &[SceneYarn],
+        cache_dir: Option<&Path>,
+    ) -> Result<Self> {
+        let bcsdf = scene_bcsdf()?;
+        let renderers = yarns
+            .iter()
+            .map(|y| {
+                let d = &scene.yarns[y.index];
+                let bake = yarn_precompute::BakeSettings { seed: d.seed, ..Default::default() };
+                FiberRenderer::with_bake(
+                    gpu,
+                    &y.packed,
+                    &bcsdf,
+                    settings(scene, d),
+                    &bake,
+                    cache_dir,
+                )
+            })
+            .collect::<Result<_>>()?;
+        Ok(YarnOverlay { renderers })
+    }
+
+    /// The renderers, in `[[yarns]]` order.
+    pub fn renderers(&self) -> &[FiberRenderer] {
+        &self.renderers
+    }
+}
+
+/// A yarn-render error as btf-render reports it.
+fn to_render(e: crate::Error) -> btf_render::Error {
+    match e {
+        crate::Error::Render(e) => e,
+        crate::Error::Gpu(m) => btf_render::Error::Gpu(m),
+        crate::Error::Limit(m) => btf_render::Error::Limit(m),
+        other => btf_render::Error::Invalid(format!("[[yarns]]: {other}")),
+    }
+}
+
+impl Overlay for YarnOverlay {
+    fn name(&self) -> &str {
+        "yarns (fibers)"
+    }
+
+    fn encode(
+        &mut self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &OverlayTargets<'_>,
+        view: &OverlayView<'_>,
+    ) -> btf_render::Result<()> {
+        let cam = fiber_camera(view.camera);
+        let lights = fiber_lights(&view.scene.lights);
+        let ambient = ambient(view.environment);
+        for r in &mut self.renderers {
+            r.set_ambient(ambient);
+            let t = (targets.color, targets.resolve, targets.depth);
+            r.encode_into(gpu, encoder, t, targets.size, &cam, &lights).map_err(to_render)?;
+        }
+        Ok(())
+    }
+}
