@@ -42,9 +42,10 @@ pub fn demo_garment() -> Result<(datasets::Mesh, datasets::Mesh)> {
 pub fn framed_points(garment: &[[f64; 3]], body: &[[f64; 3]]) -> Vec<[f64; 3]> {
     let (lo, hi) = bounds_of(garment);
     let mut pts = garment.to_vec();
-    pts.extend(body.iter().filter(|p| {
-        p[2] >= lo[2] - 0.10 && p[0] >= lo[0] - 0.05 && p[0] <= hi[0] + 0.05
-    }));
+    pts.extend(
+        body.iter()
+            .filter(|p| p[2] >= lo[2] - 0.10 && p[0] >= lo[0] - 0.05 && p[0] <= hi[0] + 0.05),
+    );
     pts
 }
 
@@ -298,7 +299,7 @@ pub struct Renders {
 }
 
 /// Runs the garment, body material, environment and render stages.
-pub fn run(out: &Path, width: u32, stage: &mut StageFn<'_>) -> Result<Renders> {
+pub fn run(out: &Path, width: u32, components: usize, stage: &mut StageFn<'_>) -> Result<Renders> {
     let garment_path = out.join("garment.obj");
     let body_path = out.join("body.obj");
     let tube_path = out.join("tube-shirt.obj");
@@ -310,7 +311,12 @@ pub fn run(out: &Path, width: u32, stage: &mut StageFn<'_>) -> Result<Renders> {
         Box::new(|| {
             let (g, b) = demo_garment()?;
             datasets::write_obj(&g, &garment_path, "btf demo: T-shirt, size M, draped")?;
-            datasets::write_obj_material(&b, &body_path, "btf demo: mannequin, size M", Some("body"))?;
+            datasets::write_obj_material(
+                &b,
+                &body_path,
+                "btf demo: mannequin, size M",
+                Some("body"),
+            )?;
             Ok(())
         }),
     )?;
@@ -319,13 +325,17 @@ pub fn run(out: &Path, width: u32, stage: &mut StageFn<'_>) -> Result<Renders> {
         "tube shirt (for comparison)",
         tube_path.exists(),
         Box::new(|| {
-            Ok(datasets::write_obj(&tube, &tube_path, "btf demo: the old tube shirt, low resolution")?)
+            Ok(datasets::write_obj(
+                &tube,
+                &tube_path,
+                "btf demo: the old tube shirt, low resolution",
+            )?)
         }),
     )?;
     stage(
         "plain body material",
         btf_core::eigen::EigenStore::open(&body_eig).is_ok(),
-        Box::new(|| plain_material(out, &body_eig)),
+        Box::new(|| plain_material(out, &body_eig, components)),
     )?;
     stage(
         "HDR sky",
@@ -422,17 +432,18 @@ pub fn run(out: &Path, width: u32, stage: &mut StageFn<'_>) -> Result<Renders> {
     Ok(Renders { renders: facts, skipped: None })
 }
 
-/// The mannequin's material: a 4×4-texel Lambertian sample of albedo [`BODY_ALBEDO`],
-/// compressed to one component (a Lambertian view slot is rank one).
-fn plain_material(out: &Path, eig: &Path) -> Result<()> {
+/// The mannequin's material: an 8×8-texel Lambertian sample of albedo [`BODY_ALBEDO`],
+/// compressed to the demo material's `components` (a Lambertian view slot is rank one, the
+/// rest are zero; the same count keeps the render cost sweep's counts valid for both stores).
+fn plain_material(out: &Path, eig: &Path, components: usize) -> Result<()> {
     let btf_path = out.join("body.btf");
-    let mut spec = datasets::MaterialSpec::new(datasets::MaterialKind::Lambert, 4);
+    let mut spec = datasets::MaterialSpec::new(datasets::MaterialKind::Lambert, 8);
     spec.albedo = Some([BODY_ALBEDO; 3]);
     let opts = datasets::GenerateOptions { resume: true, progress: false, ..Default::default() };
     datasets::generate(&spec, &btf_path, &opts)?;
     let btf = btf_core::store::BtfStore::open(&btf_path)?;
     let params = btf_core::compress::CompressParams {
-        components: 1,
+        components: components.min(64),
         quantization: btf_core::eigen::Quantization::F16,
         resume: true,
     };

@@ -230,7 +230,8 @@ pub fn write(
     }
     let tube = renders.renders.iter().find(|r| r.png == "render-tube-environment.png");
     let draped = renders.renders.iter().find(|r| r.png == "render-environment.png");
-    for (k, r) in renders.renders.iter().filter(|r| tube.is_none_or(|t| t.png != r.png)).enumerate() {
+    for (k, r) in renders.renders.iter().filter(|r| tube.is_none_or(|t| t.png != r.png)).enumerate()
+    {
         let fig = Block::Figure {
             src: r.png.clone(),
             caption: format!(
