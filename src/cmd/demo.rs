@@ -89,7 +89,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
         crate::report::compress_sweep::write_report(&btf, &a.sweep, Quantization::F16, &sweep_dir)?;
         Ok(())
     })?;
-    let renders = crate::demo::scene::run(&a.out, a.width, &mut |name, done, f| {
+    let renders = crate::demo::scene::run(&a.out, a.width, a.components, &mut |name, done, f| {
         stage(&mut stages, name, done, f)
     })?;
     // The GPU cost sweep writes render-cost/; the details page reads its CSV.

@@ -1,16 +1,53 @@
-//! The rendering half of `btf demo`: a garment mesh and an HDR sky are synthesised, scene
-//! files are written beside them (so a user can edit and re-render them with `btf render`),
-//! and the garment is rendered with the demo's eigen store under a point light with shadows,
-//! without shadows, and under the sky as an environment light (per-vertex visibility maps
-//! and weights, Sattler et al. 2003 §5; exposure `f` chosen so that the sky's horizontal
-//! irradiance is 1). The camera is placed from the mesh and the field of view
-//! ([`frame_camera`]) so that the garment fills [`FILL`] of the frame along its binding
-//! axis; the scenes take the renderer's default MSAA (4 samples).
+//! The rendering half of `btf demo`: a T-shirt sewn from pattern panels and draped on the
+//! mannequin (`datasets::garment`, issue #22), the mannequin itself in a plain grey material
+//! and an HDR sky are synthesised, scene files are written beside them (so a user can edit
+//! and re-render them with `btf render`), and the garment on its mannequin is rendered with
+//! the demo's eigen store under a point light with shadows, without shadows, and under the
+//! sky as an environment light (per-vertex visibility maps and weights, Sattler et al. 2003
+//! §5; exposure `f` chosen so that the sky's horizontal irradiance is 1); the old tube shirt
+//! (`synth mesh --kind shirt`) is rendered under the same sky for the report's comparison.
+//! The camera is placed from the garment and the part of the body around it and the field
+//! of view ([`frame_camera`], [`framed_points`]) so that they fill [`FILL`] of the frame
+//! along its binding axis; the scenes take the renderer's default MSAA (4 samples).
 
 use anyhow::{Context, Result};
 use btf_render::{Gpu, RenderOptions, Renderer, Scene};
+use datasets::garment::{GarmentKind, GarmentOptions, Size};
 use datasets::{EnvKind, EnvParams, MeshKind, Resolution};
 use std::path::Path;
+
+/// Vertices of the demo's T-shirt: at 4 000 (spacing 16 mm) the drape shows the folds where
+/// the sleeves meet the body and takes seconds, where `btf synth garment`'s 10 000 take ~10×.
+pub const GARMENT_VERTICES: usize = 4000;
+/// Grid step of the demo mannequin's mesh (m): 25 mm (about 12 000 vertices) instead of
+/// `btf synth garment`'s 12 mm (54 000), so that the environment light's per-vertex
+/// visibility stays cheap; the garment is draped on this same mesh's distance field.
+pub const BODY_MESH_STEP_M: f64 = 0.025;
+/// Albedo of the mannequin's plain grey material.
+pub const BODY_ALBEDO: f64 = 0.5;
+
+/// The demo's garment and body: a size-M T-shirt draped on its mannequin.
+pub fn demo_garment() -> Result<(datasets::Mesh, datasets::Mesh)> {
+    let mut o = GarmentOptions::new(Size::M);
+    o.vertices = GARMENT_VERTICES;
+    o.body.mesh_step_m = BODY_MESH_STEP_M;
+    let (g, body) = datasets::garment::make(GarmentKind::TShirt, &o, None, &mut |_, _| {})?;
+    anyhow::ensure!(g.drape.settled, "the demo T-shirt did not come to rest: {:?}", g.drape);
+    Ok((g.mesh, body.mesh))
+}
+
+/// What the camera frames: the garment and the body around it — the body's points no lower
+/// than 10 cm under the garment and no farther sideways than 5 cm beyond it (head and
+/// neck in, legs and hands cropped, as in a shop's photograph).
+pub fn framed_points(garment: &[[f64; 3]], body: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    let (lo, hi) = bounds_of(garment);
+    let mut pts = garment.to_vec();
+    pts.extend(
+        body.iter()
+            .filter(|p| p[2] >= lo[2] - 0.10 && p[0] >= lo[0] - 0.05 && p[0] <= hi[0] + 0.05),
+    );
+    pts
+}
 
 /// A demo stage runner: `(name, already done, work)`.
 pub type StageFn<'a> =
@@ -109,7 +146,16 @@ pub const VIEW_DIR: [f64; 3] = [-0.35, 1.9, -0.2];
 /// The demo camera's vertical field of view, degrees.
 pub const FOV_Y_DEG: f64 = 38.0;
 
-fn scene_toml(width: u32, positions: &[[f64; 3]], lighting: Lighting) -> String {
+/// What a demo scene shows.
+#[derive(Clone, Copy, PartialEq)]
+enum Subject {
+    /// `garment.obj` in the demo material on `body.obj` in plain grey.
+    Draped,
+    /// The old tube shirt `tube-shirt.obj` alone, for the comparison.
+    Tube,
+}
+
+fn scene_toml(width: u32, positions: &[[f64; 3]], lighting: Lighting, subject: Subject) -> String {
     let (lo, hi) = bounds_of(positions);
     let c = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0, (lo[2] + hi[2]) / 2.0];
     let size = (0..3).map(|k| hi[k] - lo[k]).fold(0f64, f64::max);
@@ -124,8 +170,13 @@ fn scene_toml(width: u32, positions: &[[f64; 3]], lighting: Lighting) -> String 
         Lighting::Point(shadows) => (point_lights(light, i), shadows),
         Lighting::Environment(f) => (environment_light(f), "none"),
     };
+    let what = match subject {
+        Subject::Draped => "the draped T-shirt in the demo material on the mannequin",
+        Subject::Tube => "the old tube shirt (`btf synth mesh --kind shirt`), for comparison",
+    };
+    let meshes = meshes_toml(subject);
     format!(
-        r#"# Written by `btf demo`: the demo garment in the demo material.
+        r#"# Written by `btf demo`: {what}.
 # Re-render with: btf render {{this file}} -o out.png --stats
 [output]
 width = {width}
@@ -133,14 +184,9 @@ height = {height}
 exposure = 1.6
 background = [0.03, 0.03, 0.04]
 
-[[meshes]]
-path = "garment.obj"
-
-[[materials]]
-store = "material.eig"
-uv_scale = 6.0
-
-# Framed from the mesh bounds and the field of view: the garment fills 90 % of the frame.
+{meshes}
+# Framed from the mesh bounds and the field of view: the garment (and the body around it)
+# fill 90 % of the frame.
 [camera]
 eye = [{:.4}, {:.4}, {:.4}]
 target = [{:.4}, {:.4}, {:.4}]
@@ -158,6 +204,39 @@ terminator_deg = 15.0
 "#,
         eye[0], eye[1], eye[2], target[0], target[1], target[2],
     )
+}
+
+fn meshes_toml(subject: Subject) -> &'static str {
+    match subject {
+        Subject::Draped => {
+            r#"[[meshes]]
+path = "garment.obj"
+
+[[meshes]]
+path = "body.obj"          # faces `usemtl body`
+
+# The mannequin: a plain grey Lambertian store; at uv_scale 0.001 the whole body samples
+# one spot of its texture, so it is one flat grey.
+[[materials]]
+name = "body"
+store = "body.eig"
+uv_scale = 0.001
+
+[[materials]]
+store = "material.eig"
+uv_scale = 6.0
+"#
+        }
+        Subject::Tube => {
+            r#"[[meshes]]
+path = "tube-shirt.obj"
+
+[[materials]]
+store = "material.eig"
+uv_scale = 6.0
+"#
+        }
+    }
 }
 
 fn point_lights(light: [f64; 3], i: f64) -> String {
@@ -219,15 +298,44 @@ pub struct Renders {
     pub skipped: Option<String>,
 }
 
-/// Runs the mesh, environment and render stages.
-pub fn run(out: &Path, width: u32, stage: &mut StageFn<'_>) -> Result<Renders> {
-    let mesh_path = out.join("garment.obj");
+/// Runs the garment, body material, environment and render stages.
+pub fn run(out: &Path, width: u32, components: usize, stage: &mut StageFn<'_>) -> Result<Renders> {
+    let garment_path = out.join("garment.obj");
+    let body_path = out.join("body.obj");
+    let tube_path = out.join("tube-shirt.obj");
+    let body_eig = out.join("body.eig");
     let env_path = out.join("sky.exr");
-    let mesh = datasets::synth_mesh(MeshKind::Shirt, Resolution::Low)?;
     stage(
-        "garment mesh",
-        mesh_path.exists(),
-        Box::new(|| Ok(datasets::write_obj(&mesh, &mesh_path, "btf demo: shirt, low resolution")?)),
+        "garment: T-shirt sewn and draped on the mannequin",
+        garment_path.exists() && body_path.exists(),
+        Box::new(|| {
+            let (g, b) = demo_garment()?;
+            datasets::write_obj(&g, &garment_path, "btf demo: T-shirt, size M, draped")?;
+            datasets::write_obj_material(
+                &b,
+                &body_path,
+                "btf demo: mannequin, size M",
+                Some("body"),
+            )?;
+            Ok(())
+        }),
+    )?;
+    let tube = datasets::synth_mesh(MeshKind::Shirt, Resolution::Low)?;
+    stage(
+        "tube shirt (for comparison)",
+        tube_path.exists(),
+        Box::new(|| {
+            Ok(datasets::write_obj(
+                &tube,
+                &tube_path,
+                "btf demo: the old tube shirt, low resolution",
+            )?)
+        }),
+    )?;
+    stage(
+        "plain body material",
+        btf_core::eigen::EigenStore::open(&body_eig).is_ok(),
+        Box::new(|| plain_material(out, &body_eig, components)),
     )?;
     stage(
         "HDR sky",
@@ -237,6 +345,9 @@ pub fn run(out: &Path, width: u32, stage: &mut StageFn<'_>) -> Result<Renders> {
                 .write_exr(&env_path)?)
         }),
     )?;
+    let garment = datasets::read_obj(&garment_path)?.positions;
+    let body = datasets::read_obj(&body_path)?.positions;
+    let framed = framed_points(&garment, &body);
     let env_exposure = btf_image::EnvMap::load(&env_path)?.unit_irradiance_exposure();
     let gpu = match Gpu::new() {
         Ok(g) => g,
@@ -254,26 +365,40 @@ pub fn run(out: &Path, width: u32, stage: &mut StageFn<'_>) -> Result<Renders> {
             "point",
             "render point light",
             Lighting::Point("volume"),
-            "The shirt under a lamp, with its shadows.",
+            Subject::Draped,
+            "The T-shirt, sewn from pattern panels and draped on the mannequin, under a lamp, with its shadows.",
         ),
         (
             "point-noshadow",
             "render without shadows",
             Lighting::Point("none"),
+            Subject::Draped,
             "The same lamp without shadows: what the shadow pass adds.",
         ),
         (
             "environment",
             "render environment",
             Lighting::Environment(env_exposure),
-            "The shirt under an open sky (light from every direction of a sky photograph).",
+            Subject::Draped,
+            "The T-shirt under an open sky (light from every direction of a sky photograph): the ribs follow the grain of each panel.",
+        ),
+        (
+            "tube-environment",
+            "render tube shirt",
+            Lighting::Environment(env_exposure),
+            Subject::Tube,
+            "For comparison, the toolkit's earlier garment under the same sky: a tube shirt whose sleeves do not meet the body.",
         ),
     ];
     let mut facts = Vec::new();
-    for (name, stage_name, lighting, caption) in renders {
+    for (name, stage_name, lighting, subject, caption) in renders {
         let scene_path = out.join(format!("scene-{name}.toml"));
         let png = out.join(format!("render-{name}.png"));
-        btf_image::write::write_text(&scene_path, &scene_toml(width, &mesh.positions, lighting))?;
+        let points = match subject {
+            Subject::Draped => &framed,
+            Subject::Tube => &tube.positions,
+        };
+        btf_image::write::write_text(&scene_path, &scene_toml(width, points, lighting, subject))?;
         let mut fact = None;
         stage(
             stage_name,
@@ -305,6 +430,25 @@ pub fn run(out: &Path, width: u32, stage: &mut StageFn<'_>) -> Result<Renders> {
         facts.extend(fact);
     }
     Ok(Renders { renders: facts, skipped: None })
+}
+
+/// The mannequin's material: an 8×8-texel Lambertian sample of albedo [`BODY_ALBEDO`],
+/// compressed to the demo material's `components` (a Lambertian view slot is rank one, the
+/// rest are zero; the same count keeps the render cost sweep's counts valid for both stores).
+fn plain_material(out: &Path, eig: &Path, components: usize) -> Result<()> {
+    let btf_path = out.join("body.btf");
+    let mut spec = datasets::MaterialSpec::new(datasets::MaterialKind::Lambert, 8);
+    spec.albedo = Some([BODY_ALBEDO; 3]);
+    let opts = datasets::GenerateOptions { resume: true, progress: false, ..Default::default() };
+    datasets::generate(&spec, &btf_path, &opts)?;
+    let btf = btf_core::store::BtfStore::open(&btf_path)?;
+    let params = btf_core::compress::CompressParams {
+        components: components.min(64),
+        quantization: btf_core::eigen::Quantization::F16,
+        resume: true,
+    };
+    crate::progress::compress_with_progress(&btf, eig, params)?;
+    Ok(())
 }
 
 #[cfg(test)]
@@ -341,8 +485,11 @@ mod tests {
     #[test]
     fn the_demo_garment_fills_the_frame() {
         let positions = shirt();
-        for lighting in [Lighting::Point("volume"), Lighting::Environment(1.0)] {
-            let text = scene_toml(480, &positions, lighting);
+        for (lighting, subject) in [
+            (Lighting::Point("volume"), Subject::Draped),
+            (Lighting::Environment(1.0), Subject::Tube),
+        ] {
+            let text = scene_toml(480, &positions, lighting, subject);
             let scene = Scene::from_toml(&text, Path::new("/demo/scene.toml")).unwrap();
             let (x, y) = ndc_box(&scene, &positions);
             // Every vertex inside the 90 % box (f32 matrices: 10⁻⁴), the binding one on it.
