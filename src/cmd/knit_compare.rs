@@ -32,12 +32,16 @@
 //!
 //! Per cell ([`super::knit_compare_report`]): rel. RMSE `√(Σ(x−r)²/Σr²)` on the interior
 //! mask (the garment's rasterised silhouette eroded by the yarn reach) and on the
-//! silhouette band (dilated minus eroded), the mean-radiance ratio, the median GPU frame
+//! silhouette band (dilated minus eroded), the mean-radiance ratio, mean HDR-ꟻLIP
+//! (`[A21]`, `btf_image::flip`) on both masks with the exposure range taken from the
+//! reference's interior pixels (the black background would make the frame's median 0 and
+//! the range of `[A21]` undefined), at the default 67 pixels per degree; the median GPU frame
 //! time as a ratio to the plain texture drawn in the same run, preprocessing seconds and
 //! memory, and whether the representation follows deformation. Writes `compare.csv`,
-//! `report.md`, `pareto.png`, per-distance contact sheets and every image as EXR.
+//! `report.md`, `pareto.png`, per-distance contact sheets, every image as EXR and a ꟻLIP heat
+//! map per cell (`images/flip-*.png`).
 
-use super::knit_compare_report::{self as report, Cell, Distance};
+use super::knit_compare_report::{self as report, Cell, Distance, Scores};
 use super::knit_render::fiber_light;
 use crate::guard::{self, outln};
 use anyhow::{Context, Result, bail};
@@ -303,7 +307,7 @@ pub fn run(a: CompareArgs) -> Result<()> {
     let view = btf_core::Direction::new(vt, vp).to_vector();
     let src = btf_source(&a.btf)?;
     let cw = src.chart.width;
-    if a.wales == 0 || a.wales % cw != 0 || a.wales > 512 {
+    if a.wales == 0 || !a.wales.is_multiple_of(cw) || a.wales > 512 {
         bail!("--wales {}: a multiple of the chart's width {cw} up to 512", a.wales);
     }
     let gpu = btf_render::Gpu::new().context("creating a headless GPU device")?;
@@ -422,7 +426,7 @@ pub fn run(a: CompareArgs) -> Result<()> {
                 ("R1", format!("fibers LoD {lod} px"))
             };
             cells.push(Cell::new(repr, &name, ci, rgb, prep, img.stats.yarn_bytes, true));
-            jobs.push(Job::Fibers(r, fcam.clone()));
+            jobs.push(Job::Fibers(Box::new((r, fcam))));
             bar.inc(1);
         }
         for (c, eig, pca_s, _) in &eigs {
@@ -457,7 +461,8 @@ pub fn run(a: CompareArgs) -> Result<()> {
         for (k, job) in jobs.iter_mut().enumerate() {
             let t = Instant::now();
             match job {
-                Job::Fibers(r, cam) => {
+                Job::Fibers(rc) => {
+                    let (r, cam) = &mut **rc;
                     let img = r.render(&gpu, cam, &fiber_lights, (w, h), [0.0; 4])?;
                     std::hint::black_box(img.pixels.len());
                 }
@@ -490,7 +495,25 @@ pub fn run(a: CompareArgs) -> Result<()> {
         let k = (0.5 * cam.stitch_px).round() as usize;
         let score =
             |x: &[f32], r: &[f32]| report::scores(x, r, &interior, &band, &support, (wu, hu), k);
-        let gap = score(&direct.0, &full.0);
+        let exposures = btf_image::flip::hdr_exposures_over(&full.0, &interior)
+            .context("HDR-ꟻLIP exposures from the reference's interior")?;
+        let flip = |x: &[f32], s: &mut Scores| -> Result<btf_image::flip::FlipMap> {
+            // A PCA reconstruction can dip below 0; HDR-ꟻLIP takes non-negative radiance.
+            let x: Vec<f32> = x.iter().map(|v| v.max(0.0)).collect();
+            let m = btf_image::flip::flip_hdr(
+                &full.0,
+                &x,
+                wu,
+                hu,
+                btf_image::flip::DEFAULT_PPD,
+                Some(exposures),
+            )?;
+            s.flip_interior = m.mean_over(&interior)?;
+            s.flip_band = m.mean_over(&band)?;
+            Ok(m)
+        };
+        let mut gap = score(&direct.0, &full.0);
+        flip(&direct.0, &mut gap)?;
         let ms_plain = cells
             .iter()
             .find(|c| c.distance == ci && c.name.starts_with("plain texture"))
@@ -498,6 +521,11 @@ pub fn run(a: CompareArgs) -> Result<()> {
         for c in cells.iter_mut().filter(|c| c.distance == ci) {
             c.vs_full = score(&c.rgb, &full.0);
             c.vs_direct = score(&c.rgb, &direct.0);
+            let m = flip(&c.rgb, &mut c.vs_full)?;
+            m.write_heatmap(
+                &images.join(format!("flip-{}-{tag}.png", c.file_name())),
+                Some(&support),
+            )?;
             c.ms_plain = ms_plain;
             write_exr_rgb(&images.join(format!("{}-{tag}.exr", c.file_name())), wu, hu, &c.rgb)?;
         }
@@ -547,7 +575,7 @@ fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
 
 /// A GPU cell kept for the timed repeats.
 enum Job {
-    Fibers(FiberRenderer, FiberCamera),
+    Fibers(Box<(FiberRenderer, FiberCamera)>),
     Btf(Box<btf_render::Renderer>),
 }
 

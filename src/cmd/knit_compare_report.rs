@@ -20,11 +20,22 @@ pub struct Scores {
     /// Relative RMSE on the interior after both images are box-filtered over one stitch
     /// (the appearance at the scale of the knit, without the fiber-level placement).
     pub stitch_scale: f64,
+    /// Mean HDR-ꟻLIP on the interior (exposures from the reference's interior).
+    pub flip_interior: f64,
+    /// Mean HDR-ꟻLIP on the silhouette band (same exposures).
+    pub flip_band: f64,
 }
 
 impl Default for Scores {
     fn default() -> Self {
-        Scores { interior: f64::NAN, band: f64::NAN, mean_ratio: f64::NAN, stitch_scale: f64::NAN }
+        Scores {
+            interior: f64::NAN,
+            band: f64::NAN,
+            mean_ratio: f64::NAN,
+            stitch_scale: f64::NAN,
+            flip_interior: f64::NAN,
+            flip_band: f64::NAN,
+        }
     }
 }
 
@@ -318,7 +329,7 @@ fn scores_raw(x: &[f32], r: &[f32], interior: &[bool], band: &[bool]) -> Scores 
         interior: rel(interior),
         band: rel(band),
         mean_ratio: sum(x) / sum(r),
-        stitch_scale: f64::NAN,
+        ..Scores::default()
     }
 }
 
@@ -390,14 +401,14 @@ pub fn contact_sheet(
 pub fn csv(cells: &[Cell], dists: &[Distance]) -> String {
     let mut s = String::from(
         "stitch_px,repr,name,rel_rmse_interior,rel_rmse_band,rel_rmse_stitch_scale,mean_ratio,\
-         rel_rmse_interior_direct,rel_rmse_band_direct,mean_ratio_direct,frame_ms,\
+         flip_interior,flip_band,rel_rmse_interior_direct,rel_rmse_band_direct,mean_ratio_direct,frame_ms,\
          ms_ratio_plain,prep_s,gpu_bytes,deforms\n",
     );
     for c in cells {
         let d = &dists[c.distance];
         let _ = writeln!(
             s,
-            "{},{},\"{}\",{:.5},{:.5},{:.5},{:.4},{:.5},{:.5},{:.4},{:.3},{:.3},{:.3},{},{}",
+            "{},{},\"{}\",{:.5},{:.5},{:.5},{:.4},{:.4},{:.4},{:.5},{:.5},{:.4},{:.3},{:.3},{:.3},{},{}",
             d.stitch_px,
             c.repr,
             c.name,
@@ -405,6 +416,8 @@ pub fn csv(cells: &[Cell], dists: &[Distance]) -> String {
             c.vs_full.band,
             c.vs_full.stitch_scale,
             c.vs_full.mean_ratio,
+            c.vs_full.flip_interior,
+            c.vs_full.flip_band,
             c.vs_direct.interior,
             c.vs_direct.band,
             c.vs_direct.mean_ratio,
@@ -443,9 +456,12 @@ pub fn markdown(info: &Info, cells: &[Cell], dists: &[Distance]) -> String {
     let _ = writeln!(
         s,
         "Errors are relative RMSE against R0 on the interior (the garment's silhouette eroded \
-         by the yarn reach) and on the silhouette band; time is the median GPU frame as a ratio \
+         by the yarn reach) and on the silhouette band, and mean HDR-ꟻLIP on each (at {:.0} \
+         pixels per degree, exposures from R0's interior pixels: the black background would \
+         make the frame's median 0); time is the median GPU frame as a ratio \
          to the plain texture drawn in the same run. R0 itself: fibers and BVH built in {:.1} s, \
          {:.0} MiB.\n",
+        btf_image::flip::DEFAULT_PPD,
         info.r0_prep_s,
         info.r0_bytes as f64 / 1048576.0
     );
@@ -454,7 +470,8 @@ pub fn markdown(info: &Info, cells: &[Cell], dists: &[Distance]) -> String {
             s,
             "## A stitch covers {} px\n\nInterior {} px, band {} px (±{} px). Reference {:.1} s \
              (direct only {:.1} s). Multiple-scattering gap (R0 direct against R0): interior \
-             {:.3}, band {:.3}, stitch scale {:.3}, mean ratio {:.3}.\n",
+             {:.3}, band {:.3}, stitch scale {:.3}, mean ratio {:.3}, ꟻLIP interior {:.3}, band \
+             {:.3}.\n",
             d.stitch_px,
             d.interior_px,
             d.band_count,
@@ -464,24 +481,29 @@ pub fn markdown(info: &Info, cells: &[Cell], dists: &[Distance]) -> String {
             d.ms_gap.interior,
             d.ms_gap.band,
             d.ms_gap.stitch_scale,
-            d.ms_gap.mean_ratio
+            d.ms_gap.mean_ratio,
+            d.ms_gap.flip_interior,
+            d.ms_gap.flip_band
         );
         let _ = writeln!(
             s,
-            "| repr | what | interior | band | stitch scale | mean ratio | interior vs direct | \
-             frame / plain | prep s | GPU MiB | deforms |\n\
-             |---|---|---:|---:|---:|---:|---:|---:|---:|---:|:-:|"
+            "| repr | what | interior | band | stitch scale | mean ratio | ꟻLIP interior | \
+             ꟻLIP band | interior vs direct | frame / plain | prep s | GPU MiB | deforms |\n\
+             |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|:-:|"
         );
         for c in cells.iter().filter(|c| c.distance == k) {
             let _ = writeln!(
                 s,
-                "| {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {:.1} | {} |",
+                "| {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} \
+                 | {:.1} | {} |",
                 c.repr,
                 c.name,
                 c.vs_full.interior,
                 c.vs_full.band,
                 c.vs_full.stitch_scale,
                 c.vs_full.mean_ratio,
+                c.vs_full.flip_interior,
+                c.vs_full.flip_band,
                 c.vs_direct.interior,
                 c.ms / c.ms_plain,
                 c.prep_s,
@@ -522,7 +544,7 @@ pub fn pareto(cells: &[Cell], dists: &[Distance]) -> Plot {
                 let (x, y) = (c.ms / c.ms_plain, c.vs_full.interior);
                 x.is_finite() && y.is_finite() && x > 0.0 && y > 0.0
             })
-            .map(|c| short(c))
+            .map(short)
             .collect();
         series.push(sr);
     }

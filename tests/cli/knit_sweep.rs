@@ -204,13 +204,21 @@ fn knit_compare_scores_every_representation_against_the_reference() {
     assert_eq!(reprs, ["R1", "R1", "R5", "R4", "R5"], "{csv}");
     let num = |r: &Vec<String>, k: usize| r[k].parse::<f64>().unwrap();
     for r in &rows {
-        // interior, band, stitch scale, mean ratio against R0; frame-time ratio; prep; bytes.
-        for k in [3, 4, 5, 6, 10, 11] {
+        // interior, band, stitch scale, mean ratio, ꟻLIP interior and band against R0;
+        // frame ms and its ratio to the plain texture.
+        for k in [3, 4, 5, 6, 7, 8, 12, 13] {
             assert!(num(r, k).is_finite() && num(r, k) > 0.0, "column {k} of {r:?}");
         }
+        // ꟻLIP is a per-pixel value in [0, 1], so are its means.
+        assert!(num(r, 7) <= 1.0 && num(r, 8) <= 1.0, "{r:?}");
     }
+    let heatmaps = std::fs::read_dir(d.path("cmp/images"))
+        .unwrap()
+        .filter(|e| e.as_ref().unwrap().file_name().to_string_lossy().starts_with("flip-"))
+        .count();
+    assert_eq!(heatmaps, rows.len(), "one ꟻLIP heat map per cell");
     let plain = rows.iter().find(|r| r[2].starts_with("plain texture")).unwrap();
-    assert_eq!(num(plain, 11), 1.0, "the plain texture is the time unit");
+    assert_eq!(num(plain, 13), 1.0, "the plain texture is the time unit");
     let btf = rows.iter().find(|r| r[2].starts_with("BTF")).unwrap();
     let ratio = num(btf, 6);
     assert!((0.6..1.6).contains(&ratio), "BTF mean radiance / reference {ratio}");

@@ -171,6 +171,38 @@ pub fn flip_hdr(
     Ok(FlipMap { values, width, height, exposures: Some(range) })
 }
 
+/// The exposure range of `[A21]` taken from the reference's pixels where `mask` is true
+/// (linear RGB, `mask.len()` pixels): for a subject on a black background, whose median
+/// over the whole frame is 0 and whose range is then undefined. Refused when the mask has
+/// the wrong size or its pixels have no positive median luminance.
+pub fn hdr_exposures_over(reference: &[f32], mask: &[bool]) -> Result<(f64, f64)> {
+    if mask.len() * 3 != reference.len() {
+        return Err(Error::Invalid(format!(
+            "HDR-ꟻLIP exposures: a mask of {} pixels for an image of {} values",
+            mask.len(),
+            reference.len()
+        )));
+    }
+    let picked: Vec<f32> = reference
+        .chunks_exact(3)
+        .zip(mask)
+        .filter(|(_, m)| **m)
+        .flat_map(|(p, _)| [p[0], p[1], p[2]])
+        .collect();
+    if picked.iter().any(|v| !v.is_finite() || *v < 0.0) {
+        return Err(Error::Invalid(
+            "HDR-ꟻLIP exposures: the reference has a negative or non-finite value".into(),
+        ));
+    }
+    let (start, stop) = ExposureRange::from_reference(&picked).ok_or_else(|| {
+        Error::Invalid(
+            "HDR-ꟻLIP exposures: the masked reference pixels have no positive median luminance"
+                .into(),
+        )
+    })?;
+    Ok((start as f64, stop as f64))
+}
+
 /// Refuses empty or mismatched images, non-finite values (and negative ones for HDR) and
 /// a ppd that is not a positive number up to [`MAX_PPD`]; returns the ppd as `f32`.
 fn check(reference: &[f32], test: &[f32], w: usize, h: usize, ppd: f64, hdr: bool) -> Result<f32> {

@@ -228,3 +228,32 @@ fn bad_inputs_are_refused_with_a_clear_message() {
     assert_eq!(m.exposures.map(|r| (r.start, r.stop, r.count)), Some((-2.0, 1.5, 4)));
     assert!(err(flip_hdr(&a, &a, w, h, 67.0, Some((1.0, 0.0)))).contains("start ≤ stop"));
 }
+
+#[test]
+fn exposures_over_a_mask_are_those_of_the_masked_pixels_alone() {
+    // A bright subject on a black background covering under half the frame: the median
+    // over the frame is 0, so the automatic range is refused; over the subject's mask it
+    // is the range of the subject's pixels as an image of their own.
+    let (w, h) = (20, 20);
+    let subject: Vec<f32> = noise(8 * 10 * 3, 9).iter().map(|v| 0.1 + 4.0 * v).collect();
+    let mut frame = flat(w, h, [0.0; 3]);
+    let mut mask = vec![false; w * h];
+    for y in 0..10 {
+        for x in 0..8 {
+            let (i, j) = (y * w + x + 3, y * 8 + x);
+            frame[3 * i..3 * i + 3].copy_from_slice(&subject[3 * j..3 * j + 3]);
+            mask[i] = true;
+        }
+    }
+    assert!(flip_hdr(&frame, &frame, w, h, DEFAULT_PPD, None).is_err());
+    let over = hdr_exposures_over(&frame, &mask).unwrap();
+    let own = flip_hdr(&subject, &subject, 8, 10, DEFAULT_PPD, None).unwrap().exposures.unwrap();
+    assert_eq!(over, (own.start as f64, own.stop as f64));
+    let m = flip_hdr(&frame, &frame, w, h, DEFAULT_PPD, Some(over)).unwrap();
+    assert_eq!(m.mean_over(&mask).unwrap(), 0.0);
+    // Refusals: a mask of the wrong size, a mask over black pixels only.
+    assert!(hdr_exposures_over(&frame, &mask[1..]).is_err());
+    let black: Vec<bool> = mask.iter().map(|m| !m).collect();
+    let e = hdr_exposures_over(&frame, &black).unwrap_err().to_string();
+    assert!(e.contains("median"), "{e}");
+}
