@@ -116,10 +116,10 @@ fn front(s: Stitch) -> f64 {
 
 /// A key point: stitch coordinates and depth (metres).
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct Key {
-    w: f64,
-    c: f64,
-    depth: f64,
+pub(crate) struct Key {
+    pub(crate) w: f64,
+    pub(crate) c: f64,
+    pub(crate) depth: f64,
 }
 
 /// Where the straight chords of [C03]'s key points of two neighbouring courses cross:
@@ -127,12 +127,12 @@ struct Key {
 /// `(0.3277, −0.1892)` (0.5405 of the way from k2, 0.1892 from the leg top), and the sinker
 /// chord `k0 → k1` meets the leg of the loop above at `(0.1723, 1.1892)` (0.4595 from k0,
 /// 0.8108 down the leg); mirrored on the right. Solved from the six coefficients of [C03 §3].
-const X_IN: f64 = 0.3277;
-const X_OUT: f64 = 0.1723;
-const Y_X: f64 = 0.1892;
+pub(crate) const X_IN: f64 = 0.3277;
+pub(crate) const X_OUT: f64 = 0.1723;
+pub(crate) const Y_X: f64 = 0.1892;
 
 /// The key points of loop `(c, w)` (see the module documentation).
-fn loop_keys(mesh: &StitchMesh, c: usize, w: usize, p: &SkeletonParams) -> Vec<Key> {
+pub(crate) fn loop_keys(mesh: &StitchMesh, c: usize, w: usize, p: &SkeletonParams) -> Vec<Key> {
     let (ci, wi) = (c as i64, w as i64);
     let own = mesh.stitch(ci, wi);
     let above = |dw: i64| {

@@ -1,0 +1,275 @@
+//! The per-face Gauss–Newton step of [H25 §5.2] with the signed, weighted residuals of
+//! DESIGN §3.3 item 3: `√w_length (‖x_b − x_a‖ − L₀)/L₀` ([H25 eq. 6], relative) and
+//! `√w_angle (cos α − cos α₀)` ([H25 eq. 5]), their analytic Jacobian with respect to
+//! `Θ = (θ1, l1/r, θ2, l2/r)`, `A = Jᵀ J`, `g = Jᵀ r` and a 4 × 4 Cholesky solve; a step that
+//! raises the face energy is halved (the guard the paper lacks).
+
+use super::{FaceFrame, KnotModel, KnotParams, Residual, Role, Theta};
+use crate::vec3::{self, V3};
+
+/// Halvings before a step is rejected.
+const MAX_HALVINGS: usize = 20;
+
+/// Cosine of the turning angle at `b` of the polyline `a → b → c` (1: straight on).
+pub(super) fn cos_turn(a: V3, b: V3, c: V3) -> f64 {
+    let (p, q) = (vec3::sub(b, a), vec3::sub(c, b));
+    let den = vec3::length(p) * vec3::length(q);
+    if den > 0.0 { vec3::dot(p, q) / den } else { 1.0 }
+}
+
+/// The data one face solve reads.
+pub(super) struct Ctx<'a> {
+    pub model: &'a KnotModel,
+    /// Current CPs (neighbours are read from here).
+    pub points: &'a [V3],
+    /// Lattice vectors (zero on open meshes).
+    pub l0: V3,
+    pub l1: V3,
+    pub p: &'a KnotParams,
+}
+
+/// The outcome of one face solve.
+pub(super) struct FaceResult {
+    pub theta: Theta,
+    /// Face energy before iterating and after each iteration.
+    pub energies: Vec<f64>,
+    pub guard_triggers: usize,
+    pub rejected: usize,
+}
+
+impl Ctx<'_> {
+    /// Positions of the stencil's locals at `t`, and for owned ones `∂x/∂(θ_k, λ_k)` with
+    /// their knot index.
+    fn positions(
+        &self,
+        f: usize,
+        frame: &FaceFrame,
+        t: &Theta,
+        jac: bool,
+    ) -> (Vec<V3>, Vec<Option<(usize, [V3; 2])>>) {
+        let m = self.model;
+        let st = &m.stencils[f];
+        let (r, tpl) = (m.radius, &m.faces[f]);
+        let mut pos = Vec::with_capacity(st.locals.len());
+        let mut der = Vec::with_capacity(if jac { st.locals.len() } else { 0 });
+        for l in &st.locals {
+            match l.owned {
+                Some((knot, role, own, course_wrap)) => {
+                    let q = m.knot_point(f, frame, t, knot, role, own);
+                    let q = vec3::add_scaled(q, self.l1, course_wrap as f64);
+                    pos.push(vec3::add_scaled(q, self.l0, l.wrap as f64));
+                    if jac {
+                        let k = knot as usize;
+                        let (sn, cs) = t[2 * k].sin_cos();
+                        let d = vec3::add(vec3::scale(frame.e1, cs), vec3::scale(frame.e2, sn));
+                        let dd = vec3::add(vec3::scale(frame.e1, -sn), vec3::scale(frame.e2, cs));
+                        let lam = t[2 * k + 1];
+                        let g = match role {
+                            Role::C0 => [vec3::scale(dd, r * lam), vec3::scale(d, r)],
+                            Role::C1 => [vec3::scale(dd, -r * lam), vec3::scale(d, -r)],
+                            Role::P => {
+                                let sb = if own { tpl.b_own[k] } else { -tpl.b_own[k] };
+                                [vec3::scale(vec3::cross(dd, frame.n), sb * r), [0.0; 3]]
+                            }
+                        };
+                        der.push(Some((k, g)));
+                    }
+                }
+                None => {
+                    pos.push(vec3::add_scaled(self.points[l.global], self.l0, l.wrap as f64));
+                    if jac {
+                        der.push(None);
+                    }
+                }
+            }
+        }
+        (pos, der)
+    }
+
+    /// Residuals (and Jacobian rows) of face `f` at `t`.
+    fn residuals(
+        &self,
+        f: usize,
+        frame: &FaceFrame,
+        t: &Theta,
+        jac: Option<&mut Vec<[f64; 4]>>,
+    ) -> Vec<f64> {
+        let st = &self.model.stencils[f];
+        let want = jac.is_some();
+        let (pos, der) = self.positions(f, frame, t, want);
+        let (sl, sa) = (self.p.w_length.sqrt(), self.p.w_angle.sqrt());
+        let mut res = Vec::with_capacity(st.residuals.len());
+        let mut rows = Vec::with_capacity(if want { st.residuals.len() } else { 0 });
+        // Adds `∂r/∂x_i · ∂x_i/∂Θ` to a Jacobian row.
+        let add = |row: &mut [f64; 4], i: usize, grad: V3| {
+            if let Some((k, g)) = der[i] {
+                row[2 * k] += vec3::dot(grad, g[0]);
+                row[2 * k + 1] += vec3::dot(grad, g[1]);
+            }
+        };
+        for res_def in &st.residuals {
+            match *res_def {
+                Residual::Length { a, b, rest } => {
+                    let (a, b) = (a as usize, b as usize);
+                    let e = vec3::sub(pos[b], pos[a]);
+                    let len = vec3::length(e);
+                    res.push(sl * (len - rest) / rest);
+                    if want {
+                        let mut row = [0.0; 4];
+                        if len > 0.0 {
+                            let u = vec3::scale(e, sl / (len * rest));
+                            add(&mut row, b, u);
+                            add(&mut row, a, vec3::scale(u, -1.0));
+                        }
+                        rows.push(row);
+                    }
+                }
+                Residual::Angle { a, b, c, rest } => {
+                    let (a, b, c) = (a as usize, b as usize, c as usize);
+                    let (p, q) = (vec3::sub(pos[b], pos[a]), vec3::sub(pos[c], pos[b]));
+                    let (lp, lq) = (vec3::length(p), vec3::length(q));
+                    let den = lp * lq;
+                    let cos = if den > 0.0 { vec3::dot(p, q) / den } else { 1.0 };
+                    res.push(sa * (cos - rest));
+                    if want {
+                        let mut row = [0.0; 4];
+                        if den > 0.0 {
+                            let gp = vec3::scale(
+                                vec3::sub(
+                                    vec3::scale(q, 1.0 / den),
+                                    vec3::scale(p, cos / (lp * lp)),
+                                ),
+                                sa,
+                            );
+                            let gq = vec3::scale(
+                                vec3::sub(
+                                    vec3::scale(p, 1.0 / den),
+                                    vec3::scale(q, cos / (lq * lq)),
+                                ),
+                                sa,
+                            );
+                            add(&mut row, a, vec3::scale(gp, -1.0));
+                            add(&mut row, b, vec3::sub(gp, gq));
+                            add(&mut row, c, gq);
+                        }
+                        rows.push(row);
+                    }
+                }
+            }
+        }
+        if let Some(j) = jac {
+            *j = rows;
+        }
+        res
+    }
+
+    /// Residuals and Jacobian rows of face `f` at `t` (the finite-difference test).
+    #[cfg(test)]
+    pub fn residuals_and_jacobian(
+        &self,
+        f: usize,
+        frame: &FaceFrame,
+        t: &Theta,
+    ) -> (Vec<f64>, Vec<[f64; 4]>) {
+        let mut rows = Vec::new();
+        let r = self.residuals(f, frame, t, Some(&mut rows));
+        (r, rows)
+    }
+
+    /// Face energy at `t`.
+    pub fn energy(&self, f: usize, frame: &FaceFrame, t: &Theta) -> f64 {
+        self.residuals(f, frame, t, None).iter().map(|r| r * r).sum()
+    }
+
+    /// `iterations` guarded Gauss–Newton steps of face `f` from `theta0`.
+    pub fn face(
+        &self,
+        f: usize,
+        frame: &FaceFrame,
+        theta0: Theta,
+        iterations: usize,
+    ) -> FaceResult {
+        let mut t = theta0;
+        let mut rows = Vec::new();
+        let mut out = FaceResult {
+            theta: t,
+            energies: Vec::with_capacity(iterations + 1),
+            guard_triggers: 0,
+            rejected: 0,
+        };
+        let mut e = self.energy(f, frame, &t);
+        out.energies.push(e);
+        for _ in 0..iterations {
+            let r = self.residuals(f, frame, &t, Some(&mut rows));
+            let mut a = [[0.0; 4]; 4];
+            let mut g = [0.0; 4];
+            for (ri, row) in r.iter().zip(&rows) {
+                for i in 0..4 {
+                    g[i] += row[i] * ri;
+                    for j in 0..4 {
+                        a[i][j] += row[i] * row[j];
+                    }
+                }
+            }
+            let step = solve4(a, g.map(|x| -x));
+            let mut scale = 1.0;
+            let mut accepted = false;
+            for h in 0..=MAX_HALVINGS {
+                let trial: Theta = std::array::from_fn(|i| t[i] + scale * step[i]);
+                let et = self.energy(f, frame, &trial);
+                if et <= e {
+                    t = trial;
+                    e = et;
+                    accepted = true;
+                    if h > 0 {
+                        out.guard_triggers += 1;
+                    }
+                    break;
+                }
+                scale *= 0.5;
+            }
+            if !accepted {
+                out.rejected += 1;
+            }
+            out.energies.push(e);
+        }
+        out.theta = t;
+        out
+    }
+}
+
+/// Solves the symmetric positive semi-definite `a x = b` by Cholesky with a tiny
+/// Levenberg damping (1e-12 of the trace, so a rank-deficient `a` — a knot whose residuals
+/// do not see one of its parameters — gives the least-norm-ish step instead of NaN).
+fn solve4(mut a: [[f64; 4]; 4], b: [f64; 4]) -> [f64; 4] {
+    let tr: f64 = (0..4).map(|i| a[i][i]).sum();
+    if !(tr > 0.0 && tr.is_finite()) {
+        return [0.0; 4];
+    }
+    for i in 0..4 {
+        a[i][i] += 1e-12 * tr;
+    }
+    let mut l = [[0.0; 4]; 4];
+    for i in 0..4 {
+        for j in 0..=i {
+            let s: f64 = a[i][j] - (0..j).map(|k| l[i][k] * l[j][k]).sum::<f64>();
+            if i == j {
+                if s <= 0.0 {
+                    return [0.0; 4];
+                }
+                l[i][i] = s.sqrt();
+            } else {
+                l[i][j] = s / l[j][j];
+            }
+        }
+    }
+    let mut y = [0.0; 4];
+    for i in 0..4 {
+        y[i] = (b[i] - (0..i).map(|k| l[i][k] * y[k]).sum::<f64>()) / l[i][i];
+    }
+    let mut x = [0.0; 4];
+    for i in (0..4).rev() {
+        x[i] = (y[i] - (i + 1..4).map(|k| l[k][i] * x[k]).sum::<f64>()) / l[i][i];
+    }
+    x
+}
