@@ -34,6 +34,9 @@ pub enum KnitCmd {
     /// The headline study: a knit garment as reference fibers, GPU fibers, the yarn BTF
     /// and the baselines, scored against the reference at three camera distances.
     Compare(Box<super::knit_compare::CompareArgs>),
+    /// Knot-based yarn deformation [H25] of a patch under stretch and shear, scored
+    /// against the converged reference, with the clearance between yarns.
+    Deform(Box<super::knit_deform::DeformArgs>),
 }
 
 /// `btf knit chart`.
@@ -145,6 +148,7 @@ pub fn run(cmd: KnitCmd) -> Result<()> {
         KnitCmd::Render(a) => super::knit_render::run(*a),
         KnitCmd::Sweep(a) => super::knit_sweep::run(*a),
         KnitCmd::Compare(a) => super::knit_compare::run(*a),
+        KnitCmd::Deform(a) => super::knit_deform::run(*a),
     }
 }
 

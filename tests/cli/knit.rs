@@ -134,3 +134,57 @@ fn knit_refusals_name_what_is_wrong() {
         d.fails(&["synth", "material", "--kind", "lambert", "--chart", "garter", "-o", "x.btf"]);
     assert!(e.contains("--kind yarn"), "{e}");
 }
+
+#[test]
+fn knit_deform_scores_knots_against_the_reference_and_writes_the_yarns() {
+    let d = Dir::new();
+    let out = d.ok(&[
+        "knit",
+        "deform",
+        "--chart",
+        "rib1x1",
+        "--stitches",
+        "4,4",
+        "--stretch",
+        "0,0.3",
+        "--stretch-course",
+        "0.2",
+        "--shear",
+        "0.3",
+        "--repeat",
+        "1",
+        "-o",
+        "def",
+    ]);
+    assert!(out.contains("4 cases"), "{out}");
+    let csv = std::fs::read_to_string(d.path("def/deform.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 4);
+    let num = |r: &Vec<&str>, i: usize| r[i].parse::<f64>().unwrap();
+    // Rest: a fixed point, every deviation zero.
+    assert_eq!(rows[0][0], "rest");
+    assert_eq!(num(&rows[0], 4), 0.0);
+    for i in 6..12 {
+        assert_eq!(num(&rows[0], i), 0.0, "rest column {i}");
+    }
+    for r in &rows[1..] {
+        let (e0, e3, einf) = (num(r, 3), num(r, 4), num(r, 5));
+        assert!(einf <= e3 * (1.0 + 1e-9) && e3 <= e0, "{r:?}: E_∞ ≤ E₃ ≤ E₀");
+        // [H25 Fig. 9]: naive > knots > knots + GN in RMS deviation from the reference.
+        assert!(num(r, 6) > num(r, 7) && num(r, 7) > num(r, 8), "{r:?}");
+        for i in 13..16 {
+            let c = num(r, i);
+            assert!(c > 0.5 && c < 1.5, "clearance / 2r {c} in {r:?}");
+        }
+    }
+    for name in ["report.md", "clearance.png", "deviation.png", "yarns.png"] {
+        assert!(d.path(&format!("def/{name}")).is_file(), "{name}");
+    }
+    // The solved yarns are BCC that the reference renderer reads back.
+    let f = yarn::io::read_bcc(&d.path("def/yarns/shear-0.3.bcc")).unwrap();
+    assert_eq!(f.set.curves.len(), 4);
+    assert!(d.path("def/yarns/shear-0.3-reference.bcc").is_file());
+    // Cables are refused with the reason.
+    let e = d.fails(&["knit", "deform", "--chart", "cable2x2", "--stitches", "8,4", "-o", "cab"]);
+    assert!(e.contains("cable") && e.contains("unsupported"), "{e}");
+}

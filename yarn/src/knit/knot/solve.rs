@@ -17,6 +17,9 @@ pub(super) fn cos_turn(a: V3, b: V3, c: V3) -> f64 {
     if den > 0.0 { vec3::dot(p, q) / den } else { 1.0 }
 }
 
+/// `∂x/∂(θ_k, λ_k)` of a local point and its knot `k` (`None`: a fixed point).
+type PointDerivative = Option<(usize, [V3; 2])>;
+
 /// The data one face solve reads.
 pub(super) struct Ctx<'a> {
     pub model: &'a KnotModel,
@@ -46,7 +49,7 @@ impl Ctx<'_> {
         frame: &FaceFrame,
         t: &Theta,
         jac: bool,
-    ) -> (Vec<V3>, Vec<Option<(usize, [V3; 2])>>) {
+    ) -> (Vec<V3>, Vec<PointDerivative>) {
         let m = self.model;
         let st = &m.stencils[f];
         let (r, tpl) = (m.radius, &m.faces[f]);

@@ -355,3 +355,31 @@ fn jacobian_matches_finite_differences() {
     }
     assert!(worst < 1e-6, "analytic Jacobian off finite differences by {worst:e} (relative)");
 }
+
+#[test]
+#[ignore]
+fn debug_where_rest_clearance() {
+    for chart in ["stockinette", "rib1x1"] {
+        let (model, mesh) = setup(chart, 4, 4);
+        let rest = model.yarn_set(model.rest(), 1).unwrap();
+        let c0 = min_clearance(&rest, mesh.lattice, R, 16);
+        let at = c0.at.unwrap();
+        eprintln!(
+            "{chart}: {c0:?} at stitch ({:.3}, {:.3}, depth {:.3} r)",
+            at[0] / (9.0 * R),
+            at[1] / (8.0 * R),
+            at[2] / R
+        );
+        let sk = SkeletonParams::new(R);
+        let chen = crate::knit::chen_skeleton(&mesh, &sk).unwrap();
+        let c1 = min_clearance(&chen, mesh.lattice, R, 16);
+        let at = c1.at.unwrap();
+        eprintln!(
+            "  chen: {:.4} at stitch ({:.3}, {:.3}, depth {:.3} r)",
+            c1.ratio,
+            at[0] / (9.0 * R),
+            at[1] / (8.0 * R),
+            at[2] / R
+        );
+    }
+}
