@@ -40,69 +40,102 @@ pub(super) struct FaceResult {
     pub rejected: usize,
 }
 
+/// One knot's frame at the current parameters: `d`, `d' = ∂d/∂θ`, `b = d × n`,
+/// `b' = d' × n` and `l` (metres).
+#[derive(Clone, Copy)]
+struct KnotGeom {
+    d: V3,
+    dd: V3,
+    b: V3,
+    bb: V3,
+    l: f64,
+}
+
+/// Buffers reused across the evaluations of one face solve (no allocation per step).
+#[derive(Default)]
+pub(super) struct Scratch {
+    pos: Vec<V3>,
+    der: Vec<PointDerivative>,
+    res: Vec<f64>,
+    rows: Vec<[f64; 4]>,
+}
+
 impl Ctx<'_> {
-    /// Positions of the stencil's locals at `t`, and for owned ones `∂x/∂(θ_k, λ_k)` with
-    /// their knot index.
-    fn positions(
-        &self,
-        f: usize,
-        frame: &FaceFrame,
-        t: &Theta,
-        jac: bool,
-    ) -> (Vec<V3>, Vec<PointDerivative>) {
+    fn geom(&self, frame: &FaceFrame, t: &Theta) -> [KnotGeom; 2] {
+        std::array::from_fn(|k| {
+            let (sn, cs) = t[2 * k].sin_cos();
+            let d = vec3::add(vec3::scale(frame.e1, cs), vec3::scale(frame.e2, sn));
+            let dd = vec3::add(vec3::scale(frame.e1, -sn), vec3::scale(frame.e2, cs));
+            KnotGeom {
+                d,
+                dd,
+                b: vec3::cross(d, frame.n),
+                bb: vec3::cross(dd, frame.n),
+                l: t[2 * k + 1] * self.model.radius,
+            }
+        })
+    }
+
+    /// Positions of the stencil's locals at `t` into `sc.pos`, and with `jac` for owned
+    /// ones `∂x/∂(θ_k, λ_k)` with their knot index into `sc.der`. The points of eq. 1–2
+    /// are the same expressions as [`KnotModel::knot_point`], with the knot frames shared.
+    fn positions(&self, f: usize, frame: &FaceFrame, t: &Theta, jac: bool, sc: &mut Scratch) {
         let m = self.model;
         let st = &m.stencils[f];
-        let (r, tpl) = (m.radius, &m.faces[f]);
-        let mut pos = Vec::with_capacity(st.locals.len());
-        let mut der = Vec::with_capacity(if jac { st.locals.len() } else { 0 });
+        let (r, h, tpl) = (m.radius, m.skeleton.depth, &m.faces[f]);
+        let g = self.geom(frame, t);
+        sc.pos.clear();
+        sc.der.clear();
         for l in &st.locals {
             match l.owned {
                 Some((knot, role, own, course_wrap)) => {
-                    let q = m.knot_point(f, frame, t, knot, role, own);
+                    let k = knot as usize;
+                    let kg = &g[k];
+                    let side = if own { tpl.sigma } else { -tpl.sigma };
+                    let xk = frame.xk[k];
+                    let q = match role {
+                        Role::C0 => vec3::add_scaled(vec3::add_scaled(xk, kg.d, kg.l), frame.n, side * h),
+                        Role::C1 => {
+                            vec3::add_scaled(vec3::add_scaled(xk, kg.d, -kg.l), frame.n, -side * h)
+                        }
+                        Role::P => {
+                            let sb = if own { tpl.b_own[k] } else { -tpl.b_own[k] };
+                            vec3::add_scaled(xk, kg.b, sb * r)
+                        }
+                    };
                     let q = vec3::add_scaled(q, self.l1, course_wrap as f64);
-                    pos.push(vec3::add_scaled(q, self.l0, l.wrap as f64));
+                    sc.pos.push(vec3::add_scaled(q, self.l0, l.wrap as f64));
                     if jac {
-                        let k = knot as usize;
-                        let (sn, cs) = t[2 * k].sin_cos();
-                        let d = vec3::add(vec3::scale(frame.e1, cs), vec3::scale(frame.e2, sn));
-                        let dd = vec3::add(vec3::scale(frame.e1, -sn), vec3::scale(frame.e2, cs));
-                        let lam = t[2 * k + 1];
-                        let g = match role {
-                            Role::C0 => [vec3::scale(dd, r * lam), vec3::scale(d, r)],
-                            Role::C1 => [vec3::scale(dd, -r * lam), vec3::scale(d, -r)],
+                        let gr = match role {
+                            Role::C0 => [vec3::scale(kg.dd, kg.l), vec3::scale(kg.d, r)],
+                            Role::C1 => [vec3::scale(kg.dd, -kg.l), vec3::scale(kg.d, -r)],
                             Role::P => {
                                 let sb = if own { tpl.b_own[k] } else { -tpl.b_own[k] };
-                                [vec3::scale(vec3::cross(dd, frame.n), sb * r), [0.0; 3]]
+                                [vec3::scale(kg.bb, sb * r), [0.0; 3]]
                             }
                         };
-                        der.push(Some((k, g)));
+                        sc.der.push(Some((k, gr)));
                     }
                 }
                 None => {
-                    pos.push(vec3::add_scaled(self.points[l.global], self.l0, l.wrap as f64));
+                    sc.pos.push(vec3::add_scaled(self.points[l.global], self.l0, l.wrap as f64));
                     if jac {
-                        der.push(None);
+                        sc.der.push(None);
                     }
                 }
             }
         }
-        (pos, der)
     }
 
-    /// Residuals (and Jacobian rows) of face `f` at `t`.
-    fn residuals(
-        &self,
-        f: usize,
-        frame: &FaceFrame,
-        t: &Theta,
-        jac: Option<&mut Vec<[f64; 4]>>,
-    ) -> Vec<f64> {
+    /// Residuals of face `f` at `t` into `sc.res` (and with `jac` the Jacobian rows into
+    /// `sc.rows`); returns the face energy `Σ r²`.
+    fn eval(&self, f: usize, frame: &FaceFrame, t: &Theta, jac: bool, sc: &mut Scratch) -> f64 {
         let st = &self.model.stencils[f];
-        let want = jac.is_some();
-        let (pos, der) = self.positions(f, frame, t, want);
+        self.positions(f, frame, t, jac, sc);
         let (sl, sa) = (self.p.w_length.sqrt(), self.p.w_angle.sqrt());
-        let mut res = Vec::with_capacity(st.residuals.len());
-        let mut rows = Vec::with_capacity(if want { st.residuals.len() } else { 0 });
+        sc.res.clear();
+        sc.rows.clear();
+        let (pos, der) = (&sc.pos, &sc.der);
         // Adds `∂r/∂x_i · ∂x_i/∂Θ` to a Jacobian row.
         let add = |row: &mut [f64; 4], i: usize, grad: V3| {
             if let Some((k, g)) = der[i] {
@@ -110,21 +143,24 @@ impl Ctx<'_> {
                 row[2 * k + 1] += vec3::dot(grad, g[1]);
             }
         };
+        let mut e = 0.0;
         for res_def in &st.residuals {
             match *res_def {
                 Residual::Length { a, b, rest } => {
                     let (a, b) = (a as usize, b as usize);
-                    let e = vec3::sub(pos[b], pos[a]);
-                    let len = vec3::length(e);
-                    res.push(sl * (len - rest) / rest);
-                    if want {
+                    let ev = vec3::sub(pos[b], pos[a]);
+                    let len = vec3::length(ev);
+                    let r = sl * (len - rest) / rest;
+                    sc.res.push(r);
+                    e += r * r;
+                    if jac {
                         let mut row = [0.0; 4];
                         if len > 0.0 {
-                            let u = vec3::scale(e, sl / (len * rest));
+                            let u = vec3::scale(ev, sl / (len * rest));
                             add(&mut row, b, u);
                             add(&mut row, a, vec3::scale(u, -1.0));
                         }
-                        rows.push(row);
+                        sc.rows.push(row);
                     }
                 }
                 Residual::Angle { a, b, c, rest } => {
@@ -133,85 +169,69 @@ impl Ctx<'_> {
                     let (lp, lq) = (vec3::length(p), vec3::length(q));
                     let den = lp * lq;
                     let cos = if den > 0.0 { vec3::dot(p, q) / den } else { 1.0 };
-                    res.push(sa * (cos - rest));
-                    if want {
+                    let r = sa * (cos - rest);
+                    sc.res.push(r);
+                    e += r * r;
+                    if jac {
                         let mut row = [0.0; 4];
                         if den > 0.0 {
                             let gp = vec3::scale(
-                                vec3::sub(
-                                    vec3::scale(q, 1.0 / den),
-                                    vec3::scale(p, cos / (lp * lp)),
-                                ),
+                                vec3::sub(vec3::scale(q, 1.0 / den), vec3::scale(p, cos / (lp * lp))),
                                 sa,
                             );
                             let gq = vec3::scale(
-                                vec3::sub(
-                                    vec3::scale(p, 1.0 / den),
-                                    vec3::scale(q, cos / (lq * lq)),
-                                ),
+                                vec3::sub(vec3::scale(p, 1.0 / den), vec3::scale(q, cos / (lq * lq))),
                                 sa,
                             );
                             add(&mut row, a, vec3::scale(gp, -1.0));
                             add(&mut row, b, vec3::sub(gp, gq));
                             add(&mut row, c, gq);
                         }
-                        rows.push(row);
+                        sc.rows.push(row);
                     }
                 }
             }
         }
-        if let Some(j) = jac {
-            *j = rows;
-        }
-        res
+        e
     }
 
     /// Residuals and Jacobian rows of face `f` at `t` (the finite-difference test).
     #[cfg(test)]
-    pub fn residuals_and_jacobian(
-        &self,
-        f: usize,
-        frame: &FaceFrame,
-        t: &Theta,
-    ) -> (Vec<f64>, Vec<[f64; 4]>) {
-        let mut rows = Vec::new();
-        let r = self.residuals(f, frame, t, Some(&mut rows));
-        (r, rows)
-    }
-
-    /// Face energy at `t`.
-    pub fn energy(&self, f: usize, frame: &FaceFrame, t: &Theta) -> f64 {
-        self.residuals(f, frame, t, None).iter().map(|r| r * r).sum()
+    pub fn residuals_and_jacobian(&self, f: usize, frame: &FaceFrame, t: &Theta) -> (Vec<f64>, Vec<[f64; 4]>) {
+        let mut sc = Scratch::default();
+        self.eval(f, frame, t, true, &mut sc);
+        (sc.res, sc.rows)
     }
 
     /// `iterations` guarded Gauss–Newton steps of face `f` from `theta0`.
-    pub fn face(
-        &self,
-        f: usize,
-        frame: &FaceFrame,
-        theta0: Theta,
-        iterations: usize,
-    ) -> FaceResult {
+    pub fn face(&self, f: usize, frame: &FaceFrame, theta0: Theta, iterations: usize) -> FaceResult {
+        let mut sc = Scratch::default();
         let mut t = theta0;
-        let mut rows = Vec::new();
         let mut out = FaceResult {
             theta: t,
             energies: Vec::with_capacity(iterations + 1),
             guard_triggers: 0,
             rejected: 0,
         };
-        let mut e = self.energy(f, frame, &t);
+        let mut e = self.eval(f, frame, &t, iterations > 0, &mut sc);
         out.energies.push(e);
-        for _ in 0..iterations {
-            let r = self.residuals(f, frame, &t, Some(&mut rows));
+        for it in 0..iterations {
+            if it > 0 {
+                self.eval(f, frame, &t, true, &mut sc);
+            }
             let mut a = [[0.0; 4]; 4];
             let mut g = [0.0; 4];
-            for (ri, row) in r.iter().zip(&rows) {
+            for (ri, row) in sc.res.iter().zip(&sc.rows) {
                 for i in 0..4 {
                     g[i] += row[i] * ri;
-                    for j in 0..4 {
+                    for j in i..4 {
                         a[i][j] += row[i] * row[j];
                     }
+                }
+            }
+            for i in 0..4 {
+                for j in 0..i {
+                    a[i][j] = a[j][i];
                 }
             }
             let step = solve4(a, g.map(|x| -x));
@@ -219,7 +239,7 @@ impl Ctx<'_> {
             let mut accepted = false;
             for h in 0..=MAX_HALVINGS {
                 let trial: Theta = std::array::from_fn(|i| t[i] + scale * step[i]);
-                let et = self.energy(f, frame, &trial);
+                let et = self.eval(f, frame, &trial, false, &mut sc);
                 if et <= e {
                     t = trial;
                     e = et;
