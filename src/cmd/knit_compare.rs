@@ -56,7 +56,9 @@ use std::sync::Arc;
 use std::time::Instant;
 use yarn::bcsdf::{FiberBcsdf, KhungurnParams};
 use yarn::fiber::{GenOptions, generate_fibers};
-use yarn::knit::{Chart, SkeletonParams, StitchMesh, SurfaceMesh, UvLayout, chen_skeleton};
+use yarn::knit::{
+    Chart, KnotModel, KnotParams, SkeletonParams, StitchMesh, SurfaceMesh, UvLayout, chen_skeleton,
+};
 use yarn::params::YarnParams;
 use yarn_render::{
     FiberCamera, FiberLight, FiberRenderer, FiberSettings, PackOptions, PackedYarns,
@@ -101,6 +103,13 @@ pub struct CompareArgs {
     /// Timed frames per GPU cell (interleaved; the median is reported).
     #[arg(long, default_value_t = 5)]
     pub repeat: u32,
+    /// The stretch study (DESIGN §4.2, issue #20): engineering strains along the wales
+    /// (e.g. 0,0.1,0.2,0.3,0.5). Each strain stretches the garment, moves its yarns by the
+    /// knot solver ([`yarn::knit::knot`], 3 Gauss–Newton iterations) and runs the whole
+    /// study into `stretch-S/`; `stretch.csv`, `stretch.md` and `stretch-*.png` compare the
+    /// errors against the strain. Without it: the rest garment with the Chen skeleton.
+    #[arg(long, value_delimiter = ',')]
+    pub stretch: Vec<f64>,
     /// Replace an output folder a previous compare wrote.
     #[arg(long)]
     pub fresh: bool,
@@ -200,7 +209,7 @@ struct Garment {
     centre: ([f64; 3], [f64; 3]),
 }
 
-fn garment(src: &BtfSource, wales: usize) -> Result<Garment> {
+fn garment(src: &BtfSource, wales: usize, stretch: Option<f64>) -> Result<Garment> {
     let chart = &src.chart;
     let r = src.params.yarn_radius();
     let mut sk = SkeletonParams::new(r);
@@ -232,12 +241,61 @@ fn garment(src: &BtfSource, wales: usize) -> Result<Garment> {
         triangles: mesh.triangles.clone(),
         triangle_uvs: mesh.triangle_uvs.clone(),
     };
-    let stitches = StitchMesh::on_surface(&surface, chart, &layout)?;
-    let yarns = chen_skeleton(&stitches, &sk)?;
     let centre_uv = [
         lo[0] + 0.5 * wales as f64 * layout.wale_du,
         hi[1] + 0.5 * courses as f64 * layout.course_dv,
     ];
+    let rest_stitches = StitchMesh::on_surface(&surface, chart, &layout)?;
+    let (surface, yarns) = match stretch {
+        None => {
+            let yarns = chen_skeleton(&rest_stitches, &sk)?;
+            (surface, yarns)
+        }
+        Some(eps) => {
+            // The wale direction at the UV centre (towards the next course), made
+            // horizontal: the drape is stretched about its centre along it by 1 + ε.
+            let loc = yarn::knit::UvLocator::new(&surface)?;
+            let dv = 0.5 * layout.course_dv;
+            let at = |v: f64| loc.sample([centre_uv[0], centre_uv[1] + v]).map(|s| s.0);
+            let (Some(p0), Some(p1), Some(c)) = (at(-dv), at(dv), at(0.0)) else {
+                bail!("the drape has no points around its UV centre");
+            };
+            let axis = [p1[0] - p0[0], p1[1] - p0[1], 0.0];
+            let n = (axis[0] * axis[0] + axis[1] * axis[1]).sqrt();
+            if n <= 0.0 {
+                bail!("the drape's wale direction at its centre is vertical");
+            }
+            let axis = axis.map(|x| x / n);
+            let stretch_p = |p: [f64; 3]| {
+                let d = (0..3).map(|k| (p[k] - c[k]) * axis[k]).sum::<f64>();
+                [0, 1, 2].map(|k| p[k] + eps * d * axis[k])
+            };
+            // Normals by the inverse transpose, I − ε/(1+ε) a aᵀ.
+            let stretch_n = |m: [f64; 3]| {
+                let d = (0..3).map(|k| m[k] * axis[k]).sum::<f64>();
+                let q = [0, 1, 2].map(|k| m[k] - eps / (1.0 + eps) * d * axis[k]);
+                let l = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
+                q.map(|x| x / l)
+            };
+            for p in &mut mesh.positions {
+                *p = stretch_p(*p);
+            }
+            for m in &mut mesh.normals {
+                *m = stretch_n(*m);
+            }
+            let surface = SurfaceMesh {
+                positions: mesh.positions.clone(),
+                normals: mesh.normals.clone(),
+                uvs: mesh.uvs.clone(),
+                triangles: mesh.triangles.clone(),
+                triangle_uvs: mesh.triangle_uvs.clone(),
+            };
+            let stitches = StitchMesh::on_surface(&surface, chart, &layout)?;
+            let model = KnotModel::new(&rest_stitches, &sk, (ws, cs))?;
+            let frame = model.solve(&stitches, &KnotParams::default())?;
+            (surface, model.yarn_set(&frame, 1)?)
+        }
+    };
     let centre = yarn::knit::UvLocator::new(&surface)?
         .sample(centre_uv)
         .ok_or_else(|| anyhow::anyhow!("the drape has no point at its UV centre"))?;
@@ -310,15 +368,74 @@ pub fn run(a: CompareArgs) -> Result<()> {
     if a.wales == 0 || !a.wales.is_multiple_of(cw) || a.wales > 512 {
         bail!("--wales {}: a multiple of the chart's width {cw} up to 512", a.wales);
     }
+    if a.stretch.iter().any(|s| !(s.is_finite() && (0.0..=1.0).contains(s))) {
+        bail!("--stretch {:?}: engineering strains in [0, 1]", a.stretch);
+    }
     let gpu = btf_render::Gpu::new().context("creating a headless GPU device")?;
-    guard::output_folder(&a.output, "knit compare", a.fresh, &guard::report_output)?;
-    let images = a.output.join("images");
-    std::fs::create_dir_all(&images)?;
+    guard::output_folder(&a.output, "knit compare", a.fresh, &|n| {
+        guard::report_output(n) || n.starts_with("stretch-")
+    })?;
 
+    // R4 and R5-plain: the BTF compressed to each c (once for every strain).
+    let store = BtfStore::open(&a.btf)?;
+    let mut eigs = Vec::new();
+    let mut comps = a.components.clone();
+    comps.sort_unstable();
+    comps.dedup();
+    for &c in &comps {
+        let out = a.output.join(format!("btf-c{c}.eig"));
+        let params =
+            CompressParams { components: c, quantization: Quantization::F16, resume: false };
+        let r = btf_core::compress::compress(&store, &out, params, &|| ())
+            .with_context(|| format!("compressing --btf to {c} components"))?;
+        eprintln!("  BTF c = {c}: rel. RMSE {:.3} in {:.2} s", r.rel_rmse, r.seconds);
+        eigs.push((c, out, r.seconds, r.rel_rmse));
+    }
+    drop(store);
+    let setup = Setup { w, h, view, to_light, irradiance };
+    if a.stretch.is_empty() {
+        study(&a, &src, &gpu, &eigs, &a.output, None, &setup)?;
+        return Ok(());
+    }
+    let mut runs = Vec::new();
+    for &eps in &a.stretch {
+        let out = a.output.join(format!("stretch-{eps}"));
+        std::fs::create_dir_all(&out)?;
+        eprintln!("knit compare: stretch {eps} along the wales");
+        let (cells, dists) = study(&a, &src, &gpu, &eigs, &out, Some(eps), &setup)?;
+        runs.push((eps, cells, dists));
+    }
+    super::knit_compare_report::write_stretch(&a.output, &runs)?;
+    Ok(())
+}
+
+/// The fixed set-up of a study: frame size, view, light.
+struct Setup {
+    w: u32,
+    h: u32,
+    view: [f64; 3],
+    to_light: [f64; 3],
+    irradiance: [f64; 3],
+}
+
+/// One study on the garment (stretched by `stretch` along the wales, yarns by the knot
+/// solver; `None`: at rest with the Chen skeleton) into `out`.
+fn study(
+    a: &CompareArgs,
+    src: &BtfSource,
+    gpu: &btf_render::Gpu,
+    eigs: &[(usize, PathBuf, f64, f64)],
+    out: &Path,
+    stretch: Option<f64>,
+    setup: &Setup,
+) -> Result<(Vec<Cell>, Vec<Distance>)> {
+    let Setup { w, h, view, to_light, irradiance } = *setup;
+    let images = out.join("images");
+    std::fs::create_dir_all(&images)?;
     let t0 = Instant::now();
-    let g = garment(&src, a.wales)?;
+    let g = garment(src, a.wales, stretch)?;
     let garment_s = t0.elapsed().as_secs_f64();
-    let obj = a.output.join("garment.obj");
+    let obj = out.join("garment.obj");
     datasets::write_obj(&g.mesh, &obj, "btf knit compare: the drape, UVs in chart periods")?;
     eprintln!(
         "knit compare: {} × {} stitches on the drape ({:.3} m wide), {} yarn curves, {:.1} s",
@@ -374,22 +491,6 @@ pub fn run(a: CompareArgs) -> Result<()> {
     bar.finish_and_clear();
     drop(scene);
 
-    // R4 and R5-plain: the BTF compressed to each c.
-    let store = BtfStore::open(&a.btf)?;
-    let mut eigs = Vec::new();
-    let mut comps = a.components.clone();
-    comps.sort_unstable();
-    comps.dedup();
-    for &c in &comps {
-        let out = a.output.join(format!("btf-c{c}.eig"));
-        let params =
-            CompressParams { components: c, quantization: Quantization::F16, resume: false };
-        let r = btf_core::compress::compress(&store, &out, params, &|| ())
-            .with_context(|| format!("compressing --btf to {c} components"))?;
-        eprintln!("  BTF c = {c}: rel. RMSE {:.3} in {:.2} s", r.rel_rmse, r.seconds);
-        eigs.push((c, out, r.seconds, r.rel_rmse));
-    }
-
     // The GPU cells: every representation at every distance, then interleaved timing.
     let packed = PackedYarns::new(
         &g.yarns,
@@ -411,9 +512,9 @@ pub fn run(a: CompareArgs) -> Result<()> {
             let t = Instant::now();
             let settings =
                 FiberSettings { lod_px: lod.max(0.0), tubes, msaa: 4, ..FiberSettings::default() };
-            let r = FiberRenderer::new(&gpu, &packed, &src.bcsdf, settings)?;
+            let r = FiberRenderer::new(gpu, &packed, &src.bcsdf, settings)?;
             let prep = t.elapsed().as_secs_f64();
-            let img = r.render(&gpu, &fcam, &fiber_lights, (w, h), [0.0; 4])?;
+            let img = r.render(gpu, &fcam, &fiber_lights, (w, h), [0.0; 4])?;
             if img.stats.overflow > 0 {
                 eprintln!("warning: {} fiber instances overflowed", img.stats.overflow);
             }
@@ -429,12 +530,12 @@ pub fn run(a: CompareArgs) -> Result<()> {
             jobs.push(Job::Fibers(Box::new((r, fcam))));
             bar.inc(1);
         }
-        for (c, eig, pca_s, _) in &eigs {
-            let scene = btf_scene(&a.output, &obj, eig, cam, (w, h), to_light, irradiance)?;
+        for (c, eig, pca_s, _) in eigs {
+            let scene = btf_scene(out, &obj, eig, cam, (w, h), to_light, irradiance)?;
             let t = Instant::now();
-            let mut r = btf_render::Renderer::new(&gpu, &scene, Default::default())?;
+            let mut r = btf_render::Renderer::new(gpu, &scene, Default::default())?;
             let prep = t.elapsed().as_secs_f64() + pca_s;
-            let frame = r.render(&gpu)?;
+            let frame = r.render(gpu)?;
             let bytes = r.material_bytes();
             cells.push(Cell::new("R4", &format!("BTF c = {c}"), ci, frame.rgb, prep, bytes, false));
             jobs.push(Job::Btf(Box::new(r)));
@@ -442,15 +543,15 @@ pub fn run(a: CompareArgs) -> Result<()> {
         }
         // R5: the plain texture of the BTF mean, from the smallest store.
         let (_, eig, pca_s, _) = &eigs[0];
-        let scene = btf_scene(&a.output, &obj, eig, cam, (w, h), to_light, irradiance)?;
+        let scene = btf_scene(out, &obj, eig, cam, (w, h), to_light, irradiance)?;
         let t = Instant::now();
         let opts = btf_render::RenderOptions {
             baseline: Some(btf_render::Baseline::Plain),
             ..Default::default()
         };
-        let mut r = btf_render::Renderer::new(&gpu, &scene, opts)?;
+        let mut r = btf_render::Renderer::new(gpu, &scene, opts)?;
         let prep = t.elapsed().as_secs_f64() + pca_s;
-        let frame = r.render(&gpu)?;
+        let frame = r.render(gpu)?;
         let bytes = r.material_bytes();
         cells.push(Cell::new("R5", "plain texture (BTF mean)", ci, frame.rgb, prep, bytes, false));
         jobs.push(Job::Btf(Box::new(r)));
@@ -463,11 +564,11 @@ pub fn run(a: CompareArgs) -> Result<()> {
             match job {
                 Job::Fibers(rc) => {
                     let (r, cam) = &mut **rc;
-                    let img = r.render(&gpu, cam, &fiber_lights, (w, h), [0.0; 4])?;
+                    let img = r.render(gpu, cam, &fiber_lights, (w, h), [0.0; 4])?;
                     std::hint::black_box(img.pixels.len());
                 }
                 Job::Btf(r) => {
-                    let f = r.render(&gpu)?;
+                    let f = r.render(gpu)?;
                     std::hint::black_box(f.rgb.len());
                 }
             }
@@ -539,7 +640,7 @@ pub fn run(a: CompareArgs) -> Result<()> {
             ms_gap: gap,
         });
         let sheet = report::contact_sheet(&cells, ci, &full.0, &direct.0, (w, h), &mask);
-        write_png(&a.output.join(format!("sheet-{tag}.png")), &sheet)?;
+        write_png(&out.join(format!("sheet-{tag}.png")), &sheet)?;
     }
     let info = report::Info {
         btf: a.btf.display().to_string(),
@@ -557,16 +658,16 @@ pub fn run(a: CompareArgs) -> Result<()> {
         adapter: gpu.info.name.clone(),
         eig_errors: eigs.iter().map(|(c, _, s, e)| (*c, *s, *e)).collect(),
     };
-    write_text(&a.output.join("compare.csv"), &report::csv(&cells, &dists))?;
+    write_text(&out.join("compare.csv"), &report::csv(&cells, &dists))?;
     let md = report::markdown(&info, &cells, &dists);
-    write_text(&a.output.join("report.md"), &md)?;
-    write_png(
-        &a.output.join("pareto.png"),
-        &btf_image::plot::render(&report::pareto(&cells, &dists)),
-    )?;
+    write_text(&out.join("report.md"), &md)?;
+    write_png(&out.join("pareto.png"), &btf_image::plot::render(&report::pareto(&cells, &dists)))?;
     outln!("{md}");
-    outln!("written to {}", a.output.join("report.md").display());
-    Ok(())
+    outln!("written to {}", out.join("report.md").display());
+    for c in &mut cells {
+        c.rgb = Vec::new(); // written above; the stretch summary needs the scores only
+    }
+    Ok((cells, dists))
 }
 
 fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
@@ -626,7 +727,11 @@ view_blend = "four"
 shadows = "map"
 "#,
         obj = obj.file_name().and_then(|s| s.to_str()).unwrap_or("garment.obj"),
-        eig = eig.file_name().and_then(|s| s.to_str()).unwrap_or("btf.eig"),
+        eig = {
+            // The stores sit in the study's top folder, a stretch run's scene one below.
+            let name = eig.file_name().and_then(|s| s.to_str()).unwrap_or("btf.eig");
+            if eig.parent() == Some(dir) { name.to_string() } else { format!("../{name}") }
+        },
         eye = f(cam.eye),
         target = f(cam.target),
         dir = f(to_light),

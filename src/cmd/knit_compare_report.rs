@@ -609,3 +609,141 @@ mod tests {
         assert!(m[20 * 40 + 20] && !m[0]);
     }
 }
+
+/// One strain of the stretch study: the strain, its cells and distances.
+pub type StretchRun = (f64, Vec<Cell>, Vec<Distance>);
+
+/// The representations the stretch summary follows: the BTF at its largest component
+/// count, the GPU fibers at full detail and the plain texture.
+fn stretch_followed(cells: &[Cell]) -> Vec<String> {
+    let mut names: Vec<String> = Vec::new();
+    let best_btf = cells
+        .iter()
+        .filter(|c| c.repr == "R4")
+        .max_by_key(|c| c.name.trim_start_matches("BTF c = ").parse::<usize>().unwrap_or(0))
+        .map(|c| c.name.clone());
+    names.extend(best_btf);
+    names.push("fibers full detail".into());
+    names.push("plain texture (BTF mean)".into());
+    names
+}
+
+/// The stretch study's summary (DESIGN §4.2, issue #20): per distance and followed
+/// representation the interior rel. RMSE and ꟻLIP against the reference at each strain
+/// (the GPU fibers also against the direct-only reference, which isolates the geometry
+/// from the multiple-scattering gap), the first strain at which the BTF is worse than the
+/// fibers, `stretch.csv`, `stretch.md` and one plot per distance.
+pub fn write_stretch(out: &std::path::Path, runs: &[StretchRun]) -> anyhow::Result<()> {
+    let Some((_, cells0, dists0)) = runs.first() else { return Ok(()) };
+    let names = stretch_followed(cells0);
+    fn find<'a>(cells: &'a [Cell], d: usize, name: &str) -> Option<&'a Cell> {
+        cells.iter().find(|c| c.distance == d && c.name == name)
+    }
+    let mut csv = String::from(
+        "strain,stitch_px,repr,name,rel_rmse_interior,flip_interior,stitch_scale,mean_ratio,rel_rmse_vs_direct,flip_vs_direct\n",
+    );
+    let mut md = String::from(
+        "# The stretch study: when must a preview leave the BTF?\n\n\
+         The garment stretched along the wales by each strain; the yarns follow by the knot \
+         solver (3 Gauss–Newton iterations); the BTF is the rest sample's, stretched with the \
+         UVs. Errors against the path-traced fibers of the stretched garment (R0, every \
+         bounce); the GPU fibers also against the direct-only R0 (their own light transport), \
+         which isolates the geometry from the multiple-scattering gap.\n\n",
+    );
+    for (d, dist) in dists0.iter().enumerate() {
+        let _ = writeln!(md, "## {} px per stitch\n", dist.stitch_px);
+        let _ = write!(md, "| representation | measure |");
+        for (s, _, _) in runs {
+            let _ = write!(md, " {:.0} % |", s * 100.0);
+        }
+        let _ = writeln!(md);
+        let _ = writeln!(md, "|---|---|{}", "---:|".repeat(runs.len()));
+        let mut series = Vec::new();
+        for name in &names {
+            let per: Vec<(f64, Option<&Cell>)> =
+                runs.iter().map(|(s, cells, _)| (*s, find(cells, d, name))).collect();
+            for (s, c) in &per {
+                if let Some(c) = c {
+                    let _ = writeln!(
+                        csv,
+                        "{s},{},{},{},{:.5},{:.5},{:.5},{:.5},{:.5},{:.5}",
+                        dist.stitch_px,
+                        c.repr,
+                        c.name,
+                        c.vs_full.interior,
+                        c.vs_full.flip_interior,
+                        c.vs_full.stitch_scale,
+                        c.vs_full.mean_ratio,
+                        c.vs_direct.interior,
+                        c.vs_direct.flip_interior
+                    );
+                }
+            }
+            let row = |label: &str, f: &dyn Fn(&Cell) -> f64| {
+                let mut line = format!("| {name} | {label} |");
+                for (_, c) in &per {
+                    match c {
+                        Some(c) => line.push_str(&format!(" {:.3} |", f(c))),
+                        None => line.push_str(" — |"),
+                    }
+                }
+                line
+            };
+            let _ = writeln!(md, "{}", row("rel. RMSE", &|c| c.vs_full.interior));
+            let _ = writeln!(md, "{}", row("ꟻLIP", &|c| c.vs_full.flip_interior));
+            let _ = writeln!(md, "{}", row("stitch-scale rel. RMSE", &|c| c.vs_full.stitch_scale));
+            if name.starts_with("fibers") {
+                let _ =
+                    writeln!(md, "{}", row("rel. RMSE vs direct R0", &|c| c.vs_direct.interior));
+            }
+            series.push(Series::new(
+                format!("{name}: rel. RMSE"),
+                per.iter()
+                    .filter_map(|(s, c)| c.map(|c| (s * 100.0, c.vs_full.interior)))
+                    .collect(),
+            ));
+            series.push(Series::new(
+                format!("{name}: FLIP"),
+                per.iter()
+                    .filter_map(|(s, c)| c.map(|c| (s * 100.0, c.vs_full.flip_interior)))
+                    .collect(),
+            ));
+        }
+        // The first strain at which the BTF is worse than the fibers (by each measure).
+        let btf = &names[0];
+        let cross = |f: &dyn Fn(&Cell) -> f64| {
+            runs.iter()
+                .find(|(_, cells, _)| {
+                    match (find(cells, d, btf), find(cells, d, "fibers full detail")) {
+                        (Some(b), Some(r)) => f(b) > f(r),
+                        _ => false,
+                    }
+                })
+                .map(|(s, _, _)| format!("{:.0} %", s * 100.0))
+                .unwrap_or_else(|| "none of the strains measured".into())
+        };
+        let _ = writeln!(
+            md,
+            "\nFirst strain at which {btf} is worse than the GPU fibers: {} by rel. RMSE, {} by \
+             ꟻLIP.\n\n![errors against strain](stretch-{}px.png)\n",
+            cross(&|c| c.vs_full.interior),
+            cross(&|c| c.vs_full.flip_interior),
+            dist.stitch_px
+        );
+        let plot = Plot {
+            title: format!("stretch study, {} px per stitch", dist.stitch_px),
+            x_label: "stretch along the wales (%)".into(),
+            y_label: "error against R0 (interior)".into(),
+            series,
+            ..Plot::default()
+        };
+        btf_image::write::write_png(
+            &out.join(format!("stretch-{}px.png", dist.stitch_px)),
+            &btf_image::plot::render(&plot),
+        )?;
+    }
+    btf_image::write::write_text(&out.join("stretch.csv"), &csv)?;
+    btf_image::write::write_text(&out.join("stretch.md"), &md)?;
+    eprintln!("{md}");
+    Ok(())
+}

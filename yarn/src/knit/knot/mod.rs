@@ -333,7 +333,7 @@ impl KnotModel {
                 } else {
                     None
                 };
-                let face_above = above.and_then(|(ca, wrap)| {
+                let face_above = above.filter(|_| w < wales).and_then(|(ca, wrap)| {
                     let f = face_index[ca * wales + w];
                     (f != u32::MAX).then_some((f, wrap))
                 });

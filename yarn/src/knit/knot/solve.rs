@@ -94,7 +94,9 @@ impl Ctx<'_> {
                     let side = if own { tpl.sigma } else { -tpl.sigma };
                     let xk = frame.xk[k];
                     let q = match role {
-                        Role::C0 => vec3::add_scaled(vec3::add_scaled(xk, kg.d, kg.l), frame.n, side * h),
+                        Role::C0 => {
+                            vec3::add_scaled(vec3::add_scaled(xk, kg.d, kg.l), frame.n, side * h)
+                        }
                         Role::C1 => {
                             vec3::add_scaled(vec3::add_scaled(xk, kg.d, -kg.l), frame.n, -side * h)
                         }
@@ -176,11 +178,17 @@ impl Ctx<'_> {
                         let mut row = [0.0; 4];
                         if den > 0.0 {
                             let gp = vec3::scale(
-                                vec3::sub(vec3::scale(q, 1.0 / den), vec3::scale(p, cos / (lp * lp))),
+                                vec3::sub(
+                                    vec3::scale(q, 1.0 / den),
+                                    vec3::scale(p, cos / (lp * lp)),
+                                ),
                                 sa,
                             );
                             let gq = vec3::scale(
-                                vec3::sub(vec3::scale(p, 1.0 / den), vec3::scale(q, cos / (lq * lq))),
+                                vec3::sub(
+                                    vec3::scale(p, 1.0 / den),
+                                    vec3::scale(q, cos / (lq * lq)),
+                                ),
                                 sa,
                             );
                             add(&mut row, a, vec3::scale(gp, -1.0));
@@ -197,14 +205,25 @@ impl Ctx<'_> {
 
     /// Residuals and Jacobian rows of face `f` at `t` (the finite-difference test).
     #[cfg(test)]
-    pub fn residuals_and_jacobian(&self, f: usize, frame: &FaceFrame, t: &Theta) -> (Vec<f64>, Vec<[f64; 4]>) {
+    pub fn residuals_and_jacobian(
+        &self,
+        f: usize,
+        frame: &FaceFrame,
+        t: &Theta,
+    ) -> (Vec<f64>, Vec<[f64; 4]>) {
         let mut sc = Scratch::default();
         self.eval(f, frame, t, true, &mut sc);
         (sc.res, sc.rows)
     }
 
     /// `iterations` guarded Gauss–Newton steps of face `f` from `theta0`.
-    pub fn face(&self, f: usize, frame: &FaceFrame, theta0: Theta, iterations: usize) -> FaceResult {
+    pub fn face(
+        &self,
+        f: usize,
+        frame: &FaceFrame,
+        theta0: Theta,
+        iterations: usize,
+    ) -> FaceResult {
         let mut sc = Scratch::default();
         let mut t = theta0;
         let mut out = FaceResult {

@@ -357,6 +357,33 @@ fn jacobian_matches_finite_differences() {
 }
 
 #[test]
+fn open_meshes_keep_their_boundary_and_solve() {
+    // A non-periodic patch (a garment panel): the bottom course has no loop below and the
+    // last sinker closes the open courses.
+    let (_, periodic) = setup("rib1x1", 4, 4);
+    let mut mesh = periodic.clone();
+    mesh.lattice = None;
+    let sk = SkeletonParams::new(R);
+    let model = KnotModel::new(&mesh, &sk, sk.default_spacing()).unwrap();
+    assert_eq!(model.knot_faces(), 4 * 3, "no knots on the bottom course");
+    assert_eq!(model.cp_count(), 4 * (4 * 14 + 1));
+    let rest = model.solve(&mesh, &KnotParams::default()).unwrap();
+    assert_eq!(rest.stats.energy_initial, 0.0);
+    let m = mesh.shear(0.3).unwrap();
+    let f = model.solve(&m, &KnotParams::default()).unwrap();
+    let (conv, _) = model.reference(&m, &KnotParams::default(), 500).unwrap();
+    let (e0, e3, einf) = (
+        model.energy(&model.initial(&m, 1.0).unwrap(), &KnotParams::default()),
+        model.energy(&f, &KnotParams::default()),
+        model.energy(&conv, &KnotParams::default()),
+    );
+    assert!(einf <= e3 && e3 < e0, "{einf} ≤ {e3} < {e0}");
+    let set = model.yarn_set(&f, 4).unwrap();
+    assert!(set.curves.iter().all(|c| !c.closed));
+    assert_eq!(set.period, None);
+}
+
+#[test]
 #[ignore]
 fn debug_where_rest_clearance() {
     for chart in ["stockinette", "rib1x1"] {
