@@ -2,7 +2,7 @@
 //! degenerate triangles, boundaries as intended, UV charts unmirrored, front sides
 //! outwards, and a drape that rests on (not in) the sphere.
 
-use datasets::mesh::cloth::{DrapeParams, drape};
+use datasets::mesh::cloth::{DrapeParams, drape, drape_frames};
 use datasets::{Mesh, MeshKind, Resolution, synth_mesh, write_obj};
 
 fn check_obj(mesh: &Mesh, name: &str) {
@@ -153,4 +153,24 @@ fn drape_rests_on_the_sphere_and_hangs_down() {
     assert_eq!(m.mirrored_uv_triangles(), 0);
     check_obj(m, "drape");
     eprintln!("drape n=20: {} steps, {} halvings", r.steps, r.halvings);
+}
+
+#[test]
+fn drape_frames_run_from_the_flat_cloth_to_the_drape() {
+    let p = DrapeParams::new(12);
+    let (r, frames) = drape_frames(&p, 4).unwrap();
+    assert_eq!(frames.len(), 5);
+    // Frame 0 is the flat start; the last frame is the settled drape; the result is the
+    // same as without recording.
+    let z0 = frames[0].positions[0][2];
+    assert!(frames[0].positions.iter().all(|q| q[2] == z0));
+    assert_eq!(frames[4].positions, r.mesh.positions);
+    assert_eq!(drape(&p).unwrap().mesh.positions, r.mesh.positions);
+    for f in &frames {
+        assert_eq!(f.uvs, frames[0].uvs);
+        assert_eq!(f.triangles, frames[0].triangles);
+    }
+    // The corners fall monotonically.
+    let corner: Vec<f64> = frames.iter().map(|f| f.positions[0][2]).collect();
+    assert!(corner.windows(2).all(|w| w[1] <= w[0]), "{corner:?}");
 }

@@ -291,7 +291,9 @@ fn garment(src: &BtfSource, wales: usize, stretch: Option<f64>) -> Result<Garmen
                 triangle_uvs: mesh.triangle_uvs.clone(),
             };
             let stitches = StitchMesh::on_surface(&surface, chart, &layout)?;
-            let model = KnotModel::new(&rest_stitches, &sk, (ws, cs))?;
+            // The rest gauge is the garment's own (whole courses change the course spacing
+            // by < chart.height / courses): at strain 0 the knots see only the drape.
+            let model = KnotModel::new(&rest_stitches, &sk, (ws, layout.course_dv.abs() * s))?;
             let frame = model.solve(&stitches, &KnotParams::default())?;
             (surface, model.yarn_set(&frame, 1)?)
         }

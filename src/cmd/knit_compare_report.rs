@@ -568,48 +568,6 @@ fn short(c: &Cell) -> String {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn erosion_and_dilation_of_a_square() {
-        let (w, h) = (20, 20);
-        let mask: Vec<bool> =
-            (0..w * h).map(|i| (5..15).contains(&(i % w)) && (5..15).contains(&(i / w))).collect();
-        let (interior, band) = interior_and_band(&mask, (w, h), 2);
-        // 10 × 10 eroded by 2 → 6 × 6; dilated by 2 → 14 × 14; band = 196 − 36.
-        assert_eq!(interior.iter().filter(|m| **m).count(), 36);
-        assert_eq!(band.iter().filter(|m| **m).count(), 196 - 36);
-    }
-
-    #[test]
-    fn scores_of_a_uniform_scaling() {
-        let r = vec![1.0f32; 12];
-        let x = vec![1.1f32; 12];
-        let m = vec![true; 4];
-        let s = scores(&x, &r, &m, &m, &m, (2, 2), 1);
-        assert!((s.interior - 0.1).abs() < 1e-6 && (s.mean_ratio - 1.1).abs() < 1e-6);
-        assert!((s.stitch_scale - 0.1).abs() < 1e-6);
-    }
-
-    #[test]
-    fn a_square_facing_the_camera_covers_its_projected_pixels() {
-        // A 2 × 2 m square at z = 0 seen from z = 2 (fov 90°): it spans ±0.5 of the frame.
-        let mesh = datasets::mesh::Mesh {
-            positions: vec![[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]],
-            normals: vec![[0.0, 0.0, 1.0]; 4],
-            uvs: vec![[0.0, 0.0]; 4],
-            triangles: vec![[0, 1, 2], [0, 2, 3]],
-            triangle_uvs: vec![[0, 0, 0], [0, 0, 0]],
-            ..Default::default()
-        };
-        let m = raster_mask(&mesh, [0.0, 0.0, 2.0], [0.0; 3], [0.0, 1.0, 0.0], 90.0, (40, 40));
-        assert_eq!(m.iter().filter(|v| **v).count(), 20 * 20);
-        assert!(m[20 * 40 + 20] && !m[0]);
-    }
-}
-
 /// One strain of the stretch study: the strain, its cells and distances.
 pub type StretchRun = (f64, Vec<Cell>, Vec<Distance>);
 
@@ -746,4 +704,46 @@ pub fn write_stretch(out: &std::path::Path, runs: &[StretchRun]) -> anyhow::Resu
     btf_image::write::write_text(&out.join("stretch.md"), &md)?;
     eprintln!("{md}");
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn erosion_and_dilation_of_a_square() {
+        let (w, h) = (20, 20);
+        let mask: Vec<bool> =
+            (0..w * h).map(|i| (5..15).contains(&(i % w)) && (5..15).contains(&(i / w))).collect();
+        let (interior, band) = interior_and_band(&mask, (w, h), 2);
+        // 10 × 10 eroded by 2 → 6 × 6; dilated by 2 → 14 × 14; band = 196 − 36.
+        assert_eq!(interior.iter().filter(|m| **m).count(), 36);
+        assert_eq!(band.iter().filter(|m| **m).count(), 196 - 36);
+    }
+
+    #[test]
+    fn scores_of_a_uniform_scaling() {
+        let r = vec![1.0f32; 12];
+        let x = vec![1.1f32; 12];
+        let m = vec![true; 4];
+        let s = scores(&x, &r, &m, &m, &m, (2, 2), 1);
+        assert!((s.interior - 0.1).abs() < 1e-6 && (s.mean_ratio - 1.1).abs() < 1e-6);
+        assert!((s.stitch_scale - 0.1).abs() < 1e-6);
+    }
+
+    #[test]
+    fn a_square_facing_the_camera_covers_its_projected_pixels() {
+        // A 2 × 2 m square at z = 0 seen from z = 2 (fov 90°): it spans ±0.5 of the frame.
+        let mesh = datasets::mesh::Mesh {
+            positions: vec![[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]],
+            normals: vec![[0.0, 0.0, 1.0]; 4],
+            uvs: vec![[0.0, 0.0]; 4],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+            triangle_uvs: vec![[0, 0, 0], [0, 0, 0]],
+            ..Default::default()
+        };
+        let m = raster_mask(&mesh, [0.0, 0.0, 2.0], [0.0; 3], [0.0, 1.0, 0.0], 90.0, (40, 40));
+        assert_eq!(m.iter().filter(|v| **v).count(), 20 * 20);
+        assert!(m[20 * 40 + 20] && !m[0]);
+    }
 }

@@ -38,11 +38,17 @@ pub struct DeformArgs {
     /// Stitches W,C of the periodic patch (multiples of the chart's size).
     #[arg(long, default_value = "8,8")]
     pub stitches: String,
-    /// Stretch along the wales (loop height, +y), as engineering strains.
-    #[arg(long, value_delimiter = ',', default_value = "0,0.1,0.2,0.3,0.5")]
+    /// Stretch along the wales (loop height, +y), as engineering strains (negative:
+    /// compression).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_hyphen_values = true,
+        default_value = "0,0.1,0.2,0.3,0.5"
+    )]
     pub stretch: Vec<f64>,
-    /// Stretch along the courses (+x), as engineering strains.
-    #[arg(long, value_delimiter = ',', default_value = "0.1,0.3")]
+    /// Stretch along the courses (+x), as engineering strains (negative: compression).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, default_value = "-0.1,0.1,0.3")]
     pub stretch_course: Vec<f64>,
     /// Engineering shear γ of `[[1, γ], [0, 1]]`.
     #[arg(long, value_delimiter = ',', default_value = "0.1,0.2,0.3")]
@@ -65,6 +71,21 @@ pub struct DeformArgs {
     /// Gauss–Seidel sweeps allowed for the converged reference.
     #[arg(long, default_value_t = 500)]
     pub max_sweeps: usize,
+    /// Drive the yarns by the drape simulation instead (a cloth falling over a sphere,
+    /// `datasets`' drape): this many frames after the flat start, written as
+    /// `drape/frame-K.bcc` with a per-frame table (0: the analytic maps).
+    #[arg(long, default_value_t = 0)]
+    pub drape: usize,
+    /// Wales across the draped cloth (`--drape`; the 1 m cloth of the simulation is
+    /// scaled to them, so few wales make its folds sharper than a stitch).
+    #[arg(long, default_value_t = 64)]
+    pub wales: usize,
+    /// Cloth vertices per side of the drape simulation (`--drape`).
+    #[arg(long, default_value_t = 40)]
+    pub cloth_res: usize,
+    /// Render every drape frame with the GPU fibers at W,H (`--drape`; `drape.png`).
+    #[arg(long)]
+    pub render: Option<String>,
     /// Output folder.
     #[arg(short = 'o', long = "out", alias = "output")]
     pub output: PathBuf,
@@ -134,8 +155,11 @@ pub fn run(a: DeformArgs) -> Result<()> {
         ..KnotParams::default()
     };
     guard::output_folder(&a.output, "knit deform", a.fresh, &|n| {
-        guard::report_output(n) || n == "yarns"
+        guard::report_output(n) || n == "yarns" || n == "drape"
     })?;
+    if a.drape > 0 {
+        return super::knit_deform_drape::run(&a, &chart, &params, &p);
+    }
     let yarn_dir = a.output.join("yarns");
     std::fs::create_dir_all(&yarn_dir)?;
     outln!(
@@ -302,6 +326,7 @@ fn write_outputs(
     write_text(&a.output.join("report.md"), &md)?;
     // Plots against the strain, one series per kind of map and method.
     let kinds = ["stretch along the wales", "stretch along the courses", "shear"];
+    // (The rest case joins every series at strain 0.)
     let series = |f: &dyn Fn(&Row) -> f64, label: &str| -> Vec<Series> {
         kinds
             .iter()

@@ -11,6 +11,7 @@ pub mod knit;
 pub mod knit_compare;
 pub mod knit_compare_report;
 pub mod knit_deform;
+pub mod knit_deform_drape;
 pub mod knit_render;
 pub mod knit_sweep;
 pub mod knit_sweep_report;

@@ -188,3 +188,41 @@ fn knit_deform_scores_knots_against_the_reference_and_writes_the_yarns() {
     let e = d.fails(&["knit", "deform", "--chart", "cable2x2", "--stitches", "8,4", "-o", "cab"]);
     assert!(e.contains("cable") && e.contains("unsupported"), "{e}");
 }
+
+#[test]
+fn knit_deform_follows_the_drape_frame_by_frame() {
+    let d = Dir::new();
+    let out = d.ok(&[
+        "knit",
+        "deform",
+        "--chart",
+        "rib1x1",
+        "--drape",
+        "2",
+        "--wales",
+        "8",
+        "--cloth-res",
+        "12",
+        "--max-sweeps",
+        "30",
+        "-o",
+        "dr",
+    ]);
+    assert!(out.contains("knot faces"), "{out}");
+    let csv = std::fs::read_to_string(d.path("dr/drape.csv")).unwrap();
+    let rows: Vec<Vec<f64>> =
+        csv.lines().skip(1).map(|l| l.split(',').map(|x| x.parse().unwrap()).collect()).collect();
+    assert_eq!(rows.len(), 3, "the flat start and two frames");
+    // The flat start is the rest: no energy, no strain, the template's clearance.
+    assert!(rows[0][3] < 1e-18 && rows[0][6] < 1e-9 && rows[0][7] < 1e-9, "{:?}", rows[0]);
+    assert!((rows[0][8] - rows[0][9]).abs() < 1e-9, "knots = naive at rest");
+    for r in &rows[1..] {
+        assert!(r[4] <= r[3], "the iterations lower the energy: {r:?}");
+        assert!(r[7] > 0.0, "the cloth deforms: {r:?}");
+        assert!(r[2].is_finite() && r[2] > 0.0);
+    }
+    for k in 0..3 {
+        assert!(d.path(&format!("dr/drape/frame-{k:03}.bcc")).is_file());
+    }
+    assert!(d.path("dr/drape-strain.png").is_file() && d.path("dr/drape.md").is_file());
+}

@@ -225,6 +225,37 @@ fn knit_compare_scores_every_representation_against_the_reference() {
     for f in ["report.md", "pareto.png", "sheet-6px.png", "images/R0-6px.exr", "garment.obj"] {
         assert!(d.path("cmp").join(f).is_file(), "{f}");
     }
+    // The stretch study: the garment and its yarns stretched along the wales by 50 %.
+    let mut st: Vec<&str> = args[..args.len() - 2].to_vec();
+    st.extend(["--stretch", "0,0.5", "-o", "st"]);
+    let out = d.ok(&st);
+    assert!(out.contains("stretch study") || d.path("st/stretch.md").is_file(), "{out}");
+    let csv = std::fs::read_to_string(d.path("st/stretch.csv")).unwrap();
+    let strains: Vec<&str> = csv.lines().skip(1).map(|l| l.split(',').next().unwrap()).collect();
+    assert!(strains.contains(&"0") && strains.contains(&"0.5"), "{csv}");
+    for l in csv.lines().skip(1) {
+        let rmse: f64 = l.split(',').nth(4).unwrap().parse().unwrap();
+        assert!(rmse.is_finite() && rmse > 0.0, "{l}");
+    }
+    assert!(d.path("st/stretch-6px.png").is_file() && d.path("st/stretch.md").is_file());
+    let extent = |f: &str| {
+        let text = std::fs::read_to_string(d.path(f)).unwrap();
+        let mut lo = [f64::INFINITY; 2];
+        let mut hi = [f64::NEG_INFINITY; 2];
+        for l in text.lines().filter(|l| l.starts_with("v ")) {
+            let v: Vec<f64> = l[2..].split_whitespace().map(|x| x.parse().unwrap()).collect();
+            for k in 0..2 {
+                lo[k] = lo[k].min(v[k]);
+                hi[k] = hi[k].max(v[k]);
+            }
+        }
+        [hi[0] - lo[0], hi[1] - lo[1]]
+    };
+    let (e0, e5) = (extent("st/stretch-0/garment.obj"), extent("st/stretch-0.5/garment.obj"));
+    let grow = (e5[0] / e0[0]).max(e5[1] / e0[1]);
+    assert!((1.4..1.6).contains(&grow), "the drape stretched by {grow}, not 1.5");
+    let e = d.fails(&["knit", "compare", "--btf", "y.btf", "--stretch", "2", "-o", "c4"]);
+    assert!(e.contains("--stretch"), "{e}");
     // Refusals: a BTF that is not a yarn BTF; wales that do not repeat the chart.
     crate::common::write_test_btf(&d.path("plain.btf"), 8);
     let e = d.fails(&["knit", "compare", "--btf", "plain.btf", "-o", "c2"]);

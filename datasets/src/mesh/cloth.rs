@@ -157,6 +157,32 @@ impl Sim<'_> {
 
 /// Simulates the drape and returns the settled cloth.
 pub fn drape(p: &DrapeParams) -> Result<DrapeResult> {
+    drape_frames(p, 0).map(|(r, _)| r)
+}
+
+/// The cloth mesh of node positions `xs` (UVs: one unit per metre of the flat cloth).
+fn cloth_mesh(p: &DrapeParams, xs: &[V3]) -> Mesh {
+    let n = p.n;
+    let mut mesh = Mesh::default();
+    mesh.add_grid(
+        n - 1,
+        n - 1,
+        false,
+        |s, tt| {
+            let (i, j) =
+                ((s * (n - 1) as f64).round() as usize, (tt * (n - 1) as f64).round() as usize);
+            xs[j * n + i]
+        },
+        |s, tt| [s * p.size_m, tt * p.size_m],
+    );
+    mesh.compute_normals();
+    mesh
+}
+
+/// [`drape`], also returning the cloth at `frames + 1` evenly spaced times from the flat
+/// start (`t = 0`) to the end (`frames = 0`: none): an animated stitch surface with the same
+/// vertices and UVs in every frame (a frame is the first state at or after its time).
+pub fn drape_frames(p: &DrapeParams, frames: usize) -> Result<(DrapeResult, Vec<Mesh>)> {
     let positive =
         [p.size_m, p.sphere_radius_m, p.mass_kg, p.stretch_n_per_m, p.thickness_m, p.duration_s];
     let valid = (4..=400).contains(&p.n)
@@ -203,6 +229,11 @@ pub fn drape(p: &DrapeParams) -> Result<DrapeResult> {
     let mut v = vec![[0.0; 3]; n * n];
     let mut acc = vec![[0.0; 3]; n * n];
     sim.accelerations(&x, &v, &mut acc);
+    let mut recorded = Vec::with_capacity(if frames > 0 { frames + 1 } else { 0 });
+    if frames > 0 {
+        recorded.push(cloth_mesh(p, &x));
+    }
+    let frame_time = |k: usize| p.duration_s * k as f64 / frames.max(1) as f64;
     let (mut t, mut steps, mut halvings) = (0.0, 0, 0);
     let (mut xn, mut vh, mut an) = (x.clone(), v.clone(), acc.clone());
     while t < p.duration_s {
@@ -242,24 +273,17 @@ pub fn drape(p: &DrapeParams) -> Result<DrapeResult> {
         std::mem::swap(&mut acc, &mut an);
         t += dt;
         steps += 1;
+        while frames > 0 && recorded.len() <= frames && t >= frame_time(recorded.len()) {
+            recorded.push(cloth_mesh(p, &x));
+        }
         if x.iter().any(|q| !q.iter().all(|c| c.is_finite())) {
             return Err(Error::Invalid(format!("drape simulation diverged after {steps} steps")));
         }
     }
     let max_penetration_m = x.iter().map(|&q| (-sim.obstacle(q).0).max(0.0)).fold(0.0, f64::max);
-    let mut mesh = Mesh::default();
-    let xs = &x;
-    mesh.add_grid(
-        n - 1,
-        n - 1,
-        false,
-        |s, tt| {
-            let (i, j) =
-                ((s * (n - 1) as f64).round() as usize, (tt * (n - 1) as f64).round() as usize);
-            xs[j * n + i]
-        },
-        |s, tt| [s * p.size_m, tt * p.size_m],
-    );
-    mesh.compute_normals();
-    Ok(DrapeResult { mesh, steps, halvings, max_penetration_m })
+    let mesh = cloth_mesh(p, &x);
+    while frames > 0 && recorded.len() <= frames {
+        recorded.push(mesh.clone());
+    }
+    Ok((DrapeResult { mesh, steps, halvings, max_penetration_m }, recorded))
 }

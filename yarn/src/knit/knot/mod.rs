@@ -31,8 +31,15 @@
 //!
 //! **Per frame** ([H25 §5.2] with DESIGN §3.3 items 3–5):
 //! 1. the face map is the bilinear map of its four corners (exact at corners, the affine
-//!    `F` on parallelograms); `n` = normalised cross product of the diagonals, `e1` = the
-//!    bottom edge made ⟂ `n`, `e2 = n × e1`;
+//!    `F` on parallelograms). **Not DESIGN's face normal**: each knot takes the surface
+//!    normal at its own position (the corner normals interpolated along the bottom edge),
+//!    `e1` = the bottom edge made ⟂ to it, `e2 = n × e1` — the same normal field that
+//!    places every other CP, so the knots' `±h` lift and the fixed sinker and head agree on
+//!    a bent surface; the cross product of the diagonals (DESIGN §3.3 item 5) only decides
+//!    the orientation `o = ±1`, and `b = o (d × n)`, so that a chart laid against the
+//!    surface's handedness (courses running down a texture, as on `btf knit compare`'s
+//!    garment) gives the mirror image of the rest instead of swapping the two yarns' sides
+//!    (`tests.rs`: a mirrored layout reproduces the mirrored rest with energy 0);
 //! 2. knots on the bottom edge at `s = 0.25, 0.75`, their spacing blended `d0 + β(d1 −
 //!    d0)` ([H25 §6.1], called α there by mistake, item 7): β = 1 interpolates uniformly,
 //!    β = 0 keeps the rest spacing; initial `θ, l` = the rest half-vector `l₀ d₀` mapped by
@@ -50,6 +57,16 @@
 //!    paper has no guard) and counted in [`SolveStats`];
 //! 4. the yarn curve: CPs → Catmull–Rom, up-sampled `upsample` points per segment (item 8),
 //!    with the rest length coordinates (fibers do not slide along a stretched yarn).
+//!
+//! **What it does not do, measured** (`btf knit deform`, BENCHMARKS.md): the rest template
+//! already has the crossing yarns at 0.88 × 2r near the contacts (the Catmull–Rom curves
+//! bend towards the face between the `±h` contacts and the side points; the Chen skeleton
+//! has 0.82), stretching along the wales keeps that clearance, shear and compression lower
+//! it (0.85 at 30 % shear, 0.86 at 10 % course compression), and on the drape — where the
+//! cloth compresses and creases within a stitch — the knots make it *worse* than naive
+//! interpolation (the length terms push compressed loops sideways through their
+//! neighbours): the model's missing contact (DESIGN §3.3 item 9). The templates are the
+//! projected skeleton, not relaxed with a contact penalty (DESIGN §3.3 item 1: not built).
 //!
 //! **References** ([`KnotModel::reference`], DESIGN §3.5): the same energy minimised over
 //! *all* faces jointly by block Gauss–Seidel (each face solved with its neighbours' current
@@ -172,12 +189,17 @@ struct Stencil {
 pub struct FaceFrame {
     /// Knot positions.
     pub xk: [V3; 2],
-    /// In-plane unit vector along the bottom edge.
-    pub e1: V3,
-    /// `n × e1`.
-    pub e2: V3,
-    /// Face normal (cross product of the diagonals).
-    pub n: V3,
+    /// Per knot: in-plane unit vector along the bottom edge.
+    pub e1: [V3; 2],
+    /// Per knot: `n × e1`.
+    pub e2: [V3; 2],
+    /// Per knot: the surface normal at the knot (the stitch mesh's corner normals
+    /// interpolated along the bottom edge, as for every other CP).
+    pub n: [V3; 2],
+    /// +1 where the face map keeps the orientation of the canonical patch about `n`, −1
+    /// where it mirrors it (a chart laid with courses running against the surface's
+    /// handedness): `b = o (d × n)`.
+    pub o: f64,
 }
 
 /// Knot parameters of one face: `(θ1, l1/r, θ2, l2/r)`.
@@ -477,23 +499,32 @@ impl KnotModel {
                 let x10 = mesh.eval(w + 1.0, c).0;
                 let x01 = mesh.eval(w, c + 1.0).0;
                 let x11 = mesh.eval(w + 1.0, c + 1.0).0;
-                let n = vec3::normalize(vec3::cross(vec3::sub(x11, x00), vec3::sub(x01, x10)));
+                let nd = vec3::normalize(vec3::cross(vec3::sub(x11, x00), vec3::sub(x01, x10)));
                 let edge = vec3::sub(x10, x00);
-                let e1 = n.and_then(|n| vec3::normalize(vec3::reject(edge, n)));
-                let (Some(n), Some(e1)) = (n, e1) else {
+                let (n00, n10) = (mesh.eval(w, c).1, mesh.eval(w + 1.0, c).1);
+                let frame_at = |s: f64| -> Option<(V3, V3, V3)> {
+                    let n = vec3::normalize(vec3::lerp(n00, n10, s)).or(nd)?;
+                    let e1 = vec3::normalize(vec3::reject(edge, n))?;
+                    Some((e1, vec3::cross(n, e1), n))
+                };
+                let (Some(nd), Some(k0), Some(k1)) = (nd, frame_at(f.s[0]), frame_at(f.s[1]))
+                else {
                     return Err(Error::Invalid(format!(
                         "knot deformation: stitch face (course {}, wale {}) is degenerate \
                          (corners {x00:?}, {x10:?}, {x01:?}, {x11:?})",
                         f.course, f.wale
                     )));
                 };
-                let e2 = vec3::cross(n, e1);
+                let e1 = [k0.0, k1.0];
+                let e2 = [k0.1, k1.1];
+                let n = [k0.2, k1.2];
+                let o = if vec3::dot(nd, vec3::lerp(n[0], n[1], 0.5)) < 0.0 { -1.0 } else { 1.0 };
                 let at = |s: f64| vec3::lerp(x00, x10, s);
                 let mid = at(0.5 * (f.s[0] + f.s[1]));
                 let d1 = vec3::length(edge) * (f.s[1] - f.s[0]);
                 let d0 = rest_spacing(f);
                 let half = 0.5 * (d0 + beta * (d1 - d0));
-                let dir = vec3::normalize_or(edge, e1);
+                let dir = vec3::normalize_or(edge, e1[0]);
                 let xk = if beta == 1.0 {
                     [at(f.s[0]), at(f.s[1])]
                 } else {
@@ -506,11 +537,11 @@ impl KnotModel {
                     let dt = vec3::lerp(vec3::sub(x01, x00), vec3::sub(x11, x10), s);
                     let v =
                         vec3::add(vec3::scale(ds, f.delta[k][0]), vec3::scale(dt, f.delta[k][1]));
-                    let (a, b) = (vec3::dot(v, e1), vec3::dot(v, e2));
+                    let (a, b) = (vec3::dot(v, e1[k]), vec3::dot(v, e2[k]));
                     theta[2 * k] = b.atan2(a);
                     theta[2 * k + 1] = a.hypot(b) / r;
                 }
-                Ok((FaceFrame { xk, e1, e2, n }, theta))
+                Ok((FaceFrame { xk, e1, e2, n, o }, theta))
             })
             .collect();
         let mut frames = Vec::with_capacity(out.len());
@@ -537,15 +568,16 @@ impl KnotModel {
         let k = knot as usize;
         let (r, h) = (self.radius, self.skeleton.depth);
         let (sn, cs) = t[2 * k].sin_cos();
-        let d = vec3::add(vec3::scale(frame.e1, cs), vec3::scale(frame.e2, sn));
+        let (e1, e2, n) = (frame.e1[k], frame.e2[k], frame.n[k]);
+        let d = vec3::add(vec3::scale(e1, cs), vec3::scale(e2, sn));
         let l = t[2 * k + 1] * r;
         let side = if own { tpl.sigma } else { -tpl.sigma };
         let xk = frame.xk[k];
         match role {
-            Role::C0 => vec3::add_scaled(vec3::add_scaled(xk, d, l), frame.n, side * h),
-            Role::C1 => vec3::add_scaled(vec3::add_scaled(xk, d, -l), frame.n, -side * h),
+            Role::C0 => vec3::add_scaled(vec3::add_scaled(xk, d, l), n, side * h),
+            Role::C1 => vec3::add_scaled(vec3::add_scaled(xk, d, -l), n, -side * h),
             Role::P => {
-                let b = vec3::cross(d, frame.n);
+                let b = vec3::scale(vec3::cross(d, n), frame.o);
                 let sb = if own { tpl.b_own[k] } else { -tpl.b_own[k] };
                 vec3::add_scaled(xk, b, sb * r)
             }
@@ -570,7 +602,7 @@ impl KnotModel {
                 Source::Knot { face, knot, role, own, course_wrap } => {
                     let f = face as usize;
                     let p = self.knot_point(f, &frames[f], &theta[f], knot, role, own);
-                    (vec3::add_scaled(p, l1, course_wrap as f64), frames[f].n)
+                    (vec3::add_scaled(p, l1, course_wrap as f64), frames[f].n[knot as usize])
                 }
             })
             .unzip()

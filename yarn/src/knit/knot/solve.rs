@@ -10,6 +10,10 @@ use crate::vec3::{self, V3};
 /// Halvings before a step is rejected.
 const MAX_HALVINGS: usize = 20;
 
+/// Face energy treated as converged: residuals of ~1e-11 (relative lengths and cosines)
+/// are rounding of metre coordinates, not shape.
+const CONVERGED: f64 = 1e-20;
+
 /// Cosine of the turning angle at `b` of the polyline `a → b → c` (1: straight on).
 pub(super) fn cos_turn(a: V3, b: V3, c: V3) -> f64 {
     let (p, q) = (vec3::sub(b, a), vec3::sub(c, b));
@@ -64,13 +68,14 @@ impl Ctx<'_> {
     fn geom(&self, frame: &FaceFrame, t: &Theta) -> [KnotGeom; 2] {
         std::array::from_fn(|k| {
             let (sn, cs) = t[2 * k].sin_cos();
-            let d = vec3::add(vec3::scale(frame.e1, cs), vec3::scale(frame.e2, sn));
-            let dd = vec3::add(vec3::scale(frame.e1, -sn), vec3::scale(frame.e2, cs));
+            let (e1, e2, n) = (frame.e1[k], frame.e2[k], frame.n[k]);
+            let d = vec3::add(vec3::scale(e1, cs), vec3::scale(e2, sn));
+            let dd = vec3::add(vec3::scale(e1, -sn), vec3::scale(e2, cs));
             KnotGeom {
                 d,
                 dd,
-                b: vec3::cross(d, frame.n),
-                bb: vec3::cross(dd, frame.n),
+                b: vec3::scale(vec3::cross(d, n), frame.o),
+                bb: vec3::scale(vec3::cross(dd, n), frame.o),
                 l: t[2 * k + 1] * self.model.radius,
             }
         })
@@ -95,11 +100,13 @@ impl Ctx<'_> {
                     let xk = frame.xk[k];
                     let q = match role {
                         Role::C0 => {
-                            vec3::add_scaled(vec3::add_scaled(xk, kg.d, kg.l), frame.n, side * h)
+                            vec3::add_scaled(vec3::add_scaled(xk, kg.d, kg.l), frame.n[k], side * h)
                         }
-                        Role::C1 => {
-                            vec3::add_scaled(vec3::add_scaled(xk, kg.d, -kg.l), frame.n, -side * h)
-                        }
+                        Role::C1 => vec3::add_scaled(
+                            vec3::add_scaled(xk, kg.d, -kg.l),
+                            frame.n[k],
+                            -side * h,
+                        ),
                         Role::P => {
                             let sb = if own { tpl.b_own[k] } else { -tpl.b_own[k] };
                             vec3::add_scaled(xk, kg.b, sb * r)
@@ -235,6 +242,12 @@ impl Ctx<'_> {
         let mut e = self.eval(f, frame, &t, iterations > 0, &mut sc);
         out.energies.push(e);
         for it in 0..iterations {
+            if e <= CONVERGED {
+                // Residuals at rounding level: a step would only follow the noise (and
+                // trip the guard); keep the parameters.
+                out.energies.push(e);
+                continue;
+            }
             if it > 0 {
                 self.eval(f, frame, &t, true, &mut sc);
             }

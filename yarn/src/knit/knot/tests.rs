@@ -51,7 +51,8 @@ fn knots_satisfy_eq4_by_construction() {
         let fr = &frames[f];
         for k in 0..2u8 {
             let q = |role, own| model.knot_point(f, fr, &theta[f], k, role, own);
-            let flat = |p: V3, s: f64| vec3::add_scaled(p, fr.n, -s);
+            let nk = fr.n[k as usize];
+            let flat = |p: V3, s: f64| vec3::add_scaled(p, nk, -s);
             let sg = model.faces[f].sigma;
             let c0 = flat(q(Role::C0, true), sg * h);
             let c0b = flat(q(Role::C0, false), -sg * h);
@@ -67,7 +68,7 @@ fn knots_satisfy_eq4_by_construction() {
             let cosang = vec3::dot(dv, bv) / (vec3::length(dv) * vec3::length(bv));
             assert!(cosang.abs() < 1e-12, "d ⟂ b: cos {cosang}");
             for p in [c0, c1, p0, p1] {
-                assert!(vec3::dot(vec3::sub(p, xk), fr.n).abs() < tol, "in the face plane");
+                assert!(vec3::dot(vec3::sub(p, xk), nk).abs() < tol, "in the knot's tangent plane");
             }
             checked += 1;
         }
@@ -409,4 +410,57 @@ fn debug_where_rest_clearance() {
             at[2] / R
         );
     }
+}
+
+#[test]
+#[ignore]
+fn debug_cylinder_clearance() {
+    let (model0, mesh) = setup("rib1x1", 8, 8);
+    let _ = model0;
+    let mut open = mesh.clone();
+    open.lattice = None;
+    let sk = SkeletonParams::new(R);
+    let model = KnotModel::new(&open, &sk, sk.default_spacing()).unwrap();
+    for radius_stitches in [20.0, 8.0, 4.0] {
+        let rad = radius_stitches * 8.0 * R;
+        let mut m = open.clone();
+        for (p, n) in m.corners.iter_mut().zip(m.normals.iter_mut()) {
+            let a = p[1] / rad;
+            *p = [p[0], rad * a.sin(), rad * (a.cos() - 1.0)];
+            *n = [0.0, a.sin(), a.cos()];
+        }
+        let naive = model.naive(&m).unwrap();
+        let init = model.initial(&m, 1.0).unwrap();
+        let solved = model.solve(&m, &KnotParams::default()).unwrap();
+        let c = |f: &KnotFrame| min_clearance(&model.yarn_set(f, 1).unwrap(), None, R, 8);
+        eprintln!(
+            "bend radius {radius_stitches} courses: clearance naive {:.3} init {:.3} solved {:.3}; E init {:.3e} solved {:.3e}",
+            c(&naive).ratio,
+            c(&init).ratio,
+            c(&solved).ratio,
+            model.energy(&init, &KnotParams::default()),
+            model.energy(&solved, &KnotParams::default())
+        );
+        eprintln!("   at {:?}", c(&init));
+    }
+}
+
+#[test]
+fn a_mirrored_layout_gives_the_mirrored_rest() {
+    // Courses laid against the surface's handedness (a chart running down a texture, as on
+    // the garment of `btf knit compare`): corners mirrored y → −y, normals kept. The knit
+    // is the mirror image of the rest — same lengths and angles, so energy 0.
+    let (model, mesh) = setup("rib1x1", 4, 4);
+    let mut m = mesh.clone();
+    m.corners.iter_mut().for_each(|p| p[1] = -p[1]);
+    m.lattice = mesh.lattice.map(|l| [l[0], vec3::scale(l[1], -1.0)]);
+    let f = model.solve(&m, &KnotParams::default()).unwrap();
+    assert!(f.stats.energy_initial < 1e-20, "E {}", f.stats.energy_initial);
+    let dev = (0..model.cp_count())
+        .map(|i| {
+            let p = model.rest().points[i];
+            vec3::distance([p[0], -p[1], p[2]], f.points[i])
+        })
+        .fold(0.0, f64::max);
+    assert!(dev < 1e-9 * R, "not the mirror image: {dev}");
 }
