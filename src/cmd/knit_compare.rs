@@ -598,9 +598,15 @@ fn study(
         let k = (0.5 * cam.stitch_px).round() as usize;
         let score =
             |x: &[f32], r: &[f32]| report::scores(x, r, &interior, &band, &support, (wu, hu), k);
+        // Exposures from the reference's interior; where its median is black (a stretched
+        // knit at few samples shows mostly the background between yarns), from the interior
+        // and band together; else no ꟻLIP at this distance (the scores stay unmeasured).
         let exposures = btf_image::flip::hdr_exposures_over(&full.0, &interior)
-            .context("HDR-ꟻLIP exposures from the reference's interior")?;
-        let flip = |x: &[f32], s: &mut Scores| -> Result<btf_image::flip::FlipMap> {
+            .or_else(|_| btf_image::flip::hdr_exposures_over(&full.0, &support))
+            .map_err(|e| eprintln!("warning: no HDR-ꟻLIP at {tag}: {e}"))
+            .ok();
+        let flip = |x: &[f32], s: &mut Scores| -> Result<Option<btf_image::flip::FlipMap>> {
+            let Some(exposures) = exposures else { return Ok(None) };
             // A PCA reconstruction can dip below 0; HDR-ꟻLIP takes non-negative radiance.
             let x: Vec<f32> = x.iter().map(|v| v.max(0.0)).collect();
             let m = btf_image::flip::flip_hdr(
@@ -613,7 +619,7 @@ fn study(
             )?;
             s.flip_interior = m.mean_over(&interior)?;
             s.flip_band = m.mean_over(&band)?;
-            Ok(m)
+            Ok(Some(m))
         };
         let mut gap = score(&direct.0, &full.0);
         flip(&direct.0, &mut gap)?;
@@ -624,11 +630,12 @@ fn study(
         for c in cells.iter_mut().filter(|c| c.distance == ci) {
             c.vs_full = score(&c.rgb, &full.0);
             c.vs_direct = score(&c.rgb, &direct.0);
-            let m = flip(&c.rgb, &mut c.vs_full)?;
-            m.write_heatmap(
-                &images.join(format!("flip-{}-{tag}.png", c.file_name())),
-                Some(&support),
-            )?;
+            if let Some(m) = flip(&c.rgb, &mut c.vs_full)? {
+                m.write_heatmap(
+                    &images.join(format!("flip-{}-{tag}.png", c.file_name())),
+                    Some(&support),
+                )?;
+            }
             c.ms_plain = ms_plain;
             write_exr_rgb(&images.join(format!("{}-{tag}.exr", c.file_name())), wu, hu, &c.rgb)?;
         }

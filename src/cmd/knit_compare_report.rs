@@ -641,7 +641,8 @@ pub fn write_stretch(out: &std::path::Path, runs: &[StretchRun]) -> anyhow::Resu
                 let mut line = format!("| {name} | {label} |");
                 for (_, c) in &per {
                     match c {
-                        Some(c) => line.push_str(&format!(" {:.3} |", f(c))),
+                        Some(c) if f(c).is_finite() => line.push_str(&format!(" {:.3} |", f(c))),
+                        Some(_) => line.push_str(" n/m |"),
                         None => line.push_str(" — |"),
                     }
                 }
