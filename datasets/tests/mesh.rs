@@ -170,7 +170,9 @@ fn drape_frames_run_from_the_flat_cloth_to_the_drape() {
         assert_eq!(f.uvs, frames[0].uvs);
         assert_eq!(f.triangles, frames[0].triangles);
     }
-    // The corners fall monotonically.
+    // A corner falls from the start, passes below the sphere's centre and (hanging, it
+    // may swing back a little as the cloth settles) ends well below where it began.
     let corner: Vec<f64> = frames.iter().map(|f| f.positions[0][2]).collect();
-    assert!(corner.windows(2).all(|w| w[1] <= w[0]), "{corner:?}");
+    assert!(corner[1] < corner[0] && corner.iter().skip(2).all(|&z| z < 0.0), "{corner:?}");
+    assert!(corner[4] < corner[0] - 0.4, "{corner:?}");
 }

@@ -207,6 +207,8 @@ struct Garment {
     ws: f64,
     /// UV centre: point and normal.
     centre: ([f64; 3], [f64; 3]),
+    /// Minimum distance between different courses' centre lines / 2r.
+    clearance: f64,
 }
 
 fn garment(src: &BtfSource, wales: usize, stretch: Option<f64>) -> Result<Garment> {
@@ -308,7 +310,8 @@ fn garment(src: &BtfSource, wales: usize, stretch: Option<f64>) -> Result<Garmen
         let c = (uv[1] - hi[1]) / layout.course_dv;
         *uv = [w / chart.width as f64, -c / chart.height as f64];
     }
-    Ok(Garment { mesh, yarns, wales, courses, ws, centre })
+    let clearance = yarn::knit::knot::min_clearance(&yarns, None, r, 8).ratio;
+    Ok(Garment { mesh, yarns, wales, courses, ws, centre, clearance })
 }
 
 fn uv_bounds(mesh: &Mesh) -> ([f64; 2], [f64; 2]) {
@@ -404,8 +407,8 @@ pub fn run(a: CompareArgs) -> Result<()> {
         let out = a.output.join(format!("stretch-{eps}"));
         std::fs::create_dir_all(&out)?;
         eprintln!("knit compare: stretch {eps} along the wales");
-        let (cells, dists) = study(&a, &src, &gpu, &eigs, &out, Some(eps), &setup)?;
-        runs.push((eps, cells, dists));
+        let (cells, dists, clearance) = study(&a, &src, &gpu, &eigs, &out, Some(eps), &setup)?;
+        runs.push((eps, cells, dists, clearance));
     }
     super::knit_compare_report::write_stretch(&a.output, &runs)?;
     Ok(())
@@ -430,7 +433,7 @@ fn study(
     out: &Path,
     stretch: Option<f64>,
     setup: &Setup,
-) -> Result<(Vec<Cell>, Vec<Distance>)> {
+) -> Result<(Vec<Cell>, Vec<Distance>, f64)> {
     let Setup { w, h, view, to_light, irradiance } = *setup;
     let images = out.join("images");
     std::fs::create_dir_all(&images)?;
@@ -440,11 +443,14 @@ fn study(
     let obj = out.join("garment.obj");
     datasets::write_obj(&g.mesh, &obj, "btf knit compare: the drape, UVs in chart periods")?;
     eprintln!(
-        "knit compare: {} × {} stitches on the drape ({:.3} m wide), {} yarn curves, {:.1} s",
+        "knit compare: {} × {} stitches on the drape ({:.3} m wide), {} yarn curves ({} yarns, \
+         clearance {:.3} × 2r), {:.1} s",
         g.wales,
         g.courses,
         g.wales as f64 * g.ws,
         g.yarns.curves.len(),
+        if stretch.is_some() { "knot" } else { "Chen skeleton" },
+        g.clearance,
         garment_s
     );
     let lift = 2.0 * src.params.yarn_radius();
@@ -676,7 +682,7 @@ fn study(
     for c in &mut cells {
         c.rgb = Vec::new(); // written above; the stretch summary needs the scores only
     }
-    Ok((cells, dists))
+    Ok((cells, dists, g.clearance))
 }
 
 fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {

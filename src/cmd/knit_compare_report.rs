@@ -568,8 +568,9 @@ fn short(c: &Cell) -> String {
     }
 }
 
-/// One strain of the stretch study: the strain, its cells and distances.
-pub type StretchRun = (f64, Vec<Cell>, Vec<Distance>);
+/// One strain of the stretch study: the strain, its cells and distances, and the minimum
+/// clearance between the knot yarns' courses / 2r.
+pub type StretchRun = (f64, Vec<Cell>, Vec<Distance>, f64);
 
 /// The representations the stretch summary follows: the BTF at its largest component
 /// count, the GPU fibers at full detail and the plain texture.
@@ -592,7 +593,7 @@ fn stretch_followed(cells: &[Cell]) -> Vec<String> {
 /// from the multiple-scattering gap), the first strain at which the BTF is worse than the
 /// fibers, `stretch.csv`, `stretch.md` and one plot per distance.
 pub fn write_stretch(out: &std::path::Path, runs: &[StretchRun]) -> anyhow::Result<()> {
-    let Some((_, cells0, dists0)) = runs.first() else { return Ok(()) };
+    let Some((_, cells0, dists0, _)) = runs.first() else { return Ok(()) };
     let names = stretch_followed(cells0);
     fn find<'a>(cells: &'a [Cell], d: usize, name: &str) -> Option<&'a Cell> {
         cells.iter().find(|c| c.distance == d && c.name == name)
@@ -608,10 +609,18 @@ pub fn write_stretch(out: &std::path::Path, runs: &[StretchRun]) -> anyhow::Resu
          bounce); the GPU fibers also against the direct-only R0 (their own light transport), \
          which isolates the geometry from the multiple-scattering gap.\n\n",
     );
+    let _ = write!(
+        md,
+        "Minimum clearance between the knot yarns' courses / 2r (below 1 they interpenetrate; the model has no contact):"
+    );
+    for (s, _, _, c) in runs {
+        let _ = write!(md, " {:.0} %: {c:.3};", s * 100.0);
+    }
+    let _ = writeln!(md, "\n");
     for (d, dist) in dists0.iter().enumerate() {
         let _ = writeln!(md, "## {} px per stitch\n", dist.stitch_px);
         let _ = write!(md, "| representation | measure |");
-        for (s, _, _) in runs {
+        for (s, _, _, _) in runs {
             let _ = write!(md, " {:.0} % |", s * 100.0);
         }
         let _ = writeln!(md);
@@ -619,7 +628,7 @@ pub fn write_stretch(out: &std::path::Path, runs: &[StretchRun]) -> anyhow::Resu
         let mut series = Vec::new();
         for name in &names {
             let per: Vec<(f64, Option<&Cell>)> =
-                runs.iter().map(|(s, cells, _)| (*s, find(cells, d, name))).collect();
+                runs.iter().map(|(s, cells, _, _)| (*s, find(cells, d, name))).collect();
             for (s, c) in &per {
                 if let Some(c) = c {
                     let _ = writeln!(
@@ -672,13 +681,13 @@ pub fn write_stretch(out: &std::path::Path, runs: &[StretchRun]) -> anyhow::Resu
         let btf = &names[0];
         let cross = |f: &dyn Fn(&Cell) -> f64| {
             runs.iter()
-                .find(|(_, cells, _)| {
+                .find(|(_, cells, _, _)| {
                     match (find(cells, d, btf), find(cells, d, "fibers full detail")) {
                         (Some(b), Some(r)) => f(b) > f(r),
                         _ => false,
                     }
                 })
-                .map(|(s, _, _)| format!("{:.0} %", s * 100.0))
+                .map(|(s, _, _, _)| format!("{:.0} %", s * 100.0))
                 .unwrap_or_else(|| "none of the strains measured".into())
         };
         let _ = writeln!(
