@@ -66,7 +66,12 @@
 //! cloth compresses and creases within a stitch — the knots make it *worse* than naive
 //! interpolation (the length terms push compressed loops sideways through their
 //! neighbours): the model's missing contact (DESIGN §3.3 item 9). The templates are the
-//! projected skeleton, not relaxed with a contact penalty (DESIGN §3.3 item 1: not built).
+//! projected skeleton, not relaxed with a contact penalty (DESIGN §3.3 item 1: not built) —
+//! and a relaxation over the knots' `(θ, l)` could not lift the rest clearance: between a
+//! contact (`±h` apart along `n`) and the side points (`2r` apart in the plane, depth 0)
+//! the two chords are `√(r² + h²)/2 · 2 = √2 r` apart half-way at `h = r` (0.71 × 2r), set
+//! by eq. 1–2 alone; the spline rounds that to 0.88. Only a larger lift or side points off
+//! the face plane would, which is no longer [H25]'s knot.
 //!
 //! **References** ([`KnotModel::reference`], DESIGN §3.5): the same energy minimised over
 //! *all* faces jointly by block Gauss–Seidel (each face solved with its neighbours' current
