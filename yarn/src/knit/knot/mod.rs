@@ -69,8 +69,9 @@
 //! projected skeleton, not relaxed with a contact penalty (DESIGN §3.3 item 1: not built) —
 //! and a relaxation over the knots' `(θ, l)` could not lift the rest clearance: between a
 //! contact (`±h` apart along `n`) and the side points (`2r` apart in the plane, depth 0)
-//! the two chords are `√(r² + h²)/2 · 2 = √2 r` apart half-way at `h = r` (0.71 × 2r), set
-//! by eq. 1–2 alone; the spline rounds that to 0.88. Only a larger lift or side points off
+//! the two chords are `2 √(r² t² + h² (1 − t)²)` apart at `t` along them, least at
+//! `t = h² / (r² + h²)`: `√2 r` (0.71 × 2r) at `h = r`, set by eq. 1–2 alone; the spline
+//! rounds that to 0.88. Only a larger lift or side points off
 //! the face plane would, which is no longer [H25]'s knot.
 //!
 //! **References** ([`KnotModel::reference`], DESIGN §3.5): the same energy minimised over
