@@ -1,14 +1,16 @@
 //! The demo's knitwear stage: a stockinette patch of cotton yarn rendered fiber by fiber
 //! on the GPU ([W19], `yarn-render`: fibers generated every frame, level of detail with
 //! core strips, self-shadows with shadow hiding, yarn shadows), next to the plain-tube
-//! baseline timed in the same run. Writes `knit/knit.png` and `knit/knit.json` (what the
-//! report shows); no equation lives here.
+//! baseline timed in the same run; then the same patch at rest and stretched 30 % along its
+//! wales with the yarns moved by the knot solver ([H25], `yarn::knit::knot`), side by side.
+//! Writes `knit/knit.png`, `knit/knit-stretch.png` and `knit/knit.json` (what the report
+//! shows); no equation lives here.
 
 use anyhow::Result;
 use std::path::Path;
 use std::time::Instant;
 use yarn::bcsdf::{FiberBcsdf, KhungurnParams};
-use yarn::knit::{Chart, SkeletonParams, StitchMesh, chen_skeleton};
+use yarn::knit::{Chart, KnotModel, KnotParams, SkeletonParams, StitchMesh, chen_skeleton};
 use yarn_render::{
     FiberCamera, FiberLight, FiberRenderer, FiberSettings, PackOptions, PackedYarns,
 };
@@ -67,8 +69,55 @@ pub fn run(out: &Path, width: u32) -> Result<()> {
         &rgb,
         1.0,
     )?;
+    // The knot solver: the same patch at rest and stretched along its wales.
+    let stretch = 0.3;
+    let rest_mesh = StitchMesh::flat(&chart, 8, 8, ws, cs)?;
+    let model = KnotModel::new(&rest_mesh, &sk, (ws, cs))?;
+    let stretched = rest_mesh.stretch(0.0, stretch)?;
+    let t = Instant::now();
+    let frame = model.solve(&stretched, &KnotParams::default())?;
+    let solve_ms = t.elapsed().as_secs_f64() * 1e3;
+    let clearance = yarn::knit::knot::min_clearance(
+        &model.yarn_set(&frame, 1)?,
+        stretched.lattice,
+        sk.yarn_radius,
+        8,
+    )
+    .ratio;
+    let mut panels = Vec::new();
+    for (f, label) in [(model.rest(), "rest"), (&frame, "stretched 30 % along the wales")] {
+        let mut ys = model.yarn_set(f, 1)?;
+        ys.period = None;
+        let pk = PackedYarns::new(&ys, std::slice::from_ref(&params), &PackOptions::default())?;
+        let r = FiberRenderer::new(&gpu, &pk, &bcsdf, settings)?;
+        let (lo, hi) = pk.bounds;
+        let c = [0, 1, 2].map(|a| 0.5 * (lo[a] + hi[a]));
+        // The rest patch's camera, moved with the patch centre: the stretch shows.
+        let cam = FiberCamera::perspective(
+            [c[0] + 0.15 * span, c[1] - 0.55 * span, c[2] + 0.45 * span],
+            c,
+            [0.0, 0.0, 1.0],
+            40.0,
+        );
+        let im = r.render(&gpu, &cam, &lights, size, [0.02, 0.02, 0.025, 1.0])?;
+        let rgb: Vec<f32> = im.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+        panels.push((
+            btf_image::write::to_srgb_image(size.0 as usize, size.1 as usize, &rgb, 1.0),
+            label,
+        ));
+    }
+    let pairs: Vec<(&image::RgbImage, &str)> = panels.iter().map(|(i, l)| (i, *l)).collect();
+    btf_image::write::write_png(
+        &dir.join("knit-stretch.png"),
+        &btf_image::compose::captioned_strip(&pairs, 6),
+    )?;
     let st = img.stats;
     let j = serde_json::json!({
+        "stretch_png": "knit/knit-stretch.png",
+        "stretch": stretch,
+        "knot_faces": model.knot_faces(),
+        "knot_solve_ms": solve_ms,
+        "stretch_clearance": clearance,
         "png": "knit/knit.png",
         "width": size.0, "height": size.1,
         "stitches": [8, 8],
