@@ -71,7 +71,9 @@ fn demo_runs_end_to_end_and_resumes() {
     assert!(k["knot_solve_ms"].as_f64().unwrap() > 0.0);
     let c = k["stretch_clearance"].as_f64().unwrap();
     assert!(c > 0.5 && c < 1.5, "clearance / 2r {c}");
-    assert!(out.join("knit/knit-stretch.png").is_file() && report.contains("knit/knit-stretch.png"));
+    assert!(
+        out.join("knit/knit-stretch.png").is_file() && report.contains("knit/knit-stretch.png")
+    );
     let details = std::fs::read_to_string(out.join("details.md")).unwrap();
     assert!(report.contains("(details.html)") && details.contains("| synthesise material |"));
     let gpu_required = std::env::var("BTF_REQUIRE_GPU").is_ok_and(|v| v == "1");
