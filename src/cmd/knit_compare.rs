@@ -236,13 +236,7 @@ fn garment(src: &BtfSource, wales: usize, stretch: Option<f64>) -> Result<Garmen
         wales,
         courses,
     };
-    let surface = SurfaceMesh {
-        positions: mesh.positions.clone(),
-        normals: mesh.normals.clone(),
-        uvs: mesh.uvs.clone(),
-        triangles: mesh.triangles.clone(),
-        triangle_uvs: mesh.triangle_uvs.clone(),
-    };
+    let surface = surface_of(&mesh);
     let centre_uv = [
         lo[0] + 0.5 * wales as f64 * layout.wale_du,
         hi[1] + 0.5 * courses as f64 * layout.course_dv,
@@ -285,13 +279,7 @@ fn garment(src: &BtfSource, wales: usize, stretch: Option<f64>) -> Result<Garmen
             for m in &mut mesh.normals {
                 *m = stretch_n(*m);
             }
-            let surface = SurfaceMesh {
-                positions: mesh.positions.clone(),
-                normals: mesh.normals.clone(),
-                uvs: mesh.uvs.clone(),
-                triangles: mesh.triangles.clone(),
-                triangle_uvs: mesh.triangle_uvs.clone(),
-            };
+            let surface = surface_of(&mesh);
             let stitches = StitchMesh::on_surface(&surface, chart, &layout)?;
             // The rest gauge is the garment's own (whole courses change the course spacing
             // by < chart.height / courses): at strain 0 the knots see only the drape.
@@ -312,6 +300,17 @@ fn garment(src: &BtfSource, wales: usize, stretch: Option<f64>) -> Result<Garmen
     }
     let clearance = yarn::knit::knot::min_clearance(&yarns, None, r, 8).ratio;
     Ok(Garment { mesh, yarns, wales, courses, ws, centre, clearance })
+}
+
+/// A `datasets` mesh as the surface the stitch mesh is laid on through its UVs.
+pub(crate) fn surface_of(mesh: &Mesh) -> SurfaceMesh {
+    SurfaceMesh {
+        positions: mesh.positions.clone(),
+        normals: mesh.normals.clone(),
+        uvs: mesh.uvs.clone(),
+        triangles: mesh.triangles.clone(),
+        triangle_uvs: mesh.triangle_uvs.clone(),
+    }
 }
 
 fn uv_bounds(mesh: &Mesh) -> ([f64; 2], [f64; 2]) {

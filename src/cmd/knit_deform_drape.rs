@@ -21,7 +21,7 @@ use btf_image::write::{write_png, write_text};
 use datasets::mesh::cloth::{DrapeParams, drape_frames};
 use std::time::Instant;
 use yarn::knit::knot::min_clearance;
-use yarn::knit::{Chart, KnotModel, KnotParams, SkeletonParams, StitchMesh, SurfaceMesh, UvLayout};
+use yarn::knit::{Chart, KnotModel, KnotParams, SkeletonParams, StitchMesh, UvLayout};
 use yarn::params::YarnParams;
 
 struct FrameRow {
@@ -90,18 +90,11 @@ pub fn run(a: &DeformArgs, chart: &Chart, params: &YarnParams, p: &KnotParams) -
         wales: a.wales,
         courses,
     };
-    let surface = |m: &datasets::mesh::Mesh| SurfaceMesh {
-        positions: m.positions.clone(),
-        normals: m.normals.clone(),
-        uvs: m.uvs.clone(),
-        triangles: m.triangles.clone(),
-        triangle_uvs: m.triangle_uvs.clone(),
-    };
     let meshes: Vec<StitchMesh> = frames
         .iter()
         .enumerate()
         .map(|(k, f)| {
-            StitchMesh::on_surface(&surface(f), chart, &layout)
+            StitchMesh::on_surface(&super::knit_compare::surface_of(f), chart, &layout)
                 .with_context(|| format!("drape frame {k}: laying the chart through the UVs"))
         })
         .collect::<Result<_>>()?;

@@ -2,7 +2,8 @@
 //! stitch faces (a 1×1 rib under 30 % shear and 20 % wale stretch, 3 Gauss–Newton
 //! iterations), in parallel (rayon, all cores) and serial, against naive interpolation of
 //! the rest CPs measured in the same run (the cheapest way to move yarns with a mesh), and
-//! how the cost grows with the faces.
+//! how the cost grows with the faces; and the cost of turning a solved frame into yarn
+//! curves (at the CPs, and up-sampled 4×).
 //!
 //! `cargo bench -p yarn --bench knot` prints the scaling table (median of 5 per row), then
 //! runs the criterion groups at 10³ and 10⁴ faces.
@@ -39,9 +40,9 @@ fn median_ms(mut f: impl FnMut()) -> f64 {
 
 fn scaling_table() {
     println!(
-        "\n| faces | CPs | model build (s) | naive (ms) | knots, 0 it. (ms) | 3 it. parallel (ms) | 3 it. serial (ms) | parallel / naive | µs per face (parallel) |"
+        "\n| faces | CPs | model build (s) | naive (ms) | knots, 0 it. (ms) | 3 it. parallel (ms) | 3 it. serial (ms) | parallel / naive | µs per face (parallel) | yarn curves, CPs / 4× up-sampled (ms) |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     let p = KnotParams::default();
     for side in [32usize, 100, 316] {
         let (model, mesh, build) = setup(side);
@@ -57,9 +58,16 @@ fn scaling_table() {
         let ser = median_ms(|| {
             black_box(model.solve_with(&mesh, &p, true).unwrap());
         });
+        let frame = model.solve(&mesh, &p).unwrap();
+        let curves1 = median_ms(|| {
+            black_box(model.yarn_set(&frame, 1).unwrap());
+        });
+        let curves4 = median_ms(|| {
+            black_box(model.yarn_set(&frame, 4).unwrap());
+        });
         let faces = model.knot_faces();
         println!(
-            "| {faces} | {} | {build:.2} | {naive:.2} | {zero:.2} | {par:.2} | {ser:.2} | {:.1} | {:.2} |",
+            "| {faces} | {} | {build:.2} | {naive:.2} | {zero:.2} | {par:.2} | {ser:.2} | {:.1} | {:.2} | {curves1:.2} / {curves4:.2} |",
             model.cp_count(),
             par / naive,
             par * 1e3 / faces as f64

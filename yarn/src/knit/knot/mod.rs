@@ -242,7 +242,7 @@ pub struct KnotFrame {
 }
 
 /// The knot model of one stitch-mesh topology and chart (see the module documentation).
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct KnotModel {
     courses: usize,
     wales: usize,
@@ -257,7 +257,14 @@ pub struct KnotModel {
     /// The rest (template) CPs on the canonical flat mesh.
     rest: KnotFrame,
     rest_set: YarnSet,
+    /// Rest length coordinates of the up-sampled curves per up-sampling factor (per course:
+    /// the coordinates and the wrap), computed once per factor: they depend on the rest
+    /// alone, and their arc-length quadrature costs more than a solve.
+    rest_coords: std::sync::Mutex<Vec<(usize, RestCoords)>>,
 }
+
+/// Per course: the length coordinates of the up-sampled points and the length wrap.
+type RestCoords = std::sync::Arc<Vec<(Vec<f64>, f64)>>;
 
 fn is_knitlike(s: Stitch) -> bool {
     matches!(s, Stitch::Knit | Stitch::Purl)
@@ -410,6 +417,7 @@ impl KnotModel {
                 lattice: None,
             },
             rest_set: YarnSet::default(),
+            rest_coords: std::sync::Mutex::new(Vec::new()),
         };
         // Rest CPs: the initial guess on the canonical mesh (exactly the template).
         let (frames, theta) = model.frames(&rest_mesh, 1.0)?;
@@ -422,7 +430,21 @@ impl KnotModel {
             lattice: rest_mesh.lattice,
         };
         model.stencils = model.build_stencils();
-        model.rest_set = model.curves(&model.rest, 1, None)?;
+        // The rest curves with their arc length (the one place it is computed).
+        model.rest_set = YarnSet::new(
+            (0..courses)
+                .map(|c| {
+                    let r = model.course_range(c);
+                    let pts = model.rest.points[r.clone()].to_vec();
+                    match model.rest.lattice {
+                        Some(l) => YarnCurve::periodic(pts, l[0]),
+                        None => YarnCurve::open(pts),
+                    }
+                    .and_then(|cv| cv.with_normals(model.rest.normals[r].to_vec()))
+                })
+                .collect::<Result<_>>()?,
+            None,
+        )?;
         Ok(model)
     }
 
@@ -852,91 +874,118 @@ impl KnotModel {
     pub fn energy(&self, frame: &KnotFrame, p: &KnotParams) -> f64 {
         let l0 = frame.lattice.map_or([0.0; 3], |l| l[0]);
         let pos = |(g, w): (usize, i32)| vec3::add_scaled(frame.points[g], l0, w as f64);
-        let mut e = 0.0;
-        for c in 0..self.courses {
-            for g in self.course_range(c) {
-                if let (Some(a), Some(b)) = (self.at(c, g, 0), self.at(c, g, 1)) {
-                    let rest = self.rest_distance(a, b);
-                    let r = (vec3::distance(pos(a), pos(b)) - rest) / rest;
-                    e += p.w_length * r * r;
-                }
-                if let (Some(a), Some(b), Some(cc)) =
-                    (self.at(c, g, -1), self.at(c, g, 0), self.at(c, g, 1))
-                {
-                    let r = solve::cos_turn(pos(a), pos(b), pos(cc)) - self.rest_cos(a, b, cc);
-                    e += p.w_angle * r * r;
-                }
-            }
-        }
-        e
+        let lengths: f64 = self.segment_strains(frame).iter().map(|r| p.w_length * r * r).sum();
+        let angles: f64 = (0..self.courses)
+            .flat_map(|c| self.course_range(c).map(move |g| (c, g)))
+            .filter_map(|(c, g)| {
+                let (a, b, cc) = (self.at(c, g, -1)?, self.at(c, g, 0)?, self.at(c, g, 1)?);
+                let r = solve::cos_turn(pos(a), pos(b), pos(cc)) - self.rest_cos(a, b, cc);
+                Some(p.w_angle * r * r)
+            })
+            .sum();
+        lengths + angles
     }
 
-    /// RMS relative length strain `(‖Δx‖ − ‖Δx₀‖) / ‖Δx₀‖` over all segments.
+    /// The relative length strain `(‖Δx‖ − ‖Δx₀‖) / ‖Δx₀‖` of every segment.
+    fn segment_strains(&self, frame: &KnotFrame) -> Vec<f64> {
+        let l0 = frame.lattice.map_or([0.0; 3], |l| l[0]);
+        let pos = |(g, w): (usize, i32)| vec3::add_scaled(frame.points[g], l0, w as f64);
+        (0..self.courses)
+            .flat_map(|c| self.course_range(c).map(move |g| (c, g)))
+            .filter_map(|(c, g)| {
+                let (a, b) = (self.at(c, g, 0)?, self.at(c, g, 1)?);
+                let rest = self.rest_distance(a, b);
+                Some((vec3::distance(pos(a), pos(b)) - rest) / rest)
+            })
+            .collect()
+    }
+
+    /// RMS relative length strain over all segments.
     pub fn length_strain(&self, frame: &KnotFrame) -> f64 {
-        let l0 = frame.lattice.map_or([0.0; 3], |l| l[0]);
-        let pos = |(g, w): (usize, i32)| vec3::add_scaled(frame.points[g], l0, w as f64);
-        let (mut sum, mut n) = (0.0, 0usize);
-        for c in 0..self.courses {
-            for g in self.course_range(c) {
-                if let (Some(a), Some(b)) = (self.at(c, g, 0), self.at(c, g, 1)) {
-                    let rest = self.rest_distance(a, b);
-                    sum += ((vec3::distance(pos(a), pos(b)) - rest) / rest).powi(2);
-                    n += 1;
-                }
-            }
-        }
-        (sum / n.max(1) as f64).sqrt()
+        let e = self.segment_strains(frame);
+        (e.iter().map(|x| x * x).sum::<f64>() / e.len().max(1) as f64).sqrt()
     }
 
-    /// Mean absolute relative length strain `|‖Δx‖ − ‖Δx₀‖| / ‖Δx₀‖` over all segments.
+    /// Mean absolute relative length strain over all segments.
     pub fn mean_length_strain(&self, frame: &KnotFrame) -> f64 {
-        let l0 = frame.lattice.map_or([0.0; 3], |l| l[0]);
-        let pos = |(g, w): (usize, i32)| vec3::add_scaled(frame.points[g], l0, w as f64);
-        let (mut sum, mut n) = (0.0, 0usize);
-        for c in 0..self.courses {
-            for g in self.course_range(c) {
-                if let (Some(a), Some(b)) = (self.at(c, g, 0), self.at(c, g, 1)) {
-                    let rest = self.rest_distance(a, b);
-                    sum += ((vec3::distance(pos(a), pos(b)) - rest) / rest).abs();
-                    n += 1;
-                }
-            }
+        let e = self.segment_strains(frame);
+        e.iter().map(|x| x.abs()).sum::<f64>() / e.len().max(1) as f64
+    }
+
+    /// The curve parameters of the up-sampled points of a course of `n` CPs: `j / k`.
+    fn sample_params(&self, n: usize, k: usize) -> Vec<f64> {
+        let count = if self.periodic { n * k } else { (n - 1) * k + 1 };
+        (0..count).map(|j| j as f64 / k as f64).collect()
+    }
+
+    /// The rest length coordinates of the curves up-sampled `k` times (cached per `k`).
+    fn rest_coords(&self, k: usize) -> RestCoords {
+        let mut cache = self.rest_coords.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, c)) = cache.iter().find(|(kk, _)| *kk == k) {
+            return c.clone();
         }
-        sum / n.max(1) as f64
+        let coords: RestCoords = std::sync::Arc::new(
+            self.rest_set
+                .curves
+                .par_iter()
+                .map(|rc| {
+                    let us = self.sample_params(rc.points.len(), k);
+                    (us.iter().map(|&u| rc.length_coord(u)).collect(), rc.length_wrap)
+                })
+                .collect(),
+        );
+        cache.push((k, coords.clone()));
+        coords
+    }
+
+    /// A course curve straight from its points, normals and length coordinates, validated
+    /// but without the arc-length quadrature of [`YarnCurve::open`] (the coordinates are the
+    /// rest ones, given).
+    fn course_curve(
+        &self,
+        c: usize,
+        points: Vec<V3>,
+        normals: Vec<V3>,
+        (length_coords, length_wrap): (Vec<f64>, f64),
+        shift: Option<V3>,
+    ) -> Result<YarnCurve> {
+        let n = points.len();
+        let curve = YarnCurve {
+            points,
+            length_coords,
+            colors: vec![self.skeleton.color; n],
+            params_ids: vec![self.skeleton.params_id; n],
+            normals: Some(normals),
+            closed: shift.is_some(),
+            shift: shift.unwrap_or([0.0; 3]),
+            length_wrap,
+        };
+        curve.validate(c).map_err(|e| match e {
+            Error::Invalid(m) => Error::Invalid(format!("knot yarns: {m}")),
+            other => other,
+        })?;
+        Ok(curve)
     }
 
     /// The yarn curves of a frame: one Catmull–Rom curve per course through the CPs,
     /// up-sampled `upsample` points per segment (1: the CPs themselves), with the rest
-    /// length coordinates; `params_id`/colour from the skeleton parameters. `rest` supplies
-    /// the length coordinates (`None`: the frame's own arc length — used for the rest set).
-    fn curves(
-        &self,
-        frame: &KnotFrame,
-        upsample: usize,
-        rest: Option<&YarnSet>,
-    ) -> Result<YarnSet> {
+    /// length coordinates (fibers do not slide along a stretched yarn); colour and params
+    /// id from the skeleton parameters.
+    pub fn yarn_set(&self, frame: &KnotFrame, upsample: usize) -> Result<YarnSet> {
         let k = upsample.max(1);
         let l0 = frame.lattice.map(|l| l[0]);
-        let mut curves = Vec::with_capacity(self.courses);
-        for c in 0..self.courses {
-            let range = self.course_range(c);
-            let pts = frame.points[range.clone()].to_vec();
-            let nrm = frame.normals[range].to_vec();
-            let base = match l0 {
-                Some(shift) => YarnCurve::periodic(pts, shift),
-                None => YarnCurve::open(pts),
-            }
-            .and_then(|cv| cv.with_normals(nrm))
-            .map_err(|e| match e {
-                Error::Invalid(m) => Error::Invalid(format!("knot yarns, course {c}: {m}")),
-                other => other,
-            })?;
-            let mut curve = if k == 1 {
-                base
-            } else {
-                let m = base.segment_count();
-                let count = if base.closed { m * k } else { m * k + 1 };
-                let us: Vec<f64> = (0..count).map(|j| j as f64 / k as f64).collect();
+        let coords = (k > 1).then(|| self.rest_coords(k));
+        let curves: Vec<Result<YarnCurve>> = (0..self.courses)
+            .into_par_iter()
+            .map(|c| {
+                let range = self.course_range(c);
+                let pts = frame.points[range.clone()].to_vec();
+                let nrm = frame.normals[range].to_vec();
+                let rest = &self.rest_set.curves[c];
+                let rest_z = (rest.length_coords.clone(), rest.length_wrap);
+                let base = self.course_curve(c, pts, nrm, rest_z, l0)?;
+                let Some(coords) = &coords else { return Ok(base) };
+                let us = self.sample_params(base.points.len(), k);
                 let pts: Vec<V3> = us.iter().map(|&u| base.point(u)).collect();
                 let normals = base.normals.as_ref().expect("set above");
                 let n = normals.len() as isize;
@@ -949,38 +998,14 @@ impl KnotModel {
                         vec3::normalize_or(vec3::lerp(a, b, t), a)
                     })
                     .collect();
-                let mut up = match l0 {
-                    Some(shift) => YarnCurve::periodic(pts, shift),
-                    None => YarnCurve::open(pts),
-                }?
-                .with_normals(nrm)?;
-                if let Some(rest) = rest {
-                    let rc = &rest.curves[c];
-                    up.length_coords = us.iter().map(|&u| rc.length_coord(u)).collect();
-                    up.length_wrap = rc.length_wrap;
-                }
-                up
-            };
-            if k == 1
-                && let Some(rest) = rest
-            {
-                curve.length_coords = rest.curves[c].length_coords.clone();
-                curve.length_wrap = rest.curves[c].length_wrap;
-            }
-            curves.push(
-                curve.with_color(self.skeleton.color).with_params_id(self.skeleton.params_id),
-            );
-        }
+                self.course_curve(c, pts, nrm, coords[c].clone(), l0)
+            })
+            .collect();
         let period = frame.lattice.and_then(|l| {
             let rect = l[0][1] == 0.0 && l[0][2] == 0.0 && l[1][0] == 0.0 && l[1][2] == 0.0;
             rect.then_some([l[0][0], l[1][1]])
         });
-        YarnSet::new(curves, period)
-    }
-
-    /// The yarn curves of a solved frame (see the module documentation, step 4).
-    pub fn yarn_set(&self, frame: &KnotFrame, upsample: usize) -> Result<YarnSet> {
-        self.curves(frame, upsample, Some(&self.rest_set))
+        YarnSet::new(curves.into_iter().collect::<Result<_>>()?, period)
     }
 }
 

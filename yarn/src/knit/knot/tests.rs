@@ -321,9 +321,11 @@ fn clearance_at_rest_and_under_shear() {
     let f = model.solve(&m, &KnotParams::default()).unwrap();
     let c3 = min_clearance(&model.yarn_set(&f, 1).unwrap(), m.lattice, R, 16);
     eprintln!("clearance / 2r: rest {:.4}, 30 % shear {:.4}", c0.ratio, c3.ratio);
-    // The knots keep the crossing yarns 2r apart at the contacts (±h = ±r).
-    assert!(c0.ratio > 0.5 && c0.ratio <= 1.0 + 1e-9, "{c0:?}");
-    assert!(c3.ratio.is_finite());
+    // The template's own geometry (eq. 1–2 with h = r: the chords between a contact and
+    // the side points are √2 r apart at their closest, the spline rounds it up; module
+    // docs): measured 0.8839. Shear brings different courses closer (0.846).
+    assert!((c0.ratio - 0.8839).abs() < 1e-3, "{c0:?}");
+    assert!(c3.ratio < c0.ratio - 0.02 && c3.ratio > 0.8, "{c3:?}");
 }
 
 #[test]

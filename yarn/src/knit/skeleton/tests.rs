@@ -1,80 +1,10 @@
 //! Skeleton checks: C¹ across cells, exact periodicity, the minimum centre-line distance
-//! between courses (reported per chart), frame continuity along the courses.
+//! between courses (reported per chart, by [`crate::knit::knot::min_clearance`]), frame
+//! continuity along the courses.
 
 use super::*;
 use crate::knit::chart::Chart;
-
-/// Smallest distance between centre lines of different courses (periodic images in both
-/// directions included), by dense sampling and local refinement.
-pub(crate) fn min_course_distance(set: &YarnSet, lattice: Option<[V3; 2]>) -> f64 {
-    let per = 24;
-    let samples: Vec<Vec<(f64, V3)>> = set
-        .curves
-        .iter()
-        .map(|c| {
-            let m = c.segment_count() * per;
-            (0..=m)
-                .map(|k| {
-                    let u = k as f64 / per as f64;
-                    (u, c.point(u))
-                })
-                .collect()
-        })
-        .collect();
-    let shifts: Vec<(i64, i64)> = match lattice {
-        Some(_) => (-1..=1).flat_map(|a| (-1..=1).map(move |b| (a, b))).collect(),
-        None => vec![(0, 0)],
-    };
-    let mut best = (f64::INFINITY, 0, 0, 0.0, 0.0, [0.0; 3]);
-    for (i, a) in samples.iter().enumerate() {
-        for (j, b) in samples.iter().enumerate() {
-            for &(sx, sy) in &shifts {
-                if i == j && sy == 0 {
-                    continue; // the same course (its x-images are the same yarn)
-                }
-                let off = lattice.map_or([0.0; 3], |l| {
-                    vec3::add(vec3::scale(l[0], sx as f64), vec3::scale(l[1], sy as f64))
-                });
-                for (ua, pa) in a {
-                    for (ub, pb) in b {
-                        let d = vec3::distance(*pa, vec3::add(*pb, off));
-                        if d < best.0 {
-                            best = (d, i, j, *ua, *ub, off);
-                        }
-                    }
-                }
-            }
-        }
-    }
-    // Refine around the best pair by coordinate descent on (ua, ub).
-    let (mut d, i, j, mut ua, mut ub, off) = best;
-    let (ca, cb) = (&set.curves[i], &set.curves[j]);
-    let dist = |x: f64, y: f64| vec3::distance(ca.point(x), vec3::add(cb.point(y), off));
-    let mut step = 1.0 / per as f64;
-    while step > 1e-9 {
-        let mut moved = false;
-        for (dx, dy) in [(step, 0.0), (-step, 0.0), (0.0, step), (0.0, -step)] {
-            let e = dist(ua + dx, ub + dy);
-            if e < d {
-                d = e;
-                ua += dx;
-                ub += dy;
-                moved = true;
-            }
-        }
-        if !moved {
-            step *= 0.5;
-        }
-    }
-    if std::env::var("SKEL_DEBUG").is_ok() {
-        eprintln!(
-            "closest: course {i} u {ua:.3} {:?} / course {j} u {ub:.3} {:?}",
-            ca.point(ua),
-            vec3::add(cb.point(ub), off)
-        );
-    }
-    d
-}
+use crate::knit::knot::min_clearance;
 
 #[test]
 fn skeleton_is_c1_across_cells_and_exactly_periodic() {
@@ -132,8 +62,10 @@ fn courses_keep_their_distance() {
     {
         let chart = Chart::builtin(name).unwrap();
         let mesh = StitchMesh::flat(&chart, chart.width, chart.height.max(2), sw, sc).unwrap();
-        let d = min_course_distance(&chen_skeleton(&mesh, &p).unwrap(), mesh.lattice) / r;
-        let d6 = min_course_distance(&chen_skeleton(&mesh, &chen_only).unwrap(), mesh.lattice) / r;
+        let d = min_clearance(&chen_skeleton(&mesh, &p).unwrap(), mesh.lattice, r, 24).distance / r;
+        let d6 = min_clearance(&chen_skeleton(&mesh, &chen_only).unwrap(), mesh.lattice, r, 24)
+            .distance
+            / r;
         eprintln!(
             "min centre-line distance between courses, {name}: {d:.3} r (six Chen points alone: {d6:.3} r)"
         );
