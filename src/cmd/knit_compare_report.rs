@@ -397,6 +397,12 @@ pub fn contact_sheet(
     btf_image::compose::stacked(&[&strip(&top), &strip(&bottom)], 4)
 }
 
+/// A score as CSV text, empty where it was not measured (ꟻLIP without exposures): no NaN
+/// is written.
+fn measured(x: f64, decimals: usize) -> String {
+    if x.is_finite() { format!("{x:.decimals$}") } else { String::new() }
+}
+
 /// `compare.csv`.
 pub fn csv(cells: &[Cell], dists: &[Distance]) -> String {
     let mut s = String::from(
@@ -408,7 +414,7 @@ pub fn csv(cells: &[Cell], dists: &[Distance]) -> String {
         let d = &dists[c.distance];
         let _ = writeln!(
             s,
-            "{},{},\"{}\",{:.5},{:.5},{:.5},{:.4},{:.4},{:.4},{:.5},{:.5},{:.4},{:.3},{:.3},{:.3},{},{}",
+            "{},{},\"{}\",{:.5},{:.5},{:.5},{:.4},{},{},{:.5},{:.5},{:.4},{:.3},{:.3},{:.3},{},{}",
             d.stitch_px,
             c.repr,
             c.name,
@@ -416,8 +422,8 @@ pub fn csv(cells: &[Cell], dists: &[Distance]) -> String {
             c.vs_full.band,
             c.vs_full.stitch_scale,
             c.vs_full.mean_ratio,
-            c.vs_full.flip_interior,
-            c.vs_full.flip_band,
+            measured(c.vs_full.flip_interior, 4),
+            measured(c.vs_full.flip_band, 4),
             c.vs_direct.interior,
             c.vs_direct.band,
             c.vs_direct.mean_ratio,
@@ -599,7 +605,7 @@ pub fn write_stretch(out: &std::path::Path, runs: &[StretchRun]) -> anyhow::Resu
         cells.iter().find(|c| c.distance == d && c.name == name)
     }
     let mut csv = String::from(
-        "strain,stitch_px,repr,name,rel_rmse_interior,flip_interior,stitch_scale,mean_ratio,rel_rmse_vs_direct,flip_vs_direct\n",
+        "strain,stitch_px,repr,name,rel_rmse_interior,flip_interior,stitch_scale,mean_ratio,rel_rmse_vs_direct\n",
     );
     let mut md = String::from(
         "# The stretch study: when must a preview leave the BTF?\n\n\
@@ -633,16 +639,15 @@ pub fn write_stretch(out: &std::path::Path, runs: &[StretchRun]) -> anyhow::Resu
                 if let Some(c) = c {
                     let _ = writeln!(
                         csv,
-                        "{s},{},{},{},{:.5},{:.5},{:.5},{:.5},{:.5},{:.5}",
+                        "{s},{},{},{},{},{},{},{},{}",
                         dist.stitch_px,
                         c.repr,
                         c.name,
-                        c.vs_full.interior,
-                        c.vs_full.flip_interior,
-                        c.vs_full.stitch_scale,
-                        c.vs_full.mean_ratio,
-                        c.vs_direct.interior,
-                        c.vs_direct.flip_interior
+                        measured(c.vs_full.interior, 5),
+                        measured(c.vs_full.flip_interior, 5),
+                        measured(c.vs_full.stitch_scale, 5),
+                        measured(c.vs_full.mean_ratio, 5),
+                        measured(c.vs_direct.interior, 5)
                     );
                 }
             }
