@@ -150,7 +150,7 @@ impl Precomputed {
 }
 
 /// 64-bit key hash (`yarn::hash` over 8-byte chunks and the length).
-fn key_hash(bytes: &[u8]) -> u64 {
+pub(crate) fn key_hash(bytes: &[u8]) -> u64 {
     let mut words: Vec<u64> = bytes
         .chunks(8)
         .map(|c| {
@@ -163,26 +163,26 @@ fn key_hash(bytes: &[u8]) -> u64 {
     yarn::hash::hash_keys(&words)
 }
 
-struct Writer(Vec<u8>);
+pub(crate) struct Writer(pub(crate) Vec<u8>);
 
 impl Writer {
-    fn u64(&mut self, v: usize) {
+    pub(crate) fn u64(&mut self, v: usize) {
         self.0.extend((v as u64).to_le_bytes());
     }
-    fn f64s(&mut self, v: &[f64]) {
+    pub(crate) fn f64s(&mut self, v: &[f64]) {
         v.iter().for_each(|x| self.0.extend(x.to_le_bytes()));
     }
-    fn f32s(&mut self, v: &[f32]) {
+    pub(crate) fn f32s(&mut self, v: &[f32]) {
         self.u64(v.len());
         v.iter().for_each(|x| self.0.extend(x.to_le_bytes()));
     }
 }
 
 /// Reads what [`Writer`] wrote; every length is checked against the bytes that remain.
-struct Reader<'a>(&'a [u8]);
+pub(crate) struct Reader<'a>(pub(crate) &'a [u8]);
 
 impl<'a> Reader<'a> {
-    fn take(&mut self, n: usize) -> Option<&'a [u8]> {
+    pub(crate) fn take(&mut self, n: usize) -> Option<&'a [u8]> {
         if n > self.0.len() {
             return None;
         }
@@ -190,14 +190,14 @@ impl<'a> Reader<'a> {
         self.0 = b;
         Some(a)
     }
-    fn u64(&mut self) -> Option<usize> {
+    pub(crate) fn u64(&mut self) -> Option<usize> {
         let v = u64::from_le_bytes(self.take(8)?.try_into().ok()?);
         usize::try_from(v).ok()
     }
-    fn f64(&mut self) -> Option<f64> {
+    pub(crate) fn f64(&mut self) -> Option<f64> {
         Some(f64::from_le_bytes(self.take(8)?.try_into().ok()?))
     }
-    fn f32s(&mut self) -> Option<Vec<f32>> {
+    pub(crate) fn f32s(&mut self) -> Option<Vec<f32>> {
         let n = self.u64()?;
         let bytes = self.take(n.checked_mul(4)?)?;
         Some(bytes.chunks_exact(4).map(|c| f32::from_le_bytes(c.try_into().unwrap())).collect())
