@@ -664,23 +664,14 @@ impl StripBake {
         v
     }
 
-    /// Bilinear texel weights at `(u, v)` (u repeats, v ∈ [−1, 1] clamps): `[(texel, w); 4]`.
-    pub fn texel_weights(&self, u: f64, v: f64) -> [(usize, f64); 4] {
+    /// The texel at `(u, v)` as the strip shader reads it: nearest, u repeats, v ∈ [−1, 1]
+    /// clamps (nearest because the texels are box-filtered means and the shading is
+    /// non-linear in them; `yarn_render::strips`).
+    pub fn texel_at(&self, u: f64, v: f64) -> usize {
         let (w, h) = (self.settings.width, self.settings.height);
-        let x = (u - u.floor()) * w as f64 - 0.5;
-        let y = ((v + 1.0) * 0.5 * h as f64 - 0.5).clamp(0.0, (h - 1) as f64);
-        let (x0, y0) = (x.floor(), y.floor());
-        let (fx, fy) = (x - x0, y - y0);
-        let i0 = (x0 as i64).rem_euclid(w as i64) as usize;
-        let i1 = (i0 + 1) % w;
-        let j0 = y0 as usize;
-        let j1 = (j0 + 1).min(h - 1);
-        [
-            (j0 * w + i0, (1.0 - fx) * (1.0 - fy)),
-            (j0 * w + i1, fx * (1.0 - fy)),
-            (j1 * w + i0, (1.0 - fx) * fy),
-            (j1 * w + i1, fx * fy),
-        ]
+        let i = (((u - u.floor()) * w as f64).floor() as usize).min(w - 1);
+        let j = ((v + 1.0) * 0.5 * h as f64).floor().clamp(0.0, (h - 1) as f64) as usize;
+        j * w + i
     }
 
     /// Linear bin weights of light angle θ (clamped) or φ (wrapping): `[(bin, w); 2]`.
@@ -718,6 +709,26 @@ impl StripBake {
         let psi = lerp1(&self.psi_m, bm) * lerp1(&self.psi_n, bn);
         let (a, b) = (lerp3(&self.xi_m, bm), lerp3(&self.xi_n, bn));
         (psi, [a[0] * b[0], a[1] * b[1], a[2] * b[2]])
+    }
+
+    /// The baked model's radiance `(1/K) Σ_k f(ω, e; t_k) cos θ_i · tint · Ψ̂ · ξ̂` of one
+    /// texel under a unit directional light from `(θ, φ)` (the bake's angles; the eye at
+    /// azimuth 0, perpendicular): what the strip shader computes there.
+    pub fn model_at(&self, bcsdf: &FiberBcsdf, texel: usize, theta: f64, phi: f64) -> [f64; 3] {
+        let k = self.settings.tangents;
+        let shading = Shading::Fiber { bcsdf: Arc::new(bcsdf.clone()), tint: true };
+        // The canonical bake frame (N, B, T) = (x, y, z); a tangent (T, w, e) is (e, w, T).
+        let (n, t) = ([1.0, 0.0, 0.0], [0.0, 0.0, 1.0]);
+        let wi = [theta.cos() * phi.cos(), theta.cos() * phi.sin(), theta.sin()];
+        let mut f = [0.0; 3];
+        for tk in &self.tangent[texel * k..(texel + 1) * k] {
+            let tt = tk.map(f64::from);
+            let tw = vec3::normalize([tt[2], tt[1], tt[0]]).unwrap_or(t);
+            let v = model_radiance(&shading, tw, self.color, n, &[wi])[0];
+            (0..3).for_each(|c| f[c] += v[c] / k as f64);
+        }
+        let (psi, xi) = self.factors_at(texel, theta, phi);
+        std::array::from_fn(|c| f[c] * psi * xi[c])
     }
 
     /// Coverage-weighted mean of [`StripBake::residual`] over the texels.

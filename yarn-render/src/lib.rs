@@ -17,6 +17,7 @@
 //! | [`view`] | camera, lights, frustum planes in f64 about the origin | — |
 //! | [`btf`] | the yarn BTF of DESIGN §4.2 rendered with fibers (`--method fibers`) | DESIGN §4.2 |
 //! | [`renderer`] | `FiberRenderer`: the passes of one frame, stats | [W19 §3.3, §5] |
+//! | [`strips`] | `StripRenderer`: fiber-textured yarn strips (bake, Ψ·ξ factors, PCSS) | [H25 §4.3, §5.2, eq. 9–11] |
 //! | [`scene`] | a btf-render scene's `[[yarns]]`: chart on the mesh's UVs, skeleton, pack; drawn into its frame | [C03 §3], [W19 §5] |
 //!
 //! The WGSL generator (`shaders/fiber_gen.wgsl`) mirrors `yarn::fiber::FiberModel`
@@ -35,6 +36,7 @@ pub mod pack;
 pub mod passes;
 pub mod renderer;
 pub mod scene;
+pub mod strips;
 pub mod view;
 
 pub use effects::{AoMode, FiberEffects};
@@ -42,6 +44,7 @@ pub use error::{Error, Result};
 pub use gpu_data::YarnBuffers;
 pub use pack::{PackOptions, PackedYarns};
 pub use renderer::{FiberImage, FiberRenderer, FiberSettings, FiberStats};
+pub use strips::{StripRenderer, StripSettings};
 pub use view::{FiberCamera, FiberLight};
 
 /// The generator WGSL every fiber pass starts with.
@@ -57,6 +60,7 @@ pub fn wgsl_programs() -> Vec<(&'static str, String)> {
         ("fiber_lod", passes::lod::source()),
         ("fiber_draw", passes::draw::source()),
         ("yarn_tube_shadow", passes::shadow::source()),
+        ("strip_regular", strips::source()),
     ]
 }
 

@@ -19,7 +19,7 @@ use crate::gpu_data::YarnBuffers;
 use crate::pack::PackedYarns;
 use crate::passes::draw::{DEPTH, DrawPass, color_format};
 use crate::passes::lod::{DrawArgsRaw, LodPass};
-use crate::passes::shadow::{MAX_SHADOW_MAPS, ShadowPass, ShadowPassRaw, ShadowViewsRaw};
+use crate::passes::shadow::{ShadowPass, ShadowPassRaw, ShadowViewsRaw, directional_views};
 use crate::view::{FiberCamera, FiberLight, ViewRaw, ViewSetup, lights_raw, to_cols};
 use crate::{Error, Result};
 use btf_render::Gpu;
@@ -323,37 +323,14 @@ impl FiberRenderer {
     /// The tube shadow passes of `lights` (the first [`MAX_SHADOW_MAPS`] directional lights,
     /// when yarn shadows are on) and the uniform the fiber shader reads them with.
     fn shadow_views(&self, lights: &[FiberLight]) -> Result<(Vec<ShadowPassRaw>, ShadowViewsRaw)> {
-        let mut passes = Vec::new();
-        let mut views = ShadowViewsRaw::default();
         let size = self.settings.shadow_map;
-        views.texel = [1.0 / size as f32, 2e-3, 0.0, 0.0];
         if !self.settings.effects.yarn_shadows || self.settings.tubes {
-            return Ok((passes, views));
+            let mut views = ShadowViewsRaw::default();
+            views.texel = [1.0 / size as f32, 2e-3, 0.0, 0.0];
+            return Ok((Vec::new(), views));
         }
-        for (i, l) in lights.iter().enumerate() {
-            let FiberLight::Directional { to_light, .. } = *l else { continue };
-            if passes.len() == MAX_SHADOW_MAPS {
-                break;
-            }
-            let n = (to_light.iter().map(|x| x * x).sum::<f64>()).sqrt();
-            let d = to_light.map(|x| x / n);
-            let r = self.radius;
-            let c = [0, 1, 2].map(|a| self.centre[a] + self.origin[a]);
-            let eye = [0, 1, 2].map(|a| c[a] + d[a] * 2.0 * r);
-            let up = if d[2].abs() < 0.9 { [0.0, 0.0, 1.0] } else { [1.0, 0.0, 0.0] };
-            let cam = FiberCamera::orthographic(eye, c, up, 2.0 * r);
-            let setup = ViewSetup::new(&cam, self.origin, self.centre, r, (size, size))?;
-            let vp = to_cols(&setup.view_proj);
-            views.view_proj[passes.len()] = vp;
-            views.light[passes.len()] = i as u32;
-            passes.push(ShadowPassRaw {
-                view_proj: vp,
-                to_light: [d[0] as f32, d[1] as f32, d[2] as f32, 0.0],
-                n: [8, 0, 0, 0],
-            });
-        }
-        views.n[0] = passes.len() as u32;
-        Ok((passes, views))
+        let (p, v, _) = directional_views(lights, self.origin, self.centre, self.radius, size)?;
+        Ok((p, v))
     }
 
     /// The frame uniform, shadow maps and bind groups of one frame.

@@ -10,6 +10,8 @@ use crate::{Error, Result};
 use btf_render::Gpu;
 
 const WGSL: &str = include_str!("../shaders/fiber_draw.wgsl");
+/// The fiber BCSDF, view direction and sample masks `fiber_draw` and `strip_regular` share.
+pub const SHADING_WGSL: &str = include_str!("../shaders/fiber_shading.wgsl");
 
 /// The colour target format at `samples` per pixel: `Rgba32Float`, or `Rgba16Float` under
 /// MSAA (WebGPU guarantees multisampling of the 16-bit format only; btf-render does the
@@ -22,7 +24,7 @@ pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 /// The pass's WGSL (generator and view in front).
 pub fn source() -> String {
-    format!("{}\n{}\n{WGSL}", crate::FIBER_GEN_WGSL, crate::FIBER_VIEW_WGSL)
+    format!("{}\n{}\n{SHADING_WGSL}\n{WGSL}", crate::FIBER_GEN_WGSL, crate::FIBER_VIEW_WGSL)
 }
 
 /// The compiled pass.

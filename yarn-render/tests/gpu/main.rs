@@ -10,3 +10,4 @@ mod lod;
 mod oblique;
 mod reference;
 mod scene;
+mod strips;

@@ -1,0 +1,110 @@
+// Fiber shading shared by fiber_draw and strip_regular (both declare `view`, `lobes` and
+// `q_nodes` in their own group 1): the lobe records of bcsdf.rs, the fiber BCSDF of
+// yarn::bcsdf evaluated as FiberBcsdf::eval does, the view direction, and the hashed
+// sample masks of strips narrower than their coverage.
+
+struct Lobe {
+    // Colour A_p (linear RGB).
+    color: vec4<f32>,
+    // β, shift, scale of M (Gaussian: q(θ_i) q(θ_o) exp(−x²/2β²) × scale), κ of N.
+    shape: vec4<f32>,
+    // M kind (0 constant 2/π, 1 Gaussian), N kind (0 uniform, 1 cos(φ/2)/4, 2 von Mises,
+    // 3 Lambertian cylinder), first q node, unused.
+    kinds: vec4<u32>,
+    // von Mises normalisation, unused ×3.
+    extra: vec4<f32>,
+}
+
+fn view_dir(p: vec3<f32>) -> vec3<f32> {
+    if view.eye.w == 0.0 {
+        return -view.forward.xyz;
+    }
+    return normalize(view.eye.xyz - p);
+}
+
+// ---- the fiber BCSDF (yarn::bcsdf) ----
+
+fn q_at(first: u32, theta: f32) -> f32 {
+    let x = clamp((theta + 0.5 * PI) / (PI / 256.0) - 0.5, 0.0, 255.0);
+    let k = min(u32(floor(x)), 254u);
+    let b = cr_basis(x - f32(k));
+    let k0 = select(k - 1u, 0u, k == 0u);
+    let k3 = min(k + 2u, 255u);
+    return b.x * q_nodes[first + k0] + b.y * q_nodes[first + k] + b.z * q_nodes[first + k + 1u]
+        + b.w * q_nodes[first + k3];
+}
+
+fn lobe_m(l: Lobe, ti: f32, to: f32) -> f32 {
+    if l.kinds.x == 0u {
+        return 2.0 / PI;
+    }
+    let x = 0.5 * (ti + to) - l.shape.y;
+    let g = exp(-x * x / (2.0 * l.shape.x * l.shape.x));
+    return l.shape.z * q_at(l.kinds.z, ti) * q_at(l.kinds.z, to) * g;
+}
+
+// dphi ∈ [0, π] (every lobe is even in φ_o − φ_i).
+fn lobe_n(l: Lobe, dphi: f32) -> f32 {
+    switch l.kinds.y {
+        case 0u: {
+            return 1.0 / TAU;
+        }
+        case 1u: {
+            return 0.25 * max(cos(0.5 * dphi), 0.0);
+        }
+        case 2u: {
+            return exp(l.shape.w * (cos(dphi - PI) - 1.0)) / l.extra.x;
+        }
+        default: {
+            return max(((PI - dphi) * cos(dphi) + sin(dphi)) / 8.0, 0.0);
+        }
+    }
+}
+
+// f(ω_i, ω_o)·cos θ_i for unit directions and the unit fiber tangent.
+fn bcsdf_cos(wi: vec3<f32>, wo: vec3<f32>, tan: vec3<f32>) -> vec3<f32> {
+    let si = clamp(dot(wi, tan), -1.0, 1.0);
+    let so = clamp(dot(wo, tan), -1.0, 1.0);
+    let ti = asin(si);
+    let to = asin(so);
+    let a = wi - tan * si;
+    let b = wo - tan * so;
+    let la = length(a);
+    let lb = length(b);
+    var dphi = 0.0;
+    if la > 1e-6 && lb > 1e-6 {
+        dphi = acos(clamp(dot(a, b) / (la * lb), -1.0, 1.0));
+    }
+    var f = vec3<f32>(0.0);
+    for (var i = 0u; i < view.counts.y; i++) {
+        let l = lobes[i];
+        f += l.color.rgb * (lobe_m(l, ti, to) * lobe_n(l, dphi));
+    }
+    return f * sqrt(max(1.0 - si * si, 0.0));
+}
+
+fn pcg(v: u32) -> u32 {
+    let state = v * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+// The samples a fragment of coverage `c` keeps (all when c ≥ 1).
+fn coverage_mask(c: f32, instance: u32, pixel: vec2<u32>) -> u32 {
+    if c >= 1.0 {
+        return 0xffffffffu;
+    }
+    let n = max(view.strip.y, 1.0);
+    let h = pcg(instance ^ pcg(pixel.x ^ pcg(pixel.y)));
+    let u = f32(h & 0xffffu) / 65536.0;
+    let k = u32(clamp(floor(c * n + u), 0.0, n));
+    if k == 0u {
+        return 0u;
+    }
+    let ni = u32(n);
+    let bits = (1u << k) - 1u;
+    let rot = (h >> 16u) % ni;
+    let full = (1u << ni) - 1u;
+    return ((bits << rot) | (bits >> (ni - rot))) & full;
+}
+
