@@ -1,4 +1,6 @@
-//! `btf knit sweep -o DIR`: what accuracy costs in time for the GPU fiber renderer (issue
+//! `btf knit sweep -o DIR`: what accuracy costs in time for the GPU fiber renderer and the
+//! yarn strips of [H25] (`--strips`, issue #20: bake directions, texture size, tangents,
+//! ξ and Ψ on/off, PCSS, MSAA, the plain strips; DESIGN §3.5) (issue
 //! #19, DESIGN §2.5 "What accuracy costs in time", with the per-cell metrics of §4.2's
 //! headline study). One chart patch (hair flyaways off: DESIGN §2.5's R-approx, the fiber set
 //! the real-time model draws) is path traced by `yarn-ref` once per camera and shading
@@ -89,9 +91,69 @@ pub struct SweepArgs {
     /// Timed frames per cell (median reported), interleaved across cells.
     #[arg(long, default_value_t = 3)]
     pub repeat: u32,
+    /// Yarn-strip cells [H25] to add, one per variant: full (8 × 8 bake directions,
+    /// 64 × 32 texels, 4 tangents, ξ, Ψ, PCSS 0.5°), plain (no textures: the plain shaded
+    /// strips), no-xi, no-psi, k1 (one tangent per texel, as [H25]), dirs4 (4 × 4
+    /// directions), tex32 (32 × 16 texels), tex128 (128 × 64), hard (PCSS off), msaa1.
+    /// Bakes are cached in DIR/bake-cache.
+    #[arg(long, value_delimiter = ',')]
+    pub strips: Vec<String>,
+    /// Camera rays per texel of the strip bakes.
+    #[arg(long, default_value_t = 16)]
+    pub bake_spp: u32,
     /// Remove this command's earlier outputs from the folder first.
     #[arg(long)]
     pub fresh: bool,
+}
+
+/// The strip variants `--strips` knows.
+pub const STRIP_VARIANTS: [&str; 10] =
+    ["full", "plain", "no-xi", "no-psi", "k1", "dirs4", "tex32", "tex128", "hard", "msaa1"];
+
+/// The renderer and bake settings of strip variant `name` (see `--strips`).
+fn strip_variant(
+    name: &str,
+    msaa: u32,
+    spp: u32,
+    seed: u64,
+) -> Result<(yarn_render::StripSettings, yarn_precompute::StripBakeSettings)> {
+    let mut s = yarn_render::StripSettings { msaa, ..Default::default() };
+    let mut b = yarn_precompute::StripBakeSettings { spp, seed, ..Default::default() };
+    match name {
+        "full" => {}
+        "plain" => s.textures = false,
+        "no-xi" => s.xi = false,
+        "no-psi" => s.psi = false,
+        "k1" => b.tangents = 1,
+        "dirs4" => b.directions = 4,
+        "tex32" => (b.width, b.height) = (32, 16),
+        "tex128" => (b.width, b.height) = (128, 64),
+        "hard" => s.light_angle_deg = 0.0,
+        "msaa1" => s.msaa = 1,
+        other => bail!("--strips {other}: one of {}", STRIP_VARIANTS.join(", ")),
+    }
+    Ok((s, b))
+}
+
+/// A renderer of one cell.
+enum CellRenderer {
+    Fibers(FiberRenderer),
+    Strips(yarn_render::StripRenderer),
+}
+
+impl CellRenderer {
+    fn render(
+        &self,
+        gpu: &btf_render::Gpu,
+        cam: &FiberCamera,
+        lights: &[FiberLight],
+        size: (u32, u32),
+    ) -> yarn_render::Result<yarn_render::FiberImage> {
+        match self {
+            CellRenderer::Fibers(r) => r.render(gpu, cam, lights, size, [0.0; 4]),
+            CellRenderer::Strips(r) => r.render(gpu, cam, lights, size, [0.0; 4]),
+        }
+    }
 }
 
 /// One camera of the sweep, for both renderers.
@@ -115,8 +177,14 @@ pub struct Cell {
     pub shading: String,
     /// Fibers per ply at full detail (`u32::MAX`: all).
     pub n_max: u32,
-    /// `None`: the plain-tube baseline.
+    /// `None`: the plain-tube baseline or a strip cell.
     pub lod_px: Option<f32>,
+    /// A yarn-strip cell: its variant (`--strips`).
+    pub strips: Option<String>,
+    /// Seconds the strip bake took (0 when cached or not a strip cell).
+    pub bake_s: f64,
+    /// Mean radiance of the frame over the reference's (luminance).
+    pub mean_ratio: f64,
     /// What the frame drew.
     pub stats: yarn_render::FiberStats,
     /// Relative RMSE on the interior mask, and its pixel count.
@@ -133,6 +201,8 @@ pub struct Cell {
     pub ms: f64,
     /// Median frame ms of the tubes of the same camera and shading.
     pub tubes_ms: f64,
+    /// Median frame ms of the finest fiber cell of the same camera and shading.
+    pub fibers_ms: f64,
 }
 
 fn validate(a: &SweepArgs) -> Result<()> {
@@ -157,8 +227,11 @@ fn validate(a: &SweepArgs) -> Result<()> {
     if a.n_max.contains(&0) {
         bail!("--n-max 0: at least one fiber per ply");
     }
-    if a.spp == 0 || a.bounces == 0 || a.repeat == 0 {
-        bail!("--spp, --bounces and --repeat must be ≥ 1");
+    if a.spp == 0 || a.bounces == 0 || a.repeat == 0 || a.bake_spp == 0 {
+        bail!("--spp, --bounces, --repeat and --bake-spp must be ≥ 1");
+    }
+    for v in &a.strips {
+        strip_variant(v, a.msaa, a.bake_spp, a.seed)?;
     }
     Ok(())
 }
@@ -426,6 +499,14 @@ pub fn errors(g: &[[f32; 4]], r: &yarn_ref::Image) -> [(f64, usize); 3] {
     acc.map(rel)
 }
 
+/// Σ luminance of `g` over Σ luminance of the reference.
+fn mean_ratio(g: &[[f32; 4]], r: &yarn_ref::Image) -> f64 {
+    let lum = |c: [f64; 3]| 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+    let a: f64 = g.iter().map(|p| lum([p[0], p[1], p[2]].map(f64::from))).sum();
+    let b: f64 = r.rgb.chunks_exact(3).map(|p| lum([p[0], p[1], p[2]].map(f64::from))).sum();
+    if b > 0.0 { a / b } else { f64::NAN }
+}
+
 /// `√(Σ(g−f)²/Σf²)` over the RGB of every pixel.
 fn rel_rmse(g: &[[f32; 4]], f: &[[f32; 4]]) -> f64 {
     let (mut num, mut den) = (0.0f64, 0.0f64);
@@ -460,7 +541,7 @@ fn gpu_grid(
     fine.dedup();
     let mut lods: Vec<Option<f32>> = fine.iter().map(|&l| Some(l)).collect();
     lods.push(None);
-    let total = cams.len() * bcsdfs.len() * (1 + n_maxes.len() * fine.len());
+    let total = cams.len() * bcsdfs.len() * (1 + n_maxes.len() * fine.len() + a.strips.len());
     let bar = crate::progress::bar((total * (1 + a.repeat as usize)) as u64, "GPU cells");
     let mut cells = Vec::new();
     let mut renderers = Vec::new();
@@ -517,6 +598,9 @@ fn gpu_grid(
                         shading: sname.clone(),
                         n_max,
                         lod_px: lod,
+                        strips: None,
+                        bake_s: 0.0,
+                        mean_ratio: mean_ratio(&img.pixels, &refs[ci][si]),
                         stats: img.stats,
                         interior,
                         band,
@@ -524,9 +608,56 @@ fn gpu_grid(
                         vs_full,
                         ms: f64::NAN,
                         tubes_ms: f64::NAN,
+                        fibers_ms: f64::NAN,
                     });
-                    renderers.push((r, ci));
+                    renderers.push((CellRenderer::Fibers(r), ci));
                 }
+            }
+            for v in &a.strips {
+                let (ss, bs) = strip_variant(v, a.msaa, a.bake_spp, a.seed)?;
+                let t = Instant::now();
+                let bakes = yarn_render::strips::bakes_for(
+                    &patch.yarns,
+                    std::slice::from_ref(params),
+                    b,
+                    &bs,
+                    Some(&a.output.join("bake-cache")),
+                    &|_| {},
+                )?;
+                let bake_s = if bakes.iter().all(|k| k.from_cache) {
+                    bakes.iter().map(|k| k.seconds).sum()
+                } else {
+                    t.elapsed().as_secs_f64()
+                };
+                eprintln!(
+                    "strips {v}: bake {bake_s:.1} s, mean residual {:.3}",
+                    bakes.iter().map(|k| k.mean_residual()).sum::<f64>() / bakes.len() as f64
+                );
+                let r = yarn_render::StripRenderer::new(gpu, &packed, &bakes, b, ss)?;
+                let img = r.render(gpu, &cam.gpu, lights, size, [0.0; 4])?;
+                let [interior, band, all] = errors(&img.pixels, &refs[ci][si]);
+                let file = format!("gpu-{}-{sname}-strips-{v}.exr", file_safe(&cam.name));
+                let rgb: Vec<f32> = img.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+                write_exr_rgb(&a.output.join(file), size.0 as usize, size.1 as usize, &rgb)?;
+                bar.inc(1);
+                cells.push(Cell {
+                    camera: cam.name.clone(),
+                    shading: sname.clone(),
+                    n_max: n_maxes[0],
+                    lod_px: None,
+                    strips: Some(v.clone()),
+                    bake_s,
+                    mean_ratio: mean_ratio(&img.pixels, &refs[ci][si]),
+                    stats: img.stats,
+                    interior,
+                    band,
+                    all,
+                    vs_full: f64::NAN,
+                    ms: f64::NAN,
+                    tubes_ms: f64::NAN,
+                    fibers_ms: f64::NAN,
+                });
+                renderers.push((CellRenderer::Strips(r), ci));
             }
         }
     }
@@ -534,7 +665,7 @@ fn gpu_grid(
     for _ in 0..a.repeat {
         for (k, (r, ci)) in renderers.iter().enumerate() {
             let t = Instant::now();
-            let img = r.render(gpu, &cams[*ci].gpu, lights, size, [0.0; 4])?;
+            let img = r.render(gpu, &cams[*ci].gpu, lights, size)?;
             times[k].push(t.elapsed().as_secs_f64() * 1e3);
             std::hint::black_box(img.pixels.len());
             bar.inc(1);
@@ -546,14 +677,22 @@ fn gpu_grid(
     }
     let tube_ms: Vec<(String, String, f64)> = cells
         .iter()
-        .filter(|c| c.lod_px.is_none())
+        .filter(|c| c.lod_px.is_none() && c.strips.is_none())
         .map(|c| (c.camera.clone(), c.shading.clone(), c.ms))
         .collect();
+    // The finest fiber cell (the first of each camera and shading: thresholds ascend).
+    let mut fiber_ms: Vec<(String, String, f64)> = Vec::new();
+    for c in cells.iter().filter(|c| c.lod_px.is_some()) {
+        if !fiber_ms.iter().any(|(cam, s, _)| *cam == c.camera && *s == c.shading) {
+            fiber_ms.push((c.camera.clone(), c.shading.clone(), c.ms));
+        }
+    }
+    let find = |v: &[(String, String, f64)], c: &Cell| {
+        v.iter().find(|(cam, s, _)| *cam == c.camera && *s == c.shading).map_or(f64::NAN, |t| t.2)
+    };
     for c in &mut cells {
-        c.tubes_ms = tube_ms
-            .iter()
-            .find(|(cam, s, _)| *cam == c.camera && *s == c.shading)
-            .map_or(f64::NAN, |t| t.2);
+        c.tubes_ms = find(&tube_ms, c);
+        c.fibers_ms = find(&fiber_ms, c);
     }
     Ok(cells)
 }

@@ -14,18 +14,19 @@ pub(crate) fn n_max_text(n: u32) -> String {
 pub(crate) fn csv(cells: &[Cell], cams: &[Cam]) -> String {
     let mut s = String::from(
         "camera,stitch_px,shading,n_max,method,lod_px,segments,culled,instances,triangles,yarn_bytes,\
-         rel_rmse_interior,interior_px,rel_rmse_band,band_px,rel_rmse_all,all_px,rel_rmse_vs_full,frame_ms,tubes_ms,ratio_tubes\n",
+         rel_rmse_interior,interior_px,rel_rmse_band,band_px,rel_rmse_all,all_px,rel_rmse_vs_full,frame_ms,tubes_ms,ratio_tubes,\
+         mean_ratio,fibers_ms,ratio_fibers,bake_s\n",
     );
     for c in cells {
         let px = cams.iter().find(|k| k.name == c.camera).and_then(|k| k.stitch_px);
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{},{:.6e},{},{:.6e},{},{:.6e},{},{:.6e},{:.4},{:.4},{:.4}",
+            "{},{},{},{},{},{},{},{},{},{},{},{:.6e},{},{:.6e},{},{:.6e},{},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.2}",
             c.camera,
             px.map(|p| p.to_string()).unwrap_or_default(),
             c.shading,
             n_max_text(c.n_max),
-            if c.lod_px.is_some() { "fibers" } else { "tubes" },
+            method(c),
             c.lod_px.map(|l| l.to_string()).unwrap_or_default(),
             c.stats.segments,
             c.stats.culled,
@@ -38,13 +39,26 @@ pub(crate) fn csv(cells: &[Cell], cams: &[Cam]) -> String {
             c.band.1,
             c.all.0,
             c.all.1,
-            c.vs_full,
+            if c.vs_full.is_finite() { format!("{:.6e}", c.vs_full) } else { String::new() },
             c.ms,
             c.tubes_ms,
-            c.ms / c.tubes_ms
+            c.ms / c.tubes_ms,
+            c.mean_ratio,
+            c.fibers_ms,
+            c.ms / c.fibers_ms,
+            c.bake_s
         );
     }
     s
+}
+
+/// `fibers`, `tubes` or `strips-VARIANT`.
+fn method(c: &Cell) -> String {
+    match (&c.strips, c.lod_px) {
+        (Some(v), _) => format!("strips-{v}"),
+        (None, Some(_)) => "fibers".into(),
+        (None, None) => "tubes".into(),
+    }
 }
 
 /// The LoD crossover of one (camera, shading, n_max) series: with `e₀` the covered-pixel error
@@ -131,17 +145,20 @@ pub(crate) fn markdown(
         tiles.join(", "),
         a.repeat
     );
-    s.push_str("| camera | shading | n_max | ω^LoD px | instances | triangles | rel. RMSE interior | (px) | rel. RMSE silhouette | (px) | rel. RMSE covered | vs full detail | frame ms | × tubes |\n");
-    s.push_str("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    s.push_str("| camera | shading | n_max | method | ω^LoD px | instances | triangles | rel. RMSE interior | (px) | rel. RMSE silhouette | (px) | rel. RMSE covered | vs full detail | mean / ref | frame ms | × tubes | × fibers |\n");
+    s.push_str(
+        "|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+    );
     let e = |v: f64| if v.is_finite() { format!("{v:.4}") } else { "—".into() };
     for c in cells {
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1} | {:.2} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1} | {:.2} | {} |",
             c.camera,
             c.shading,
             n_max_text(c.n_max),
-            c.lod_px.map_or("tubes".into(), |l| l.to_string()),
+            method(c),
+            c.lod_px.map_or("—".into(), |l| l.to_string()),
             c.stats.instances,
             c.stats.triangles,
             e(c.interior.0),
@@ -150,8 +167,27 @@ pub(crate) fn markdown(
             c.band.1,
             e(c.all.0),
             e(c.vs_full),
+            e(c.mean_ratio),
             c.ms,
-            c.ms / c.tubes_ms
+            c.ms / c.tubes_ms,
+            e(c.ms / c.fibers_ms)
+        );
+    }
+    if cells.iter().any(|c| c.strips.is_some()) {
+        s.push_str("\nYarn strips [H25] (`--strips`): baked textures of a straight yarn of this one, at the variant's settings; bake seconds (as baked, also when read from DIR/bake-cache): ");
+        let mut bakes: Vec<String> = Vec::new();
+        for c in cells {
+            if let Some(v) = &c.strips {
+                let b = format!("{v} {:.1} s", c.bake_s);
+                if !bakes.contains(&b) {
+                    bakes.push(b);
+                }
+            }
+        }
+        let _ = writeln!(
+            s,
+            "{}. × fibers: frame time against the finest fiber cell of the same camera and shading.",
+            bakes.join(", ")
         );
     }
     s.push_str("\nInterior: reference coverage ≥ 0.99 and GPU alpha ≥ 0.99; silhouette: the other pixels either image covers by more than 0.01; covered: both together (a LoD that thins the yarn moves pixels out of the interior, so the crossover is judged on this one); vs full detail: the frame against the finest threshold's GPU image (what the LoD alone changes). LoD crossover: the largest ω^LoD whose covered-pixel error, and that of every smaller threshold, stays within ±10 % of the error at the smallest threshold swept (full detail at 0). Two-sided: while the full-detail error is large, a LoD that drops most fibers can score *lower* against the reference (a near-black frame scores ≈ 1), and that is a change of appearance, not a gain.\n\n");
@@ -197,9 +233,27 @@ pub(crate) fn plot(cells: &[Cell]) -> Plot {
         // Labels from the f32 threshold as given (0.1, not 0.10000000149…).
         series.push(Series::parametric(name, pts, |l| format!("{}px", l as f32)));
     }
+    let mut strip_keys: Vec<(String, String)> = Vec::new();
+    for c in cells.iter().filter(|c| c.strips.is_some()) {
+        let k = (c.camera.clone(), c.shading.clone());
+        if !strip_keys.contains(&k) {
+            strip_keys.push(k);
+        }
+    }
+    for (cam, sh) in strip_keys {
+        let pts: Vec<(f64, f64)> = cells
+            .iter()
+            .filter(|c| c.strips.is_some() && c.camera == cam && c.shading == sh)
+            .map(|c| (c.ms / c.tubes_ms, c.all.0))
+            .filter(|p| finite(p.0, p.1))
+            .collect();
+        let mut t = Series::new(format!("{cam} {sh} strips"), pts);
+        t.points_only = true;
+        series.push(t);
+    }
     let tubes: Vec<(f64, f64)> = cells
         .iter()
-        .filter(|c| c.lod_px.is_none())
+        .filter(|c| c.lod_px.is_none() && c.strips.is_none())
         .map(|c| (1.0, c.all.0))
         .filter(|p| finite(p.0, p.1))
         .collect();
@@ -207,7 +261,7 @@ pub(crate) fn plot(cells: &[Cell]) -> Plot {
     t.points_only = true;
     series.push(t);
     Plot {
-        title: "GPU fibers: error against frame time".into(),
+        title: "GPU fibers and yarn strips: error against frame time".into(),
         x_label: "frame time / plain tubes (same run, log)".into(),
         y_label: "rel. RMSE against the reference, covered pixels (log)".into(),
         log_y: true,

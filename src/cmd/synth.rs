@@ -41,6 +41,8 @@ choices! {
         Reference = "reference",
         /// Fibers generated on the GPU [W19] (`yarn-render`): seconds, not hours.
         Fibers = "fibers",
+        /// Fiber-textured yarn strips [H25] (`yarn-render`, textures baked once and cached).
+        Strips = "strips",
     }
 }
 
@@ -111,10 +113,12 @@ pub struct MaterialArgs {
     /// yarn: yarn preset name or yarn TOML file.
     #[arg(long)]
     pub yarn: Option<String>,
-    /// yarn: how the BTF is rendered (reference: path traced; fibers: GPU [W19]).
+    /// yarn: how the BTF is rendered (reference: path traced; fibers: GPU [W19]; strips:
+    /// GPU yarn strips [H25]).
     #[arg(long, default_value = "reference")]
     pub method: YarnMethod,
-    /// yarn: jittered samples per texel (default 16).
+    /// yarn: jittered samples per texel (default 16); strips: camera rays per texel of the
+    /// texture bake.
     #[arg(long)]
     pub spp: Option<u32>,
     /// yarn: stitches W,C of the periodic patch (default one chart repeat).
@@ -410,6 +414,41 @@ fn synth_yarn_material(a: &MaterialArgs, progress: bool) -> Result<()> {
     }
     let dtype = if a.f16 { btf_core::zarr::DType::F16 } else { a.dtype.dtype() };
     let opts = YarnBtfOptions { resume: a.resume, progress, dtype };
+    if spec.method == "strips" {
+        let gpu = btf_render::Gpu::new()?;
+        let settings = yarn_render::StripSettings::default();
+        // The bake of the strip textures takes --spp and --bounces.
+        let mut bake = yarn_precompute::StripBakeSettings::default();
+        if let Some(n) = a.spp {
+            bake.spp = n;
+        }
+        if let Some(b) = a.bounces {
+            bake.bounces = b;
+        }
+        let cache = a.output.parent().map(|p| p.join(".yarn-cache"));
+        let r = yarn_render::btf::generate_strip_btf(
+            &gpu,
+            &spec,
+            settings,
+            &bake,
+            cache.as_deref(),
+            &a.output,
+            &opts,
+        )
+        .with_context(|| format!("synthesising yarn {} into {}", chart_name, a.output.display()))?;
+        eprintln!(
+            "yarn {} in {} {}² ({}, GPU yarn strips): {} images written, {} kept, {:.1} s -> {}",
+            spec.chart.name,
+            spec.params.name,
+            a.size,
+            a.sampling,
+            r.images_written,
+            r.images_skipped,
+            r.seconds,
+            a.output.display()
+        );
+        return Ok(());
+    }
     if spec.method == "fibers" {
         let gpu = btf_render::Gpu::new()?;
         let settings = yarn_render::FiberSettings::default();

@@ -115,7 +115,11 @@ fn bad_yarns_entries_are_refused_by_the_binary_naming_the_key() {
     let cases = [
         ("yarn = \"cotton-2ply\"", "yarn = \"silk-9ply\"", vec!["yarns[0].yarn", "silk-9ply"]),
         ("chart = \"rib2x2\"", "chart = \"argyle\"", vec!["yarns[0].chart", "argyle"]),
-        ("method = \"fibers\"", "method = \"strips\"", vec!["yarns[0].method", "not implemented"]),
+        (
+            "method = \"fibers\"",
+            "method = \"lumislice\"",
+            vec!["yarns[0].method", "not implemented"],
+        ),
         ("wales = 8", "wales = 0", vec!["yarns[0].wales"]),
         (
             "wales = 8\ncourses = 8",

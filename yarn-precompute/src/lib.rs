@@ -10,6 +10,7 @@
 //! | [`cache`] | `Precomputed`: all of the above + the ambient tables, cached on disk | [W19 eq. 8–10] |
 //! | [`sigma`] | `SigmaField`: extinction `2 r_f n_A` of the cross-section | DESIGN §2.3 item 10 |
 //! | [`settings`] | `BakeSettings`: sizes and their limits | DESIGN §2.4 |
+//! | [`srbf`] | `SrbfFit` (NNLS on a Fibonacci set) and the `I_M` table of the strips' environment light | [H25 eq. 14–17] |
 //! | [`strip_bake`] | `StripBake`: coverage, tangent, AO, factorised Ψ^Fiber and ξ of yarn strips | [H25 §4.3, §5.1, eq. 9–11] |
 //!
 //! Citation keys: [W19] Wu & Yuksel 2019, [C03] Chen et al. 2003, [H25] Huang et al. 2025,
@@ -26,6 +27,7 @@ pub mod error;
 pub mod self_shadow;
 pub mod settings;
 pub mod sigma;
+pub mod srbf;
 pub mod strip_bake;
 
 pub use ao::{AoCubic, AoTexture};
@@ -37,4 +39,5 @@ pub use settings::{
     AoSettings, BakeSettings, CoreMigration, CoreSettings, ShadingModel, ShadowSettings,
 };
 pub use sigma::SigmaField;
+pub use srbf::{ImTable, SrbfFit};
 pub use strip_bake::{StripBake, StripBakeSettings};

@@ -1,4 +1,5 @@
-//! The yarn BTF of DESIGN §4.2 rendered by the GPU fiber renderer instead of the CPU
+//! The yarn BTF of DESIGN §4.2 rendered by the GPU fiber renderer (or the yarn strips of
+//! [H25], `--method strips`, [`generate_strip_btf`]) instead of the CPU
 //! reference (`btf synth material --kind yarn --method fibers`): the same periodic patch
 //! (`yarn_ref::patch::KnitPatch`: chart, stitches, period, `z_ref`), the same oblique
 //! orthographic camera through the texel centres of `z_ref`, the same directional light of
@@ -15,12 +16,14 @@
 
 use crate::{
     FiberCamera, FiberLight, FiberRenderer, FiberSettings, PackOptions, PackedYarns, Result,
+    StripRenderer, StripSettings,
 };
 use btf_core::store::{BtfMeta, BtfWriter};
 use btf_render::Gpu;
 use serde_json::json;
 use std::path::Path;
 use std::time::Instant;
+use yarn_precompute::StripBakeSettings;
 use yarn_ref::btf::{YarnBtfOptions, YarnBtfSpec};
 use yarn_ref::patch::{KnitPatch, PatchOptions};
 
@@ -70,9 +73,7 @@ pub fn generate_fiber_btf(
         &PackOptions { seed: spec.seed, frame_samples_per_segment: 16, tiles: [3, 3] },
     )?;
     let renderer = FiberRenderer::new(gpu, &packed, &bcsdf, settings)?;
-    let n = sampling.len();
-    let dirs: Vec<[f64; 3]> = (0..n).map(|i| sampling.direction(i).to_vector()).collect();
-    let mut meta = BtfMeta::new(sampling.clone(), sampling, spec.size, spec.size);
+    let mut meta = BtfMeta::new(sampling.clone(), sampling.clone(), spec.size, spec.size);
     let s = &settings;
     meta.provenance = json!({
         "generator": "yarn-render",
@@ -97,13 +98,132 @@ pub fn generate_fiber_btf(
                   centres of z_ref, 3x3 periodic copies, black background, directional light of \
                   unit perpendicular irradiance, MSAA footprint",
     });
+    let render = |cam: &FiberCamera, lights: &[FiberLight], size| {
+        renderer.render(gpu, cam, lights, size, [0.0; 4]).map(|f| (f.pixels, f.stats.instances))
+    };
+    let (written, skipped, instances) =
+        write_images(spec, &patch, &sampling, meta, out, opts, "fibers", render)?;
+    Ok(FiberBtfReport {
+        images_written: written,
+        images_skipped: skipped,
+        seconds: t0.elapsed().as_secs_f64(),
+        instances,
+    })
+}
+
+/// Renders the yarn BTF of `spec` with the yarn strips of [H25] (`settings`, textures baked
+/// with `bake` and cached in `cache_dir`) into `out` (`--method strips`): the same patch,
+/// camera, light and store as the reference and the fibers.
+pub fn generate_strip_btf(
+    gpu: &Gpu,
+    spec: &YarnBtfSpec,
+    settings: StripSettings,
+    bake: &StripBakeSettings,
+    cache_dir: Option<&Path>,
+    out: &Path,
+    opts: &YarnBtfOptions,
+) -> Result<FiberBtfReport> {
+    let t0 = Instant::now();
+    let bcsdf = match &spec.shading {
+        yarn_ref::Shading::Fiber { bcsdf, .. } => (**bcsdf).clone(),
+        yarn_ref::Shading::Lambert { .. } => {
+            return Err(crate::Error::Invalid(
+                "the strip renderer shades with a fiber BCSDF, not Lambert".into(),
+            ));
+        }
+    };
+    if spec.size == 0 || spec.size > 4096 {
+        return Err(crate::Error::Invalid(format!("yarn BTF size {} (1..=4096)", spec.size)));
+    }
+    let sampling = spec.sampling.clone().validated().map_err(btf_render::Error::from)?;
+    let mut popts =
+        PatchOptions { stitches: spec.stitches, color: spec.color, ..PatchOptions::default() };
+    popts.generation.seed = spec.seed;
+    popts.generation.hairs = false;
+    let patch = KnitPatch::new(&spec.chart, &spec.params, &popts)
+        .map_err(|e| crate::Error::Invalid(e.to_string()))?;
+    let packed = PackedYarns::new(
+        &patch.yarns,
+        std::slice::from_ref(&spec.params),
+        &PackOptions { seed: spec.seed, frame_samples_per_segment: 16, tiles: [3, 3] },
+    )?;
+    let bake = StripBakeSettings { seed: spec.seed, ..*bake };
+    let bakes = crate::strips::bakes_for(
+        &patch.yarns,
+        std::slice::from_ref(&spec.params),
+        &bcsdf,
+        &bake,
+        cache_dir,
+        &|_| {},
+    )?;
+    let renderer = StripRenderer::new(gpu, &packed, &bakes, &bcsdf, settings)?;
+    let mut meta = BtfMeta::new(sampling.clone(), sampling.clone(), spec.size, spec.size);
+    let s = &settings;
+    meta.provenance = json!({
+        "generator": "yarn-render",
+        "version": env!("CARGO_PKG_VERSION"),
+        "kind": "yarn",
+        "method": "strips",
+        "chart": {"name": spec.chart.name, "source": spec.chart_source, "text": spec.chart.to_text()},
+        "yarn": {"preset": spec.params.name},
+        "stitches": patch.stitches,
+        "size": spec.size,
+        "seed": spec.seed,
+        "shading": yarn_ref::Shading::Fiber { bcsdf: std::sync::Arc::new(bcsdf.clone()), tint: true }.name(),
+        "color": spec.color,
+        "period_m": patch.period.size,
+        "z_ref_m": patch.z_ref,
+        "settings": {
+            "msaa": s.msaa, "textures": s.textures, "xi": s.xi, "psi": s.psi,
+            "shadows": s.shadows, "light_angle_deg": s.light_angle_deg,
+        },
+        "bake": {
+            "texels": [bake.width, bake.height], "directions": bake.directions, "spp": bake.spp,
+            "tangents": bake.tangents, "bounces": bake.bounces,
+            "mean_residual": bakes[0].mean_residual(), "seconds": bakes[0].seconds,
+        },
+        "model": "yarn strips [H25] (camera-facing strips textured with a bake of a straight \
+                  yarn of explicit fibers: coverage, fiber tangents, AO, rank-1 fiber shadowing \
+                  and multiple-scattering factors; strip shadow maps with PCSS), oblique \
+                  orthographic camera through texel centres of z_ref, 3x3 periodic copies, \
+                  black background, directional light of unit perpendicular irradiance, MSAA",
+    });
+    let render = |cam: &FiberCamera, lights: &[FiberLight], size| {
+        renderer.render(gpu, cam, lights, size, [0.0; 4]).map(|f| (f.pixels, f.stats.instances))
+    };
+    let (written, skipped, instances) =
+        write_images(spec, &patch, &sampling, meta, out, opts, "strips", render)?;
+    Ok(FiberBtfReport {
+        images_written: written,
+        images_skipped: skipped,
+        seconds: t0.elapsed().as_secs_f64(),
+        instances,
+    })
+}
+
+/// The image loop both methods share: every (view, light) of `sampling` rendered by
+/// `render` through the oblique camera of the patch and written (resumable) into `out`.
+/// Returns (written, kept, instances of the last image).
+#[allow(clippy::too_many_arguments)]
+fn write_images(
+    spec: &YarnBtfSpec,
+    patch: &KnitPatch,
+    sampling: &btf_core::sampling::Sampling,
+    meta: BtfMeta,
+    out: &Path,
+    opts: &YarnBtfOptions,
+    method: &str,
+    mut render: impl FnMut(&FiberCamera, &[FiberLight], (u32, u32)) -> Result<(Vec<[f32; 4]>, u32)>,
+) -> Result<(usize, usize, u32)> {
+    let n = sampling.len();
+    let dirs: Vec<[f64; 3]> = (0..n).map(|i| sampling.direction(i).to_vector()).collect();
     let writer = BtfWriter::create(out, meta, opts.dtype, opts.resume)?;
     let bar = if opts.progress {
         indicatif::ProgressBar::new((n * n) as u64)
     } else {
         indicatif::ProgressBar::hidden()
     };
-    bar.set_message(format!("yarn fibers {} {}²", spec.chart.name, spec.size));
+    bar.set_message(format!("yarn {method} {} {}²", spec.chart.name, spec.size));
     let (mut written, mut skipped, mut instances) = (0, 0, 0);
     let size = (spec.size as u32, spec.size as u32);
     for view in 0..n {
@@ -120,9 +240,9 @@ pub fn generate_fiber_btf(
                 vec![0.0f32; spec.size * spec.size * 3]
             } else {
                 let lights = [FiberLight::Directional { to_light: l, irradiance: [1.0; 3] }];
-                let f = renderer.render(gpu, &cam, &lights, size, [0.0; 4])?;
-                instances = f.stats.instances;
-                f.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect()
+                let (pixels, count) = render(&cam, &lights, size)?;
+                instances = count;
+                pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect()
             };
             writer.write_image(view, light, &img)?;
             written += 1;
@@ -131,10 +251,5 @@ pub fn generate_fiber_btf(
     }
     writer.finish()?;
     bar.finish_and_clear();
-    Ok(FiberBtfReport {
-        images_written: written,
-        images_skipped: skipped,
-        seconds: t0.elapsed().as_secs_f64(),
-        instances,
-    })
+    Ok((written, skipped, instances))
 }

@@ -325,8 +325,8 @@ impl FiberRenderer {
     fn shadow_views(&self, lights: &[FiberLight]) -> Result<(Vec<ShadowPassRaw>, ShadowViewsRaw)> {
         let size = self.settings.shadow_map;
         if !self.settings.effects.yarn_shadows || self.settings.tubes {
-            let mut views = ShadowViewsRaw::default();
-            views.texel = [1.0 / size as f32, 2e-3, 0.0, 0.0];
+            let views =
+                ShadowViewsRaw { texel: [1.0 / size as f32, 2e-3, 0.0, 0.0], ..Default::default() };
             return Ok((Vec::new(), views));
         }
         let (p, v, _) = directional_views(lights, self.origin, self.centre, self.radius, size)?;

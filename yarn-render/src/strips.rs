@@ -396,8 +396,8 @@ impl StripRenderer {
 
     fn shadow_views(&self, lights: &[FiberLight]) -> Result<(Vec<ShadowPassRaw>, StripShadowRaw)> {
         let size = self.settings.shadow_map;
-        let mut raw = StripShadowRaw::default();
-        raw.texel = [1.0 / size as f32, 2e-3, 0.0, 0.0];
+        let mut raw =
+            StripShadowRaw { texel: [1.0 / size as f32, 2e-3, 0.0, 0.0], ..Default::default() };
         if !self.settings.shadows {
             return Ok((Vec::new(), raw));
         }

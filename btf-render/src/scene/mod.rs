@@ -457,7 +457,6 @@ mod tests {
             ("wales = 4\ncourses = 4", "wales = 4096\ncourses = 4096", "yarns[0].wales"),
             ("wales = 4", "wales = 4\nstitch_uv = [0.0, 0.1]", "yarns[0].stitch_uv"),
             ("wales = 4", "wales = 4\nstitch_uv = [0.1, -0.1]", "yarns[0].stitch_uv"),
-            ("wales = 4", "wales = 4\nmethod = \"strips\"", "yarns[0].method"),
             ("wales = 4", "wales = 4\nmethod = \"lumislice\"", "yarns[0].method"),
             ("wales = 4", "wales = 4\nlod_px = -1", "yarns[0].lod_px"),
             ("wales = 4", "wales = 4\nalbedo = [2, 0, 0]", "yarns[0].albedo"),

@@ -23,7 +23,7 @@ pub enum YarnMethod {
     /// Procedural fibers generated on the GPU every frame ([W19]).
     #[default]
     Fibers,
-    /// Fiber-textured yarn strips (Huang et al. 2025): not implemented yet.
+    /// Fiber-textured yarn strips (Huang et al. 2025) with baked textures.
     Strips,
     /// Lumislices (Chen et al. 2003): not implemented yet.
     Lumislice,
@@ -76,7 +76,7 @@ pub struct YarnsDesc {
     /// Level-of-detail threshold ω^LoD in pixels ([W19 eq. 4]; 0: every fiber).
     #[serde(default = "default_lod_px")]
     pub lod_px: f32,
-    /// How the yarns are drawn: `fibers` (the only one implemented).
+    /// How the yarns are drawn: `fibers` or `strips` (`lumislice` is not implemented yet).
     #[serde(default)]
     pub method: YarnMethod,
     /// Yarn colour (linear RGB in [0, 1]); default: the skeleton's.
@@ -137,12 +137,11 @@ impl YarnsDesc {
     pub fn validate(&self, key: &str) -> std::result::Result<(), (String, String)> {
         let bad = |k: &str, what: String| Err((format!("{key}.{k}"), what));
         match self.method {
-            YarnMethod::Fibers => {}
-            m => {
-                let name = if m == YarnMethod::Strips { "strips" } else { "lumislice" };
+            YarnMethod::Fibers | YarnMethod::Strips => {}
+            YarnMethod::Lumislice => {
                 return bad(
                     "method",
-                    format!("\"{name}\" is not implemented yet (only \"fibers\")"),
+                    "\"lumislice\" is not implemented yet (\"fibers\" or \"strips\")".into(),
                 );
             }
         }

@@ -20,7 +20,7 @@ use std::path::Path;
 use yarn::YarnParams;
 use yarn::knit::{Chart, SkeletonParams, StitchMesh, SurfaceMesh, UvLayout, chen_skeleton};
 
-pub use overlay::{YarnOverlay, fiber_camera, fiber_lights};
+pub use overlay::{YarnDrawer, YarnOverlay, fiber_camera, fiber_lights};
 
 /// One `[[yarns]]` entry built: its yarn, curves and packed data.
 #[derive(Debug, Clone)]

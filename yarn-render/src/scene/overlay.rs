@@ -1,7 +1,9 @@
 //! [`YarnOverlay`]: a scene's `[[yarns]]` drawn by the fiber renderer of [W19] (§5: fibers
 //! generated from the control points every frame, LoD of [W19 eq. 4], the fiber BCSDF of
-//! [W19 eq. 5–6]) into btf-render's own colour and depth targets, after its BTF pass, with
-//! its camera matrix and the scene's lights.
+//! [W19 eq. 5–6]) — or, with `method = "strips"`, by the yarn strips of [H25] (textures
+//! baked once per yarn and colour, cached with the fiber bakes) — into btf-render's own
+//! colour and depth targets, after its BTF pass, with its camera matrix and the scene's
+//! lights.
 //!
 //! **How the two renderers meet — choice (a), drawing into shared targets.** btf-render
 //! keeps its depth buffer when an overlay is present and hands the overlay its colour
@@ -25,13 +27,17 @@
 //! meshes. Yarns and meshes do not shadow each other (each casts shadows on itself only).
 
 use super::SceneYarn;
-use crate::{AoMode, FiberCamera, FiberEffects, FiberLight, FiberRenderer, FiberSettings, Result};
+use crate::{
+    AoMode, FiberCamera, FiberEffects, FiberLight, FiberRenderer, FiberSettings, Result,
+    StripRenderer, StripSettings,
+};
 use btf_render::Gpu;
 use btf_render::camera::CameraSetup;
 use btf_render::renderer::{Overlay, OverlayEnvironment, OverlayTargets, OverlayView};
-use btf_render::scene::{Light, Scene, YarnAo, YarnsDesc};
+use btf_render::scene::{Light, Scene, YarnAo, YarnMethod, YarnsDesc};
 use std::path::Path;
 use yarn::bcsdf::{FiberBcsdf, KhungurnParams};
+use yarn_precompute::StripBakeSettings;
 
 /// The fiber renderer's camera for btf-render's: the same world → clip matrix.
 pub fn fiber_camera(cam: &CameraSetup) -> FiberCamera {
@@ -93,9 +99,17 @@ pub fn scene_bcsdf() -> Result<FiberBcsdf> {
     Ok(FiberBcsdf::khungurn(&KhungurnParams::default())?)
 }
 
-/// The fiber renderers of a scene's `[[yarns]]`, drawn after its BTF pass.
+/// How one `[[yarns]]` entry is drawn (`method`).
+pub enum YarnDrawer {
+    /// Procedural fibers [W19].
+    Fibers(FiberRenderer),
+    /// Fiber-textured strips [H25] (`method = "strips"`).
+    Strips(StripRenderer),
+}
+
+/// The yarn renderers of a scene's `[[yarns]]`, drawn after its BTF pass.
 pub struct YarnOverlay {
-    renderers: Vec<FiberRenderer>,
+    renderers: Vec<YarnDrawer>,
 }
 
 impl YarnOverlay {
@@ -112,22 +126,41 @@ impl YarnOverlay {
             .iter()
             .map(|y| {
                 let d = &scene.yarns[y.index];
+                if d.method == YarnMethod::Strips {
+                    let bake = StripBakeSettings { seed: d.seed, ..Default::default() };
+                    let bakes = crate::strips::bakes_for(
+                        &y.set,
+                        std::slice::from_ref(&y.params),
+                        &bcsdf,
+                        &bake,
+                        cache_dir,
+                        &|_| {},
+                    )?;
+                    let s = StripSettings {
+                        msaa: scene.effects.msaa,
+                        shadows: d.shadows,
+                        ..StripSettings::default()
+                    };
+                    return Ok(YarnDrawer::Strips(StripRenderer::new(
+                        gpu, &y.packed, &bakes, &bcsdf, s,
+                    )?));
+                }
                 let bake = yarn_precompute::BakeSettings { seed: d.seed, ..Default::default() };
-                FiberRenderer::with_bake(
+                Ok(YarnDrawer::Fibers(FiberRenderer::with_bake(
                     gpu,
                     &y.packed,
                     &bcsdf,
                     settings(scene, d),
                     &bake,
                     cache_dir,
-                )
+                )?))
             })
             .collect::<Result<_>>()?;
         Ok(YarnOverlay { renderers })
     }
 
     /// The renderers, in `[[yarns]]` order.
-    pub fn renderers(&self) -> &[FiberRenderer] {
+    pub fn renderers(&self) -> &[YarnDrawer] {
         &self.renderers
     }
 }
@@ -144,7 +177,7 @@ fn to_render(e: crate::Error) -> btf_render::Error {
 
 impl Overlay for YarnOverlay {
     fn name(&self) -> &str {
-        "yarns (fibers)"
+        "yarns"
     }
 
     fn encode(
@@ -158,9 +191,18 @@ impl Overlay for YarnOverlay {
         let lights = fiber_lights(&view.scene.lights);
         let ambient = ambient(view.environment);
         for r in &mut self.renderers {
-            r.set_ambient(ambient);
             let t = (targets.color, targets.resolve, targets.depth);
-            r.encode_into(gpu, encoder, t, targets.size, &cam, &lights).map_err(to_render)?;
+            match r {
+                YarnDrawer::Fibers(r) => {
+                    r.set_ambient(ambient);
+                    r.encode_into(gpu, encoder, t, targets.size, &cam, &lights)
+                }
+                YarnDrawer::Strips(r) => {
+                    r.set_ambient(ambient);
+                    r.encode_into(gpu, encoder, t, targets.size, &cam, &lights)
+                }
+            }
+            .map_err(to_render)?;
         }
         Ok(())
     }
