@@ -18,17 +18,20 @@
 //!   spread of fiber directions in a texel; `K = 1` is the paper's tangent texture;
 //! - PCSS light size is the light's angular radius [`StripSettings::light_angle_deg`]
 //!   (a directional light has none in our scenes; 0 gives the hard map, one tap);
-//! - the flyaway overlay pass and the environment light through SRBFs are not built yet
-//!   (issue #20): hair flyaways are left out of the bake, and an environment becomes the
-//!   constant ambient term `ambient · A(θ_o) · AO`, as for the fiber renderer.
+//! - environment light ([`StripRenderer::set_environment`]): [H25 eq. 17] with the SRBF
+//!   fit and `I_M` table of `yarn_precompute::srbf` — per SRBF j its strip shadow map
+//!   (PCSS of angular radius `1/√λ`), `Ψ` and `ξ` read at ω_j, and `I_M` averaged over the
+//!   texel's K tangents; without one, a constant ambient term `ambient · A(θ_o) · AO`;
+//! - the flyaway overlay pass is not built yet (issue #20): hair flyaways are left out of
+//!   the bake.
 
 use crate::bcsdf;
 use crate::gpu_data::YarnBuffers;
 use crate::pack::PackedYarns;
 use crate::passes::draw::{DEPTH, SHADING_WGSL, color_format};
-use crate::passes::shadow::{MAX_SHADOW_MAPS, ShadowPass, ShadowPassRaw, directional_views};
+use crate::passes::shadow::{MAX_SHADOW_MAPS, ShadowPass, ShadowPassRaw, light_views};
 use crate::renderer::{FiberImage, FiberStats};
-use crate::view::{FiberCamera, FiberLight, ViewRaw, ViewSetup, lights_raw, to_cols};
+use crate::view::{FiberCamera, FiberLight, MAX_LIGHTS, ViewRaw, ViewSetup, lights_raw, to_cols};
 use crate::{Error, Result};
 use btf_render::Gpu;
 use std::path::Path;
@@ -100,15 +103,35 @@ struct StripHeaderRaw {
     f: [f32; 4],
 }
 
-/// The strip shader's shadow uniform (the fiber one plus PCSS scales).
+/// The most SRBFs of an environment.
+pub const MAX_SRBFS: usize = 32;
+/// Shadow maps of one frame: the directional lights' and one per SRBF.
+const MAX_STRIP_MAPS: usize = MAX_SHADOW_MAPS + MAX_SRBFS;
+
+/// The strip shader's shadow uniform: per map its light (directional light `i`, or SRBF
+/// `j` as `MAX_LIGHTS + j`) and its PCSS scale.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct StripShadowRaw {
-    view_proj: [[[f32; 4]; 4]; MAX_SHADOW_MAPS],
+    view_proj: [[[f32; 4]; 4]; MAX_STRIP_MAPS],
     n: [u32; 4],
-    light: [u32; 4],
+    light: [[u32; 4]; MAX_STRIP_MAPS / 4],
     texel: [f32; 4],
-    pcss: [f32; 4],
+    pcss: [[f32; 4]; MAX_STRIP_MAPS / 4],
+}
+
+impl Default for StripShadowRaw {
+    fn default() -> Self {
+        bytemuck::Zeroable::zeroed()
+    }
+}
+
+/// An environment fitted by SRBFs, uploaded.
+struct StripEnv {
+    buffer: wgpu::Buffer,
+    dirs: Vec<[f64; 3]>,
+    /// PCSS angular radius of each SRBF (`1/√λ`, DESIGN §3.3 item 14), degrees.
+    angle_deg: f64,
 }
 
 /// The strip bakes of `set`'s yarn types: one per entry of `params`, tinted with the colour
@@ -154,6 +177,8 @@ pub struct StripRenderer {
     centre: [f64; 3],
     radius: f64,
     texel_bytes: u64,
+    env: Option<StripEnv>,
+    no_env: wgpu::Buffer,
 }
 
 impl StripRenderer {
@@ -259,6 +284,7 @@ impl StripRenderer {
                     count: None,
                 },
                 buf(7, fs, wgpu::BufferBindingType::Uniform),
+                buf(8, fs, ro),
             ],
         });
         let src = source();
@@ -350,7 +376,47 @@ impl StripRenderer {
             origin: packed.origin,
             centre,
             radius,
+            env: None,
+            no_env: storage("strip env (none)", bytemuck::cast_slice(&[0.0f32; 4])),
         })
+    }
+
+    /// Lights the next frames with an environment fitted by SRBFs and the `I_M` table of this
+    /// renderer's BCSDF at the fit's λ ([H25 eq. 14–17]; `None`: no environment). Each SRBF
+    /// gets a strip shadow map with PCSS of angular radius `1/√λ` when shadows are on.
+    pub fn set_environment(
+        &mut self,
+        gpu: &Gpu,
+        env: Option<(&yarn_precompute::SrbfFit, &yarn_precompute::ImTable)>,
+    ) -> Result<()> {
+        let Some((fit, table)) = env else {
+            self.env = None;
+            return Ok(());
+        };
+        let n = fit.centres.len();
+        if n == 0 || n > MAX_SRBFS || fit.weights.len() != n {
+            return Err(Error::Invalid(format!("strips: {n} SRBFs (1..={MAX_SRBFS})")));
+        }
+        if (table.lambda - fit.lambda).abs() > 1e-9 * fit.lambda {
+            return Err(Error::Invalid(format!(
+                "strips: I_M table for λ = {} but the fit has λ = {}",
+                table.lambda, fit.lambda
+            )));
+        }
+        let mut data = vec![n as f32, fit.lambda as f32, 0.0, 0.0];
+        for (c, w) in fit.centres.iter().zip(&fit.weights) {
+            data.extend([c[0] as f32, c[1] as f32, c[2] as f32, 0.0]);
+            data.extend([w[0] as f32, w[1] as f32, w[2] as f32, 0.0]);
+        }
+        table.values.iter().for_each(|v| data.extend(v));
+        let buffer = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("strip env"),
+            contents: bytemuck::cast_slice(&data),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let angle_deg = (1.0 / fit.lambda.sqrt()).atan().to_degrees().min(44.0);
+        self.env = Some(StripEnv { buffer, dirs: fit.centres.clone(), angle_deg });
+        Ok(())
     }
 
     /// The settings in use.
@@ -401,18 +467,33 @@ impl StripRenderer {
         if !self.settings.shadows {
             return Ok((Vec::new(), raw));
         }
-        let (passes, views, depth_per_metre) =
-            directional_views(lights, self.origin, self.centre, self.radius, size)?;
-        raw.view_proj = views.view_proj;
-        raw.n = views.n;
-        raw.light = views.light;
-        let tan = self.settings.light_angle_deg.to_radians().tan();
-        let metres_per_texel = 2.0 * self.radius / size as f64;
-        for (m, dpm) in depth_per_metre.iter().enumerate() {
-            // Penumbra (texels) = depth gap / (depth per metre) · tan(angle) / (metres per texel).
-            raw.pcss[m] = if tan > 0.0 { (tan / (dpm * metres_per_texel)) as f32 } else { 0.0 };
+        // (direction, light index, PCSS angle in degrees)
+        let mut maps: Vec<([f64; 3], u32, f64)> = Vec::new();
+        for (i, l) in lights.iter().enumerate() {
+            if let FiberLight::Directional { to_light, .. } = *l
+                && maps.len() < MAX_SHADOW_MAPS
+            {
+                maps.push((to_light, i as u32, self.settings.light_angle_deg));
+            }
         }
-        Ok((passes, raw))
+        if let Some(e) = &self.env {
+            for (j, d) in e.dirs.iter().enumerate() {
+                maps.push((*d, (MAX_LIGHTS + j) as u32, e.angle_deg));
+            }
+        }
+        let dirs: Vec<[f64; 3]> = maps.iter().map(|m| m.0).collect();
+        let views = light_views(&dirs, self.origin, self.centre, self.radius, size)?;
+        let metres_per_texel = 2.0 * self.radius / size as f64;
+        for (m, ((pass, dpm), (_, light, angle))) in views.iter().zip(&maps).enumerate() {
+            raw.view_proj[m] = pass.view_proj;
+            raw.light[m / 4][m % 4] = *light;
+            // Penumbra (texels) = depth gap / (depth per metre) · tan(angle) / (metres per texel).
+            let tan = angle.to_radians().tan();
+            raw.pcss[m / 4][m % 4] =
+                if tan > 0.0 { (tan / (dpm * metres_per_texel)) as f32 } else { 0.0 };
+        }
+        raw.n[0] = maps.len() as u32;
+        Ok((views.into_iter().map(|v| v.0).collect(), raw))
     }
 
     /// Records the shadow and strip passes of one frame into `enc`.
@@ -481,6 +562,7 @@ impl StripRenderer {
                     resource: wgpu::BindingResource::Sampler(&self.sampler),
                 },
                 entry(7, &sbuf),
+                entry(8, self.env.as_ref().map_or(&self.no_env, |e| &e.buffer)),
             ],
         });
         self.shadow.encode(gpu, enc, &self.data, &maps, &passes);

@@ -163,10 +163,47 @@ impl ShadowPass {
     }
 }
 
+/// One orthographic light view per unit direction of `dirs` (towards the light) for a
+/// scene within `radius` of `centre` (origin-relative), side `2·radius`, `size²` texels:
+/// the pass uniform and the light-clip depth per metre along the light (PCSS turns depth
+/// gaps into metres).
+pub fn light_views(
+    dirs: &[[f64; 3]],
+    origin: [f64; 3],
+    centre: [f64; 3],
+    radius: f64,
+    size: u32,
+) -> Result<Vec<(ShadowPassRaw, f64)>> {
+    let mut out = Vec::new();
+    for &dir in dirs {
+        let n = (dir.iter().map(|x| x * x).sum::<f64>()).sqrt();
+        if !(n > 0.0 && n.is_finite()) {
+            return Err(Error::Invalid(format!("shadow view: light direction {dir:?}")));
+        }
+        let d = dir.map(|x| x / n);
+        let r = radius;
+        let c = [0, 1, 2].map(|a| centre[a] + origin[a]);
+        let eye = [0, 1, 2].map(|a| c[a] + d[a] * 2.0 * r);
+        let up = if d[2].abs() < 0.9 { [0.0, 0.0, 1.0] } else { [1.0, 0.0, 0.0] };
+        let cam = FiberCamera::orthographic(eye, c, up, 2.0 * r);
+        let setup = ViewSetup::new(&cam, origin, centre, r, (size, size))?;
+        let m = &setup.view_proj;
+        let depth_per_metre = (m[(2, 0)] * d[0] + m[(2, 1)] * d[1] + m[(2, 2)] * d[2]).abs();
+        out.push((
+            ShadowPassRaw {
+                view_proj: to_cols(m),
+                to_light: [d[0] as f32, d[1] as f32, d[2] as f32, 0.0],
+                n: [8, 0, 0, 0],
+            },
+            depth_per_metre,
+        ));
+    }
+    Ok(out)
+}
+
 /// The shadow passes of the first [`MAX_SHADOW_MAPS`] directional lights of `lights` for a
-/// scene within `radius` of `centre` (origin-relative): orthographic light views of side
-/// `2·radius`, `size²` texels; with the uniform the shaders read them with and, per map,
-/// the light-clip depth per metre along the light (PCSS turns depth gaps into metres).
+/// scene within `radius` of `centre` (origin-relative) ([`light_views`]), with the uniform
+/// the fiber shader reads them with and, per map, the light-clip depth per metre.
 pub fn directional_views(
     lights: &[FiberLight],
     origin: [f64; 3],
@@ -174,34 +211,22 @@ pub fn directional_views(
     radius: f64,
     size: u32,
 ) -> Result<(Vec<ShadowPassRaw>, ShadowViewsRaw, Vec<f64>)> {
-    let mut passes = Vec::new();
-    let mut views = ShadowViewsRaw::default();
-    let mut depth_per_metre = Vec::new();
-    views.texel = [1.0 / size as f32, 2e-3, 0.0, 0.0];
+    let mut views =
+        ShadowViewsRaw { texel: [1.0 / size as f32, 2e-3, 0.0, 0.0], ..Default::default() };
+    let mut dirs = Vec::new();
     for (i, l) in lights.iter().enumerate() {
         let FiberLight::Directional { to_light, .. } = *l else { continue };
-        if passes.len() == MAX_SHADOW_MAPS {
+        if dirs.len() == MAX_SHADOW_MAPS {
             break;
         }
-        let n = (to_light.iter().map(|x| x * x).sum::<f64>()).sqrt();
-        let d = to_light.map(|x| x / n);
-        let r = radius;
-        let c = [0, 1, 2].map(|a| centre[a] + origin[a]);
-        let eye = [0, 1, 2].map(|a| c[a] + d[a] * 2.0 * r);
-        let up = if d[2].abs() < 0.9 { [0.0, 0.0, 1.0] } else { [1.0, 0.0, 0.0] };
-        let cam = FiberCamera::orthographic(eye, c, up, 2.0 * r);
-        let setup = ViewSetup::new(&cam, origin, centre, r, (size, size))?;
-        let vp = to_cols(&setup.view_proj);
-        views.view_proj[passes.len()] = vp;
-        views.light[passes.len()] = i as u32;
-        let m = &setup.view_proj;
-        depth_per_metre.push((m[(2, 0)] * d[0] + m[(2, 1)] * d[1] + m[(2, 2)] * d[2]).abs());
-        passes.push(ShadowPassRaw {
-            view_proj: vp,
-            to_light: [d[0] as f32, d[1] as f32, d[2] as f32, 0.0],
-            n: [8, 0, 0, 0],
-        });
+        views.light[dirs.len()] = i as u32;
+        dirs.push(to_light);
     }
-    views.n[0] = passes.len() as u32;
-    Ok((passes, views, depth_per_metre))
+    let v = light_views(&dirs, origin, centre, radius, size)?;
+    for (k, (p, _)) in v.iter().enumerate() {
+        views.view_proj[k] = p.view_proj;
+    }
+    views.n[0] = v.len() as u32;
+    let depth = v.iter().map(|x| x.1).collect();
+    Ok((v.into_iter().map(|x| x.0).collect(), views, depth))
 }

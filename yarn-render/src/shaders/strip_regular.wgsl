@@ -21,14 +21,16 @@ struct StripHeader {
     f: vec4<f32>,
 }
 
+// Maps: the directional lights' (light i) and one per SRBF (light 8 + j).
 struct ShadowViews {
-    view_proj: array<mat4x4<f32>, 4>,
+    view_proj: array<mat4x4<f32>, 36>,
+    // Maps in use, unused ×3.
     n: vec4<u32>,
-    light: vec4<u32>,
+    light: array<vec4<u32>, 9>,
     // 1/size, depth bias, unused, unused.
     texel: vec4<f32>,
     // Per map: PCSS penumbra texels per unit of light-clip depth gap (0: hard, one tap).
-    pcss: vec4<f32>,
+    pcss: array<vec4<f32>, 9>,
 }
 
 @group(1) @binding(0) var<uniform> view: View;
@@ -39,6 +41,9 @@ struct ShadowViews {
 @group(1) @binding(5) var shadow_maps: texture_depth_2d_array;
 @group(1) @binding(6) var shadow_cmp: sampler_comparison;
 @group(1) @binding(7) var<uniform> shadow_views: ShadowViews;
+// The environment (strips.rs set_environment): count, λ, unused ×2; per SRBF its direction
+// (xyz, 0) and weight (rgb, 0); then I_M on 16³ nodes (θ_j, θ_o, Δφ), RGB.
+@group(1) @binding(8) var<storage, read> env: array<f32>;
 
 struct StripOut {
     @builtin(position) clip: vec4<f32>,
@@ -135,7 +140,7 @@ fn factor3(h: StripHeader, t: u32, first: u32, b: Bins) -> vec3<f32> {
 // shadow map with one comparison tap (DESIGN §3.5's PCSS limit).
 fn strip_visibility(li: u32, centre: vec3<f32>, wi: vec3<f32>, radius: f32) -> f32 {
     for (var m = 0u; m < shadow_views.n.x; m++) {
-        if shadow_views.light[m] != li {
+        if shadow_views.light[m / 4u][m % 4u] != li {
             continue;
         }
         let p = centre + wi * (radius * 1.05);
@@ -146,7 +151,7 @@ fn strip_visibility(li: u32, centre: vec3<f32>, wi: vec3<f32>, radius: f32) -> f
             return 1.0;
         }
         let depth = ndc.z - shadow_views.texel.y;
-        let k = shadow_views.pcss[m];
+        let k = shadow_views.pcss[m / 4u][m % 4u];
         let texel = shadow_views.texel.x;
         if k <= 0.0 {
             return textureSampleCompareLevel(shadow_maps, shadow_cmp, uv, i32(m), depth);
@@ -180,6 +185,37 @@ fn strip_visibility(li: u32, centre: vec3<f32>, wi: vec3<f32>, radius: f32) -> f
         return v / 16.0;
     }
     return 1.0;
+}
+
+// I_M at (θ_j, θ_o, Δφ), trilinear on the 16³ nodes (yarn_precompute::ImTable::at).
+fn im_at(first: u32, theta_j: f32, theta_o: f32, dphi: f32) -> vec3<f32> {
+    let n = 16u;
+    let cj = clamp((theta_j + 0.5 * PI) / PI * 15.0, 0.0, 15.0);
+    let co = clamp((theta_o + 0.5 * PI) / PI * 15.0, 0.0, 15.0);
+    let cp = clamp(dphi / PI * 15.0, 0.0, 15.0);
+    let j = min(u32(floor(cj)), 14u);
+    let o = min(u32(floor(co)), 14u);
+    let p = min(u32(floor(cp)), 14u);
+    let f = vec3<f32>(cj - f32(j), co - f32(o), cp - f32(p));
+    var out = vec3<f32>(0.0);
+    for (var c = 0u; c < 8u; c++) {
+        let d = vec3<u32>(c & 1u, (c >> 1u) & 1u, (c >> 2u) & 1u);
+        let w = select(1.0 - f.x, f.x, d.x == 1u) * select(1.0 - f.y, f.y, d.y == 1u)
+            * select(1.0 - f.z, f.z, d.z == 1u);
+        let a = first + 3u * (((j + d.x) * n + o + d.y) * n + p + d.z);
+        out += w * vec3<f32>(env[a], env[a + 1u], env[a + 2u]);
+    }
+    return out;
+}
+
+// The angles of ω in a fiber frame with tangent t: θ from the normal plane, and the
+// in-plane unit projection (for Δφ).
+fn fiber_angles(w: vec3<f32>, t: vec3<f32>) -> vec4<f32> {
+    let s = clamp(dot(w, t), -1.0, 1.0);
+    let p = w - t * s;
+    let l = length(p);
+    let q = select(vec3<f32>(0.0), p / l, l > 1e-6);
+    return vec4<f32>(q, asin(s));
 }
 
 fn ambient_at(h: StripHeader, theta_o: f32) -> vec3<f32> {
@@ -257,7 +293,43 @@ fn fs_strip(in: StripOut) -> FragmentOut {
         }
         l += f * el * strip_visibility(i, in.centre, wi, radius);
     }
-    if any(view.ambient.rgb > vec3<f32>(0.0)) {
+    let n_env = u32(env[0]);
+    if n_env > 0u {
+        let first_im = 4u + 8u * n_env;
+        for (var j = 0u; j < n_env; j++) {
+            let wj = vec3<f32>(env[4u + 8u * j], env[5u + 8u * j], env[6u + 8u * j]);
+            let weight = vec3<f32>(env[8u + 8u * j], env[9u + 8u * j], env[10u + 8u * j]);
+            var im = vec3<f32>(0.0);
+            var fac = vec3<f32>(1.0);
+            if textured {
+                for (var k = 0u; k < kt; k++) {
+                    let tk = vec3<f32>(tap(h, taps, 2u + 3u * k), tap(h, taps, 3u + 3u * k),
+                        tap(h, taps, 4u + 3u * k));
+                    let tw = normalize_or(tk.x * tt + tk.y * w + tk.z * e, tt);
+                    let aj = fiber_angles(wj, tw);
+                    let ao_ = fiber_angles(wo, tw);
+                    let dphi = acos(clamp(dot(aj.xyz, ao_.xyz), -1.0, 1.0));
+                    im += im_at(first_im, aj.w, ao_.w, dphi);
+                }
+                im /= f32(kt);
+                let theta = asin(clamp(dot(wj, tt), -1.0, 1.0));
+                let phi = atan2(dot(wj, w), dot(wj, e));
+                let bt = bins_theta(d, theta);
+                let bp = bins_phi(d, phi);
+                if (flags & 2u) != 0u {
+                    fac *= factor1(h, taps, first_psi, bt) * factor1(h, taps, first_psi + d, bp);
+                }
+                if (flags & 1u) != 0u {
+                    fac *= factor3(h, taps, first_xi, bt) * factor3(h, taps, first_xi + 3u * d, bp);
+                }
+            } else {
+                let aj = fiber_angles(wj, tt);
+                let ao_ = fiber_angles(wo, tt);
+                im = im_at(first_im, aj.w, ao_.w, acos(clamp(dot(aj.xyz, ao_.xyz), -1.0, 1.0)));
+            }
+            l += weight * im * fac * strip_visibility(8u + j, in.centre, wj, radius);
+        }
+    } else if any(view.ambient.rgb > vec3<f32>(0.0)) {
         let to = asin(clamp(dot(wo, tt), -1.0, 1.0));
         l += view.ambient.rgb * ambient_at(h, to) * ao;
     }

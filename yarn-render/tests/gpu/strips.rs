@@ -130,3 +130,66 @@ fn strips_carry_their_bake_on_the_baked_yarn() {
     }
     let _ = light;
 }
+
+#[test]
+fn white_furnace_through_srbfs_and_the_strip_shader() {
+    let Some(gpu) = Gpu::for_tests("white_furnace_through_srbfs_and_the_strip_shader") else {
+        return;
+    };
+    let p = cotton();
+    let bcsdf = FiberBcsdf::khungurn(&KhungurnParams::default()).unwrap();
+    let s = StripBakeSettings {
+        width: 4,
+        height: 2,
+        directions: 2,
+        spp: 1,
+        ao_rays: 1,
+        bounces: 1,
+        tangents: 1,
+        seed: 1,
+    };
+    let bake = StripBake::bake(&p, &bcsdf, COLOR, &s, &|_| {}).unwrap();
+    let length = 0.02;
+    let pts: Vec<[f64; 3]> = (0..=16).map(|i| [0.0, 0.0, length * i as f64 / 16.0]).collect();
+    let curve = YarnCurve::open(pts).unwrap().with_normals(vec![[1.0, 0.0, 0.0]; 17]).unwrap();
+    let set = YarnSet::new(vec![curve.with_color(COLOR)], None).unwrap();
+    let packed = PackedYarns::new(
+        &set,
+        std::slice::from_ref(&p),
+        &PackOptions { seed: 1, frame_samples_per_segment: 16, tiles: [1, 1] },
+    )
+    .unwrap();
+    // Plain strips (the BCSDF at the yarn tangent, coverage 1), no shadows: what reaches
+    // the eye is Σ_j W_j I_M(θ_j, θ_o, Δφ_j) = ∫ f cos dω = A(θ_o) under a white sky.
+    let settings =
+        StripSettings { textures: false, shadows: false, msaa: 1, ..StripSettings::default() };
+    let mut r =
+        StripRenderer::new(&gpu, &packed, std::slice::from_ref(&bake), &bcsdf, settings).unwrap();
+    let env = btf_image::EnvMap::constant(128, [1.0; 3]).unwrap();
+    let fit = yarn_precompute::SrbfFit::fit(&env, 16).unwrap();
+    let table = yarn_precompute::ImTable::build(&bcsdf, fit.lambda).unwrap();
+    r.set_environment(&gpu, Some((&fit, &table))).unwrap();
+    let amb = yarn::bcsdf::AmbientTable::build(&bcsdf, 256);
+    let mut worst = 0.0f64;
+    for elev in [0.0f64, 30.0, 60.0] {
+        // The eye at elevation `elev` above the yarn's normal plane: θ_o = elev.
+        let e = elev.to_radians();
+        let eye = [0.05 * e.cos(), 0.0, 0.5 * length + 0.05 * e.sin()];
+        let cam = FiberCamera::orthographic(eye, [0.0, 0.0, 0.5 * length], [0.0, 1.0, 0.0], 0.004);
+        let img = r.render(&gpu, &cam, &[], (32, 32), [0.0; 4]).unwrap();
+        let c = img.pixels[16 * 32 + 16];
+        assert!(c[3] > 0.99, "the centre pixel is on the strip");
+        let a = amb.at(e);
+        for k in 0..3 {
+            let want = a[k] * COLOR[k] as f64;
+            let rel = (c[k] as f64 - want).abs() / want;
+            worst = worst.max(rel);
+        }
+        eprintln!(
+            "furnace θ_o {elev}°: GPU {:?} against A(θ_o)·tint {:?}",
+            &c[..3],
+            a.map(|x| x * COLOR[0] as f64)
+        );
+    }
+    assert!(worst < 0.02, "white furnace off by {worst}");
+}
