@@ -67,6 +67,14 @@ pub struct SweepArgs {
     /// default dir:35,60).
     #[arg(long = "light")]
     pub lights: Vec<String>,
+    /// Environment map (equirectangular EXR/HDR, e.g. from `btf synth env`), optionally
+    /// ,SCALE: the reference samples it; the GPU fibers get its constant ambient term
+    /// ([W19 eq. 7–8]); the strips its SRBF fit and I_M table ([H25 eq. 14–17]).
+    #[arg(long)]
+    pub env: Option<String>,
+    /// SRBFs of the strips' environment fit.
+    #[arg(long, default_value_t = 16)]
+    pub srbfs: usize,
     /// LoD thresholds ω^LoD in pixels (0: every fiber of every segment).
     #[arg(long, value_delimiter = ',', default_value = "0,0.5,1,2,4")]
     pub lod_px: Vec<f32>,
@@ -359,9 +367,26 @@ fn cameras(
     Ok(cams)
 }
 
-/// `--light` for both renderers (default `dir:35,60`).
-fn lights(specs: &[String]) -> Result<(Vec<FiberLight>, Vec<yarn_ref::Light>)> {
-    let specs = if specs.is_empty() { vec!["dir:35,60".into()] } else { specs.to_vec() };
+/// `--env FILE[,SCALE]`: the map scaled.
+fn env_map(spec: &str) -> Result<btf_image::EnvMap> {
+    let (path, scale) = match spec.split_once(',') {
+        Some((p, s)) => {
+            (p, s.parse::<f64>().with_context(|| format!("--env '{spec}': bad scale"))?)
+        }
+        None => (spec, 1.0),
+    };
+    if !(scale.is_finite() && scale > 0.0) {
+        bail!("--env '{spec}': the scale must be > 0");
+    }
+    let mut map = btf_image::EnvMap::load(std::path::Path::new(path))
+        .with_context(|| format!("--env {path}"))?;
+    map.pixels.iter_mut().for_each(|p| *p = p.map(|x| (x as f64 * scale) as f32));
+    Ok(map)
+}
+
+/// `--light` for both renderers (default `dir:35,60` unless an environment is given).
+fn lights(specs: &[String], env: bool) -> Result<(Vec<FiberLight>, Vec<yarn_ref::Light>)> {
+    let specs = if specs.is_empty() && !env { vec!["dir:35,60".into()] } else { specs.to_vec() };
     let max = yarn_render::view::MAX_LIGHTS;
     if specs.len() > max {
         bail!("--light given {} times: at most {max}", specs.len());
@@ -374,7 +399,11 @@ fn lights(specs: &[String]) -> Result<(Vec<FiberLight>, Vec<yarn_ref::Light>)> {
 /// Runs `btf knit sweep`.
 pub fn run(a: SweepArgs) -> Result<()> {
     validate(&a)?;
-    let inputs = chart_inputs_of(&a.chart, &a.yarn);
+    let mut inputs = chart_inputs_of(&a.chart, &a.yarn);
+    let env_path = a.env.as_deref().map(|e| std::path::Path::new(e.split(',').next().unwrap_or(e)));
+    if let Some(p) = env_path {
+        inputs.push(("env", p));
+    }
     guard::refuse_overlap(&[("-o", &a.output)], &inputs)?;
     let [w, h] = crate::args::numbers::<u32, 2>(&a.size, "--size")?;
     if w == 0 || h == 0 || w > 4096 || h > 4096 {
@@ -391,7 +420,33 @@ pub fn run(a: SweepArgs) -> Result<()> {
     let view = btf_core::Direction::new(vt, vp).to_vector();
     let chart = load_chart(&a.chart)?;
     let params = load_yarn(&a.yarn)?;
-    let (gpu_lights, ref_lights) = lights(&a.lights)?;
+    let env = a.env.as_deref().map(env_map).transpose()?;
+    let (gpu_lights, mut ref_lights) = lights(&a.lights, env.is_some())?;
+    if let Some(map) = &env {
+        ref_lights.push(yarn_ref::Light::Environment(yarn_ref::EnvLight::new(map.clone(), 1.0)));
+    }
+    if !(1..=yarn_render::strips::MAX_SRBFS).contains(&a.srbfs) {
+        bail!("--srbfs {}: 1..={}", a.srbfs, yarn_render::strips::MAX_SRBFS);
+    }
+    let srbf = env
+        .as_ref()
+        .filter(|_| !a.strips.is_empty())
+        .map(|m| yarn_precompute::SrbfFit::fit(m, a.srbfs))
+        .transpose()?;
+    if let Some(f) = &srbf {
+        eprintln!(
+            "environment: {} SRBFs, λ {:.2}, fit error {:.3}, power ratio {:.3}",
+            f.centres.len(),
+            f.lambda,
+            f.rel_error,
+            f.power_ratio[1]
+        );
+    }
+    // The fibers' constant ambient term: the uniform radiance of the same power.
+    let ambient = env
+        .as_ref()
+        .map_or([0.0; 3], |m| m.integral().map(|x| (x / (4.0 * std::f64::consts::PI)) as f32));
+    let light_env = LightEnv { ambient, srbf };
     let bcsdfs: Vec<(String, yarn::bcsdf::FiberBcsdf)> = a
         .shading
         .iter()
@@ -426,7 +481,18 @@ pub fn run(a: SweepArgs) -> Result<()> {
 
     // References: once per camera and shading model; then the GPU grid.
     let refs = references(&a, &cams, &bcsdfs, &scene, &ref_lights, (w, h))?;
-    let cells = gpu_grid(&a, &gpu, &patch, &params, &cams, &bcsdfs, &gpu_lights, &refs, (w, h))?;
+    let cells = gpu_grid(
+        &a,
+        &gpu,
+        &patch,
+        &params,
+        &cams,
+        &bcsdfs,
+        &gpu_lights,
+        &light_env,
+        &refs,
+        (w, h),
+    )?;
 
     write_text(&a.output.join("sweep.csv"), &csv(&cells, &cams))?;
     let md = markdown(&a, &cells, &cams, stitches, (w, h));
@@ -519,6 +585,14 @@ fn rel_rmse(g: &[[f32; 4]], f: &[[f32; 4]]) -> f64 {
     if den > 0.0 { (num / den).sqrt() } else { f64::NAN }
 }
 
+/// The environment as each GPU method takes it.
+struct LightEnv {
+    /// The fibers' constant ambient radiance.
+    ambient: [f32; 3],
+    /// The strips' SRBF fit.
+    srbf: Option<yarn_precompute::SrbfFit>,
+}
+
 /// Builds every cell's renderer, renders each once (stats, error), then times
 /// `a.repeat` frames per cell, interleaved.
 #[allow(clippy::too_many_arguments)]
@@ -530,6 +604,7 @@ fn gpu_grid(
     cams: &[Cam],
     bcsdfs: &[(String, yarn::bcsdf::FiberBcsdf)],
     lights: &[FiberLight],
+    env: &LightEnv,
     refs: &[Vec<yarn_ref::Image>],
     size: (u32, u32),
 ) -> Result<Vec<Cell>> {
@@ -570,7 +645,8 @@ fn gpu_grid(
                         tubes: lod.is_none(),
                         ..FiberSettings::default()
                     };
-                    let r = FiberRenderer::new(gpu, &packed, b, settings)?;
+                    let mut r = FiberRenderer::new(gpu, &packed, b, settings)?;
+                    r.set_ambient(env.ambient);
                     let img = r.render(gpu, &cam.gpu, lights, size, [0.0; 4])?;
                     let [interior, band, all] = errors(&img.pixels, &refs[ci][si]);
                     let full = full.get_or_insert_with(|| img.pixels.clone());
@@ -633,7 +709,11 @@ fn gpu_grid(
                     "strips {v}: bake {bake_s:.1} s, mean residual {:.3}",
                     bakes.iter().map(|k| k.mean_residual()).sum::<f64>() / bakes.len() as f64
                 );
-                let r = yarn_render::StripRenderer::new(gpu, &packed, &bakes, b, ss)?;
+                let mut r = yarn_render::StripRenderer::new(gpu, &packed, &bakes, b, ss)?;
+                if let Some(fit) = &env.srbf {
+                    let table = yarn_precompute::ImTable::build(b, fit.lambda)?;
+                    r.set_environment(gpu, Some((fit, &table)))?;
+                }
                 let img = r.render(gpu, &cam.gpu, lights, size, [0.0; 4])?;
                 let [interior, band, all] = errors(&img.pixels, &refs[ci][si]);
                 let file = format!("gpu-{}-{sname}-strips-{v}.exr", file_safe(&cam.name));

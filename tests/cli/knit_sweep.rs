@@ -122,6 +122,91 @@ fn knit_sweep_writes_the_grid_with_tubes_at_ratio_one() {
 }
 
 #[test]
+fn knit_sweep_strips_cells_are_scored_and_timed_against_the_fibers() {
+    let d = Dir::new();
+    let args = [
+        "knit",
+        "sweep",
+        "--size",
+        "32,32",
+        "--spp",
+        "4",
+        "--bounces",
+        "2",
+        "--lod-px",
+        "0",
+        "--distances",
+        "",
+        "--shading",
+        "khungurn",
+        "--strips",
+        "tex32,plain,no-psi",
+        "--bake-spp",
+        "2",
+        "--repeat",
+        "1",
+        "-o",
+        "sw",
+    ];
+    let Some(out) = run_gpu(&d, &args) else { return };
+    assert!(out.contains("Yarn strips"), "{out}");
+    let csv = std::fs::read_to_string(d.path("sw/sweep.csv")).unwrap();
+    let r = rows(&csv);
+    // One camera: full-detail fibers, tubes, three strip variants.
+    assert_eq!(r.len(), 5, "{csv}");
+    let f = |m: &str, k: &str| -> f64 {
+        let row = r.iter().find(|x| x["method"] == m).unwrap_or_else(|| panic!("{m}: {csv}"));
+        row[k].parse().unwrap_or_else(|_| panic!("{m} {k} = '{}'", row[k]))
+    };
+    for m in ["strips-tex32", "strips-plain", "strips-no-psi"] {
+        let e = f(m, "rel_rmse_all");
+        assert!(e.is_finite() && e > 0.0, "{csv}");
+        assert!(f(m, "frame_ms") > 0.0 && f(m, "mean_ratio") > 0.0, "{csv}");
+        assert!(f(m, "bake_s") > 0.0, "{csv}");
+        // One strip per segment and period: 2·n_sub triangles each (n_sub = 4).
+        assert_eq!(f(m, "triangles"), f(m, "instances") * 8.0, "{csv}");
+    }
+    // Fiber shadowing Ψ ≤ 1 darkens: the strips without it are brighter.
+    assert!(f("strips-no-psi", "mean_ratio") > f("strips-tex32", "mean_ratio"), "{csv}");
+    assert_eq!(f("fibers", "ratio_fibers"), 1.0, "{csv}");
+    for x in ["gpu-btf-khungurn-strips-tex32.exr", "bake-cache"] {
+        assert!(d.path("sw").join(x).exists(), "{x}");
+    }
+    // --method strips: the yarn BTF by the strips, an ordinary store.
+    let Some(_) = run_gpu(
+        &d,
+        &[
+            "synth",
+            "material",
+            "--kind",
+            "yarn",
+            "--method",
+            "strips",
+            "--chart",
+            "stockinette",
+            "--size",
+            "8",
+            "--sampling",
+            "rings:0x1,45x4",
+            "--spp",
+            "1",
+            "--bounces",
+            "2",
+            "-o",
+            "y.btf",
+        ],
+    ) else {
+        return;
+    };
+    let st = btf_core::store::BtfStore::open(&d.path("y.btf")).unwrap();
+    let prov = &st.meta().provenance;
+    assert_eq!(prov["method"], "strips", "{prov}");
+    assert_eq!(prov["bake"]["directions"], 8, "{prov}");
+    let img = st.read_image(0, 0).unwrap();
+    assert!(img.iter().all(|x| x.is_finite()) && img.iter().any(|&x| x > 0.0));
+}
+
+#[test]
 fn knit_gpu_refusals_name_the_flag() {
     let d = Dir::new();
     let e = d.fails(&["knit", "sweep", "--msaa", "3", "-o", "o"]);
@@ -134,6 +219,8 @@ fn knit_gpu_refusals_name_the_flag() {
     assert!(e.contains("--lod-px -1"), "{e}");
     let e = d.fails(&["knit", "sweep", "--shading", "lambert", "-o", "o"]);
     assert!(e.contains("--shading lambert"), "{e}");
+    let e = d.fails(&["knit", "sweep", "--strips", "shiny", "-o", "o"]);
+    assert!(e.contains("--strips shiny"), "{e}");
     let e = d.fails(&["knit", "sweep", "--distances", "0", "-o", "o"]);
     assert!(e.contains("--distances 0"), "{e}");
     std::fs::write(d.path("c.chart"), "name: c\nkp\n").unwrap();
