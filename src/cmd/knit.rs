@@ -29,7 +29,8 @@ pub enum KnitCmd {
     Ref(Box<RefArgs>),
     /// Real-time GPU render (fibers generated on the GPU, [W19]) of a patch or BCC curves.
     Render(Box<super::knit_render::RenderArgs>),
-    /// What accuracy costs in time: GPU fibers over LoD × shading against the reference.
+    /// What accuracy costs in time: GPU fibers over LoD × shading and yarn strips over
+    /// their settings, against the reference.
     Sweep(Box<super::knit_sweep::SweepArgs>),
     /// The headline study: a knit garment as reference fibers, GPU fibers, the yarn BTF
     /// and the baselines, scored against the reference at three camera distances.
@@ -37,6 +38,9 @@ pub enum KnitCmd {
     /// Knot-based yarn deformation [H25] of a patch under stretch and shear, scored
     /// against the converged reference, with the clearance between yarns.
     Deform(Box<super::knit_deform::DeformArgs>),
+    /// The texture bake of [H25]'s yarn strips over bake settings: time, residual of the
+    /// factorised model against the reference, pictures.
+    Strips(Box<super::knit_strips::StripsArgs>),
 }
 
 /// `btf knit chart`.
@@ -149,6 +153,7 @@ pub fn run(cmd: KnitCmd) -> Result<()> {
         KnitCmd::Sweep(a) => super::knit_sweep::run(*a),
         KnitCmd::Compare(a) => super::knit_compare::run(*a),
         KnitCmd::Deform(a) => super::knit_deform::run(*a),
+        KnitCmd::Strips(a) => super::knit_strips::run(*a),
     }
 }
 

@@ -8,6 +8,9 @@
 //!   (the gap between the two is the multiple-scattering gap, reported separately);
 //! - **R1** [W19]'s fibers on the GPU (`yarn-render`) at full detail and at
 //!   ω^LoD ∈ `--lod` ([W19 eq. 4]);
+//! - **R2** [H25]'s yarn strips (`yarn_render::strips`, textures baked once from a
+//!   straight yarn of the same parameters and cached in `DIR/bake-cache`; no flyaway
+//!   overlay yet, so hair flyaways are missing from them);
 //! - **R4** the BTF on the garment: the yarn BTF made by the reference
 //!   (`btf synth material --kind yarn`), compressed per view ([S03]'s PCA) to each
 //!   `--components`, rendered by `btf-render` per pixel with four-light/four-view blending
@@ -110,6 +113,9 @@ pub struct CompareArgs {
     /// errors against the strain. Without it: the rest garment with the Chen skeleton.
     #[arg(long, value_delimiter = ',')]
     pub stretch: Vec<f64>,
+    /// Camera rays per texel of the yarn strips' bake (R2).
+    #[arg(long, default_value_t = 16)]
+    pub bake_spp: u32,
     /// Replace an output folder a previous compare wrote.
     #[arg(long)]
     pub fresh: bool,
@@ -510,7 +516,22 @@ fn study(
     lods.dedup();
     let mut cells: Vec<Cell> = Vec::new();
     let mut jobs: Vec<Job> = Vec::new();
-    let n_cells = cams.len() * (lods.len() + 1 + eigs.len() + 1);
+    let n_cells = cams.len() * (lods.len() + 2 + eigs.len() + 1);
+    // R2: the strip textures, baked once (cached across strains and runs).
+    let t = Instant::now();
+    let bakes = yarn_render::strips::bakes_for(
+        &g.yarns,
+        std::slice::from_ref(&src.params),
+        &src.bcsdf,
+        &yarn_precompute::StripBakeSettings {
+            seed: src.seed,
+            spp: a.bake_spp,
+            ..Default::default()
+        },
+        Some(&a.output.join("bake-cache")),
+        &|_| {},
+    )?;
+    let strip_prep = if bakes[0].from_cache { bakes[0].seconds } else { t.elapsed().as_secs_f64() };
     let bar = crate::progress::bar((n_cells * (1 + a.repeat as usize)) as u64, "GPU cells");
     for (ci, cam) in cams.iter().enumerate() {
         let fcam = FiberCamera::perspective(cam.eye, cam.target, UP, FOV_DEG);
@@ -535,6 +556,22 @@ fn study(
             };
             cells.push(Cell::new(repr, &name, ci, rgb, prep, img.stats.yarn_bytes, true));
             jobs.push(Job::Fibers(Box::new((r, fcam))));
+            bar.inc(1);
+        }
+        {
+            let t = Instant::now();
+            let r = yarn_render::StripRenderer::new(
+                gpu,
+                &packed,
+                &bakes,
+                &src.bcsdf,
+                yarn_render::StripSettings::default(),
+            )?;
+            let prep = t.elapsed().as_secs_f64() + strip_prep;
+            let img = r.render(gpu, &fcam, &fiber_lights, (w, h), [0.0; 4])?;
+            let rgb: Vec<f32> = img.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+            cells.push(Cell::new("R2", "yarn strips", ci, rgb, prep, img.stats.yarn_bytes, true));
+            jobs.push(Job::Strips(Box::new((r, fcam))));
             bar.inc(1);
         }
         for (c, eig, pca_s, _) in eigs {
@@ -571,6 +608,11 @@ fn study(
             match job {
                 Job::Fibers(rc) => {
                     let (r, cam) = &mut **rc;
+                    let img = r.render(gpu, cam, &fiber_lights, (w, h), [0.0; 4])?;
+                    std::hint::black_box(img.pixels.len());
+                }
+                Job::Strips(rc) => {
+                    let (r, cam) = &**rc;
                     let img = r.render(gpu, cam, &fiber_lights, (w, h), [0.0; 4])?;
                     std::hint::black_box(img.pixels.len());
                 }
@@ -691,6 +733,7 @@ fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
 /// A GPU cell kept for the timed repeats.
 enum Job {
     Fibers(Box<(FiberRenderer, FiberCamera)>),
+    Strips(Box<(yarn_render::StripRenderer, FiberCamera)>),
     Btf(Box<btf_render::Renderer>),
 }
 

@@ -569,6 +569,7 @@ fn short(c: &Cell) -> String {
         "R1" if c.name.contains("full") => "R1 full".into(),
         "R1" => format!("R1 {}", c.name.trim_start_matches("fibers LoD ").replace(' ', "")),
         "R4" => format!("R4 {}", c.name.trim_start_matches("BTF ").replace(' ', "")),
+        "R2" => "R2 strips".into(),
         _ if c.name.contains("tubes") => "tubes".into(),
         _ => "plain".into(),
     }
@@ -579,7 +580,7 @@ fn short(c: &Cell) -> String {
 pub type StretchRun = (f64, Vec<Cell>, Vec<Distance>, f64);
 
 /// The representations the stretch summary follows: the BTF at its largest component
-/// count, the GPU fibers at full detail and the plain texture.
+/// count, the GPU fibers at full detail, the yarn strips and the plain texture.
 fn stretch_followed(cells: &[Cell]) -> Vec<String> {
     let mut names: Vec<String> = Vec::new();
     let best_btf = cells
@@ -589,6 +590,9 @@ fn stretch_followed(cells: &[Cell]) -> Vec<String> {
         .map(|c| c.name.clone());
     names.extend(best_btf);
     names.push("fibers full detail".into());
+    if cells.iter().any(|c| c.name == "yarn strips") {
+        names.push("yarn strips".into());
+    }
     names.push("plain texture (BTF mean)".into());
     names
 }
@@ -684,6 +688,24 @@ pub fn write_stretch(out: &std::path::Path, runs: &[StretchRun]) -> anyhow::Resu
         }
         // The first strain at which the BTF is worse than the fibers (by each measure).
         let btf = &names[0];
+        let cross_with = |other: &str, f: &dyn Fn(&Cell) -> f64| {
+            runs.iter()
+                .find(|(_, cells, _, _)| match (find(cells, d, btf), find(cells, d, other)) {
+                    (Some(b), Some(r)) => f(b) > f(r),
+                    _ => false,
+                })
+                .map(|(s, _, _, _)| format!("{:.0} %", s * 100.0))
+                .unwrap_or_else(|| "none of the strains measured".into())
+        };
+        let strips_line = if names.iter().any(|n| n == "yarn strips") {
+            format!(
+                " Than the yarn strips: {} by rel. RMSE, {} by ꟻLIP.",
+                cross_with("yarn strips", &|c| c.vs_full.interior),
+                cross_with("yarn strips", &|c| c.vs_full.flip_interior)
+            )
+        } else {
+            String::new()
+        };
         let cross = |f: &dyn Fn(&Cell) -> f64| {
             runs.iter()
                 .find(|(_, cells, _, _)| {
@@ -698,7 +720,7 @@ pub fn write_stretch(out: &std::path::Path, runs: &[StretchRun]) -> anyhow::Resu
         let _ = writeln!(
             md,
             "\nFirst strain at which {btf} is worse than the GPU fibers: {} by rel. RMSE, {} by \
-             ꟻLIP.\n\n![errors against strain](stretch-{}px.png)\n",
+             ꟻLIP.{strips_line}\n\n![errors against strain](stretch-{}px.png)\n",
             cross(&|c| c.vs_full.interior),
             cross(&|c| c.vs_full.flip_interior),
             dist.stitch_px

@@ -13,6 +13,7 @@ pub mod knit_compare_report;
 pub mod knit_deform;
 pub mod knit_deform_drape;
 pub mod knit_render;
+pub mod knit_strips;
 pub mod knit_sweep;
 pub mod knit_sweep_report;
 pub mod reconstruct;

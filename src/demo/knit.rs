@@ -2,8 +2,10 @@
 //! on the GPU ([W19], `yarn-render`: fibers generated every frame, level of detail with
 //! core strips, self-shadows with shadow hiding, yarn shadows), next to the plain-tube
 //! baseline timed in the same run; then the same patch at rest and stretched 30 % along its
-//! wales with the yarns moved by the knot solver ([H25], `yarn::knit::knot`), side by side.
-//! Writes `knit/knit.png`, `knit/knit-stretch.png` and `knit/knit.json` (what the report
+//! wales with the yarns moved by the knot solver ([H25], `yarn::knit::knot`), side by side;
+//! then the rest patch by the fibers and by [H25]'s yarn strips (`yarn_render::strips`,
+//! textures baked once into `knit/bake-cache`), each timed. Writes `knit/knit.png`,
+//! `knit/knit-stretch.png`, `knit/knit-strips.png` and `knit/knit.json` (what the report
 //! shows); no equation lives here.
 
 use anyhow::Result;
@@ -111,8 +113,48 @@ pub fn run(out: &Path, width: u32) -> Result<()> {
         &dir.join("knit-stretch.png"),
         &btf_image::compose::captioned_strip(&pairs, 6),
     )?;
+    // Fibers against yarn strips on the rest patch, each timed (best of two frames).
+    let t = Instant::now();
+    let bakes = yarn_render::strips::bakes_for(
+        &set,
+        std::slice::from_ref(&params),
+        &bcsdf,
+        &yarn_precompute::StripBakeSettings { spp: 4, ..Default::default() },
+        Some(&dir.join("bake-cache")),
+        &|_| {},
+    )?;
+    let bake_s = if bakes[0].from_cache { bakes[0].seconds } else { t.elapsed().as_secs_f64() };
+    let mut strips = yarn_render::StripRenderer::new(
+        &gpu,
+        &packed,
+        &bakes,
+        &bcsdf,
+        yarn_render::StripSettings::default(),
+    )?;
+    strips.set_ambient(effects.ambient);
+    let simg = strips.render(&gpu, &cam, &lights, size, [0.02, 0.02, 0.025, 1.0])?;
+    let mut ts = f64::INFINITY;
+    for _ in 0..2 {
+        let t = Instant::now();
+        strips.render(&gpu, &cam, &lights, size, [0.0; 4])?;
+        ts = ts.min(t.elapsed().as_secs_f64());
+    }
+    let to_img = |im: &yarn_render::FiberImage| {
+        let rgb: Vec<f32> = im.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+        btf_image::write::to_srgb_image(size.0 as usize, size.1 as usize, &rgb, 1.0)
+    };
+    let (fi, si) = (to_img(&img), to_img(&simg));
+    let fl = format!("fibers (Wu & Yuksel), {:.0} ms", tf * 1e3);
+    let sl = format!("yarn strips (Huang et al.), {:.0} ms", ts * 1e3);
+    btf_image::write::write_png(
+        &dir.join("knit-strips.png"),
+        &btf_image::compose::captioned_strip(&[(&fi, fl.as_str()), (&si, sl.as_str())], 6),
+    )?;
     let st = img.stats;
     let j = serde_json::json!({
+        "strips_png": "knit/knit-strips.png",
+        "strips_ms": ts * 1e3,
+        "strips_bake_s": bake_s,
         "stretch_png": "knit/knit-stretch.png",
         "stretch": stretch,
         "knot_faces": model.knot_faces(),

@@ -150,6 +150,8 @@ struct KnitDemo {
     tubes_ms: f64,
     /// The knot-solver panel: image, strain, faces, solve ms, clearance / 2r.
     stretch: Option<(String, f64, u64, f64, f64)>,
+    /// The strips panel: image, strips ms, bake seconds.
+    strips: Option<(String, f64, f64)>,
 }
 
 fn knit_json(out: &Path) -> Option<KnitDemo> {
@@ -171,6 +173,13 @@ fn knit_json(out: &Path) -> Option<KnitDemo> {
                 j.get("knot_faces")?.as_u64()?,
                 j.get("knot_solve_ms")?.as_f64()?,
                 j.get("stretch_clearance")?.as_f64()?,
+            ))
+        })(),
+        strips: (|| {
+            Some((
+                j.get("strips_png")?.as_str()?.to_owned(),
+                j.get("strips_ms")?.as_f64()?,
+                j.get("strips_bake_s")?.as_f64()?,
             ))
         })(),
     })
@@ -317,6 +326,18 @@ pub fn write(
                 caption:
                     "The same patch at rest and stretched; the loops lengthen with the fabric."
                         .into(),
+            });
+        }
+        if let Some((png, ms, bake)) = &k.strips {
+            page.push(Block::Para(format!(
+                "The same yarns drawn a second way: as flat ribbons facing the camera, painted with what the individual fibers look like (Huang et al. 2025) — the fibers' coverage, direction, shadowing and inner light bouncing, computed once in {:.0} s from a single yarn traced fiber by fiber. A frame took {:.0} ms against {:.0} ms for the fibers; `btf knit sweep --strips` measures what each costs in accuracy.",
+                bake,
+                ms,
+                k.fibers_ms
+            )));
+            page.push(Block::Figure {
+                src: png.clone(),
+                caption: "Fibers generated on the GPU (left) and fiber-textured yarn strips (right), same yarns, camera and lights.".into(),
             });
         }
     }

@@ -74,6 +74,9 @@ fn demo_runs_end_to_end_and_resumes() {
     assert!(
         out.join("knit/knit-stretch.png").is_file() && report.contains("knit/knit-stretch.png")
     );
+    // The yarn strips' panel, timed, with its bake.
+    assert!(k["strips_ms"].as_f64().unwrap() > 0.0 && k["strips_bake_s"].as_f64().unwrap() > 0.0);
+    assert!(out.join("knit/knit-strips.png").is_file() && report.contains("knit/knit-strips.png"));
     let details = std::fs::read_to_string(out.join("details.md")).unwrap();
     assert!(report.contains("(details.html)") && details.contains("| synthesise material |"));
     let gpu_required = std::env::var("BTF_REQUIRE_GPU").is_ok_and(|v| v == "1");

@@ -206,6 +206,48 @@ fn knit_sweep_strips_cells_are_scored_and_timed_against_the_fibers() {
     assert!(img.iter().all(|x| x.is_finite()) && img.iter().any(|&x| x > 0.0));
 }
 
+/// `btf knit strips`: one bake per grid point, each with a finite residual in [0, 1) where
+/// the yarn covers texels, its time and its picture; bad sizes are refused by name.
+#[test]
+fn knit_strips_bakes_the_grid_with_residuals_and_pictures() {
+    let d = Dir::new();
+    let out = d.ok(&[
+        "knit",
+        "strips",
+        "--spp",
+        "2",
+        "--directions",
+        "2",
+        "--texels",
+        "8x4",
+        "--tangents",
+        "1,2",
+        "-o",
+        "bk",
+    ]);
+    assert!(out.contains("Yarn-strip bakes"), "{out}");
+    let csv = std::fs::read_to_string(d.path("bk/bake.csv")).unwrap();
+    let r = rows(&csv);
+    assert_eq!(r.len(), 2, "{csv}");
+    for (row, k) in r.iter().zip(["1", "2"]) {
+        assert_eq!(row["tangents"], k, "{csv}");
+        let res: f64 = row["mean_residual"].parse().unwrap();
+        assert!(res.is_finite() && (0.0..1.5).contains(&res), "{csv}");
+        let s: f64 = row["seconds"].parse().unwrap();
+        assert!(s > 0.0, "{csv}");
+        // 8 × 4 texels × (2 + 3K + 8·2) floats + the ambient table, 4 bytes each.
+        let k: usize = k.parse().unwrap();
+        let bytes: usize = row["gpu_bytes"].parse().unwrap();
+        assert_eq!(bytes, 4 * (32 * (2 + 3 * k + 16) + 3 * 64), "{csv}");
+        let png = std::fs::read(d.path(&format!("bk/bake-spp2-d2-8x4-k{k}.png"))).unwrap();
+        assert_eq!(&png[1..4], b"PNG");
+    }
+    let e = d.fails(&["knit", "strips", "--texels", "8by4", "-o", "bk2"]);
+    assert!(e.contains("--texels 8by4"), "{e}");
+    let e = d.fails(&["knit", "strips", "--directions", "1", "-o", "bk2"]);
+    assert!(e.contains("directions"), "{e}");
+}
+
 #[test]
 fn knit_gpu_refusals_name_the_flag() {
     let d = Dir::new();
@@ -233,7 +275,8 @@ fn knit_gpu_refusals_name_the_flag() {
 /// `btf knit compare` (DESIGN §4.2's headline study) on a tiny garment: a 5 × 5 yarn BTF at
 /// 8², 8 wales on the drape, one 64² camera. Every representation has its row with finite
 /// errors, the plain texture is its own time unit, the BTF made by the reference keeps the
-/// reference's mean radiance on the garment, and one bounce is darker than eight.
+/// reference's mean radiance on the garment, and one bounce is darker than eight; the yarn
+/// strips (R2) have their row and their bake is cached.
 #[test]
 fn knit_compare_scores_every_representation_against_the_reference() {
     let d = Dir::new();
@@ -276,6 +319,8 @@ fn knit_compare_scores_every_representation_against_the_reference() {
         "2",
         "--repeat",
         "1",
+        "--bake-spp",
+        "1",
         "-o",
         "cmp",
     ];
@@ -288,7 +333,7 @@ fn knit_compare_scores_every_representation_against_the_reference() {
         .map(|l| l.split(',').map(|s| s.trim_matches('"').to_owned()).collect())
         .collect();
     let reprs: Vec<&str> = rows.iter().map(|r| r[1].as_str()).collect();
-    assert_eq!(reprs, ["R1", "R1", "R5", "R4", "R5"], "{csv}");
+    assert_eq!(reprs, ["R1", "R1", "R5", "R2", "R4", "R5"], "{csv}");
     let num = |r: &Vec<String>, k: usize| r[k].parse::<f64>().unwrap();
     for r in &rows {
         // interior, band, stitch scale, mean ratio, ꟻLIP interior and band against R0;
@@ -309,6 +354,7 @@ fn knit_compare_scores_every_representation_against_the_reference() {
     let btf = rows.iter().find(|r| r[2].starts_with("BTF")).unwrap();
     let ratio = num(btf, 6);
     assert!((0.6..1.6).contains(&ratio), "BTF mean radiance / reference {ratio}");
+    assert!(d.path("cmp/bake-cache").is_dir(), "the strips' bake is cached");
     for f in ["report.md", "pareto.png", "sheet-6px.png", "images/R0-6px.exr", "garment.obj"] {
         assert!(d.path("cmp").join(f).is_file(), "{f}");
     }

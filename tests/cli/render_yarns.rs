@@ -105,6 +105,67 @@ fn the_knit_swatch_example_renders_its_yarns_as_the_standalone_fiber_renderer_do
     assert!(changed <= yarn.len() && changed * 10 >= yarn.len() * 9, "{changed}");
 }
 
+/// The same swatch with `method = "strips"`: the yarn strips are drawn (the yarn region
+/// differs from the floor alone), and an environment light reaches them through its SRBF
+/// fit (adding a sky brightens the yarn region; rotating it changes it).
+#[test]
+fn the_knit_swatch_renders_as_yarn_strips_lit_by_lights_and_an_environment() {
+    let d = Dir::new();
+    example(&d);
+    let text = std::fs::read_to_string(d.path("knit-swatch.toml")).unwrap();
+    let strips = text.replacen("method = \"fibers\"", "method = \"strips\"", 1);
+    assert_ne!(strips, text);
+    std::fs::write(d.path("strips.toml"), &strips).unwrap();
+    d.ok(&["synth", "env", "--kind", "sky", "--width", "64", "-o", "sky.exr"]);
+    let env = |rot: f64| {
+        format!(
+            "{strips}\n[[lights]]\nkind = \"environment\"\npath = \"sky.exr\"\nexposure = 2e-3\nrotation_deg = {rot}\nvisibility_res = 4\n"
+        )
+    };
+    std::fs::write(d.path("strips-env.toml"), env(0.0)).unwrap();
+    std::fs::write(d.path("strips-env-rot.toml"), env(120.0)).unwrap();
+    let no_yarns = text.split("[[yarns]]").next().unwrap().to_string()
+        + &text[text.find("[camera]").unwrap()..];
+    std::fs::write(d.path("floor.toml"), no_yarns).unwrap();
+    let size = "48";
+    let render = |scene: &str, exr: &str| -> Option<Vec<f32>> {
+        let o = d.btf(&[
+            "render",
+            scene,
+            "--width",
+            size,
+            "--height",
+            size,
+            "-o",
+            &format!("{exr}.png"),
+            "--exr",
+            exr,
+        ]);
+        if String::from_utf8_lossy(&o.stderr).contains("no GPU adapter") {
+            assert!(std::env::var("BTF_REQUIRE_GPU").as_deref() != Ok("1"), "no GPU adapter");
+            return None;
+        }
+        assert!(o.status.success(), "{scene}: {}", String::from_utf8_lossy(&o.stderr));
+        Some(read_exr(&d.path(exr)).2)
+    };
+    let Some(floor) = render("floor.toml", "floor.exr") else { return };
+    let lit = render("strips.toml", "strips.exr").unwrap();
+    let env0 = render("strips-env.toml", "env0.exr").unwrap();
+    let env1 = render("strips-env-rot.toml", "env1.exr").unwrap();
+    let n = 48 * 48;
+    let yarn: Vec<usize> = (0..n)
+        .filter(|&i| (0..3).any(|c| (lit[3 * i + c] - floor[3 * i + c]).abs() > 1e-3))
+        .collect();
+    assert!(yarn.len() > n / 10, "the strips cover part of the frame: {}", yarn.len());
+    let sum = |img: &[f32]| {
+        yarn.iter().map(|&i| (0..3).map(|c| img[3 * i + c] as f64).sum::<f64>()).sum::<f64>()
+    };
+    let (s_lit, s0, s1) = (sum(&lit), sum(&env0), sum(&env1));
+    eprintln!("yarn region: directional {s_lit:.3}, + sky {s0:.3}, + sky rotated 120° {s1:.3}");
+    assert!(s0 > 1.01 * s_lit, "the sky adds light to the strips: {s0} vs {s_lit}");
+    assert!((s1 - s0).abs() > 1e-3 * s0, "rotating the sky changes the strips: {s1} vs {s0}");
+}
+
 #[test]
 fn bad_yarns_entries_are_refused_by_the_binary_naming_the_key() {
     let d = Dir::new();

@@ -3,7 +3,9 @@
 //! [W19 eq. 5–6]) — or, with `method = "strips"`, by the yarn strips of [H25] (textures
 //! baked once per yarn and colour, cached with the fiber bakes) — into btf-render's own
 //! colour and depth targets, after its BTF pass, with its camera matrix and the scene's
-//! lights.
+//! lights. With `method = "strips"` the environment is not the ambient term but its fit by
+//! 16 SRBFs with the `I_M` table ([H25 eq. 14–17], `yarn_precompute::srbf`), fitted once per
+//! map and rotated about `+z` with the environment; each SRBF has a strip shadow map.
 //!
 //! **How the two renderers meet — choice (a), drawing into shared targets.** btf-render
 //! keeps its depth buffer when an overlay is present and hands the overlay its colour
@@ -110,7 +112,14 @@ pub enum YarnDrawer {
 /// The yarn renderers of a scene's `[[yarns]]`, drawn after its BTF pass.
 pub struct YarnOverlay {
     renderers: Vec<YarnDrawer>,
+    bcsdf: FiberBcsdf,
+    /// The strips' environment: the map it was fitted to (path, revision), its SRBF fit
+    /// and I_M table, refitted when the map changes.
+    srbf: Option<(std::path::PathBuf, u64, yarn_precompute::SrbfFit, yarn_precompute::ImTable)>,
 }
+
+/// SRBFs of the strips' environment fit in scenes ([H25 §6]: 16).
+pub const SCENE_SRBFS: usize = 16;
 
 impl YarnOverlay {
     /// Uploads `yarns` (built by [`super::build`] from `scene`) and compiles their passes;
@@ -156,7 +165,44 @@ impl YarnOverlay {
                 )?))
             })
             .collect::<Result<_>>()?;
-        Ok(YarnOverlay { renderers })
+        Ok(YarnOverlay { renderers, bcsdf, srbf: None })
+    }
+
+    /// The strips' SRBF environment for this frame: fitted once per map (path and
+    /// revision), rotated about `+z` and scaled by the exposure per frame.
+    fn strip_environment(
+        &mut self,
+        view: &OverlayView<'_>,
+    ) -> Result<Option<(yarn_precompute::SrbfFit, &yarn_precompute::ImTable)>> {
+        let (Some(oe), Some(desc)) = (
+            view.environment,
+            view.scene.lights.iter().find_map(|l| match l {
+                Light::Environment(e) => Some(e),
+                _ => None,
+            }),
+        ) else {
+            return Ok(None);
+        };
+        let fresh =
+            !matches!(&self.srbf, Some((p, r, _, _)) if *p == desc.path && *r == oe.revision);
+        if fresh {
+            let map = btf_image::EnvMap::load(&desc.path).map_err(|e| {
+                crate::Error::Invalid(format!(
+                    "[[yarns]] strips: environment {}: {e}",
+                    desc.path.display()
+                ))
+            })?;
+            let fit = yarn_precompute::SrbfFit::fit(&map, SCENE_SRBFS)
+                .map_err(|e| crate::Error::Invalid(format!("[[yarns]] strips: SRBF fit: {e}")))?;
+            let table = yarn_precompute::ImTable::build(&self.bcsdf, fit.lambda)
+                .map_err(|e| crate::Error::Invalid(format!("[[yarns]] strips: I_M table: {e}")))?;
+            self.srbf = Some((desc.path.clone(), oe.revision, fit, table));
+        }
+        let Some((_, _, fit, table)) = &self.srbf else { return Ok(None) };
+        let mut f = fit.rotated_z(oe.rotation_deg);
+        let x = oe.exposure as f64;
+        f.weights.iter_mut().for_each(|w| *w = w.map(|v| v * x));
+        Ok(Some((f, table)))
     }
 
     /// The renderers, in `[[yarns]]` order.
@@ -190,6 +236,12 @@ impl Overlay for YarnOverlay {
         let cam = fiber_camera(view.camera);
         let lights = fiber_lights(&view.scene.lights);
         let ambient = ambient(view.environment);
+        let has_strips = self.renderers.iter().any(|r| matches!(r, YarnDrawer::Strips(_)));
+        let env = if has_strips {
+            self.strip_environment(view).map_err(to_render)?.map(|(f, t)| (f, t.clone()))
+        } else {
+            None
+        };
         for r in &mut self.renderers {
             let t = (targets.color, targets.resolve, targets.depth);
             match r {
@@ -198,8 +250,9 @@ impl Overlay for YarnOverlay {
                     r.encode_into(gpu, encoder, t, targets.size, &cam, &lights)
                 }
                 YarnDrawer::Strips(r) => {
-                    r.set_ambient(ambient);
-                    r.encode_into(gpu, encoder, t, targets.size, &cam, &lights)
+                    // The environment through SRBFs ([H25 eq. 17]), not the ambient term.
+                    r.set_environment(gpu, env.as_ref().map(|(f, t)| (f, t)))
+                        .and_then(|_| r.encode_into(gpu, encoder, t, targets.size, &cam, &lights))
                 }
             }
             .map_err(to_render)?;
