@@ -10,6 +10,17 @@ use btf_render::{Gpu, RenderOptions, Renderer, Scene};
 use std::path::{Path, PathBuf};
 use yarn_render::scene::{SceneYarn, YarnOverlay, bounds_f32};
 
+/// Where `btf render` and `btf view` cache the yarns' bakes (fiber effects, strip textures):
+/// `$BTF_YARN_CACHE`, else `btf-yarn-cache` in the system's temporary folder. The files are
+/// named by a hash of everything they depend on and checked on load, so the folder can be
+/// shared and deleted at any time.
+pub fn default_cache() -> PathBuf {
+    match std::env::var_os("BTF_YARN_CACHE") {
+        Some(p) if !p.is_empty() => PathBuf::from(p),
+        _ => std::env::temp_dir().join("btf-yarn-cache"),
+    }
+}
+
 /// A scene's yarns, built.
 pub struct SceneYarns {
     yarns: Vec<SceneYarn>,

@@ -58,7 +58,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
         crate::guard::check_file(exr, btf_core::fs::EXR)?;
     }
     crate::guard::check_file(&args.output, btf_core::fs::PNG)?;
-    let yarns = crate::scene_yarns::SceneYarns::build(&scene, &args.scene.scene, None)?;
+    let yarns = crate::scene_yarns::SceneYarns::build(
+        &scene,
+        &args.scene.scene,
+        Some(crate::scene_yarns::default_cache()),
+    )?;
     let gpu = Gpu::new().context("creating a headless GPU device")?;
     let baseline = match args.baseline.as_deref() {
         None => None,

@@ -173,11 +173,15 @@ impl Viewer {
         auto_exposure: bool,
     ) -> Viewer {
         let mut errors = Vec::new();
-        let yarns =
-            crate::scene_yarns::SceneYarns::build(&scene, scene_path, None).unwrap_or_else(|e| {
-                errors.push(format!("{e:#}"));
-                crate::scene_yarns::SceneYarns::none()
-            });
+        let yarns = crate::scene_yarns::SceneYarns::build(
+            &scene,
+            scene_path,
+            Some(crate::scene_yarns::default_cache()),
+        )
+        .unwrap_or_else(|e| {
+            errors.push(format!("{e:#}"));
+            crate::scene_yarns::SceneYarns::none()
+        });
         let mut v = Viewer {
             orbit: Orbit::new(&scene.camera),
             lights: scene.lights.clone(),

@@ -124,8 +124,9 @@ fn the_knit_swatch_renders_as_yarn_strips_lit_by_lights_and_an_environment() {
     };
     std::fs::write(d.path("strips-env.toml"), env(0.0)).unwrap();
     std::fs::write(d.path("strips-env-rot.toml"), env(120.0)).unwrap();
-    let no_yarns = text.split("[[yarns]]").next().unwrap().to_string()
-        + &text[text.find("[camera]").unwrap()..];
+    let no_yarns = text[..text.find("\n[[yarns]]").unwrap()].to_string()
+        + "\n"
+        + &text[text.find("\n[camera]").unwrap()..];
     std::fs::write(d.path("floor.toml"), no_yarns).unwrap();
     let size = "48";
     let render = |scene: &str, exr: &str| -> Option<Vec<f32>> {

@@ -75,6 +75,9 @@ pub struct StripSettings {
     pub shadow_map: u32,
     /// Constant ambient radiance (linear RGB).
     pub ambient: [f32; 3],
+    /// Strips narrower than this (pixels) are widened to it with their coverage as a
+    /// fraction of the samples (as the fiber renderer's `min_strip_px`).
+    pub min_strip_px: f32,
 }
 
 impl Default for StripSettings {
@@ -90,6 +93,7 @@ impl Default for StripSettings {
             light_angle_deg: 0.5,
             shadow_map: 1024,
             ambient: [0.0; 3],
+            min_strip_px: 1.0,
         }
     }
 }
@@ -202,6 +206,9 @@ impl StripRenderer {
                 "strips: shadow_map {} (16..=8192)",
                 settings.shadow_map
             )));
+        }
+        if !(settings.min_strip_px.is_finite() && settings.min_strip_px >= 0.0) {
+            return Err(Error::Invalid(format!("strips: min_strip_px {}", settings.min_strip_px)));
         }
         if !(settings.light_angle_deg.is_finite()
             && (0.0..45.0).contains(&settings.light_angle_deg))
@@ -454,7 +461,7 @@ impl StripRenderer {
             planes: setup.planes().map(|p| p.map(|x| x as f32)),
             lod: [0, s.n_sub, flags, 0],
             counts: [lights.len() as u32, self.lobe_count, self.data.segment_count, 0],
-            strip: [0.0, s.msaa as f32, 0.0, 0.0],
+            strip: [s.min_strip_px, s.msaa as f32, 0.0, 0.0],
             lights: lights_raw(lights, self.origin)?,
             ambient: [s.ambient[0], s.ambient[1], s.ambient[2], 0.0],
         })

@@ -51,8 +51,10 @@ struct StripOut {
     @location(1) tangent: vec3<f32>,
     @location(2) normal: vec3<f32>,
     @location(3) color: vec3<f32>,
-    // v across in [−1, 1], ply turns z/α_ply (unwrapped), unused ×2.
-    @location(4) uv: vec4<f32>,
+    // v across in [−widen, widen], ply turns z/α_ply (unwrapped), widen (≥ 1), unused.
+    // Centroid: a thin strip must read its texture inside the covered samples, not at a
+    // pixel centre outside it (where v would clamp to the empty border texels).
+    @location(4) @interpolate(perspective, centroid) uv: vec4<f32>,
     // Identity hash, params id.
     @location(5) @interpolate(flat) ids: vec4<u32>,
 }
@@ -69,13 +71,20 @@ fn vs_strip(@builtin(vertex_index) vi: u32, @builtin(instance_index) seg: u32) -
     let h = headers[c.ids.x];
     let e = view_dir(yp.pos);
     let across = normalize_or(cross(yp.t, e), any_perpendicular(yp.t));
+    // A strip narrower than the minimum width (px) is widened to it and keeps its coverage
+    // fraction of the samples (as fiber_draw's strips): `widen` ≥ 1 scales v.
+    let px = pixels_of(view, 2.0 * h.f.x, yp.pos);
+    var widen = 1.0;
+    if px < view.strip.x && px > 0.0 {
+        widen = view.strip.x / px;
+    }
     var out: StripOut;
-    out.clip = view.view_proj * vec4<f32>(yp.pos + across * (h.f.x * side), 1.0);
+    out.clip = view.view_proj * vec4<f32>(yp.pos + across * (h.f.x * widen * side), 1.0);
     out.centre = yp.pos;
     out.tangent = yp.t;
     out.normal = yp.n;
     out.color = select(s.color[0].rgb, s.color[1].rgb, t >= 0.5);
-    out.uv = vec4<f32>(side, s.phase.x + yp.dz / c.pitch.x, 0.0, 0.0);
+    out.uv = vec4<f32>(side * widen, s.phase.x + yp.dz / c.pitch.x, widen, 0.0);
     out.ids = vec4<u32>(pcg(seg), c.ids.x, 0u, 0u);
     return out;
 }
@@ -243,7 +252,8 @@ fn fs_strip(in: StripOut) -> FragmentOut {
     let w = cross(tt, e);
     let psi_e = atan2(dot(e, bb), dot(e, nn));
     let u = in.uv.y - psi_e / TAU;
-    let v = in.uv.x;
+    let widen = max(in.uv.z, 1.0);
+    let v = in.uv.x / widen;
     let taps = texel_at(h, u, v);
     let d = h.dims.z;
     let kt = h.dims.w;
@@ -338,7 +348,7 @@ fn fs_strip(in: StripOut) -> FragmentOut {
     }
     var out: FragmentOut;
     out.color = vec4<f32>(l, 1.0);
-    out.mask = coverage_mask(alpha, in.ids.x ^ pcg(u32(in.clip.x) * 7919u + u32(in.clip.y)),
+    out.mask = coverage_mask(alpha / widen, in.ids.x ^ pcg(u32(in.clip.x) * 7919u + u32(in.clip.y)),
         vec2<u32>(in.clip.xy));
     return out;
 }

@@ -193,3 +193,53 @@ fn white_furnace_through_srbfs_and_the_strip_shader() {
     }
     assert!(worst < 0.02, "white furnace off by {worst}");
 }
+
+#[test]
+fn sub_pixel_strips_keep_their_coverage() {
+    let Some(gpu) = Gpu::for_tests("sub_pixel_strips_keep_their_coverage") else { return };
+    let p = cotton();
+    let bcsdf = FiberBcsdf::khungurn(&KhungurnParams::default()).unwrap();
+    let s = StripBakeSettings { spp: 4, directions: 2, ..StripBakeSettings::small() };
+    let bake = StripBake::bake(&p, &bcsdf, COLOR, &s, &|_| {}).unwrap();
+    let rows = 1024u32;
+    let light = [FiberLight::Directional { to_light: [1.0, 0.3, 0.2], irradiance: [1.0; 3] }];
+    // A straight yarn filling a 1024-row frame, at 4, 1, 0.5 and 0.25 pixels per strip
+    // width (the yarn's length chosen for it): the covered width per metre must agree.
+    let mut widths = Vec::new();
+    for px_per_strip in [4.0, 1.0, 0.5, 0.25] {
+        let length = 2.0 * bake.half_width * rows as f64 / px_per_strip;
+        let n = ((length / 2e-3).ceil() as usize).max(8);
+        let pts: Vec<[f64; 3]> =
+            (0..=n).map(|i| [0.0, 0.0, length * i as f64 / n as f64]).collect();
+        let curve =
+            YarnCurve::open(pts).unwrap().with_normals(vec![[1.0, 0.0, 0.0]; n + 1]).unwrap();
+        let set = YarnSet::new(vec![curve.with_color(COLOR)], None).unwrap();
+        let packed = PackedYarns::new(
+            &set,
+            std::slice::from_ref(&p),
+            &PackOptions { seed: 1, frame_samples_per_segment: 16, tiles: [1, 1] },
+        )
+        .unwrap();
+        let r = StripRenderer::new(
+            &gpu,
+            &packed,
+            std::slice::from_ref(&bake),
+            &bcsdf,
+            StripSettings::default(),
+        )
+        .unwrap();
+        let cam = FiberCamera::orthographic(
+            [1.0, 0.0, 0.5 * length],
+            [0.0, 0.0, 0.5 * length],
+            [0.0, 0.0, 1.0],
+            length,
+        );
+        let img = r.render(&gpu, &cam, &light, (16, rows), [0.0; 4]).unwrap();
+        let px = length / rows as f64;
+        widths.push(img.pixels.iter().map(|q| q[3] as f64).sum::<f64>() * px * px / length);
+    }
+    eprintln!("covered width per metre of yarn at 4, 1, 0.5, 0.25 px per strip: {widths:?}");
+    for w in &widths[1..] {
+        assert!((w / widths[0] - 1.0).abs() < 0.15, "{widths:?}");
+    }
+}
