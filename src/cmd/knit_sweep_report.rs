@@ -175,13 +175,14 @@ pub(crate) fn markdown(
     }
     if cells.iter().any(|c| c.strips.is_some()) {
         s.push_str("\nYarn strips [H25] (`--strips`): baked textures of a straight yarn of this one, at the variant's settings; bake seconds (as baked, also when read from DIR/bake-cache): ");
+        let mut seen: Vec<&str> = Vec::new();
         let mut bakes: Vec<String> = Vec::new();
         for c in cells {
-            if let Some(v) = &c.strips {
-                let b = format!("{v} {:.1} s", c.bake_s);
-                if !bakes.contains(&b) {
-                    bakes.push(b);
-                }
+            if let Some(v) = &c.strips
+                && !seen.contains(&v.as_str())
+            {
+                seen.push(v);
+                bakes.push(format!("{v} {:.1} s", c.bake_s));
             }
         }
         let _ = writeln!(
