@@ -9,8 +9,8 @@
 //! - **R1** [W19]'s fibers on the GPU (`yarn-render`) at full detail and at
 //!   ω^LoD ∈ `--lod` ([W19 eq. 4]);
 //! - **R2** [H25]'s yarn strips (`yarn_render::strips`, textures baked once from a
-//!   straight yarn of the same parameters and cached in `DIR/bake-cache`; no flyaway
-//!   overlay yet, so hair flyaways are missing from them);
+//!   straight yarn of the same parameters and cached in `DIR/bake-cache`; with the flyaway
+//!   overlay when the BTF's yarn has hair flyaways);
 //! - **R4** the BTF on the garment: the yarn BTF made by the reference
 //!   (`btf synth material --kind yarn`), compressed per view ([S03]'s PCA) to each
 //!   `--components`, rendered by `btf-render` per pixel with four-light/four-view blending
@@ -531,6 +531,11 @@ fn study(
         Some(&a.output.join("bake-cache")),
         &|_| {},
     )?;
+    let flyaways = if src.hairs {
+        yarn_render::strips::flyaways_for(std::slice::from_ref(&src.params), src.seed)?
+    } else {
+        Vec::new()
+    };
     let strip_prep = if bakes[0].from_cache { bakes[0].seconds } else { t.elapsed().as_secs_f64() };
     let bar = crate::progress::bar((n_cells * (1 + a.repeat as usize)) as u64, "GPU cells");
     for (ci, cam) in cams.iter().enumerate() {
@@ -560,13 +565,17 @@ fn study(
         }
         {
             let t = Instant::now();
-            let r = yarn_render::StripRenderer::new(
+            let mut r = yarn_render::StripRenderer::new(
                 gpu,
                 &packed,
                 &bakes,
                 &src.bcsdf,
                 yarn_render::StripSettings::default(),
             )?;
+            // The flyaway overlay when the reference has hair flyaways.
+            if src.hairs {
+                r.set_flyaways(gpu, &flyaways)?;
+            }
             let prep = t.elapsed().as_secs_f64() + strip_prep;
             let img = r.render(gpu, &fcam, &fiber_lights, (w, h), [0.0; 4])?;
             let rgb: Vec<f32> = img.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();

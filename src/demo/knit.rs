@@ -132,6 +132,8 @@ pub fn run(out: &Path, width: u32) -> Result<()> {
         yarn_render::StripSettings::default(),
     )?;
     strips.set_ambient(effects.ambient);
+    let fly = yarn_render::strips::flyaways_for(std::slice::from_ref(&params), 1)?;
+    strips.set_flyaways(&gpu, &fly)?;
     let simg = strips.render(&gpu, &cam, &lights, size, [0.02, 0.02, 0.025, 1.0])?;
     let mut ts = f64::INFINITY;
     for _ in 0..2 {

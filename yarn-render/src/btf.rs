@@ -156,7 +156,12 @@ pub fn generate_strip_btf(
         cache_dir,
         &|_| {},
     )?;
-    let renderer = StripRenderer::new(gpu, &packed, &bakes, &bcsdf, settings)?;
+    let mut renderer = StripRenderer::new(gpu, &packed, &bakes, &bcsdf, settings)?;
+    // The reference's patch has hair flyaways when the spec asks: the overlay draws them.
+    if spec.hairs {
+        let fly = crate::strips::flyaways_for(std::slice::from_ref(&spec.params), spec.seed)?;
+        renderer.set_flyaways(gpu, &fly)?;
+    }
     let mut meta = BtfMeta::new(sampling.clone(), sampling.clone(), spec.size, spec.size);
     let s = &settings;
     meta.provenance = json!({
@@ -176,6 +181,7 @@ pub fn generate_strip_btf(
         "settings": {
             "msaa": s.msaa, "textures": s.textures, "xi": s.xi, "psi": s.psi,
             "shadows": s.shadows, "light_angle_deg": s.light_angle_deg,
+            "flyaways": spec.hairs && s.flyaways,
         },
         "bake": {
             "texels": [bake.width, bake.height], "directions": bake.directions, "spp": bake.spp,

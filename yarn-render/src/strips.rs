@@ -43,7 +43,7 @@ fn entry(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
 use yarn::bcsdf::FiberBcsdf;
 use yarn::{YarnParams, YarnSet};
 use yarn_precompute::strip_bake::AMBIENT_ENTRIES;
-use yarn_precompute::{StripBake, StripBakeSettings};
+use yarn_precompute::{FlyawayBake, StripBake, StripBakeSettings};
 
 const WGSL: &str = include_str!("shaders/strip_regular.wgsl");
 
@@ -78,6 +78,8 @@ pub struct StripSettings {
     /// Strips narrower than this (pixels) are widened to it with their coverage as a
     /// fraction of the samples (as the fiber renderer's `min_strip_px`).
     pub min_strip_px: f32,
+    /// Draw the flyaway overlay when flyaway textures are set ([`StripRenderer::set_flyaways`]).
+    pub flyaways: bool,
 }
 
 impl Default for StripSettings {
@@ -94,6 +96,7 @@ impl Default for StripSettings {
             shadow_map: 1024,
             ambient: [0.0; 3],
             min_strip_px: 1.0,
+            flyaways: true,
         }
     }
 }
@@ -105,6 +108,7 @@ struct StripHeaderRaw {
     dims: [u32; 4],
     offs: [u32; 4],
     f: [f32; 4],
+    fly: [u32; 4],
 }
 
 /// The most SRBFs of an environment.
@@ -164,10 +168,27 @@ pub fn bakes_for(
         .collect()
 }
 
+/// The flyaway textures of the yarn types `params` ([`yarn_precompute::FlyawayBake`], 64 × 32
+/// texels, 3 textures, 8 rays per texel; a second or so, not cached).
+pub fn flyaways_for(params: &[YarnParams], seed: u64) -> Result<Vec<FlyawayBake>> {
+    params
+        .iter()
+        .map(|p| {
+            FlyawayBake::bake(p, 64, 32, 3, 8, seed)
+                .map_err(|e| Error::Invalid(format!("yarn '{}': flyaway bake: {e}", p.name)))
+        })
+        .collect()
+}
+
 /// The strip renderer of one packed yarn set.
 pub struct StripRenderer {
     data: YarnBuffers,
     pipeline: wgpu::RenderPipeline,
+    pipeline_fly: wgpu::RenderPipeline,
+    headers_cpu: Vec<StripHeaderRaw>,
+    fly: wgpu::Buffer,
+    fly_count: u32,
+    extent: f64,
     layout: wgpu::BindGroupLayout,
     shadow: ShadowPass,
     headers: wgpu::Buffer,
@@ -238,7 +259,8 @@ impl StripRenderer {
             headers.push(StripHeaderRaw {
                 dims: [s.width as u32, s.height as u32, s.directions as u32, s.tangents as u32],
                 offs: [base, base + n_tex as u32, b.texel_stride() as u32, AMBIENT_ENTRIES as u32],
-                f: [b.half_width as f32, 0.0, 0.0, 0.0],
+                f: [b.half_width as f32, b.half_width as f32, 0.0, 0.0],
+                fly: [0; 4],
             });
             texels.extend(t);
         }
@@ -292,15 +314,16 @@ impl StripRenderer {
                 },
                 buf(7, fs, wgpu::BufferBindingType::Uniform),
                 buf(8, fs, ro),
+                buf(9, fs, ro),
             ],
         });
         let src = source();
         let samples = settings.msaa;
-        let pipeline = gpu
-            .scoped("strip_regular pipeline", || {
+        let make = |fly: bool| {
+            gpu.scoped("strip_regular pipeline", || {
                 let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
                     label: Some("strip_regular.wgsl"),
-                    source: wgpu::ShaderSource::Wgsl(src.into()),
+                    source: wgpu::ShaderSource::Wgsl(src.as_str().into()),
                 });
                 let pl = dev.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                     label: Some("strip_regular"),
@@ -324,9 +347,19 @@ impl StripRenderer {
                     depth_stencil: Some(wgpu::DepthStencilState {
                         format: DEPTH,
                         depth_write_enabled: Some(true),
-                        depth_compare: Some(wgpu::CompareFunction::Less),
+                        // The flyaway overlay lies in the regular strips' plane: it passes
+                        // at equal depth and is pulled towards the eye by a few ulps.
+                        depth_compare: Some(if fly {
+                            wgpu::CompareFunction::LessEqual
+                        } else {
+                            wgpu::CompareFunction::Less
+                        }),
                         stencil: Default::default(),
-                        bias: Default::default(),
+                        bias: if fly {
+                            wgpu::DepthBiasState { constant: -4, slope_scale: -1.0, clamp: 0.0 }
+                        } else {
+                            Default::default()
+                        },
                     }),
                     multisample: wgpu::MultisampleState {
                         count: samples,
@@ -347,22 +380,35 @@ impl StripRenderer {
                     cache: None,
                 })
             })
-            .map_err(|e| Error::Gpu(e.to_string()))?;
+            .map_err(|e| Error::Gpu(e.to_string()))
+        };
+        let pipeline = make(false)?;
+        let pipeline_fly = make(true)?;
         let (lo, hi) = packed.bounds;
         let reach = bakes.iter().map(|b| b.half_width).fold(packed.max_reach, f64::max);
-        let (centre, radius) = if packed.segments.is_empty() {
+        let (centre, extent) = if packed.segments.is_empty() {
             ([0.0; 3], 1.0)
         } else {
             let c = [0, 1, 2].map(|a| 0.5 * (lo[a] + hi[a]) - packed.origin[a]);
             let r = (0..3).map(|a| (hi[a] - lo[a]).powi(2)).sum::<f64>().sqrt() * 0.5;
-            (c, r + reach)
+            (c, r)
         };
+        let radius = extent + reach;
         let headers = if headers.is_empty() { vec![StripHeaderRaw::default()] } else { headers };
         if texels.is_empty() {
             texels.push(0.0);
         }
         Ok(StripRenderer {
-            headers: storage("strip headers", bytemuck::cast_slice(&headers)),
+            headers: dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("strip headers"),
+                contents: bytemuck::cast_slice(&headers),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            }),
+            headers_cpu: headers,
+            fly: storage("strip flyaways (none)", bytemuck::cast_slice(&[0.0f32; 4])),
+            fly_count: 0,
+            extent,
+            pipeline_fly,
             texel_bytes: texels.len() as u64 * 4,
             texels: storage("strip texels", bytemuck::cast_slice(&texels)),
             lobes: storage("strip lobes", bytemuck::cast_slice(&lobes)),
@@ -429,6 +475,52 @@ impl StripRenderer {
     /// The settings in use.
     pub fn settings(&self) -> &StripSettings {
         &self.settings
+    }
+
+    /// Sets the flyaway textures, one per yarn type of the packed set (e.g. from
+    /// [`flyaways_for`]; an empty slice removes them): the overlay pass draws them over the
+    /// regular strips when [`StripSettings::flyaways`] is on.
+    pub fn set_flyaways(&mut self, gpu: &Gpu, flyaways: &[FlyawayBake]) -> Result<()> {
+        if !flyaways.is_empty() && flyaways.len() != self.headers_cpu.len() {
+            return Err(Error::Invalid(format!(
+                "strips: {} flyaway bakes for {} yarn types",
+                flyaways.len(),
+                self.headers_cpu.len()
+            )));
+        }
+        let mut data: Vec<f32> = Vec::new();
+        let mut reach: f64 = 0.0;
+        for (k, h) in self.headers_cpu.iter_mut().enumerate() {
+            match flyaways.get(k) {
+                Some(f) => {
+                    h.fly =
+                        [(data.len() / 4) as u32, f.width as u32, f.height as u32, f.count as u32];
+                    h.f[1] = f.half_width as f32;
+                    reach = reach.max(f.half_width);
+                    data.extend(f.gpu_texels());
+                }
+                None => {
+                    h.fly = [0; 4];
+                    h.f[1] = h.f[0];
+                }
+            }
+        }
+        let max = gpu.device.limits().max_storage_buffer_binding_size;
+        if data.len() as u64 * 4 > max {
+            return Err(Error::Limit(format!("flyaway textures of {} bytes", data.len() * 4)));
+        }
+        self.fly_count = flyaways.len() as u32;
+        if data.is_empty() {
+            data.extend([0.0; 4]);
+        }
+        self.fly = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("strip flyaways"),
+            contents: bytemuck::cast_slice(&data),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        gpu.queue.write_buffer(&self.headers, 0, bytemuck::cast_slice(&self.headers_cpu));
+        self.radius = self.radius.max(self.extent + reach);
+        Ok(())
     }
 
     /// Sets the constant ambient radiance of the next frames (non-finite or negative
@@ -570,7 +662,40 @@ impl StripRenderer {
                 },
                 entry(7, &sbuf),
                 entry(8, self.env.as_ref().map_or(&self.no_env, |e| &e.buffer)),
+                entry(9, &self.fly),
             ],
+        });
+        // The flyaway overlay: the same bindings with flag 16 in the view.
+        let fly_group = (self.settings.flyaways && self.fly_count > 0).then(|| {
+            let mut fraw = raw;
+            fraw.lod[2] |= 16;
+            let fbuf = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("strip view (flyaways)"),
+                contents: bytemuck::bytes_of(&fraw),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            dev.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("strip_flyaway"),
+                layout: &self.layout,
+                entries: &[
+                    entry(0, &fbuf),
+                    entry(1, &self.headers),
+                    entry(2, &self.texels),
+                    entry(3, &self.lobes),
+                    entry(4, &self.q_nodes),
+                    wgpu::BindGroupEntry {
+                        binding: 5,
+                        resource: wgpu::BindingResource::TextureView(&maps_view),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 6,
+                        resource: wgpu::BindingResource::Sampler(&self.sampler),
+                    },
+                    entry(7, &sbuf),
+                    entry(8, self.env.as_ref().map_or(&self.no_env, |e| &e.buffer)),
+                    entry(9, &self.fly),
+                ],
+            })
         });
         self.shadow.encode(gpu, enc, &self.data, &maps, &passes);
         let load = |c: Option<[f64; 4]>| match c {
@@ -605,6 +730,11 @@ impl StripRenderer {
         pass.set_bind_group(0, &self.data.bind_group, &[]);
         pass.set_bind_group(1, &group, &[]);
         pass.draw(0..2 * (self.settings.n_sub + 1), 0..self.data.segment_count);
+        if let Some(g) = &fly_group {
+            pass.set_pipeline(&self.pipeline_fly);
+            pass.set_bind_group(1, g, &[]);
+            pass.draw(0..2 * (self.settings.n_sub + 1), 0..self.data.segment_count);
+        }
         Ok(())
     }
 

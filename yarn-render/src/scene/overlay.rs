@@ -150,9 +150,10 @@ impl YarnOverlay {
                         shadows: d.shadows,
                         ..StripSettings::default()
                     };
-                    return Ok(YarnDrawer::Strips(StripRenderer::new(
-                        gpu, &y.packed, &bakes, &bcsdf, s,
-                    )?));
+                    let mut r = StripRenderer::new(gpu, &y.packed, &bakes, &bcsdf, s)?;
+                    let fly = crate::strips::flyaways_for(std::slice::from_ref(&y.params), d.seed)?;
+                    r.set_flyaways(gpu, &fly)?;
+                    return Ok(YarnDrawer::Strips(r));
                 }
                 let bake = yarn_precompute::BakeSettings { seed: d.seed, ..Default::default() };
                 Ok(YarnDrawer::Fibers(FiberRenderer::with_bake(

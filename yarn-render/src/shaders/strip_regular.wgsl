@@ -17,8 +17,11 @@ struct StripHeader {
     // First float of the texels, first float of the ambient table, floats per texel,
     // ambient entries.
     offs: vec4<u32>,
-    // Strip half-width H (metres), unused ×3.
+    // Strip half-width H, flyaway strip half-width H_f (metres), unused ×2.
     f: vec4<f32>,
+    // Flyaway textures (yarn_precompute::FlyawayBake): first float, texels along u, across,
+    // count (0: none).
+    fly: vec4<u32>,
 }
 
 // Maps: the directional lights' (light i) and one per SRBF (light 8 + j).
@@ -44,6 +47,8 @@ struct ShadowViews {
 // The environment (strips.rs set_environment): count, λ, unused ×2; per SRBF its direction
 // (xyz, 0) and weight (rgb, 0); then I_M on 16³ nodes (θ_j, θ_o, Δφ), RGB.
 @group(1) @binding(8) var<storage, read> env: array<f32>;
+// Flyaway texels: per texture, per texel (t_T, t_w, t_e, coverage).
+@group(1) @binding(9) var<storage, read> fly_texels: array<vec4<f32>>;
 
 struct StripOut {
     @builtin(position) clip: vec4<f32>,
@@ -73,13 +78,16 @@ fn vs_strip(@builtin(vertex_index) vi: u32, @builtin(instance_index) seg: u32) -
     let across = normalize_or(cross(yp.t, e), any_perpendicular(yp.t));
     // A strip narrower than the minimum width (px) is widened to it and keeps its coverage
     // fraction of the samples (as fiber_draw's strips): `widen` ≥ 1 scales v.
-    let px = pixels_of(view, 2.0 * h.f.x, yp.pos);
+    // The flyaway overlay (flag 16) draws the same strips H_f wide.
+    let fly = (view.lod.z & 16u) != 0u;
+    let hw = select(h.f.x, h.f.y, fly);
+    let px = pixels_of(view, 2.0 * hw, yp.pos);
     var widen = 1.0;
     if px < view.strip.x && px > 0.0 {
         widen = view.strip.x / px;
     }
     var out: StripOut;
-    out.clip = view.view_proj * vec4<f32>(yp.pos + across * (h.f.x * widen * side), 1.0);
+    out.clip = view.view_proj * vec4<f32>(yp.pos + across * (hw * widen * side), 1.0);
     out.centre = yp.pos;
     out.tangent = yp.t;
     out.normal = yp.n;
@@ -238,9 +246,77 @@ fn ambient_at(h: StripHeader, theta_o: f32) -> vec3<f32> {
     return mix(v0, v1, f);
 }
 
+// The flyaway overlay [H25 §4.4]: texture `ids.x % count` (one per segment), u = the ply
+// turns (view-independent, as [H25]), nearest texel; where a hair was the first fiber seen,
+// the BCSDF at its direction under every light (no Ψ or ξ: hairs stand apart), the strip
+// shadow map, the environment through I_M; elsewhere no sample.
+fn fs_flyaway(in: StripOut, h: StripHeader) -> FragmentOut {
+    var out: FragmentOut;
+    out.color = vec4<f32>(0.0);
+    out.mask = 0u;
+    if h.fly.w == 0u {
+        return out;
+    }
+    let w = h.fly.y;
+    let hh = h.fly.z;
+    let widen = max(in.uv.z, 1.0);
+    let v = in.uv.x / widen;
+    let i = u32((i32(floor(fract(in.uv.y) * f32(w))) % i32(w) + i32(w)) % i32(w));
+    let j = u32(clamp(floor((v + 1.0) * 0.5 * f32(hh)), 0.0, f32(hh - 1u)));
+    let k = in.ids.x % h.fly.w;
+    let tx = fly_texels[h.fly.x + (k * hh + j) * w + i];
+    if tx.w <= 0.0 {
+        return out;
+    }
+    let tt = normalize_or(in.tangent, vec3<f32>(1.0, 0.0, 0.0));
+    let wo = view_dir(in.centre);
+    let nn = normalize_or(in.normal - tt * dot(in.normal, tt), any_perpendicular(tt));
+    let e = normalize_or(wo - tt * dot(wo, tt), nn);
+    let ww = cross(tt, e);
+    let tw = normalize_or(tx.x * tt + tx.y * ww + tx.z * e, tt);
+    let radius = yarn_params[in.ids.y].c.z;
+    var l = vec3<f32>(0.0);
+    for (var li = 0u; li < view.counts.x; li++) {
+        let light = view.lights[li];
+        var wi = light.pos_dir.xyz;
+        var el = light.value.rgb;
+        if light.pos_dir.w != 0.0 {
+            let dl = light.pos_dir.xyz - in.centre;
+            let d2 = max(dot(dl, dl), 1e-20);
+            wi = dl / sqrt(d2);
+            el = el / d2;
+        }
+        l += bcsdf_cos(wi, wo, tw) * el * strip_visibility(li, in.centre, wi, radius);
+    }
+    let n_env = u32(env[0]);
+    if n_env > 0u {
+        let first_im = 4u + 8u * n_env;
+        let ao_ = fiber_angles(wo, tw);
+        for (var jj = 0u; jj < n_env; jj++) {
+            let wj = vec3<f32>(env[4u + 8u * jj], env[5u + 8u * jj], env[6u + 8u * jj]);
+            let weight = vec3<f32>(env[8u + 8u * jj], env[9u + 8u * jj], env[10u + 8u * jj]);
+            let aj = fiber_angles(wj, tw);
+            let im = im_at(first_im, aj.w, ao_.w, acos(clamp(dot(aj.xyz, ao_.xyz), -1.0, 1.0)));
+            l += weight * im * strip_visibility(8u + jj, in.centre, wj, radius);
+        }
+    } else if any(view.ambient.rgb > vec3<f32>(0.0)) {
+        l += view.ambient.rgb * ambient_at(h, asin(clamp(dot(wo, tw), -1.0, 1.0)));
+    }
+    if (view.lod.z & 4u) != 0u {
+        l *= in.color;
+    }
+    out.color = vec4<f32>(l, 1.0);
+    out.mask = coverage_mask(tx.w / widen,
+        in.ids.x ^ 0x9e3779b9u ^ pcg(u32(in.clip.x) * 7919u + u32(in.clip.y)), vec2<u32>(in.clip.xy));
+    return out;
+}
+
 @fragment
 fn fs_strip(in: StripOut) -> FragmentOut {
     let h = headers[in.ids.y];
+    if (view.lod.z & 16u) != 0u {
+        return fs_flyaway(in, h);
+    }
     let flags = view.lod.z;
     let textured = (flags & 8u) != 0u;
     let tt = normalize_or(in.tangent, vec3<f32>(1.0, 0.0, 0.0));

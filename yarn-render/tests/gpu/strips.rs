@@ -243,3 +243,87 @@ fn sub_pixel_strips_keep_their_coverage() {
         assert!((w / widths[0] - 1.0).abs() < 0.15, "{widths:?}");
     }
 }
+
+#[test]
+fn the_flyaway_overlay_adds_the_baked_hair_coverage() {
+    let Some(gpu) = Gpu::for_tests("the_flyaway_overlay_adds_the_baked_hair_coverage") else {
+        return;
+    };
+    let p = cotton();
+    let bcsdf = FiberBcsdf::khungurn(&KhungurnParams::default()).unwrap();
+    let s = StripBakeSettings { spp: 4, directions: 2, ..StripBakeSettings::small() };
+    let bake = StripBake::bake(&p, &bcsdf, COLOR, &s, &|_| {}).unwrap();
+    let fly = yarn_precompute::FlyawayBake::bake(&p, 32, 32, 3, 4, 1).unwrap();
+    // The flyaways' expected covered width (m) beside the regular strip (|v|·H_f > H) and
+    // over it.
+    let (mut out_w, mut in_w) = (0.0, 0.0);
+    for k in 0..fly.count * fly.width * fly.height {
+        let j = (k / fly.width) % fly.height;
+        let v = -1.0 + 2.0 * (j as f64 + 0.5) / fly.height as f64;
+        let w = fly.texels[k][3] as f64 * 2.0 * fly.half_width
+            / fly.height as f64
+            / (fly.count * fly.width) as f64;
+        if v.abs() * fly.half_width > bake.half_width { out_w += w } else { in_w += w }
+    }
+    let rows = 1024u32;
+    let length = 2.0 * fly.half_width * rows as f64 / 6.0; // the flyaway strip 6 px wide
+    let n = ((length / 2e-3).ceil() as usize).max(8);
+    let pts: Vec<[f64; 3]> = (0..=n).map(|i| [0.0, 0.0, length * i as f64 / n as f64]).collect();
+    let curve = YarnCurve::open(pts).unwrap().with_normals(vec![[1.0, 0.0, 0.0]; n + 1]).unwrap();
+    let set = YarnSet::new(vec![curve.with_color(COLOR)], None).unwrap();
+    let packed = PackedYarns::new(
+        &set,
+        std::slice::from_ref(&p),
+        &PackOptions { seed: 1, frame_samples_per_segment: 16, tiles: [1, 1] },
+    )
+    .unwrap();
+    let light = [FiberLight::Directional { to_light: [1.0, 0.3, 0.2], irradiance: [1.0; 3] }];
+    let cam = FiberCamera::orthographic(
+        [1.0, 0.0, 0.5 * length],
+        [0.0, 0.0, 0.5 * length],
+        [0.0, 0.0, 1.0],
+        length,
+    );
+    let px = length / rows as f64;
+    let width = |fl: bool| {
+        let mut r = StripRenderer::new(
+            &gpu,
+            &packed,
+            std::slice::from_ref(&bake),
+            &bcsdf,
+            StripSettings { flyaways: fl, ..Default::default() },
+        )
+        .unwrap();
+        r.set_flyaways(&gpu, std::slice::from_ref(&fly)).unwrap();
+        let img = r.render(&gpu, &cam, &light, (16, rows), [0.0; 4]).unwrap();
+        (img.pixels.iter().map(|q| q[3] as f64).sum::<f64>() * px * px / length, img.pixels)
+    };
+    let ((w0, _), (w1, _)) = (width(false), width(true));
+    eprintln!(
+        "covered width per metre: regular {w0:.4e}, with flyaways {w1:.4e} (+{:.4e}); baked flyaway width beside the strip {out_w:.4e}, over it {in_w:.4e}",
+        w1 - w0
+    );
+    assert!(out_w > 0.0, "the bake has hairs beside the yarn");
+    assert!(w1 > w0 * 1.01, "the overlay adds coverage: {w0} → {w1}");
+    assert!(w1 - w0 >= 0.7 * out_w && w1 - w0 <= 1.3 * (out_w + in_w), "{w0} → {w1}");
+    // No hairs: the overlay draws nothing, bit for bit.
+    let mut bald = p.clone();
+    bald.hair_density = 0.0;
+    let fz = yarn_precompute::FlyawayBake::bake(&bald, 8, 8, 3, 2, 1).unwrap();
+    let pair: Vec<Vec<[f32; 4]>> = [false, true]
+        .iter()
+        .map(|&fl| {
+            let mut r = StripRenderer::new(
+                &gpu,
+                &packed,
+                std::slice::from_ref(&bake),
+                &bcsdf,
+                StripSettings { flyaways: fl, ..Default::default() },
+            )
+            .unwrap();
+            r.set_flyaways(&gpu, std::slice::from_ref(&fz)).unwrap();
+            r.render(&gpu, &cam, &light, (16, 256), [0.0; 4]).unwrap().pixels
+        })
+        .collect();
+    assert!(pair[0] == pair[1], "an empty overlay changed the frame");
+}
