@@ -22,8 +22,14 @@
 //!   fit and `I_M` table of `yarn_precompute::srbf` — per SRBF j its strip shadow map
 //!   (PCSS of angular radius `1/√λ`), `Ψ` and `ξ` read at ω_j, and `I_M` averaged over the
 //!   texel's K tangents; without one, a constant ambient term `ambient · A(θ_o) · AO`;
-//! - the flyaway overlay pass is not built yet (issue #20): hair flyaways are left out of
-//!   the bake.
+//! - the flyaway overlay [H25 §4.4] ([`StripRenderer::set_flyaways`]): a second draw of
+//!   the same strips `H_f` wide with `yarn_precompute::FlyawayBake`'s textures (where a hair
+//!   was the first fiber seen, its direction), one of the textures per segment by a hash,
+//!   u = the ply turns (view-independent, as [H25]), shaded with the BCSDF alone (hairs
+//!   stand apart: no Ψ, no ξ), passing at equal depth and biased towards the eye. [H25]'s
+//!   "adjust the local scattering for the flyaway density" is in the regular bake's ξ,
+//!   which is fitted without hairs (DESIGN §3.3 item 15's choice, inverted: the hairs are
+//!   drawn, not folded in).
 
 use crate::bcsdf;
 use crate::gpu_data::YarnBuffers;
