@@ -146,8 +146,8 @@ pub fn run(out: &Path, width: u32) -> Result<()> {
         btf_image::write::to_srgb_image(size.0 as usize, size.1 as usize, &rgb, 1.0)
     };
     let (fi, si) = (to_img(&img), to_img(&simg));
-    let fl = format!("fibers (Wu & Yuksel), {:.0} ms", tf * 1e3);
-    let sl = format!("yarn strips (Huang et al.), {:.0} ms", ts * 1e3);
+    let fl = format!("fibers {:.0} ms", tf * 1e3);
+    let sl = format!("strips {:.0} ms", ts * 1e3);
     btf_image::write::write_png(
         &dir.join("knit-strips.png"),
         &btf_image::compose::captioned_strip(&[(&fi, fl.as_str()), (&si, sl.as_str())], 6),

@@ -330,7 +330,7 @@ pub fn write(
         }
         if let Some((png, ms, bake)) = &k.strips {
             page.push(Block::Para(format!(
-                "The same yarns drawn a second way: as flat ribbons facing the camera, painted with what the individual fibers look like (Huang et al. 2025) — the fibers' coverage, direction, shadowing and inner light bouncing, computed once in {:.0} s from a single yarn traced fiber by fiber. A frame took {:.0} ms against {:.0} ms for the fibers; `btf knit sweep --strips` measures what each costs in accuracy.",
+                "The same yarns drawn a second way: as flat ribbons facing the camera, painted with what the individual fibers look like (Huang et al. 2025) — the fibers' coverage, direction, shadowing and inner light bouncing, computed once in {:.0} s from a single yarn traced fiber by fiber. A frame took {:.0} ms against {:.0} ms for the fibers (this close, every ribbon pixel is shaded with four fiber directions and the stray hairs are drawn in a second pass; from a distance the ribbons are the cheaper of the two); `btf knit sweep --strips` measures what each costs in accuracy.",
                 bake,
                 ms,
                 k.fibers_ms
