@@ -63,6 +63,11 @@ fn texels(s: &str) -> Result<(usize, usize)> {
     }
 }
 
+/// A CSV cell: the value, or empty when nothing was measured (never `NaN`).
+fn cell(x: f64) -> String {
+    if x.is_finite() { format!("{x:.5}") } else { String::new() }
+}
+
 /// Coverage-weighted quantile `q` of the residual over texels with coverage.
 fn quantile(b: &StripBake, q: f64) -> f64 {
     let mut v: Vec<(f64, f64)> = b
@@ -172,7 +177,7 @@ pub fn run(a: StripsArgs) -> Result<()> {
         let (med, p90) = (quantile(&b, 0.5), quantile(&b, 0.9));
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},{:.3},{:.5},{:.5},{:.5},{:.5},{},{:.6e},{:.6e}",
+            "{},{},{},{},{},{:.3},{:.5},{},{},{:.5},{},{:.6e},{:.6e}",
             s.spp,
             s.directions,
             s.width,
@@ -180,8 +185,8 @@ pub fn run(a: StripsArgs) -> Result<()> {
             s.tangents,
             b.seconds,
             b.mean_residual(),
-            med,
-            p90,
+            cell(med),
+            cell(p90),
             psi,
             b.gpu_bytes(),
             b.half_width,

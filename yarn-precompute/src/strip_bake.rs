@@ -297,13 +297,24 @@ pub fn measure(
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Measured> {
     s.validate()?;
+    let st = setup(params, bcsdf, color, s)?;
+    measure_in(&st, params, s, dirs, progress)
+}
+
+/// [`measure`] on a yarn already set up (fibers generated, BVH built).
+fn measure_in(
+    st: &Setup,
+    params: &YarnParams,
+    s: &StripBakeSettings,
+    dirs: &[(f64, f64)],
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Measured> {
     if dirs.is_empty() || dirs.iter().any(|d| !(d.0.abs() < FRAC_PI_2 && d.1.is_finite())) {
         return Err(Error::Invalid(format!("strip bake: light directions {dirs:?}")));
     }
-    let st = setup(params, bcsdf, color, s)?;
     let lights: Vec<[Light; 1]> =
-        dirs.iter().map(|&d| [Light::directional(light_dir(&st, d), [1.0; 3])]).collect();
-    let wdirs: Vec<V3> = dirs.iter().map(|&d| light_dir(&st, d)).collect();
+        dirs.iter().map(|&d| [Light::directional(light_dir(st, d), [1.0; 3])]).collect();
+    let wdirs: Vec<V3> = dirs.iter().map(|&d| light_dir(st, d)).collect();
     let path = PathSettings { max_bounces: s.bounces, ..PathSettings::default() };
     let (w, h, nd) = (s.width, s.height, dirs.len());
     let nx = (s.spp as f64).sqrt().ceil() as u32;
@@ -536,9 +547,11 @@ impl StripBake {
         progress: &(dyn Fn(u64) + Sync),
     ) -> Result<Self> {
         let t0 = Instant::now();
+        s.validate()?;
         let dirs = s.directions_grid();
-        let m = measure(params, bcsdf, color, s, &dirs, progress)?;
+        // One yarn (fibers and BVH) for the measurement and the model fit.
         let st = setup(params, bcsdf, color, s)?;
+        let m = measure_in(&st, params, s, &dirs, progress)?;
         let d = s.directions;
         let nd = d * d;
         let texels = s.width * s.height;

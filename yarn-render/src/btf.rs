@@ -23,6 +23,7 @@ use btf_render::Gpu;
 use serde_json::json;
 use std::path::Path;
 use std::time::Instant;
+use yarn::bcsdf::FiberBcsdf;
 use yarn_precompute::StripBakeSettings;
 use yarn_ref::btf::{YarnBtfOptions, YarnBtfSpec};
 use yarn_ref::patch::{KnitPatch, PatchOptions};
@@ -49,29 +50,7 @@ pub fn generate_fiber_btf(
     opts: &YarnBtfOptions,
 ) -> Result<FiberBtfReport> {
     let t0 = Instant::now();
-    let bcsdf = match &spec.shading {
-        yarn_ref::Shading::Fiber { bcsdf, .. } => (**bcsdf).clone(),
-        yarn_ref::Shading::Lambert { .. } => {
-            return Err(crate::Error::Invalid(
-                "the fiber renderer shades with a fiber BCSDF, not Lambert".into(),
-            ));
-        }
-    };
-    if spec.size == 0 || spec.size > 4096 {
-        return Err(crate::Error::Invalid(format!("yarn BTF size {} (1..=4096)", spec.size)));
-    }
-    let sampling = spec.sampling.clone().validated().map_err(btf_render::Error::from)?;
-    let mut popts =
-        PatchOptions { stitches: spec.stitches, color: spec.color, ..PatchOptions::default() };
-    popts.generation.seed = spec.seed;
-    popts.generation.hairs = false;
-    let patch = KnitPatch::new(&spec.chart, &spec.params, &popts)
-        .map_err(|e| crate::Error::Invalid(e.to_string()))?;
-    let packed = PackedYarns::new(
-        &patch.yarns,
-        std::slice::from_ref(&spec.params),
-        &PackOptions { seed: spec.seed, frame_samples_per_segment: 16, tiles: [3, 3] },
-    )?;
+    let (bcsdf, sampling, patch, packed) = prepare(spec, "fiber")?;
     let renderer = FiberRenderer::new(gpu, &packed, &bcsdf, settings)?;
     let mut meta = BtfMeta::new(sampling.clone(), sampling.clone(), spec.size, spec.size);
     let s = &settings;
@@ -124,29 +103,7 @@ pub fn generate_strip_btf(
     opts: &YarnBtfOptions,
 ) -> Result<FiberBtfReport> {
     let t0 = Instant::now();
-    let bcsdf = match &spec.shading {
-        yarn_ref::Shading::Fiber { bcsdf, .. } => (**bcsdf).clone(),
-        yarn_ref::Shading::Lambert { .. } => {
-            return Err(crate::Error::Invalid(
-                "the strip renderer shades with a fiber BCSDF, not Lambert".into(),
-            ));
-        }
-    };
-    if spec.size == 0 || spec.size > 4096 {
-        return Err(crate::Error::Invalid(format!("yarn BTF size {} (1..=4096)", spec.size)));
-    }
-    let sampling = spec.sampling.clone().validated().map_err(btf_render::Error::from)?;
-    let mut popts =
-        PatchOptions { stitches: spec.stitches, color: spec.color, ..PatchOptions::default() };
-    popts.generation.seed = spec.seed;
-    popts.generation.hairs = false;
-    let patch = KnitPatch::new(&spec.chart, &spec.params, &popts)
-        .map_err(|e| crate::Error::Invalid(e.to_string()))?;
-    let packed = PackedYarns::new(
-        &patch.yarns,
-        std::slice::from_ref(&spec.params),
-        &PackOptions { seed: spec.seed, frame_samples_per_segment: 16, tiles: [3, 3] },
-    )?;
+    let (bcsdf, sampling, patch, packed) = prepare(spec, "strip")?;
     let bake = StripBakeSettings { seed: spec.seed, ..*bake };
     let bakes = crate::strips::bakes_for(
         &patch.yarns,
@@ -205,6 +162,40 @@ pub fn generate_strip_btf(
         seconds: t0.elapsed().as_secs_f64(),
         instances,
     })
+}
+
+/// What both GPU methods start from: the spec's fiber BCSDF (`what` names the renderer
+/// refusing Lambert), its validated sampling, the periodic patch (hair flyaways not
+/// generated: the renderers draw from the curves) and the curves packed with 3 × 3 periodic
+/// copies.
+fn prepare(
+    spec: &YarnBtfSpec,
+    what: &str,
+) -> Result<(FiberBcsdf, btf_core::sampling::Sampling, KnitPatch, PackedYarns)> {
+    let bcsdf = match &spec.shading {
+        yarn_ref::Shading::Fiber { bcsdf, .. } => (**bcsdf).clone(),
+        yarn_ref::Shading::Lambert { .. } => {
+            return Err(crate::Error::Invalid(format!(
+                "the {what} renderer shades with a fiber BCSDF, not Lambert"
+            )));
+        }
+    };
+    if spec.size == 0 || spec.size > 4096 {
+        return Err(crate::Error::Invalid(format!("yarn BTF size {} (1..=4096)", spec.size)));
+    }
+    let sampling = spec.sampling.clone().validated().map_err(btf_render::Error::from)?;
+    let mut popts =
+        PatchOptions { stitches: spec.stitches, color: spec.color, ..PatchOptions::default() };
+    popts.generation.seed = spec.seed;
+    popts.generation.hairs = false;
+    let patch = KnitPatch::new(&spec.chart, &spec.params, &popts)
+        .map_err(|e| crate::Error::Invalid(e.to_string()))?;
+    let packed = PackedYarns::new(
+        &patch.yarns,
+        std::slice::from_ref(&spec.params),
+        &PackOptions { seed: spec.seed, frame_samples_per_segment: 16, tiles: [3, 3] },
+    )?;
+    Ok((bcsdf, sampling, patch, packed))
 }
 
 /// The image loop both methods share: every (view, light) of `sampling` rendered by

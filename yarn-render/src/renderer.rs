@@ -17,7 +17,7 @@ use crate::bcsdf;
 use crate::effects::{self, AoMode, FiberEffects};
 use crate::gpu_data::YarnBuffers;
 use crate::pack::PackedYarns;
-use crate::passes::draw::{DEPTH, DrawPass, color_format};
+use crate::passes::draw::{DEPTH, DrawPass, FrameTargets, color_format};
 use crate::passes::lod::{DrawArgsRaw, LodPass};
 use crate::passes::shadow::{ShadowPass, ShadowPassRaw, ShadowViewsRaw, directional_views};
 use crate::view::{FiberCamera, FiberLight, ViewRaw, ViewSetup, lights_raw, to_cols};
@@ -566,32 +566,10 @@ impl FiberRenderer {
         (width, height): (u32, u32),
         clear: [f64; 4],
     ) -> Result<FiberImage> {
-        gpu.check_frame(width, height, self.settings.msaa)?;
+        let t = FrameTargets::new(gpu, "fiber", (width, height), self.settings.msaa)?;
         let dev = &gpu.device;
         let b = self.bindings(gpu, cam, lights, (width, height))?;
-        let samples = self.settings.msaa;
-        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
-        let format = color_format(samples);
-        let resolved = gpu.target("fiber colour", (width, height), 1, format, usage);
-        let msaa = (samples > 1).then(|| {
-            gpu.target(
-                "fiber colour msaa",
-                (width, height),
-                samples,
-                format,
-                wgpu::TextureUsages::RENDER_ATTACHMENT,
-            )
-        });
-        let depth = gpu.target(
-            "fiber depth",
-            (width, height),
-            samples,
-            DEPTH,
-            wgpu::TextureUsages::RENDER_ATTACHMENT,
-        );
-        let rv = resolved.create_view(&Default::default());
-        let mv = msaa.as_ref().map(|t| t.create_view(&Default::default()));
-        let dv = depth.create_view(&Default::default());
+        let (cv, rv, dv) = t.views();
         let readback = dev.create_buffer(&wgpu::BufferDescriptor {
             label: Some("fiber args read-back"),
             size: size_of::<DrawArgsRaw>() as u64,
@@ -600,25 +578,12 @@ impl FiberRenderer {
         });
         gpu.scoped("fiber frame", || {
             let mut enc = dev.create_command_encoder(&Default::default());
-            let targets = match &mv {
-                Some(m) => (m, Some(&rv), &dv),
-                None => (&rv, None, &dv),
-            };
-            self.record(gpu, &mut enc, &b, targets, Some(clear));
+            self.record(gpu, &mut enc, &b, (&cv, rv.as_ref(), &dv), Some(clear));
             enc.copy_buffer_to_buffer(&self.args, 0, &readback, 0, readback.size());
             gpu.queue.submit([enc.finish()]);
         })?;
         let args: DrawArgsRaw = *bytemuck::from_bytes(&gpu.read_buffer(&readback)?);
-        let pixels = if samples > 1 {
-            let bytes = gpu.read_texture(&resolved, 8)?;
-            bytemuck::cast_slice::<u8, [half::f16; 4]>(&bytes)
-                .iter()
-                .map(|p| p.map(f32::from))
-                .collect()
-        } else {
-            let bytes = gpu.read_texture(&resolved, 16)?;
-            bytemuck::cast_slice::<u8, [f32; 4]>(&bytes).to_vec()
-        };
+        let pixels = t.read(gpu)?;
         let stats = FiberStats {
             segments: self.data.segment_count,
             culled: args.culled,

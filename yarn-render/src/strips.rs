@@ -34,7 +34,7 @@
 use crate::bcsdf;
 use crate::gpu_data::YarnBuffers;
 use crate::pack::PackedYarns;
-use crate::passes::draw::{DEPTH, SHADING_WGSL, color_format};
+use crate::passes::draw::{DEPTH, FrameTargets, SHADING_WGSL, color_format};
 use crate::passes::shadow::{MAX_SHADOW_MAPS, ShadowPass, ShadowPassRaw, light_views};
 use crate::renderer::{FiberImage, FiberStats};
 use crate::view::{FiberCamera, FiberLight, MAX_LIGHTS, ViewRaw, ViewSetup, lights_raw, to_cols};
@@ -619,11 +619,6 @@ impl StripRenderer {
     ) -> Result<()> {
         let dev = &gpu.device;
         let raw = self.view_raw(cam, lights, size)?;
-        let ubuf = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("strip view"),
-            contents: bytemuck::bytes_of(&raw),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
         let (passes, sraw) = self.shadow_views(lights)?;
         let side = self.settings.shadow_map;
         let maps = dev.create_texture(&wgpu::TextureDescriptor {
@@ -649,42 +644,18 @@ impl StripRenderer {
             contents: bytemuck::bytes_of(&sraw),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let group = dev.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("strip_regular"),
-            layout: &self.layout,
-            entries: &[
-                entry(0, &ubuf),
-                entry(1, &self.headers),
-                entry(2, &self.texels),
-                entry(3, &self.lobes),
-                entry(4, &self.q_nodes),
-                wgpu::BindGroupEntry {
-                    binding: 5,
-                    resource: wgpu::BindingResource::TextureView(&maps_view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 6,
-                    resource: wgpu::BindingResource::Sampler(&self.sampler),
-                },
-                entry(7, &sbuf),
-                entry(8, self.env.as_ref().map_or(&self.no_env, |e| &e.buffer)),
-                entry(9, &self.fly),
-            ],
-        });
-        // The flyaway overlay: the same bindings with flag 16 in the view.
-        let fly_group = (self.settings.flyaways && self.fly_count > 0).then(|| {
-            let mut fraw = raw;
-            fraw.lod[2] |= 16;
-            let fbuf = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("strip view (flyaways)"),
-                contents: bytemuck::bytes_of(&fraw),
+        // Group 1 for a view uniform (the regular pass, and the flyaway overlay with flag 16).
+        let group = |label, view: &ViewRaw| {
+            let vbuf = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytemuck::bytes_of(view),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
             dev.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("strip_flyaway"),
+                label: Some(label),
                 layout: &self.layout,
                 entries: &[
-                    entry(0, &fbuf),
+                    entry(0, &vbuf),
                     entry(1, &self.headers),
                     entry(2, &self.texels),
                     entry(3, &self.lobes),
@@ -702,6 +673,12 @@ impl StripRenderer {
                     entry(9, &self.fly),
                 ],
             })
+        };
+        let regular = group("strip_regular", &raw);
+        let fly_group = (self.settings.flyaways && self.fly_count > 0).then(|| {
+            let mut fraw = raw;
+            fraw.lod[2] |= 16;
+            group("strip_flyaway", &fraw)
         });
         self.shadow.encode(gpu, enc, &self.data, &maps, &passes);
         let load = |c: Option<[f64; 4]>| match c {
@@ -734,7 +711,7 @@ impl StripRenderer {
         });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &self.data.bind_group, &[]);
-        pass.set_bind_group(1, &group, &[]);
+        pass.set_bind_group(1, &regular, &[]);
         pass.draw(0..2 * (self.settings.n_sub + 1), 0..self.data.segment_count);
         if let Some(g) = &fly_group {
             pass.set_pipeline(&self.pipeline_fly);
@@ -792,50 +769,16 @@ impl StripRenderer {
         (width, height): (u32, u32),
         clear: [f64; 4],
     ) -> Result<FiberImage> {
-        let samples = self.settings.msaa;
-        gpu.check_frame(width, height, samples)?;
-        let format = color_format(samples);
-        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
-        let resolved = gpu.target("strip colour", (width, height), 1, format, usage);
-        let msaa = (samples > 1).then(|| {
-            gpu.target(
-                "strip colour msaa",
-                (width, height),
-                samples,
-                format,
-                wgpu::TextureUsages::RENDER_ATTACHMENT,
-            )
-        });
-        let depth = gpu.target(
-            "strip depth",
-            (width, height),
-            samples,
-            DEPTH,
-            wgpu::TextureUsages::RENDER_ATTACHMENT,
-        );
-        let rv = resolved.create_view(&Default::default());
-        let mv = msaa.as_ref().map(|t| t.create_view(&Default::default()));
-        let dv = depth.create_view(&Default::default());
+        let t = FrameTargets::new(gpu, "strip", (width, height), self.settings.msaa)?;
+        let (cv, rv, dv) = t.views();
         gpu.scoped("strip frame", || -> Result<()> {
             let mut enc = gpu.device.create_command_encoder(&Default::default());
-            let targets = match &mv {
-                Some(m) => (m, Some(&rv), &dv),
-                None => (&rv, None, &dv),
-            };
+            let targets = (&cv, rv.as_ref(), &dv);
             self.record(gpu, &mut enc, cam, lights, (width, height), targets, Some(clear))?;
             gpu.queue.submit([enc.finish()]);
             Ok(())
         })??;
-        let pixels = if samples > 1 {
-            let bytes = gpu.read_texture(&resolved, 8)?;
-            bytemuck::cast_slice::<u8, [half::f16; 4]>(&bytes)
-                .iter()
-                .map(|p| p.map(f32::from))
-                .collect()
-        } else {
-            let bytes = gpu.read_texture(&resolved, 16)?;
-            bytemuck::cast_slice::<u8, [f32; 4]>(&bytes).to_vec()
-        };
+        let pixels = t.read(gpu)?;
         let n = self.data.segment_count;
         let stats = FiberStats {
             segments: n,

@@ -228,3 +228,53 @@ impl DrawPass {
         pass.draw_indirect(args, 0);
     }
 }
+
+/// The colour (resolved, and multisampled under MSAA) and depth targets of one offscreen
+/// frame, as the fiber and strip renderers draw into them.
+pub struct FrameTargets {
+    resolved: wgpu::Texture,
+    msaa: Option<wgpu::Texture>,
+    depth: wgpu::Texture,
+    samples: u32,
+}
+
+impl FrameTargets {
+    /// Targets of `size` at `samples` per pixel (`what` names them in GPU errors).
+    pub fn new(gpu: &Gpu, what: &str, size: (u32, u32), samples: u32) -> Result<Self> {
+        gpu.check_frame(size.0, size.1, samples)?;
+        let format = color_format(samples);
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+        let attach = wgpu::TextureUsages::RENDER_ATTACHMENT;
+        Ok(FrameTargets {
+            resolved: gpu.target(&format!("{what} colour"), size, 1, format, usage),
+            msaa: (samples > 1)
+                .then(|| gpu.target(&format!("{what} colour msaa"), size, samples, format, attach)),
+            depth: gpu.target(&format!("{what} depth"), size, samples, DEPTH, attach),
+            samples,
+        })
+    }
+
+    /// Views `(colour, resolve, depth)` as the passes take them.
+    pub fn views(&self) -> (wgpu::TextureView, Option<wgpu::TextureView>, wgpu::TextureView) {
+        let rv = self.resolved.create_view(&Default::default());
+        let dv = self.depth.create_view(&Default::default());
+        match &self.msaa {
+            Some(m) => (m.create_view(&Default::default()), Some(rv), dv),
+            None => (rv, None, dv),
+        }
+    }
+
+    /// The resolved frame as linear RGBA, rows top to bottom.
+    pub fn read(&self, gpu: &Gpu) -> Result<Vec<[f32; 4]>> {
+        Ok(if self.samples > 1 {
+            let bytes = gpu.read_texture(&self.resolved, 8)?;
+            bytemuck::cast_slice::<u8, [half::f16; 4]>(&bytes)
+                .iter()
+                .map(|p| p.map(f32::from))
+                .collect()
+        } else {
+            let bytes = gpu.read_texture(&self.resolved, 16)?;
+            bytemuck::cast_slice::<u8, [f32; 4]>(&bytes).to_vec()
+        })
+    }
+}

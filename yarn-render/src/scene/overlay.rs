@@ -174,7 +174,7 @@ impl YarnOverlay {
     fn strip_environment(
         &mut self,
         view: &OverlayView<'_>,
-    ) -> Result<Option<(yarn_precompute::SrbfFit, &yarn_precompute::ImTable)>> {
+    ) -> Result<Option<yarn_precompute::SrbfFit>> {
         let (Some(oe), Some(desc)) = (
             view.environment,
             view.scene.lights.iter().find_map(|l| match l {
@@ -199,11 +199,11 @@ impl YarnOverlay {
                 .map_err(|e| crate::Error::Invalid(format!("[[yarns]] strips: I_M table: {e}")))?;
             self.srbf = Some((desc.path.clone(), oe.revision, fit, table));
         }
-        let Some((_, _, fit, table)) = &self.srbf else { return Ok(None) };
+        let Some((_, _, fit, _)) = &self.srbf else { return Ok(None) };
         let mut f = fit.rotated_z(oe.rotation_deg);
         let x = oe.exposure as f64;
         f.weights.iter_mut().for_each(|w| *w = w.map(|v| v * x));
-        Ok(Some((f, table)))
+        Ok(Some(f))
     }
 
     /// The renderers, in `[[yarns]]` order.
@@ -238,11 +238,9 @@ impl Overlay for YarnOverlay {
         let lights = fiber_lights(&view.scene.lights);
         let ambient = ambient(view.environment);
         let has_strips = self.renderers.iter().any(|r| matches!(r, YarnDrawer::Strips(_)));
-        let env = if has_strips {
-            self.strip_environment(view).map_err(to_render)?.map(|(f, t)| (f, t.clone()))
-        } else {
-            None
-        };
+        let env = if has_strips { self.strip_environment(view).map_err(to_render)? } else { None };
+        // The table stays where it was built (it changes only with the map).
+        let table = self.srbf.as_ref().map(|s| &s.3);
         for r in &mut self.renderers {
             let t = (targets.color, targets.resolve, targets.depth);
             match r {
@@ -252,7 +250,7 @@ impl Overlay for YarnOverlay {
                 }
                 YarnDrawer::Strips(r) => {
                     // The environment through SRBFs ([H25 eq. 17]), not the ambient term.
-                    r.set_environment(gpu, env.as_ref().map(|(f, t)| (f, t)))
+                    r.set_environment(gpu, env.as_ref().zip(table))
                         .and_then(|_| r.encode_into(gpu, encoder, t, targets.size, &cam, &lights))
                 }
             }

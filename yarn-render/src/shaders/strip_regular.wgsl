@@ -204,6 +204,18 @@ fn strip_visibility(li: u32, centre: vec3<f32>, wi: vec3<f32>, radius: f32) -> f
     return 1.0;
 }
 
+// Light i seen from p: the unit direction towards it and the factor on its value (1 for
+// a directional light's irradiance, 1/d² for a point light's intensity).
+fn light_at(i: u32, p: vec3<f32>) -> vec4<f32> {
+    let light = view.lights[i];
+    if light.pos_dir.w == 0.0 {
+        return vec4<f32>(light.pos_dir.xyz, 1.0);
+    }
+    let dl = light.pos_dir.xyz - p;
+    let d2 = max(dot(dl, dl), 1e-20);
+    return vec4<f32>(dl / sqrt(d2), 1.0 / d2);
+}
+
 // I_M at (θ_j, θ_o, Δφ), trilinear on the 16³ nodes (yarn_precompute::ImTable::at).
 fn im_at(first: u32, theta_j: f32, theta_o: f32, dphi: f32) -> vec3<f32> {
     let n = 16u;
@@ -277,15 +289,9 @@ fn fs_flyaway(in: StripOut, h: StripHeader) -> FragmentOut {
     let radius = yarn_params[in.ids.y].c.z;
     var l = vec3<f32>(0.0);
     for (var li = 0u; li < view.counts.x; li++) {
-        let light = view.lights[li];
-        var wi = light.pos_dir.xyz;
-        var el = light.value.rgb;
-        if light.pos_dir.w != 0.0 {
-            let dl = light.pos_dir.xyz - in.centre;
-            let d2 = max(dot(dl, dl), 1e-20);
-            wi = dl / sqrt(d2);
-            el = el / d2;
-        }
+        let ls = light_at(li, in.centre);
+        let wi = ls.xyz;
+        let el = view.lights[li].value.rgb * ls.w;
         l += bcsdf_cos(wi, wo, tw) * el * strip_visibility(li, in.centre, wi, radius);
     }
     let n_env = u32(env[0]);
@@ -346,15 +352,9 @@ fn fs_strip(in: StripOut) -> FragmentOut {
     let radius = yarn_params[in.ids.y].c.z;
     var l = vec3<f32>(0.0);
     for (var i = 0u; i < view.counts.x; i++) {
-        let light = view.lights[i];
-        var wi = light.pos_dir.xyz;
-        var el = light.value.rgb;
-        if light.pos_dir.w != 0.0 {
-            let dl = light.pos_dir.xyz - in.centre;
-            let d2 = max(dot(dl, dl), 1e-20);
-            wi = dl / sqrt(d2);
-            el = el / d2;
-        }
+        let ls = light_at(i, in.centre);
+        let wi = ls.xyz;
+        let el = view.lights[i].value.rgb * ls.w;
         var f = vec3<f32>(0.0);
         if textured {
             for (var k = 0u; k < kt; k++) {

@@ -137,7 +137,13 @@ fn white_furnace_through_srbfs_and_the_strip_shader() {
         return;
     };
     let p = cotton();
-    let bcsdf = FiberBcsdf::khungurn(&KhungurnParams::default()).unwrap();
+    // The paper's normalisation: an albedo that varies with θ_o (the energy-conserving one
+    // is 1 everywhere and would hide a wrong θ_o or Δφ lookup).
+    let bcsdf = FiberBcsdf::khungurn(&KhungurnParams {
+        normalization: yarn::bcsdf::Normalization::Paper,
+        ..KhungurnParams::default()
+    })
+    .unwrap();
     let s = StripBakeSettings {
         width: 4,
         height: 2,
@@ -188,7 +194,7 @@ fn white_furnace_through_srbfs_and_the_strip_shader() {
         eprintln!(
             "furnace θ_o {elev}°: GPU {:?} against A(θ_o)·tint {:?}",
             &c[..3],
-            a.map(|x| x * COLOR[0] as f64)
+            [0, 1, 2].map(|k| a[k] * COLOR[k] as f64)
         );
     }
     assert!(worst < 0.02, "white furnace off by {worst}");
