@@ -12,6 +12,7 @@
 //! | [`settings`] | `BakeSettings`: sizes and their limits | DESIGN §2.4 |
 //! | [`srbf`] | `SrbfFit` (NNLS on a Fibonacci set) and the `I_M` table of the strips' environment light | [H25 eq. 14–17] |
 //! | [`flyaway`] | `FlyawayBake`: hair-flyaway coverage and direction textures of the strips' overlay | [H25 §4.4, eq. 12–13] |
+//! | [`lumislice`] | `Lumislice`: the 32 × 21-direction scattering table per voxel of the yarn cross-section, its LoD pyramid, the yarn shadow table | [C03 §5, eq. 4–11] |
 //! | [`strip_bake`] | `StripBake`: coverage, tangent, AO, factorised Ψ^Fiber and ξ of yarn strips | [H25 §4.3, §5.1, eq. 9–11] |
 //!
 //! Citation keys: [W19] Wu & Yuksel 2019, [C03] Chen et al. 2003, [H25] Huang et al. 2025,
@@ -26,6 +27,7 @@ pub mod cache;
 pub mod core_texture;
 pub mod error;
 pub mod flyaway;
+pub mod lumislice;
 pub mod self_shadow;
 pub mod settings;
 pub mod sigma;
@@ -37,6 +39,7 @@ pub use cache::{BakeTimes, Precomputed};
 pub use core_texture::{CoreTexcoord, CoreTexel, CoreTexture};
 pub use error::{Error, Result};
 pub use flyaway::FlyawayBake;
+pub use lumislice::{Lumislice, LumisliceSettings, YarnShadowLut};
 pub use self_shadow::SelfShadowVolume;
 pub use settings::{
     AoSettings, BakeSettings, CoreMigration, CoreSettings, ShadingModel, ShadowSettings,
