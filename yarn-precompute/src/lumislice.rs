@@ -816,7 +816,7 @@ impl YarnShadowLut {
     pub fn at(&self, d: f64) -> f64 {
         let n = self.values.len();
         let x = (d.abs() / self.reach) * (n - 1) as f64;
-        if !(x < (n - 1) as f64) {
+        if x.is_nan() || x >= (n - 1) as f64 {
             return 1.0;
         }
         let i = x.floor() as usize;

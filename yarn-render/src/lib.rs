@@ -18,6 +18,7 @@
 //! | [`btf`] | the yarn BTF of DESIGN §4.2 rendered with fibers (`--method fibers`) | DESIGN §4.2 |
 //! | [`renderer`] | `FiberRenderer`: the passes of one frame, stats | [W19 §3.3, §5] |
 //! | [`strips`] | `StripRenderer`: fiber-textured yarn strips (bake, Ψ·ξ factors, PCSS) | [H25 §4.3, §5.2, eq. 9–11] |
+//! | [`lumislice`] | `LumisliceRenderer`: ray-marched lumislice pieces, centre-line shadow maps (eq. 10), back-to-front "over" | [C03 §5, eq. 9–11] |
 //! | [`scene`] | a btf-render scene's `[[yarns]]`: chart on the mesh's UVs, skeleton, pack; drawn into its frame | [C03 §3], [W19 §5] |
 //!
 //! The WGSL generator (`shaders/fiber_gen.wgsl`) mirrors `yarn::fiber::FiberModel`
@@ -32,6 +33,7 @@ pub mod btf;
 pub mod effects;
 pub mod error;
 pub mod gpu_data;
+pub mod lumislice;
 pub mod pack;
 pub mod passes;
 pub mod renderer;
@@ -42,6 +44,7 @@ pub mod view;
 pub use effects::{AoMode, FiberEffects};
 pub use error::{Error, Result};
 pub use gpu_data::YarnBuffers;
+pub use lumislice::{LumisliceRenderSettings, LumisliceRenderer};
 pub use pack::{PackOptions, PackedYarns};
 pub use renderer::{FiberImage, FiberRenderer, FiberSettings, FiberStats};
 pub use strips::{StripRenderer, StripSettings};
@@ -61,6 +64,8 @@ pub fn wgsl_programs() -> Vec<(&'static str, String)> {
         ("fiber_draw", passes::draw::source()),
         ("yarn_tube_shadow", passes::shadow::source()),
         ("strip_regular", strips::source()),
+        ("lumislice_march", lumislice::source()),
+        ("lumislice_centerline", lumislice::centerline_source()),
     ]
 }
 

@@ -7,6 +7,7 @@ mod common;
 mod effects;
 mod expand;
 mod lod;
+mod lumislice;
 mod oblique;
 mod reference;
 mod scene;
