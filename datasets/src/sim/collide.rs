@@ -7,6 +7,14 @@
 //! and the reaction goes to the triangle's nodes by barycentric weight. Each candidate
 //! remembers which side of the triangle the node was on when it was found, so a node that
 //! did cross is pushed back to its side rather than further through.
+//!
+//! [C03 §4.1.2] lets a triangle act on a point only when the distance vector lies within
+//! 45° of the triangle's normal (the influence cone, [`SelfContact::cone_cos`]); without it
+//! every node of a flat sheet would be pushed sideways by the neighbouring cells'
+//! triangles, whose closest points lie in the sheet's own plane. Self-friction is the
+//! dynamic law of [C03 eq. 3] with the layer field's push as the normal force and no
+//! static part ([C03 §4.1.3]); the paper's `c₈` is replaced by the C¹ barrier of
+//! [`super::field`], like `c₆`.
 
 use super::field::ThicknessField;
 use super::hashgrid::HashGrid;
@@ -34,6 +42,9 @@ pub struct SelfContact {
     pub margin: f64,
     /// Dynamic friction between layers (`K_d`; Chen has no static self-friction).
     pub dynamic_friction: f64,
+    /// Cosine of the influence cone's half-angle: a triangle pushes a node only if
+    /// `|d̂ · n̂| ≥ cone_cos` (`cos 45°` in [C03 §4.1.2]; 0 = the whole half-space).
+    pub cone_cos: f64,
 }
 
 fn tri_points(x: &[V3], t: [u32; 3]) -> [V3; 3] {
@@ -142,6 +153,11 @@ impl SelfContact {
         let n_tri = normalize_or(cross(sub(q[1], q[0]), sub(q[2], q[0])), [0.0, 0.0, 1.0]);
         let d_vec = sub(p, cp);
         let d = length(d_vec);
+        // Outside the influence cone (e.g. a neighbour in the sheet's own plane, whose side
+        // is only rounding noise): no push.
+        if self.cone_cos > 0.0 && d > 1e-12 && dot(d_vec, n_tri).abs() < self.cone_cos * d {
+            return None;
+        }
         let same_side = dot(d_vec, n_tri) * c.side >= 0.0;
         let (dist, dir) = if same_side && d > 1e-9 {
             (d, scale(d_vec, 1.0 / d))

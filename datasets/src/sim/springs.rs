@@ -44,6 +44,30 @@ impl SpringLaw {
         if t > self.max_tension { (self.max_tension, 0.0) } else { (t, kt) }
     }
 
+    /// Energy stored in the spring (J): the integral of [`SpringLaw::tension`] from the
+    /// slack interval to `l`, ignoring `max_tension` and the exponent cap of 30.
+    pub fn energy(&self, k: f64, rest: f64, l: f64) -> f64 {
+        let (th_hi, th_lo) = (self.hi * rest, self.lo * rest);
+        // ∫ k θ (e^{(s−θ)/θ} − 1) ds = k θ² (e^x − 1 − x), x = (l − θ)/θ; the literal
+        // law is e^{−1} times the exponential alone, whose integral is k θ² e^{−1} (e^x − 1).
+        let exp_energy = |k: f64, th: f64, x: f64| match self.kind {
+            LawKind::Linear => 0.5 * k * (x * th) * (x * th),
+            LawKind::Exponential => k * th * th * (x.exp_m1() - x),
+            LawKind::PaperLiteral => k * th * th * (-1f64).exp() * x.exp_m1(),
+        };
+        if l > th_hi {
+            if th_hi > 0.0 {
+                exp_energy(k, th_hi, (l - th_hi) / th_hi)
+            } else {
+                0.5 * k * (l - th_hi) * (l - th_hi)
+            }
+        } else if l < th_lo {
+            exp_energy(k * self.compression, th_lo, (th_lo - l) / th_lo)
+        } else {
+            0.0
+        }
+    }
+
     fn unlimited(&self, k: f64, rest: f64, l: f64) -> (f64, f64) {
         let (th_hi, th_lo) = (self.hi * rest, self.lo * rest);
         if l > th_hi {
@@ -125,6 +149,21 @@ mod tests {
         // Compression pushes apart below the slack.
         assert!(l.tension(k, rest, 0.9 * rest).0 < 0.0);
         assert_eq!(l.tension(k, rest, rest).0, 0.0);
+    }
+
+    #[test]
+    fn energy_is_the_integral_of_the_tension() {
+        let (k, rest) = (1500.0, 0.01);
+        for kind in [LawKind::Linear, LawKind::Exponential, LawKind::PaperLiteral] {
+            let l = law(kind);
+            for x in [0.8, 0.93, 1.0, 1.07, 1.3] {
+                let x = x * rest;
+                let h = 1e-9;
+                let d = (l.energy(k, rest, x + h) - l.energy(k, rest, x - h)) / (2.0 * h);
+                let t = l.tension(k, rest, x).0;
+                assert!((d - t).abs() <= 1e-5 * t.abs().max(1e-3), "{kind:?} at {x}: {d} vs {t}");
+            }
+        }
     }
 
     #[test]

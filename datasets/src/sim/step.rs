@@ -1,19 +1,45 @@
 //! The time step, Chen et al. 2003 §4.2 with the knit design's choices (§1.3 item 7):
-//! (1) spring, gravity and air forces, (2) the body's thickness field, (3) the cloth's
-//! own ([`super::collide`]), (4) a bound `dt ≤ min(c·√(m/k), ½ T / v_max, dt_max)` where `k`
-//! sums the stiffnesses acting on a node (springs past their slack, contact fields), (5) a
-//! symplectic Euler update with friction applied to the new velocities, (6) while a node
-//! would end inside the body or cross a triangle, the step is retried with half the `dt`
-//! (up to `max_halvings` times, after which a node still inside is put back on the
-//! surface, inelastically). Symplectic Euler, like the velocity Verlet of the older drape,
-//! does not pump energy into stiff springs; it needs one force evaluation per step.
-
+//! (1) spring, angle-spring, gravity and air forces, (2) the body's thickness field, (3) the
+//! cloth's own ([`super::collide`]), (4) a bound `dt ≤ min(c·√(m/k), ½ T / v_max, dt_max)`
+//! where `k` sums the stiffnesses acting on a node (springs past their slack, angle springs,
+//! contact fields), (5) an explicit update by one of three [`Integrator`]s with friction
+//! applied to the velocities of each kick, (6) while a node would end inside the body or
+//! cross a triangle, the step is retried with half the `dt` (up to `max_halvings` times,
+//! after which a node still inside is put back on the surface, inelastically). Halving and
+//! the bound apply to every integrator.
+//!
+//! The integrators:
+//! - [`Integrator::SymplecticEuler`] (the default, and what the older drape used): one
+//!   force evaluation, `v += a dt`, `x += v dt`;
+//! - [`Integrator::VelocityVerlet`] (the knit default), as kick–drift–kick: half a kick
+//!   with the forces at `x`, a drift, the forces at the new positions, the other half
+//!   kick. Two evaluations; symplectic and time-reversible for conservative forces, so the
+//!   energy error stays bounded. Friction acts in each half kick with half the budget, so
+//!   a node held by static friction does not creep;
+//! - [`Integrator::MidpointRk2`] (the paper's "RK2", [C03 §4.2] step 7, which does not say
+//!   which RK2): the explicit midpoint rule, forces at `(x + v dt/2, v + a dt/2)`. Two
+//!   evaluations, second order, but not symplectic: its energy error grows like `dt²`.
+use super::angles::AngleForce;
 use super::collide::{Candidate, SelfContact, candidates};
 use super::field::ThicknessField;
 use super::friction::Friction;
 use super::{Cloth, Collider};
 use crate::vec3::{V3, add, cross, dot, length, scale, sub};
+use crate::{Error, Result};
 use rayon::prelude::*;
+use std::time::Instant;
+
+/// The explicit update rule (see the module documentation).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Integrator {
+    /// `v += a dt; x += v dt` — one force evaluation per step.
+    #[default]
+    SymplecticEuler,
+    /// Kick–drift–kick velocity Verlet — two evaluations, bounded energy error.
+    VelocityVerlet,
+    /// The explicit midpoint rule (the paper's RK2) — two evaluations.
+    MidpointRk2,
+}
 
 /// Contact with the body.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -41,6 +67,8 @@ pub struct SimParams {
     pub cfl: f64,
     /// Halvings tried before a penetration is resolved by projection.
     pub max_halvings: u32,
+    /// The update rule.
+    pub integrator: Integrator,
 }
 
 impl Default for SimParams {
@@ -53,6 +81,7 @@ impl Default for SimParams {
             dt_max: 1.0 / 25.0,
             cfl: 0.5,
             max_halvings: 6,
+            integrator: Integrator::SymplecticEuler,
         }
     }
 }
@@ -68,6 +97,23 @@ pub struct StepReport {
     pub projected: usize,
     /// Kinetic energy after the step (J).
     pub kinetic_energy: f64,
+    /// Force evaluations, halved attempts included.
+    pub force_evaluations: u32,
+}
+
+/// What a run up to a given time did (one frame of a scene).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct AdvanceReport {
+    /// Steps taken.
+    pub steps: usize,
+    /// Halvings over those steps.
+    pub halvings: usize,
+    /// Nodes projected out of the body over those steps.
+    pub projected: usize,
+    /// Force evaluations.
+    pub force_evaluations: usize,
+    /// Wall-clock time spent (ms).
+    pub wall_ms: f64,
 }
 
 /// How a run to rest went.
@@ -101,6 +147,8 @@ pub struct Simulator<'a> {
     pub params: SimParams,
     /// Simulated time (s).
     pub time: f64,
+    /// Velocity of each pinned node (m/s; zero holds it in place). Unpinned nodes ignore it.
+    pub pin_velocity: Vec<V3>,
     collider: Option<&'a dyn Collider>,
     candidates: Vec<Candidate>,
     built_at: Vec<V3>,
@@ -131,6 +179,7 @@ impl<'a> Simulator<'a> {
             x,
             params,
             time: 0.0,
+            pin_velocity: vec![[0.0; 3]; n],
             collider,
             candidates: Vec::new(),
             built_at: Vec::new(),
@@ -140,6 +189,61 @@ impl<'a> Simulator<'a> {
     /// Total kinetic energy (J), summed in node order.
     pub fn kinetic_energy(&self) -> f64 {
         self.v.iter().zip(&self.cloth.mass).map(|(v, m)| 0.5 * m * dot(*v, *v)).sum()
+    }
+
+    /// Energy stored in the springs and angle springs (J), summed in element order.
+    pub fn internal_energy(&self) -> f64 {
+        let c = &self.cloth;
+        let springs: f64 = c
+            .springs
+            .iter()
+            .map(|s| {
+                let l = length(sub(self.x[s.b as usize], self.x[s.a as usize]));
+                c.laws[s.law as usize].energy(s.k, s.rest, l)
+            })
+            .sum();
+        springs + c.angles.iter().map(|a| a.energy(&self.x)).sum::<f64>()
+    }
+
+    /// Potential energy in gravity (J, zero at the origin).
+    pub fn gravity_energy(&self) -> f64 {
+        self.x.iter().zip(&self.cloth.mass).map(|(x, m)| -m * dot(self.params.gravity, *x)).sum()
+    }
+
+    /// Total momentum (kg·m/s), summed in node order.
+    pub fn momentum(&self) -> V3 {
+        self.v.iter().zip(&self.cloth.mass).fold([0.0; 3], |s, (v, m)| add(s, scale(*v, *m)))
+    }
+
+    /// Steps until the simulated time reaches `t_end` (the last step is shortened to land
+    /// on it). Fails if the state stops being finite or more than `max_steps` are needed.
+    pub fn advance_to(&mut self, t_end: f64, max_steps: usize) -> Result<AdvanceReport> {
+        let start = Instant::now();
+        let mut r = AdvanceReport::default();
+        while t_end - self.time > 1e-12 * t_end.abs().max(1.0) {
+            if r.steps >= max_steps {
+                return Err(Error::Invalid(format!(
+                    "the simulation needed more than {max_steps} steps to reach t = {t_end} s \
+                     (at t = {} s, last dt = {:e} s): the springs are too stiff for the masses",
+                    self.time,
+                    t_end - self.time
+                )));
+            }
+            let s = self.step_capped(t_end - self.time);
+            r.steps += 1;
+            r.halvings += s.halvings as usize;
+            r.projected += s.projected;
+            r.force_evaluations += s.force_evaluations as usize;
+            if !s.kinetic_energy.is_finite() {
+                return Err(Error::Invalid(format!(
+                    "the simulation diverged at t = {} s (non-finite velocities); lower \
+                     `cfl` or the stiffnesses",
+                    self.time
+                )));
+            }
+        }
+        r.wall_ms = start.elapsed().as_secs_f64() * 1e3;
+        Ok(r)
     }
 
     /// Total mass (kg).
@@ -161,9 +265,9 @@ impl<'a> Simulator<'a> {
         }
     }
 
-    fn forces(&self) -> Forces {
+    /// Forces, stiffnesses and contacts at positions `x` and velocities `v`.
+    fn forces(&self, x: &[V3], v: &[V3]) -> Forces {
         let c = &self.cloth;
-        let (x, v) = (&self.x, &self.v);
         let per_spring: Vec<(V3, f64)> = c
             .springs
             .par_iter()
@@ -185,6 +289,7 @@ impl<'a> Simulator<'a> {
                 )
             })
             .collect();
+        let per_angle: Vec<AngleForce> = c.angles.par_iter().map(|a| a.force(x)).collect();
         let p = &self.params;
         let body = p.body.filter(|_| self.collider.is_some());
         let results: Vec<(V3, f64, (f64, V3, f64))> = (0..x.len())
@@ -197,6 +302,11 @@ impl<'a> Simulator<'a> {
                     let (fs, ks) = per_spring[si as usize];
                     f = add(f, scale(fs, sign));
                     k += ks;
+                }
+                for &(ai, slot) in c.angles_at(i) {
+                    let af = &per_angle[ai as usize];
+                    f = add(f, af.force[slot as usize]);
+                    k += af.stiffness[slot as usize];
                 }
                 let mut contact = (f64::INFINITY, [0.0; 3], 0.0);
                 if let (Some(b), Some(col)) = (body, self.collider) {
@@ -262,63 +372,101 @@ impl<'a> Simulator<'a> {
         dt
     }
 
-    /// Advances one step.
-    pub fn step(&mut self) -> StepReport {
-        self.refresh_candidates();
-        let f = self.forces();
-        let mut dt = self.bound(&f);
+    /// Velocities after a kick of `dt` with forces `f` from velocities `v`: body friction
+    /// with the contact forces of `f`, then dynamic self-friction; pinned nodes take their
+    /// prescribed velocity.
+    fn kick(&self, v: &[V3], f: &Forces, dt: f64) -> Vec<V3> {
         let c = &self.cloth;
-        let n = self.x.len();
         let body = self.params.body.filter(|_| self.collider.is_some());
-        let mut halvings = 0;
-        let (mut xn, mut vn);
-        loop {
-            vn = (0..n)
-                .into_par_iter()
-                .map(|i| {
-                    if c.pinned[i] {
-                        return [0.0; 3];
-                    }
-                    let m = c.mass[i];
-                    let mut w = add(self.v[i], scale(f.force[i], dt / m));
-                    let (_, nrm, fnorm) = f.contact[i];
-                    if let (Some(b), true) = (body, fnorm > 0.0) {
-                        w = b.friction.apply(w, nrm, fnorm, m, dt);
-                    }
-                    w
-                })
-                .collect::<Vec<V3>>();
-            if let Some(sc) = self.params.self_contact {
-                for &(node, tri, wts, nrm, mag) in &f.pushes {
-                    let t = c.triangles[tri as usize];
-                    let i = node as usize;
-                    if c.pinned[i] {
-                        continue;
-                    }
-                    let other =
-                        (0..3).fold([0.0; 3], |s, k| add(s, scale(vn[t[k] as usize], wts[k])));
-                    let rel = sub(vn[i], other);
-                    let fr = Friction { static_coef: 0.0, dynamic_coef: sc.dynamic_friction };
-                    let after = fr.apply(rel, nrm, mag, c.mass[i], dt);
-                    let delta = scale(sub(after, rel), 0.5);
-                    vn[i] = add(vn[i], delta);
-                    for k in 0..3 {
-                        let corner = t[k] as usize;
-                        if !c.pinned[corner] {
-                            vn[corner] = sub(vn[corner], scale(delta, wts[k]));
-                        }
+        let mut vn = (0..v.len())
+            .into_par_iter()
+            .map(|i| {
+                if c.pinned[i] {
+                    return self.pin_velocity[i];
+                }
+                let m = c.mass[i];
+                let mut w = add(v[i], scale(f.force[i], dt / m));
+                let (_, nrm, fnorm) = f.contact[i];
+                if let (Some(b), true) = (body, fnorm > 0.0) {
+                    w = b.friction.apply(w, nrm, fnorm, m, dt);
+                }
+                w
+            })
+            .collect::<Vec<V3>>();
+        if let Some(sc) = self.params.self_contact {
+            for &(node, tri, wts, nrm, mag) in &f.pushes {
+                let t = c.triangles[tri as usize];
+                let i = node as usize;
+                if c.pinned[i] {
+                    continue;
+                }
+                let other = (0..3).fold([0.0; 3], |s, k| add(s, scale(vn[t[k] as usize], wts[k])));
+                let rel = sub(vn[i], other);
+                let fr = Friction { static_coef: 0.0, dynamic_coef: sc.dynamic_friction };
+                let after = fr.apply(rel, nrm, mag, c.mass[i], dt);
+                let delta = scale(sub(after, rel), 0.5);
+                vn[i] = add(vn[i], delta);
+                for k in 0..3 {
+                    let corner = t[k] as usize;
+                    if !c.pinned[corner] {
+                        vn[corner] = sub(vn[corner], scale(delta, wts[k]));
                     }
                 }
             }
-            xn = (0..n)
-                .into_par_iter()
-                .map(|i| add(self.x[i], scale(vn[i], dt)))
-                .collect::<Vec<V3>>();
+        }
+        vn
+    }
+
+    /// Positions `x + v dt`.
+    fn drift(x: &[V3], v: &[V3], dt: f64) -> Vec<V3> {
+        (0..x.len()).into_par_iter().map(|i| add(x[i], scale(v[i], dt))).collect()
+    }
+
+    /// Advances one step.
+    pub fn step(&mut self) -> StepReport {
+        self.step_capped(f64::INFINITY)
+    }
+
+    /// Advances one step of at most `dt_cap` (s).
+    pub fn step_capped(&mut self, dt_cap: f64) -> StepReport {
+        self.refresh_candidates();
+        let f = self.forces(&self.x, &self.v);
+        let mut dt = self.bound(&f).min(dt_cap);
+        let n = self.x.len();
+        let body = self.params.body.filter(|_| self.collider.is_some());
+        let mut halvings = 0;
+        let mut evaluations = 1;
+        let (mut xn, mut vn);
+        loop {
+            match self.params.integrator {
+                Integrator::SymplecticEuler => {
+                    vn = self.kick(&self.v, &f, dt);
+                    xn = Self::drift(&self.x, &vn, dt);
+                }
+                Integrator::VelocityVerlet => {
+                    vn = self.kick(&self.v, &f, 0.5 * dt);
+                    xn = Self::drift(&self.x, &vn, dt);
+                }
+                Integrator::MidpointRk2 => {
+                    let v_mid = self.kick(&self.v, &f, 0.5 * dt);
+                    let x_mid = Self::drift(&self.x, &self.v, 0.5 * dt);
+                    let f_mid = self.forces(&x_mid, &v_mid);
+                    evaluations += 1;
+                    vn = self.kick(&self.v, &f_mid, dt);
+                    xn = Self::drift(&self.x, &v_mid, dt);
+                }
+            }
             if halvings >= self.params.max_halvings || !self.penetrates(&f, &xn) {
                 break;
             }
             dt *= 0.5;
             halvings += 1;
+        }
+        if self.params.integrator == Integrator::VelocityVerlet {
+            // vn holds the half-kicked velocities; the second half kick uses the new forces.
+            let f_end = self.forces(&xn, &vn);
+            evaluations += 1;
+            vn = self.kick(&vn, &f_end, 0.5 * dt);
         }
         // Safety net: nodes still inside the body go back to its surface.
         let mut projected = 0;
@@ -326,7 +474,11 @@ impl<'a> Simulator<'a> {
             let fixes: Vec<Option<(V3, V3)>> = (0..n)
                 .into_par_iter()
                 .map(|i| {
-                    if f.contact[i].0 - length(vn[i]) * dt > 0.0 {
+                    let moved = match self.params.integrator {
+                        Integrator::SymplecticEuler => length(vn[i]) * dt,
+                        _ => length(sub(xn[i], self.x[i])),
+                    };
+                    if f.contact[i].0 - moved > 0.0 {
                         return None;
                     }
                     let (d, nrm) = col.query(xn[i]);
@@ -350,7 +502,13 @@ impl<'a> Simulator<'a> {
         self.x = xn;
         self.v = vn;
         self.time += dt;
-        StepReport { dt, halvings, projected, kinetic_energy: self.kinetic_energy() }
+        StepReport {
+            dt,
+            halvings,
+            projected,
+            kinetic_energy: self.kinetic_energy(),
+            force_evaluations: evaluations,
+        }
     }
 
     /// Whether moving to `xn` would put a node newly inside the body or through a triangle.
