@@ -41,6 +41,14 @@ pub enum KnitCmd {
     /// The texture bake of [H25]'s yarn strips over bake settings: time, residual of the
     /// factorised model against the reference, pictures.
     Strips(Box<super::knit_strips::StripsArgs>),
+    /// What accuracy costs in time for the lumislice renderer [C03 §5]: table resolution,
+    /// march steps, level of detail, eq. 10 shadows, extinction, multiple scattering,
+    /// against the volumetric reference, with frame-time ratios to plain tubes.
+    Lumislice(Box<super::knit_lumislice::LumisliceArgs>),
+    /// Knitwear that moves: the knit animation [C03 §4] (a scarf dropped or stretched)
+    /// drives the yarns through the knot solver [H25]; BCC frames, rendered frames, a
+    /// contact sheet and per-frame costs; resumable.
+    Animate(Box<super::knit_animate::AnimateArgs>),
 }
 
 /// `btf knit chart`.
@@ -154,6 +162,8 @@ pub fn run(cmd: KnitCmd) -> Result<()> {
         KnitCmd::Compare(a) => super::knit_compare::run(*a),
         KnitCmd::Deform(a) => super::knit_deform::run(*a),
         KnitCmd::Strips(a) => super::knit_strips::run(*a),
+        KnitCmd::Lumislice(a) => super::knit_lumislice::run(*a),
+        KnitCmd::Animate(a) => super::knit_animate::run(*a),
     }
 }
 

@@ -18,6 +18,7 @@ mod garment;
 mod hostile;
 mod import_export;
 mod knit;
+mod knit_motion;
 mod knit_sweep;
 mod python;
 mod relight;
