@@ -43,6 +43,8 @@ choices! {
         Fibers = "fibers",
         /// Fiber-textured yarn strips [H25] (`yarn-render`, textures baked once and cached).
         Strips = "strips",
+        /// Lumislices [C03 §5] (`yarn-render`, the scattering table computed once and cached).
+        Lumislice = "lumislice",
     }
 }
 
@@ -114,7 +116,7 @@ pub struct MaterialArgs {
     #[arg(long)]
     pub yarn: Option<String>,
     /// yarn: how the BTF is rendered (reference: path traced; fibers: GPU [W19]; strips:
-    /// GPU yarn strips [H25]).
+    /// GPU yarn strips [H25]; lumislice: GPU lumislices [C03 §5]).
     #[arg(long, default_value = "reference")]
     pub method: YarnMethod,
     /// yarn: jittered samples per texel (default 16); strips: camera rays per texel of the
@@ -438,6 +440,32 @@ fn synth_yarn_material(a: &MaterialArgs, progress: bool) -> Result<()> {
         .with_context(|| format!("synthesising yarn {} into {}", chart_name, a.output.display()))?;
         eprintln!(
             "yarn {} in {} {}² ({}, GPU yarn strips): {} images written, {} kept, {:.1} s -> {}",
+            spec.chart.name,
+            spec.params.name,
+            a.size,
+            a.sampling,
+            r.images_written,
+            r.images_skipped,
+            r.seconds,
+            a.output.display()
+        );
+        return Ok(());
+    }
+    if spec.method == "lumislice" {
+        let gpu = btf_render::Gpu::new()?;
+        let cache = a.output.parent().map(|p| p.join(".yarn-cache"));
+        let r = yarn_render::btf::generate_lumislice_btf(
+            &gpu,
+            &spec,
+            yarn_render::LumisliceRenderSettings::default(),
+            &yarn_precompute::LumisliceSettings::default(),
+            cache.as_deref(),
+            &a.output,
+            &opts,
+        )
+        .with_context(|| format!("synthesising yarn {} into {}", chart_name, a.output.display()))?;
+        eprintln!(
+            "yarn {} in {} {}² ({}, GPU lumislices): {} images written, {} kept, {:.1} s -> {}",
             spec.chart.name,
             spec.params.name,
             a.size,

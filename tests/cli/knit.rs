@@ -117,19 +117,6 @@ fn knit_refusals_name_what_is_wrong() {
     std::fs::write(d.path("c.chart"), "name: c\nkp\n").unwrap();
     let e = d.fails(&["knit", "fibers", "--chart", "c.chart", "-o", "c.chart"]);
     assert!(e.contains("c.chart"), "{e}");
-    let e = d.fails(&[
-        "synth",
-        "material",
-        "--kind",
-        "yarn",
-        "--method",
-        "lumislice",
-        "--size",
-        "4",
-        "-o",
-        "x.btf",
-    ]);
-    assert!(e.contains("lumislice"), "{e}");
     let e =
         d.fails(&["synth", "material", "--kind", "lambert", "--chart", "garter", "-o", "x.btf"]);
     assert!(e.contains("--kind yarn"), "{e}");

@@ -122,3 +122,38 @@ fn knit_animate_writes_frames_and_resumes() {
     let e = d.fails(&["knit", "animate", "--seconds", "0", "-o", "an2"]);
     assert!(e.contains("--seconds 0"), "{e}");
 }
+
+/// `btf synth material --kind yarn --method lumislice`: the yarn BTF by the lumislices, an
+/// ordinary store with its provenance; the head-on view under the head-on light is brighter
+/// than under a grazing one (the yarns shade each other).
+#[test]
+fn synth_material_yarn_by_lumislices() {
+    let d = Dir::new();
+    let args = [
+        "synth",
+        "material",
+        "--kind",
+        "yarn",
+        "--method",
+        "lumislice",
+        "--size",
+        "8",
+        "--sampling",
+        "rings:0x1,60x4",
+        "-o",
+        "y.btf",
+    ];
+    let Some(_) = run_gpu(&d, &args) else { return };
+    let st = btf_core::store::BtfStore::open(&d.path("y.btf")).unwrap();
+    let prov = &st.meta().provenance;
+    assert_eq!(prov["method"], "lumislice", "{prov}");
+    assert_eq!(prov["table"]["res"], 32, "{prov}");
+    let mean = |l: usize| {
+        let img = st.read_image(0, l).unwrap();
+        assert!(img.iter().all(|x| x.is_finite() && *x >= 0.0));
+        img.iter().map(|x| *x as f64).sum::<f64>() / img.len() as f64
+    };
+    let (head_on, grazing) = (mean(0), mean(1));
+    assert!(head_on > 0.0 && grazing < head_on, "{head_on} vs {grazing}");
+    assert!(d.path(".yarn-cache").is_dir(), "the table is cached beside the store");
+}

@@ -167,6 +167,59 @@ fn the_knit_swatch_renders_as_yarn_strips_lit_by_lights_and_an_environment() {
     assert!((s1 - s0).abs() > 1e-3 * s0, "rotating the sky changes the strips: {s1} vs {s0}");
 }
 
+/// The same swatch with `method = "lumislice"`: the yarn volumes are drawn over the floor
+/// (the yarn region differs from the floor alone), and turning the light changes them.
+#[test]
+fn the_knit_swatch_renders_as_lumislices() {
+    let d = Dir::new();
+    example(&d);
+    let text = std::fs::read_to_string(d.path("knit-swatch.toml")).unwrap();
+    let ls = text.replacen("method = \"fibers\"", "method = \"lumislice\"", 1);
+    assert_ne!(ls, text);
+    std::fs::write(d.path("ls.toml"), &ls).unwrap();
+    let turned = ls.replacen("direction = [0.4, 1.0, 0.5]", "direction = [-1.0, 0.2, 0.4]", 1);
+    assert_ne!(turned, ls);
+    std::fs::write(d.path("ls-turned.toml"), &turned).unwrap();
+    let no_yarns = text[..text.find("\n[[yarns]]").unwrap()].to_string()
+        + "\n"
+        + &text[text.find("\n[camera]").unwrap()..];
+    std::fs::write(d.path("floor.toml"), no_yarns).unwrap();
+    let render = |scene: &str, exr: &str| -> Option<Vec<f32>> {
+        let o = d.btf(&[
+            "render",
+            scene,
+            "--width",
+            "40",
+            "--height",
+            "40",
+            "-o",
+            &format!("{exr}.png"),
+            "--exr",
+            exr,
+        ]);
+        if String::from_utf8_lossy(&o.stderr).contains("no GPU adapter") {
+            assert!(std::env::var("BTF_REQUIRE_GPU").as_deref() != Ok("1"), "no GPU adapter");
+            return None;
+        }
+        assert!(o.status.success(), "{scene}: {}", String::from_utf8_lossy(&o.stderr));
+        Some(read_exr(&d.path(exr)).2)
+    };
+    let Some(floor) = render("floor.toml", "floor.exr") else { return };
+    let lit = render("ls.toml", "ls.exr").unwrap();
+    let turned = render("ls-turned.toml", "turned.exr").unwrap();
+    let n = 40 * 40;
+    let yarn: Vec<usize> = (0..n)
+        .filter(|&i| (0..3).any(|c| (lit[3 * i + c] - floor[3 * i + c]).abs() > 1e-3))
+        .collect();
+    assert!(yarn.len() > n / 10, "the lumislices cover part of the frame: {}", yarn.len());
+    assert!(lit.iter().all(|v| v.is_finite()));
+    let diff = yarn
+        .iter()
+        .filter(|&&i| (0..3).any(|c| (lit[3 * i + c] - turned[3 * i + c]).abs() > 1e-3))
+        .count();
+    assert!(diff * 2 > yarn.len(), "the light moves over the yarns: {diff} of {}", yarn.len());
+}
+
 #[test]
 fn bad_yarns_entries_are_refused_by_the_binary_naming_the_key() {
     let d = Dir::new();
@@ -177,11 +230,7 @@ fn bad_yarns_entries_are_refused_by_the_binary_naming_the_key() {
     let cases = [
         ("yarn = \"cotton-2ply\"", "yarn = \"silk-9ply\"", vec!["yarns[0].yarn", "silk-9ply"]),
         ("chart = \"rib2x2\"", "chart = \"argyle\"", vec!["yarns[0].chart", "argyle"]),
-        (
-            "method = \"fibers\"",
-            "method = \"lumislice\"",
-            vec!["yarns[0].method", "not implemented"],
-        ),
+        ("method = \"fibers\"", "method = \"slices\"", vec!["slices"]),
         ("wales = 8", "wales = 0", vec!["yarns[0].wales"]),
         (
             "wales = 8\ncourses = 8",
@@ -204,6 +253,15 @@ fn bad_yarns_entries_are_refused_by_the_binary_naming_the_key() {
         }
         assert!(!d.path("bad.png").exists(), "{to}: an image was written");
     }
+    // Lumislices blend into 4× MSAA targets: a scene without MSAA is refused by name.
+    let ls = text.replacen("method = \"fibers\"", "method = \"lumislice\"", 1).replacen(
+        "[effects]\n",
+        "[effects]\nmsaa = 1\n",
+        1,
+    );
+    std::fs::write(d.path("bad.toml"), ls).unwrap();
+    let err = d.fails(&["render", "bad.toml", "-o", "bad.png"]);
+    assert!(err.contains("yarns[0].method = \"lumislice\"") && err.contains("msaa = 1"), "{err}");
 }
 
 #[test]

@@ -164,6 +164,72 @@ pub fn generate_strip_btf(
     })
 }
 
+/// Renders the yarn BTF of `spec` with the lumislice renderer of [C03 §5] (`settings`; its
+/// table computed with `table` in the spec's colour and cached in `cache_dir`) into `out`
+/// (`--method lumislice`): the same patch, camera, light and store as the other methods.
+/// The yarn is the table's Kajiya–Kay medium, not the spec's fiber BCSDF.
+pub fn generate_lumislice_btf(
+    gpu: &Gpu,
+    spec: &YarnBtfSpec,
+    settings: crate::LumisliceRenderSettings,
+    table: &yarn_precompute::LumisliceSettings,
+    cache_dir: Option<&Path>,
+    out: &Path,
+    opts: &YarnBtfOptions,
+) -> Result<FiberBtfReport> {
+    let t0 = Instant::now();
+    let (sampling, patch, packed) = prepare_patch(spec)?;
+    let table = yarn_precompute::LumisliceSettings { seed: spec.seed, ..*table };
+    let color = spec.color.map(|c| c.clamp(0.0, 1.0));
+    let slice =
+        yarn_precompute::Lumislice::for_params(&spec.params, color, &table, cache_dir, &|_| {})
+            .map_err(|e| crate::Error::Invalid(format!("lumislice table: {e}")))?;
+    let renderer =
+        crate::LumisliceRenderer::new(gpu, &packed, std::slice::from_ref(&slice), settings)?;
+    let mut meta = BtfMeta::new(sampling.clone(), sampling.clone(), spec.size, spec.size);
+    let s = &settings;
+    meta.provenance = json!({
+        "generator": "yarn-render",
+        "version": env!("CARGO_PKG_VERSION"),
+        "kind": "yarn",
+        "method": "lumislice",
+        "chart": {"name": spec.chart.name, "source": spec.chart_source, "text": spec.chart.to_text()},
+        "yarn": {"preset": spec.params.name},
+        "stitches": patch.stitches,
+        "size": spec.size,
+        "seed": spec.seed,
+        "color": spec.color,
+        "period_m": patch.period.size,
+        "z_ref_m": patch.z_ref,
+        "settings": {
+            "n_sub": s.n_sub, "step_cells": s.step_cells, "max_steps": s.max_steps,
+            "level_bias": s.level_bias, "shadows": s.shadows,
+            "shadow_variant": format!("{:?}", s.shadow_variant),
+        },
+        "table": {
+            "res": table.res, "levels": slice.levels.len(), "multiple": table.multiple,
+            "extinction": format!("{:?}", table.extinction), "lod": format!("{:?}", table.lod),
+            "seconds": slice.seconds,
+        },
+        "model": "lumislices [C03 §5] (a 32x21-direction scattering table per voxel of the \
+                  yarn cross-section, ray-marched along straight pieces of the yarn, shadows of \
+                  other yarns by eq. 10 from centre-line maps), oblique orthographic camera \
+                  through texel centres of z_ref, 3x3 periodic copies, black background, \
+                  directional light of unit perpendicular irradiance",
+    });
+    let render = |cam: &FiberCamera, lights: &[FiberLight], size| {
+        renderer.render(gpu, cam, lights, size, [0.0; 4]).map(|f| (f.pixels, f.stats.instances))
+    };
+    let (written, skipped, instances) =
+        write_images(spec, &patch, &sampling, meta, out, opts, "lumislice", render)?;
+    Ok(FiberBtfReport {
+        images_written: written,
+        images_skipped: skipped,
+        seconds: t0.elapsed().as_secs_f64(),
+        instances,
+    })
+}
+
 /// What both GPU methods start from: the spec's fiber BCSDF (`what` names the renderer
 /// refusing Lambert), its validated sampling, the periodic patch (hair flyaways not
 /// generated: the renderers draw from the curves) and the curves packed with 3 × 3 periodic
@@ -180,6 +246,15 @@ fn prepare(
             )));
         }
     };
+    let (sampling, patch, packed) = prepare_patch(spec)?;
+    Ok((bcsdf, sampling, patch, packed))
+}
+
+/// The validated sampling, the periodic patch (hair flyaways not generated: the renderers
+/// draw from the curves) and the curves packed with 3 × 3 periodic copies.
+fn prepare_patch(
+    spec: &YarnBtfSpec,
+) -> Result<(btf_core::sampling::Sampling, KnitPatch, PackedYarns)> {
     if spec.size == 0 || spec.size > 4096 {
         return Err(crate::Error::Invalid(format!("yarn BTF size {} (1..=4096)", spec.size)));
     }
@@ -195,7 +270,7 @@ fn prepare(
         std::slice::from_ref(&spec.params),
         &PackOptions { seed: spec.seed, frame_samples_per_segment: 16, tiles: [3, 3] },
     )?;
-    Ok((bcsdf, sampling, patch, packed))
+    Ok((sampling, patch, packed))
 }
 
 /// The image loop both methods share: every (view, light) of `sampling` rendered by

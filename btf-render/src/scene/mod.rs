@@ -314,6 +314,15 @@ impl Scene {
             if let Err((key, what)) = y.validate(&format!("yarns[{i}]")) {
                 return bad(key, &what);
             }
+            if y.method == yarns::YarnMethod::Lumislice && e.msaa != 4 {
+                return bad(
+                    format!("yarns[{i}].method = \"lumislice\""),
+                    &format!(
+                        "blends into 4× MSAA targets; the scene has effects.msaa = {}",
+                        e.msaa
+                    ),
+                );
+            }
         }
         if !self.yarns.is_empty()
             && let Some(i) = self.materials.iter().position(|m| m.transmission.is_some())

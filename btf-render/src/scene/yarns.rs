@@ -25,7 +25,8 @@ pub enum YarnMethod {
     Fibers,
     /// Fiber-textured yarn strips (Huang et al. 2025) with baked textures.
     Strips,
-    /// Lumislices (Chen et al. 2003): not implemented yet.
+    /// Lumislices (Chen et al. 2003): ray-marched yarn volumes with a precomputed
+    /// scattering table, blended over the opaque scene (needs MSAA 4).
     Lumislice,
 }
 
@@ -136,15 +137,6 @@ impl YarnsDesc {
     /// `yarns[i]`).
     pub fn validate(&self, key: &str) -> std::result::Result<(), (String, String)> {
         let bad = |k: &str, what: String| Err((format!("{key}.{k}"), what));
-        match self.method {
-            YarnMethod::Fibers | YarnMethod::Strips => {}
-            YarnMethod::Lumislice => {
-                return bad(
-                    "method",
-                    "\"lumislice\" is not implemented yet (\"fibers\" or \"strips\")".into(),
-                );
-            }
-        }
         for (k, n) in [("wales", self.wales), ("courses", self.courses)] {
             if !(1..=MAX_WALES).contains(&n) {
                 return bad(k, format!("{n} must be in 1..={MAX_WALES}"));

@@ -107,6 +107,8 @@ pub enum YarnDrawer {
     Fibers(FiberRenderer),
     /// Fiber-textured strips [H25] (`method = "strips"`).
     Strips(StripRenderer),
+    /// Lumislices [C03 §5] (`method = "lumislice"`), drawn after every opaque drawer.
+    Lumislice(crate::LumisliceRenderer),
 }
 
 /// The yarn renderers of a scene's `[[yarns]]`, drawn after its BTF pass.
@@ -135,6 +137,36 @@ impl YarnOverlay {
             .iter()
             .map(|y| {
                 let d = &scene.yarns[y.index];
+                if d.method == YarnMethod::Lumislice {
+                    if scene.effects.msaa != crate::lumislice::SAMPLES {
+                        return Err(crate::Error::Invalid(format!(
+                            "yarns[{}].method = \"lumislice\" blends into 4× MSAA targets; the \
+                             scene has effects.msaa = {}",
+                            y.index, scene.effects.msaa
+                        )));
+                    }
+                    let color = y
+                        .set
+                        .curves
+                        .first()
+                        .and_then(|c| c.colors.first().copied())
+                        .unwrap_or([0.8; 3])
+                        .map(|v| v.clamp(0.0, 1.0));
+                    let table = yarn_precompute::Lumislice::for_params(
+                        &y.params,
+                        color,
+                        &yarn_precompute::LumisliceSettings { seed: d.seed, ..Default::default() },
+                        cache_dir,
+                        &|_| {},
+                    )
+                    .map_err(|e| {
+                        crate::Error::Invalid(format!("yarns[{}]: lumislice: {e}", y.index))
+                    })?;
+                    let s =
+                        crate::LumisliceRenderSettings { shadows: d.shadows, ..Default::default() };
+                    let r = crate::LumisliceRenderer::new(gpu, &y.packed, &[table], s)?;
+                    return Ok(YarnDrawer::Lumislice(r));
+                }
                 if d.method == YarnMethod::Strips {
                     let bake = StripBakeSettings { seed: d.seed, ..Default::default() };
                     let bakes = crate::strips::bakes_for(
@@ -241,7 +273,10 @@ impl Overlay for YarnOverlay {
         let env = if has_strips { self.strip_environment(view).map_err(to_render)? } else { None };
         // The table stays where it was built (it changes only with the map).
         let table = self.srbf.as_ref().map(|s| &s.3);
-        for r in &mut self.renderers {
+        // Opaque drawers first, then the blended lumislices over them.
+        let (opaque, blended): (Vec<_>, Vec<_>) =
+            self.renderers.iter_mut().partition(|r| !matches!(r, YarnDrawer::Lumislice(_)));
+        for r in opaque.into_iter().chain(blended) {
             let t = (targets.color, targets.resolve, targets.depth);
             match r {
                 YarnDrawer::Fibers(r) => {
@@ -252,6 +287,10 @@ impl Overlay for YarnOverlay {
                     // The environment through SRBFs ([H25 eq. 17]), not the ambient term.
                     r.set_environment(gpu, env.as_ref().zip(table))
                         .and_then(|_| r.encode_into(gpu, encoder, t, targets.size, &cam, &lights))
+                }
+                // Point and directional lights only: [C03] has no environment light.
+                YarnDrawer::Lumislice(r) => {
+                    r.encode_into(gpu, encoder, t, targets.size, &cam, &lights)
                 }
             }
             .map_err(to_render)?;
