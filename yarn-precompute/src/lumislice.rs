@@ -9,7 +9,8 @@
 //! For each voxel `p` and each of the 32 × 21 light directions `L` (longitude
 //! `θ_i = 2πi/32` about the axis from `N'`, altitude `φ_j = −π/2 + πj/20` out of the slice
 //! plane, DESIGN item 9) the table holds the light the voxel scatters per unit extinction
-//! and unit irradiance:
+//! and unit irradiance — the voxel reflectance function of [C03 eq. 7–8], with the
+//! multiple-scattering term of [C03 eq. 4]:
 //!
 //! `V(p, L) = ϖ · (Ψ(L) · T(p, L) + M(p, L))`
 //!

@@ -5,7 +5,8 @@
 // density's reach, end planes ⟂ the curve tangent there, shared with the neighbour so the
 // pieces tile the yarn) and marches [C03 eq. 9] front to back: per step σ⊥ from the slice
 // turned by the twist, the view extinction σ⊥·sin β_o (anisotropic) or σ⊥, the table V of
-// yarn_precompute::Lumislice for every light (bilinear in the voxel and over the four
+// yarn_precompute::Lumislice (the VRF of [C03 eq. 8], times the irradiance: [C03 eq. 7])
+// for every light (bilinear in the voxel and over the four
 // nearest of the 32 × 21 light directions), other yarns' shadow by [C03 eq. 10] from the
 // centre-line maps (lumislice_centerline), and the step's own attenuation (DESIGN item 11).
 // Output is premultiplied colour and coverage, blended "over" in the sorted order.
