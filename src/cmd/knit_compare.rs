@@ -11,6 +11,9 @@
 //! - **R2** [H25]'s yarn strips (`yarn_render::strips`, textures baked once from a
 //!   straight yarn of the same parameters and cached in `DIR/bake-cache`; with the flyaway
 //!   overlay when the BTF's yarn has hair flyaways);
+//! - **R3** [C03]'s lumislices (`yarn_render::lumislice`, the scattering table computed
+//!   once for the yarn's colour and cached in `DIR/bake-cache`): a Kajiya–Kay volume, not
+//!   the fibers' BCSDF, so its error holds the model's difference as well as the method's;
 //! - **R4** the BTF on the garment: the yarn BTF made by the reference
 //!   (`btf synth material --kind yarn`), compressed per view ([S03]'s PCA) to each
 //!   `--components`, rendered by `btf-render` per pixel with four-light/four-view blending
@@ -516,7 +519,7 @@ fn study(
     lods.dedup();
     let mut cells: Vec<Cell> = Vec::new();
     let mut jobs: Vec<Job> = Vec::new();
-    let n_cells = cams.len() * (lods.len() + 2 + eigs.len() + 1);
+    let n_cells = cams.len() * (lods.len() + 3 + eigs.len() + 1);
     // R2: the strip textures, baked once (cached across strains and runs).
     let t = Instant::now();
     let bakes = yarn_render::strips::bakes_for(
@@ -537,6 +540,16 @@ fn study(
         Vec::new()
     };
     let strip_prep = if bakes[0].from_cache { bakes[0].seconds } else { t.elapsed().as_secs_f64() };
+    // R3: the lumislice table, computed once (cached like the strip bakes).
+    let t = Instant::now();
+    let slice = yarn_precompute::Lumislice::for_params(
+        &src.params,
+        src.color.map(|c| c.clamp(0.0, 1.0)),
+        &yarn_precompute::LumisliceSettings { seed: src.seed, ..Default::default() },
+        Some(&a.output.join("bake-cache")),
+        &|_| {},
+    )?;
+    let slice_prep = if slice.from_cache { slice.seconds } else { t.elapsed().as_secs_f64() };
     let bar = crate::progress::bar((n_cells * (1 + a.repeat as usize)) as u64, "GPU cells");
     for (ci, cam) in cams.iter().enumerate() {
         let fcam = FiberCamera::perspective(cam.eye, cam.target, UP, FOV_DEG);
@@ -583,6 +596,21 @@ fn study(
             jobs.push(Job::Strips(Box::new((r, fcam))));
             bar.inc(1);
         }
+        {
+            let t = Instant::now();
+            let r = yarn_render::LumisliceRenderer::new(
+                gpu,
+                &packed,
+                std::slice::from_ref(&slice),
+                yarn_render::LumisliceRenderSettings::default(),
+            )?;
+            let prep = t.elapsed().as_secs_f64() + slice_prep;
+            let img = r.render(gpu, &fcam, &fiber_lights, (w, h), [0.0; 4])?;
+            let rgb: Vec<f32> = img.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+            cells.push(Cell::new("R3", "lumislices", ci, rgb, prep, img.stats.yarn_bytes, true));
+            jobs.push(Job::Lumislice(Box::new((r, fcam))));
+            bar.inc(1);
+        }
         for (c, eig, pca_s, _) in eigs {
             let scene = btf_scene(out, &obj, eig, cam, (w, h), to_light, irradiance)?;
             let t = Instant::now();
@@ -621,6 +649,11 @@ fn study(
                     std::hint::black_box(img.pixels.len());
                 }
                 Job::Strips(rc) => {
+                    let (r, cam) = &**rc;
+                    let img = r.render(gpu, cam, &fiber_lights, (w, h), [0.0; 4])?;
+                    std::hint::black_box(img.pixels.len());
+                }
+                Job::Lumislice(rc) => {
                     let (r, cam) = &**rc;
                     let img = r.render(gpu, cam, &fiber_lights, (w, h), [0.0; 4])?;
                     std::hint::black_box(img.pixels.len());
@@ -743,6 +776,7 @@ fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
 enum Job {
     Fibers(Box<(FiberRenderer, FiberCamera)>),
     Strips(Box<(yarn_render::StripRenderer, FiberCamera)>),
+    Lumislice(Box<(yarn_render::LumisliceRenderer, FiberCamera)>),
     Btf(Box<btf_render::Renderer>),
 }
 

@@ -570,6 +570,7 @@ fn short(c: &Cell) -> String {
         "R1" => format!("R1 {}", c.name.trim_start_matches("fibers LoD ").replace(' ', "")),
         "R4" => format!("R4 {}", c.name.trim_start_matches("BTF ").replace(' ', "")),
         "R2" => "R2 strips".into(),
+        "R3" => "R3 lumislices".into(),
         _ if c.name.contains("tubes") => "tubes".into(),
         _ => "plain".into(),
     }
@@ -580,7 +581,8 @@ fn short(c: &Cell) -> String {
 pub type StretchRun = (f64, Vec<Cell>, Vec<Distance>, f64);
 
 /// The representations the stretch summary follows: the BTF at its largest component
-/// count, the GPU fibers at full detail, the yarn strips and the plain texture.
+/// count, the GPU fibers at full detail, the yarn strips, the lumislices and the plain
+/// texture.
 fn stretch_followed(cells: &[Cell]) -> Vec<String> {
     let mut names: Vec<String> = Vec::new();
     let best_btf = cells
@@ -592,6 +594,9 @@ fn stretch_followed(cells: &[Cell]) -> Vec<String> {
     names.push("fibers full detail".into());
     if cells.iter().any(|c| c.name == "yarn strips") {
         names.push("yarn strips".into());
+    }
+    if cells.iter().any(|c| c.name == "lumislices") {
+        names.push("lumislices".into());
     }
     names.push("plain texture (BTF mean)".into());
     names
