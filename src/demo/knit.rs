@@ -4,7 +4,8 @@
 //! baseline timed in the same run; then the same patch at rest and stretched 30 % along its
 //! wales with the yarns moved by the knot solver ([H25], `yarn::knit::knot`), side by side;
 //! then the rest patch by the fibers and by [H25]'s yarn strips (`yarn_render::strips`,
-//! textures baked once into `knit/bake-cache`), each timed. Writes `knit/knit.png`,
+//! textures baked once into `knit/bake-cache`) and by [C03]'s lumislices
+//! (`yarn_render::lumislice`, the table computed once into the same cache), each timed. Writes `knit/knit.png`,
 //! `knit/knit-stretch.png`, `knit/knit-strips.png` and `knit/knit.json` (what the report
 //! shows); no equation lives here.
 
@@ -145,18 +146,47 @@ pub fn run(out: &Path, width: u32) -> Result<()> {
         let rgb: Vec<f32> = im.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
         btf_image::write::to_srgb_image(size.0 as usize, size.1 as usize, &rgb, 1.0)
     };
-    let (fi, si) = (to_img(&img), to_img(&simg));
+    // And by [C03]'s lumislices (the table computed once into the same cache).
+    let t = Instant::now();
+    let slice = yarn_precompute::Lumislice::for_params(
+        &params,
+        sk.color.map(|c| c as f32),
+        &yarn_precompute::LumisliceSettings::default(),
+        Some(&dir.join("bake-cache")),
+        &|_| {},
+    )?;
+    let slice_s = if slice.from_cache { slice.seconds } else { t.elapsed().as_secs_f64() };
+    let lum = yarn_render::LumisliceRenderer::new(
+        &gpu,
+        &packed,
+        std::slice::from_ref(&slice),
+        yarn_render::LumisliceRenderSettings::default(),
+    )?;
+    let limg = lum.render(&gpu, &cam, &lights, size, [0.02, 0.02, 0.025, 1.0])?;
+    let mut tl = f64::INFINITY;
+    for _ in 0..2 {
+        let t = Instant::now();
+        lum.render(&gpu, &cam, &lights, size, [0.0; 4])?;
+        tl = tl.min(t.elapsed().as_secs_f64());
+    }
+    let (fi, si, li) = (to_img(&img), to_img(&simg), to_img(&limg));
     let fl = format!("fibers {:.0} ms", tf * 1e3);
     let sl = format!("strips {:.0} ms", ts * 1e3);
+    let ll = format!("lumislices {:.0} ms", tl * 1e3);
     btf_image::write::write_png(
         &dir.join("knit-strips.png"),
-        &btf_image::compose::captioned_strip(&[(&fi, fl.as_str()), (&si, sl.as_str())], 6),
+        &btf_image::compose::captioned_strip(
+            &[(&fi, fl.as_str()), (&si, sl.as_str()), (&li, ll.as_str())],
+            6,
+        ),
     )?;
     let st = img.stats;
     let j = serde_json::json!({
         "strips_png": "knit/knit-strips.png",
         "strips_ms": ts * 1e3,
         "strips_bake_s": bake_s,
+        "lumislice_ms": tl * 1e3,
+        "lumislice_table_s": slice_s,
         "stretch_png": "knit/knit-stretch.png",
         "stretch": stretch,
         "knot_faces": model.knot_faces(),

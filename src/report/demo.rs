@@ -152,6 +152,8 @@ struct KnitDemo {
     stretch: Option<(String, f64, u64, f64, f64)>,
     /// The strips panel: image, strips ms, bake seconds.
     strips: Option<(String, f64, f64)>,
+    /// The lumislices of the same panel: ms, table seconds.
+    lumislices: Option<(f64, f64)>,
 }
 
 fn knit_json(out: &Path) -> Option<KnitDemo> {
@@ -181,6 +183,9 @@ fn knit_json(out: &Path) -> Option<KnitDemo> {
                 j.get("strips_ms")?.as_f64()?,
                 j.get("strips_bake_s")?.as_f64()?,
             ))
+        })(),
+        lumislices: (|| {
+            Some((j.get("lumislice_ms")?.as_f64()?, j.get("lumislice_table_s")?.as_f64()?))
         })(),
     })
 }
@@ -335,9 +340,15 @@ pub fn write(
                 ms,
                 k.fibers_ms
             )));
+            if let Some((lms, table)) = k.lumislices {
+                page.push(Block::Para(format!(
+                    "And a third way (right): each yarn as a cloud of light-scattering fibers, its cross-section precomputed once ({:.0} s) for 672 light directions with the light bouncing inside it, then marched through pixel by pixel and shaded by the yarns between it and the lamp (Chen et al. 2003). A frame took {:.0} ms; `btf knit lumislice` measures its accuracy against a slow exact rendering of the same volumes.",
+                    table, lms
+                )));
+            }
             page.push(Block::Figure {
                 src: png.clone(),
-                caption: "Fibers generated on the GPU (left) and fiber-textured yarn strips (right), same yarns, camera and lights.".into(),
+                caption: "Fibers generated on the GPU (left), fiber-textured yarn strips (middle) and lumislices (right), same yarns, camera and lights.".into(),
             });
         }
     }

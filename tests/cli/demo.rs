@@ -76,6 +76,9 @@ fn demo_runs_end_to_end_and_resumes() {
     );
     // The yarn strips' panel, timed, with its bake.
     assert!(k["strips_ms"].as_f64().unwrap() > 0.0 && k["strips_bake_s"].as_f64().unwrap() > 0.0);
+    assert!(
+        k["lumislice_ms"].as_f64().unwrap() > 0.0 && k["lumislice_table_s"].as_f64().unwrap() > 0.0
+    );
     assert!(out.join("knit/knit-strips.png").is_file() && report.contains("knit/knit-strips.png"));
     let details = std::fs::read_to_string(out.join("details.md")).unwrap();
     assert!(report.contains("(details.html)") && details.contains("| synthesise material |"));
