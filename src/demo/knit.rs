@@ -150,7 +150,7 @@ pub fn run(out: &Path, width: u32) -> Result<()> {
     let t = Instant::now();
     let slice = yarn_precompute::Lumislice::for_params(
         &params,
-        sk.color.map(|c| c as f32),
+        sk.color,
         &yarn_precompute::LumisliceSettings::default(),
         Some(&dir.join("bake-cache")),
         &|_| {},
