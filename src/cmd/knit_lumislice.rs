@@ -68,7 +68,8 @@ pub struct LumisliceArgs {
     /// steps0.5, steps2, bias-1 (one level finer), bias+1 (coarser), finest (LoD off),
     /// eq11 (the paper's LoD rule), no-shadow, empirical (eq. 10 as published), isotropic
     /// (the paper's extinction), nsub2, nsub8, ms (multiple scattering in the table, against
-    /// the reference with multiple scattering).
+    /// the reference with multiple scattering), slices8 (the paper's instanced slices, 8 a
+    /// piece, instead of the ray march).
     #[arg(
         long,
         value_delimiter = ',',
@@ -95,7 +96,8 @@ pub struct LumisliceArgs {
 const FOV_DEG: f64 = 30.0;
 
 /// The variants `--variants` knows.
-const VARIANTS: [&str; 15] = [
+const VARIANTS: [&str; 16] = [
+    "slices8",
     "default",
     "res16",
     "res64",
@@ -137,6 +139,7 @@ fn variant(
         "nsub2" => r.n_sub = 2,
         "nsub8" => r.n_sub = 8,
         "ms" => t.multiple = true,
+        "slices8" => r.slices = 8,
         other => bail!("--variants {other}: one of {}", VARIANTS.join(", ")),
     }
     Ok((t, r))

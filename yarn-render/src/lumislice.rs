@@ -17,7 +17,10 @@
 //! **Deviations from [C03], each for a reason** (DESIGN §1.3):
 //! - a ray march per piece instead of slices: no edge-on degeneracy and no per-slice
 //!   opacity that ignores the path length through a slice (item 12); the paper's instanced
-//!   slices are not built;
+//!   slices are kept for comparison ([`LumisliceRenderSettings::slices`] per piece, back to
+//!   front within a piece, opacity corrected for the path length through the slab) — at
+//!   70–90° from the yarn axis they show gaps and ghosts where the march does not
+//!   (`tests/gpu/lumislice.rs`, BENCHMARKS.md);
 //! - the shadow test per march step, not per slice vertex, and only where the occluding
 //!   centre line is another piece (not this or a neighbouring one) more than `R_y` nearer
 //!   the light — the table already holds the yarn's own attenuation (item 13's double count);
@@ -76,6 +79,9 @@ pub struct LumisliceRenderSettings {
     pub k0: f64,
     /// Side of the centre-line maps (texels).
     pub shadow_map: u32,
+    /// The paper's instanced slices, this many per piece (0: the ray march, the default;
+    /// DESIGN §1.3 item 12: slices vanish edge-on).
+    pub slices: u32,
 }
 
 impl Default for LumisliceRenderSettings {
@@ -89,6 +95,7 @@ impl Default for LumisliceRenderSettings {
             shadow_variant: ShadowVariant::Physical,
             k0: 0.8,
             shadow_map: 1024,
+            slices: 0,
         }
     }
 }
@@ -110,6 +117,7 @@ struct MarchParamsRaw {
     view_proj: [[[f32; 4]; 4]; MAX_SHADOW_MAPS],
     light: [u32; 4],
     dpm: [f32; 4],
+    slices: [u32; 4],
 }
 
 #[repr(C)]
@@ -183,6 +191,9 @@ impl LumisliceRenderer {
         }
         if !(-4..=4).contains(&s.level_bias) {
             return Err(Error::Invalid(format!("lumislice: level_bias {} (−4..=4)", s.level_bias)));
+        }
+        if s.slices > 256 {
+            return Err(Error::Invalid(format!("lumislice: slices {} (0..=256)", s.slices)));
         }
         if s.shadow_map < 16 || s.shadow_map > 8192 {
             return Err(Error::Invalid(format!(
@@ -313,7 +324,8 @@ impl LumisliceRenderer {
                         layout: &wgpu::BindGroupLayout,
                         vs: &'static str,
                         fs: &'static str,
-                        march: bool| {
+                        march: bool,
+                        strip: bool| {
             gpu.scoped(label, || {
                 let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
                     label: Some(label),
@@ -338,7 +350,13 @@ impl LumisliceRenderer {
                         compilation_options: Default::default(),
                         buffers: &[],
                     },
-                    primitive: if march {
+                    primitive: if strip {
+                        wgpu::PrimitiveState {
+                            topology: wgpu::PrimitiveTopology::TriangleStrip,
+                            cull_mode: None,
+                            ..Default::default()
+                        }
+                    } else if march {
                         wgpu::PrimitiveState {
                             topology: wgpu::PrimitiveTopology::TriangleList,
                             front_face: wgpu::FrontFace::Ccw,
@@ -384,8 +402,12 @@ impl LumisliceRenderer {
             })
             .map_err(|e| Error::Gpu(e.to_string()))
         };
-        let march =
-            pipeline("lumislice_march", &march_src, &march_layout, "vs_piece", "fs_piece", true)?;
+        let (vs, fs, strip) = if s.slices > 0 {
+            ("vs_slice", "fs_slice", true)
+        } else {
+            ("vs_piece", "fs_piece", false)
+        };
+        let march = pipeline("lumislice_march", &march_src, &march_layout, vs, fs, true, strip)?;
         let centre = pipeline(
             "lumislice_centerline",
             &centre_src,
@@ -393,6 +415,7 @@ impl LumisliceRenderer {
             "vs_centre",
             "fs_centre",
             false,
+            true,
         )?;
         let n_sub = s.n_sub as usize;
         let pieces = packed
@@ -520,6 +543,7 @@ impl LumisliceRenderer {
                 maps.len() as u32,
             ],
             f: [s.step_cells, s.level_bias as f32, s.shadow_map as f32, self.lut_entries as f32],
+            slices: [s.slices, 0, 0, 0],
             ..Default::default()
         };
         for (m, ((pass, dpm), (_, light))) in views.iter().zip(&maps).enumerate() {
@@ -686,7 +710,11 @@ impl LumisliceRenderer {
             pass.set_pipeline(&self.march);
             pass.set_bind_group(0, &self.data.bind_group, &[]);
             pass.set_bind_group(1, &group, &[]);
-            pass.draw(0..36, 0..self.pieces.len() as u32);
+            if s.slices > 0 {
+                pass.draw(0..4, 0..self.pieces.len() as u32 * s.slices);
+            } else {
+                pass.draw(0..36, 0..self.pieces.len() as u32);
+            }
         }
         Ok(())
     }

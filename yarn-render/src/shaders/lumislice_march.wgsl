@@ -33,6 +33,8 @@ struct MarchParams {
     light: vec4<u32>,
     // Per map: light-clip depth per metre.
     dpm: vec4<f32>,
+    // Slices per piece in the paper's slice mode (0: the ray march), unused ×3.
+    slices: vec4<u32>,
 }
 
 @group(1) @binding(0) var<uniform> view: View;
@@ -342,5 +344,120 @@ fn fs_piece(in: PieceOut) -> MarchOut {
     }
     var out: MarchOut;
     out.color = vec4<f32>(l, 1.0 - tr);
+    return out;
+}
+
+// ---- [C03 §5.2]'s instanced slices (the paper's mode, for comparison) ----
+// One instance per slice: `slices` quads per piece, ⟂ the piece axis at (k + ½)Δs, spanned by
+// the slice frame turned by the twist there, ±half width; within a piece drawn back to
+// front. Each slice stands for a slab Δs thick: opacity 1 − e^{−σ⊥ sin β_o Δs/|cos β_o|}
+// (the path length through the slab, DESIGN §1.3 item 12's correction; it diverges, and
+// the quads vanish, as the slices turn edge-on).
+
+struct SliceOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    // Slice coordinates (x, y), twist angle, unused.
+    @location(1) xy: vec4<f32>,
+    // Piece axis (xyz), Δs (w).
+    @location(2) @interpolate(flat) axis: vec4<f32>,
+    // Slice frame e1 at the piece start (xyz), unused.
+    @location(3) @interpolate(flat) e1: vec4<f32>,
+    // Piece, params id, level, unused.
+    @location(4) @interpolate(flat) ids: vec4<u32>,
+}
+
+@vertex
+fn vs_slice(@builtin(vertex_index) vi: u32, @builtin(instance_index) inst: u32) -> SliceOut {
+    let n_sub = max(mp.n.x, 1u);
+    let per = max(mp.slices.x, 1u);
+    let piece = order[inst / per];
+    var k = inst % per;
+    let seg = piece / n_sub;
+    let sub = piece % n_sub;
+    let ya = yarn_point(seg, f32(sub) / f32(n_sub));
+    let yb = yarn_point(seg, f32(sub + 1u) / f32(n_sub));
+    let s = segments[seg];
+    let c = curves[s.ids.x];
+    let pid = c.ids.x;
+    let h = headers[pid];
+    let ab = yb.pos - ya.pos;
+    let len = length(ab);
+    let axis = normalize_or(ab, ya.t);
+    let mid = 0.5 * (ya.pos + yb.pos);
+    // Back to front along the piece.
+    var toward = view.forward.xyz;
+    if view.eye.w != 0.0 {
+        toward = normalize_or(mid - view.eye.xyz, view.forward.xyz);
+    }
+    if dot(toward, axis) > 0.0 {
+        k = per - 1u - k;
+    }
+    let e1 = normalize_or(ya.n - axis * dot(ya.n, axis), any_perpendicular(axis));
+    let e2 = cross(axis, e1);
+    let nb = yb.n - axis * dot(yb.n, axis);
+    let delta = atan2(dot(cross(e1, nb), axis), dot(e1, nb));
+    let f = (f32(k) + 0.5) / f32(per);
+    let g = mix(twist_angle(seg, ya.dz), twist_angle(seg, yb.dz) + delta, f);
+    // Slice axes in the world: (x, y) = rot(−g)(a, b) ⇔ a = x cos g − y sin g, b = x sin g + y cos g.
+    let cg = cos(g);
+    let sg = sin(g);
+    let ex = e1 * cg + e2 * sg;
+    let ey = -e1 * sg + e2 * cg;
+    let corner = vec2<f32>(select(-1.0, 1.0, (vi & 1u) == 1u), select(-1.0, 1.0, (vi & 2u) == 2u));
+    let xy = corner * h.size.x;
+    let p = ya.pos + axis * (f * len) + ex * xy.x + ey * xy.y;
+    let m = max(pixels_of(view, 2.0 * h.size.x, mid), 1.0);
+    let level = u32(clamp(log2(f32(h.dims.y)) - ceil(log2(m)) + mp.f.y, 0.0, f32(h.dims.x - 1u)));
+    var out: SliceOut;
+    out.clip = view.view_proj * vec4<f32>(p, 1.0);
+    out.world = p;
+    out.xy = vec4<f32>(xy, g, 0.0);
+    out.axis = vec4<f32>(axis, len / f32(per));
+    out.e1 = vec4<f32>(e1, 0.0);
+    out.ids = vec4<u32>(piece, pid, level, 0u);
+    return out;
+}
+
+@fragment
+fn fs_slice(in: SliceOut) -> MarchOut {
+    let h = headers[in.ids.y];
+    let lv = in.ids.z;
+    let axis = in.axis.xyz;
+    var d = view.forward.xyz;
+    if view.eye.w != 0.0 {
+        d = normalize(in.world - view.eye.xyz);
+    }
+    let x = in.xy.x;
+    let y = in.xy.y;
+    let sig = sigma_at(h, lv, x, y);
+    if sig <= 0.0 {
+        discard;
+    }
+    let cos_o = max(abs(dot(d, axis)), 1e-3);
+    let view_factor = select(length(cross(d, axis)), 1.0, h.dims.z == 1u);
+    let alpha = 1.0 - exp(-sig * view_factor * in.axis.w / cos_o);
+    let e1 = in.e1.xyz;
+    let e2 = cross(axis, e1);
+    let cg = cos(in.xy.z);
+    let sg = sin(in.xy.z);
+    var l = vec3<f32>(0.0);
+    for (var i = 0u; i < view.counts.x; i++) {
+        let light = view.lights[i];
+        var wi = light.pos_dir.xyz;
+        var e = light.value.rgb;
+        if light.pos_dir.w != 0.0 {
+            let dl = light.pos_dir.xyz - in.world;
+            let d2 = max(dot(dl, dl), 1e-20);
+            wi = dl / sqrt(d2);
+            e = e / d2;
+        }
+        let wa = dot(wi, e1);
+        let wb = dot(wi, e2);
+        let ls = vec3<f32>(wa * cg + wb * sg, -wa * sg + wb * cg, dot(wi, axis));
+        l += (alpha * yarn_shadow(i, in.world, in.ids.x, h.size.y)) * e * vrf_at(h, lv, x, y, ls);
+    }
+    var out: MarchOut;
+    out.color = vec4<f32>(l, alpha);
     return out;
 }

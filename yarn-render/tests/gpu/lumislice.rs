@@ -271,3 +271,56 @@ fn an_opaque_plate_keeps_its_pixels_bit_for_bit() {
     let behind = frame(Some(0.999_999));
     assert_eq!(behind, free, "a plate behind the yarn changes nothing");
 }
+
+/// DESIGN §1.5's edge-on curve: a straight yarn seen at angles θ from its axis, the paper's
+/// instanced slices against the ray march, both against the volumetric reference. The
+/// slices are cross-sections ⟂ the yarn: face-on when looking along it, edge-on (vanishing)
+/// at 90°, where the ray march has no degeneracy.
+#[test]
+fn slices_fail_edge_on_where_the_ray_march_does_not() {
+    let Some(gpu) = Gpu::for_tests("lumislice_edge_on") else { return };
+    let p = cotton();
+    let (l, s) = table(&p);
+    let pts = (0..9).map(|i| [(i as f64 - 4.0) * 1.5e-3, 0.0, 0.0]).collect();
+    let set = YarnSet::new(vec![YarnCurve::open(pts).unwrap()], None).unwrap();
+    let packed = PackedYarns::new(&set, std::slice::from_ref(&p), &PackOptions::default()).unwrap();
+    let (w, h) = (64usize, 48usize);
+    let (to_light, irradiance) = ([0.2, -0.6, 0.8], [3.0, 3.0, 3.0]);
+    let mut curve = Vec::new();
+    for theta in [20.0f64, 45.0, 70.0, 90.0] {
+        let t = theta.to_radians();
+        let (target, up, fov) = ([0.0; 3], [0.0, 0.0, 1.0], 30.0);
+        let eye = [6e-3 * t.cos(), -6e-3 * t.sin(), 1.5e-3];
+        let r = reference(
+            &set,
+            &p,
+            &s,
+            &[Light::Directional { to_light, irradiance }],
+            &Camera::perspective(eye, target, up, fov).unwrap(),
+            (w, h),
+        );
+        let mut row = vec![theta];
+        for slices in [0u32, 8] {
+            let rs = LumisliceRenderSettings { n_sub: 8, slices, ..Default::default() };
+            let ren = LumisliceRenderer::new(&gpu, &packed, std::slice::from_ref(&l), rs).unwrap();
+            let img = ren
+                .render(
+                    &gpu,
+                    &FiberCamera::perspective(eye, target, up, fov),
+                    &[FiberLight::Directional { to_light, irradiance }],
+                    (w as u32, h as u32),
+                    [0.0; 4],
+                )
+                .unwrap();
+            dump(&format!("edge-{theta}-{slices}"), (w, h), &img.pixels, &r);
+            row.push(rel_rmse(&img.pixels, &r).0);
+        }
+        eprintln!("θ = {theta:>4}°: ray march {:.4}, slices {:.4}", row[1], row[2]);
+        curve.push(row);
+    }
+    for r in &curve {
+        assert!(r[1] < 0.10, "the ray march at every angle: {curve:?}");
+    }
+    let last = &curve[curve.len() - 1];
+    assert!(last[2] > 2.0 * last[1] && last[2] > curve[0][2], "slices edge-on: {curve:?}");
+}
