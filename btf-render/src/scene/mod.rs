@@ -466,7 +466,6 @@ mod tests {
             ("wales = 4\ncourses = 4", "wales = 4096\ncourses = 4096", "yarns[0].wales"),
             ("wales = 4", "wales = 4\nstitch_uv = [0.0, 0.1]", "yarns[0].stitch_uv"),
             ("wales = 4", "wales = 4\nstitch_uv = [0.1, -0.1]", "yarns[0].stitch_uv"),
-            ("wales = 4", "wales = 4\nmethod = \"lumislice\"", "yarns[0].method"),
             ("wales = 4", "wales = 4\nlod_px = -1", "yarns[0].lod_px"),
             ("wales = 4", "wales = 4\nalbedo = [2, 0, 0]", "yarns[0].albedo"),
         ];
@@ -474,6 +473,12 @@ mod tests {
             let e = load(&format!("{MINIMAL}{YARNS}").replace(from, to)).unwrap_err().to_string();
             assert!(e.contains(key), "{to}: {e}");
         }
+        // Lumislices blend into 4× MSAA targets: accepted by default, refused without MSAA.
+        let ls =
+            format!("{MINIMAL}{YARNS}").replace("wales = 4", "wales = 4\nmethod = \"lumislice\"");
+        assert_eq!(load(&ls).unwrap().yarns[0].method, YarnMethod::Lumislice);
+        let e = load(&format!("{ls}[effects]\nmsaa = 1\n")).unwrap_err().to_string();
+        assert!(e.contains("yarns[0].method") && e.contains("msaa = 1"), "{e}");
         let e = load(
             &format!("{MINIMAL}{YARNS}").replace("wales = 4", "wales = 4\nmethod = \"splines\""),
         )
