@@ -438,7 +438,7 @@ impl<'a> FrameRenderer<'a> {
         let packed = PackedYarns::new(
             set,
             std::slice::from_ref(&self.params),
-            &PackOptions { seed: 1, frame_samples_per_segment: 8, tiles: [1, 1] },
+            &PackOptions { seed: 1, frame_samples_per_segment: 4, tiles: [1, 1] },
         )?;
         let clear = [0.05, 0.05, 0.06, 1.0];
         let img = match &self.table {
