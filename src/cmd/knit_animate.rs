@@ -105,9 +105,7 @@ fn simulate(a: &AnimateArgs, grid: LoopGrid, ws: f64, cs: f64) -> Result<(SceneR
         grid,
         a.seconds
     );
-    let hash = yarn::hash::hash_keys(
-        &key.bytes().map(u64::from).chain([key.len() as u64]).collect::<Vec<_>>(),
-    );
+    let hash = yarn::hash::hash_bytes(key.as_bytes());
     let path = a.output.join("cache").join(format!("sim-{hash:016x}.bin"));
     if let Ok(bytes) = std::fs::read(&path)
         && let Some(run) = decode_run(&bytes, &key, grid)
@@ -158,28 +156,14 @@ fn encode_run(run: &SceneRun, key: &str) -> Vec<u8> {
             p.iter().for_each(|x| out.extend(x.to_le_bytes()));
         }
     }
-    let sum = checksum(&out);
+    let sum = yarn::hash::hash_bytes(&out);
     out.extend(sum.to_le_bytes());
     out
 }
 
-/// A 64-bit checksum of `bytes` (`yarn::hash` over 8-byte words and the length).
-fn checksum(bytes: &[u8]) -> u64 {
-    let mut words: Vec<u64> = bytes
-        .chunks(8)
-        .map(|c| {
-            let mut b = [0u8; 8];
-            b[..c.len()].copy_from_slice(c);
-            u64::from_le_bytes(b)
-        })
-        .collect();
-    words.push(bytes.len() as u64);
-    yarn::hash::hash_keys(&words)
-}
-
 fn decode_run(bytes: &[u8], key: &str, grid: LoopGrid) -> Option<SceneRun> {
     let (body, sum) = bytes.split_at(bytes.len().checked_sub(8)?);
-    if checksum(body) != u64::from_le_bytes(sum.try_into().ok()?) {
+    if yarn::hash::hash_bytes(body) != u64::from_le_bytes(sum.try_into().ok()?) {
         return None;
     }
     let mut at = 0usize;

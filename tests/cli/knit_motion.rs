@@ -6,6 +6,7 @@
 //! GPU runs are skipped without an adapter unless `BTF_REQUIRE_GPU=1`.
 
 use crate::common::Dir;
+use crate::knit_sweep::rows;
 
 fn run_gpu(d: &Dir, args: &[&str]) -> Option<(String, String)> {
     let o = d.btf(args);
@@ -17,18 +18,6 @@ fn run_gpu(d: &Dir, args: &[&str]) -> Option<(String, String)> {
     }
     assert!(o.status.success(), "btf {args:?} failed:\n{err}");
     Some((String::from_utf8(o.stdout).unwrap(), err))
-}
-
-fn rows(csv: &str) -> Vec<std::collections::HashMap<String, String>> {
-    let mut lines = csv.lines();
-    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
-    lines
-        .map(|l| {
-            let cells: Vec<&str> = l.split(',').collect();
-            assert_eq!(cells.len(), head.len(), "{l}");
-            head.iter().zip(cells).map(|(h, c)| (h.to_string(), c.to_string())).collect()
-        })
-        .collect()
 }
 
 #[test]

@@ -45,7 +45,7 @@ fn knit_render_stats_and_compare_against_itself_is_zero() {
 }
 
 /// The CSV as rows of named cells.
-fn rows(csv: &str) -> Vec<std::collections::HashMap<String, String>> {
+pub(crate) fn rows(csv: &str) -> Vec<std::collections::HashMap<String, String>> {
     let mut lines = csv.lines();
     let head: Vec<&str> = lines.next().unwrap().split(',').collect();
     lines

@@ -151,16 +151,43 @@ impl Precomputed {
 
 /// 64-bit key hash (`yarn::hash` over 8-byte chunks and the length).
 pub(crate) fn key_hash(bytes: &[u8]) -> u64 {
-    let mut words: Vec<u64> = bytes
-        .chunks(8)
-        .map(|c| {
-            let mut b = [0u8; 8];
-            b[..c.len()].copy_from_slice(c);
-            u64::from_le_bytes(b)
-        })
-        .collect();
-    words.push(bytes.len() as u64);
-    yarn::hash::hash_keys(&words)
+    yarn::hash::hash_bytes(bytes)
+}
+
+/// A cache file: `magic`, `version`, the key (length-prefixed), the payload length and
+/// its CRC-32C, the payload. Every bake of this crate writes its payload so.
+pub(crate) fn frame(magic: &[u8; 8], version: u32, key: &str, payload: &[u8]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(payload.len() + key.len() + 32);
+    out.extend(magic);
+    out.extend(version.to_le_bytes());
+    out.extend((key.len() as u32).to_le_bytes());
+    out.extend(key.as_bytes());
+    out.extend((payload.len() as u64).to_le_bytes());
+    out.extend(crc32c::crc32c(payload).to_le_bytes());
+    out.extend(payload);
+    out
+}
+
+/// The payload of a [`frame`]d file if its magic, version and key are exactly these, its
+/// length is what it says and its CRC matches (else `None`: the caller rebuilds).
+pub(crate) fn unframe<'a>(
+    bytes: &'a [u8],
+    magic: &[u8; 8],
+    version: u32,
+    key: &str,
+) -> Option<&'a [u8]> {
+    let mut r = Reader(bytes);
+    if r.take(8)? != magic || u32::from_le_bytes(r.take(4)?.try_into().ok()?) != version {
+        return None;
+    }
+    let klen = u32::from_le_bytes(r.take(4)?.try_into().ok()?) as usize;
+    if r.take(klen)? != key.as_bytes() {
+        return None;
+    }
+    let plen = r.u64()?;
+    let crc = u32::from_le_bytes(r.take(4)?.try_into().ok()?);
+    let payload = r.take(plen)?;
+    (r.0.is_empty() && crc32c::crc32c(payload) == crc).then_some(payload)
 }
 
 pub(crate) struct Writer(pub(crate) Vec<u8>);
@@ -229,37 +256,12 @@ fn encode(p: &Precomputed, key: &str) -> Vec<u8> {
     w.u64(p.ambient.theta_o.len());
     w.f64s(&p.ambient.theta_o);
     p.ambient.values.iter().for_each(|v| w.f64s(v));
-    let payload = w.0;
-    let mut out = Vec::with_capacity(payload.len() + key.len() + 32);
-    out.extend(MAGIC);
-    out.extend(FORMAT_VERSION.to_le_bytes());
-    out.extend((key.len() as u32).to_le_bytes());
-    out.extend(key.as_bytes());
-    out.extend((payload.len() as u64).to_le_bytes());
-    out.extend(crc32c::crc32c(&payload).to_le_bytes());
-    out.extend(payload);
-    out
+    frame(MAGIC, FORMAT_VERSION, key, &w.0)
 }
 
 /// The bundle in `bytes` if the header carries exactly `key` and the payload is intact.
 fn decode(bytes: &[u8], key: &str) -> Option<Precomputed> {
-    let mut r = Reader(bytes);
-    if r.take(8)? != MAGIC {
-        return None;
-    }
-    if u32::from_le_bytes(r.take(4)?.try_into().ok()?) != FORMAT_VERSION {
-        return None;
-    }
-    let klen = u32::from_le_bytes(r.take(4)?.try_into().ok()?) as usize;
-    if r.take(klen)? != key.as_bytes() {
-        return None;
-    }
-    let plen = r.u64()?;
-    let crc = u32::from_le_bytes(r.take(4)?.try_into().ok()?);
-    let payload = r.take(plen)?;
-    if !r.0.is_empty() || crc32c::crc32c(payload) != crc {
-        return None;
-    }
+    let payload = unframe(bytes, MAGIC, FORMAT_VERSION, key)?;
     let p = parse(&mut Reader(payload))?;
     check_sizes(&p.core).ok()?;
     let s = &p.self_shadow;

@@ -836,37 +836,13 @@ fn encode(l: &Lumislice, key: &str) -> Vec<u8> {
         w.f32s(&lv.sigma);
         w.f32s(&lv.vrf.concat());
     }
-    let payload = w.0;
-    let mut out = Vec::with_capacity(payload.len() + key.len() + 32);
-    out.extend(MAGIC);
-    out.extend(LUMISLICE_FORMAT_VERSION.to_le_bytes());
-    out.extend((key.len() as u32).to_le_bytes());
-    out.extend(key.as_bytes());
-    out.extend((payload.len() as u64).to_le_bytes());
-    out.extend(crc32c::crc32c(&payload).to_le_bytes());
-    out.extend(payload);
-    out
+    crate::cache::frame(MAGIC, LUMISLICE_FORMAT_VERSION, key, &w.0)
 }
 
 /// The lumislice in `bytes` if the header carries exactly `key`, the payload is intact and
 /// every level has the size `s` implies.
 fn decode(bytes: &[u8], key: &str, s: &LumisliceSettings) -> Option<Lumislice> {
-    let mut r = Reader(bytes);
-    if r.take(8)? != MAGIC
-        || u32::from_le_bytes(r.take(4)?.try_into().ok()?) != LUMISLICE_FORMAT_VERSION
-    {
-        return None;
-    }
-    let klen = u32::from_le_bytes(r.take(4)?.try_into().ok()?) as usize;
-    if r.take(klen)? != key.as_bytes() {
-        return None;
-    }
-    let plen = r.u64()?;
-    let crc = u32::from_le_bytes(r.take(4)?.try_into().ok()?);
-    let payload = r.take(plen)?;
-    if !r.0.is_empty() || crc32c::crc32c(payload) != crc {
-        return None;
-    }
+    let payload = crate::cache::unframe(bytes, MAGIC, LUMISLICE_FORMAT_VERSION, key)?;
     let mut r = Reader(payload);
     let (half_width, ply_pitch, fiber_radius, seconds) = (r.f64()?, r.f64()?, r.f64()?, r.f64()?);
     let albedo: [f32; 3] = r.f32s()?.try_into().ok()?;

@@ -26,6 +26,21 @@ pub fn hash_keys(keys: &[u64]) -> u64 {
     h
 }
 
+/// Hashes a byte string into 64 bits: [`hash_keys`] over its little-endian 8-byte words
+/// (the last zero-padded) and its length (cache keys and checksums).
+pub fn hash_bytes(bytes: &[u8]) -> u64 {
+    let mut words: Vec<u64> = bytes
+        .chunks(8)
+        .map(|c| {
+            let mut b = [0u8; 8];
+            b[..c.len()].copy_from_slice(c);
+            u64::from_le_bytes(b)
+        })
+        .collect();
+    words.push(bytes.len() as u64);
+    hash_keys(&words)
+}
+
 /// A uniform number in `[0, 1)` from 64 bits (the top 53).
 #[inline]
 pub fn unit_f64(bits: u64) -> f64 {

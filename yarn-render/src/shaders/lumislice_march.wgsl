@@ -227,6 +227,40 @@ fn yarn_shadow(i: u32, p: vec3<f32>, piece: u32, reach: f32) -> f32 {
     return 1.0;
 }
 
+// The slice frame at a point: e1, e2 at the piece start, the axis, and (cos, sin) of the
+// twist angle that turns them into the slice's (x, y).
+struct SliceFrame {
+    e1: vec3<f32>,
+    e2: vec3<f32>,
+    axis: vec3<f32>,
+    twist: vec2<f32>,
+}
+
+// Σ over the lights of irradiance × [C03 eq. 10]'s shadow × V at slice point `q` of the
+// world point `p` (the light turned into the slice frame first).
+fn scattered(h: SliceHeader, lv: u32, q: vec2<f32>, p: vec3<f32>, f: SliceFrame, piece: u32,
+    reach: f32) -> vec3<f32> {
+    var l = vec3<f32>(0.0);
+    for (var i = 0u; i < view.counts.x; i++) {
+        let light = view.lights[i];
+        var wi = light.pos_dir.xyz;
+        var e = light.value.rgb;
+        if light.pos_dir.w != 0.0 {
+            let dl = light.pos_dir.xyz - p;
+            let d2 = max(dot(dl, dl), 1e-20);
+            wi = dl / sqrt(d2);
+            e = e / d2;
+        }
+        let wa = dot(wi, f.e1);
+        let wb = dot(wi, f.e2);
+        let c = f.twist.x;
+        let s = f.twist.y;
+        let ls = vec3<f32>(wa * c + wb * s, -wa * s + wb * c, dot(wi, f.axis));
+        l += yarn_shadow(i, p, piece, reach) * e * vrf_at(h, lv, q.x, q.y, ls);
+    }
+    return l;
+}
+
 struct MarchOut {
     @location(0) color: vec4<f32>,
 }
@@ -320,22 +354,8 @@ fn fs_piece(in: PieceOut) -> MarchOut {
             continue;
         }
         let alpha = 1.0 - exp(-sig * step);
-        for (var i = 0u; i < view.counts.x; i++) {
-            let light = view.lights[i];
-            var wi = light.pos_dir.xyz;
-            var e = light.value.rgb;
-            if light.pos_dir.w != 0.0 {
-                let dl = light.pos_dir.xyz - p;
-                let d2 = max(dot(dl, dl), 1e-20);
-                wi = dl / sqrt(d2);
-                e = e / d2;
-            }
-            let wa = dot(wi, e1);
-            let wb = dot(wi, e2);
-            let ls = vec3<f32>(wa * cg + wb * sg, -wa * sg + wb * cg, dot(wi, axis));
-            let v = vrf_at(h, lv, x, y, ls);
-            l += (tr * alpha * yarn_shadow(i, p, in.ids.x, reach)) * e * v;
-        }
+        let frame = SliceFrame(e1, e2, axis, vec2<f32>(cg, sg));
+        l += (tr * alpha) * scattered(h, lv, vec2<f32>(x, y), p, frame, in.ids.x, reach);
         tr *= 1.0 - alpha;
         if tr < 1e-4 {
             tr = 0.0;
@@ -441,22 +461,8 @@ fn fs_slice(in: SliceOut) -> MarchOut {
     let e2 = cross(axis, e1);
     let cg = cos(in.xy.z);
     let sg = sin(in.xy.z);
-    var l = vec3<f32>(0.0);
-    for (var i = 0u; i < view.counts.x; i++) {
-        let light = view.lights[i];
-        var wi = light.pos_dir.xyz;
-        var e = light.value.rgb;
-        if light.pos_dir.w != 0.0 {
-            let dl = light.pos_dir.xyz - in.world;
-            let d2 = max(dot(dl, dl), 1e-20);
-            wi = dl / sqrt(d2);
-            e = e / d2;
-        }
-        let wa = dot(wi, e1);
-        let wb = dot(wi, e2);
-        let ls = vec3<f32>(wa * cg + wb * sg, -wa * sg + wb * cg, dot(wi, axis));
-        l += (alpha * yarn_shadow(i, in.world, in.ids.x, h.size.y)) * e * vrf_at(h, lv, x, y, ls);
-    }
+    let frame = SliceFrame(e1, e2, axis, vec2<f32>(cg, sg));
+    let l = alpha * scattered(h, lv, vec2<f32>(x, y), in.world, frame, in.ids.x, h.size.y);
     var out: MarchOut;
     out.color = vec4<f32>(l, alpha);
     return out;
