@@ -91,6 +91,20 @@ pub struct RenderArgs {
     /// Print a JSON summary on stdout.
     #[arg(long)]
     pub json: bool,
+    /// Renderer: GPU fibers [W19] or lumislices [C03 §5] (the scattering table computed
+    /// once, cached in --cache; the fiber options do not apply).
+    #[arg(long, default_value = "fibers")]
+    pub method: RenderMethod,
+}
+
+crate::args::choices! {
+    /// `btf knit render --method`.
+    RenderMethod {
+        /// Fibers generated on the GPU every frame.
+        Fibers = "fibers",
+        /// Ray-marched lumislice pieces (4× MSAA, point and directional lights).
+        Lumislice = "lumislice",
+    }
 }
 
 crate::args::choices! {
@@ -257,17 +271,50 @@ pub fn run(a: RenderArgs) -> Result<()> {
         ..FiberSettings::default()
     };
     let gpu = btf_render::Gpu::new()?;
-    let renderer = FiberRenderer::with_bake(
-        &gpu,
-        &packed,
-        &bcsdf(a.shading.as_str())?,
-        settings,
-        &yarn_precompute::BakeSettings { seed: a.patch.seed, ..Default::default() },
-        a.cache.as_deref(),
-    )?;
-    let t1 = std::time::Instant::now();
-    let img = renderer.render(&gpu, &cam, &lights, (w, h), [0.0, 0.0, 0.0, 0.0])?;
-    let render_s = t1.elapsed().as_secs_f64();
+    let (img, render_s) = match a.method {
+        RenderMethod::Fibers => {
+            let renderer = FiberRenderer::with_bake(
+                &gpu,
+                &packed,
+                &bcsdf(a.shading.as_str())?,
+                settings,
+                &yarn_precompute::BakeSettings { seed: a.patch.seed, ..Default::default() },
+                a.cache.as_deref(),
+            )?;
+            let t1 = std::time::Instant::now();
+            let img = renderer.render(&gpu, &cam, &lights, (w, h), [0.0, 0.0, 0.0, 0.0])?;
+            (img, t1.elapsed().as_secs_f64())
+        }
+        RenderMethod::Lumislice => {
+            // The table in the yarn's colour (ϖ), from the first curve.
+            let albedo = set
+                .curves
+                .first()
+                .and_then(|c| c.colors.first().copied())
+                .unwrap_or([0.8; 3])
+                .map(|v| v.clamp(0.0, 1.0));
+            let table = yarn_precompute::Lumislice::for_params(
+                &params,
+                albedo,
+                &yarn_precompute::LumisliceSettings { seed: a.patch.seed, ..Default::default() },
+                a.cache.as_deref(),
+                &|_| {},
+            )?;
+            let rs = yarn_render::LumisliceRenderSettings {
+                shadows: !a.no_yarn_shadows,
+                ..Default::default()
+            };
+            let renderer = yarn_render::LumisliceRenderer::new(
+                &gpu,
+                &packed,
+                std::slice::from_ref(&table),
+                rs,
+            )?;
+            let t1 = std::time::Instant::now();
+            let img = renderer.render(&gpu, &cam, &lights, (w, h), [0.0, 0.0, 0.0, 0.0])?;
+            (img, t1.elapsed().as_secs_f64())
+        }
+    };
     let rgb: Vec<f32> = img.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
     let (wu, hu) = (w as usize, h as usize);
     match ext(&image).as_str() {
@@ -298,7 +345,8 @@ pub fn run(a: RenderArgs) -> Result<()> {
     let st = img.stats;
     if a.json {
         let j = serde_json::json!({
-            "image": image, "width": w, "height": h, "lod_px": a.lod_px, "n_sub": a.n_sub,
+            "image": image, "method": a.method.as_str(), "width": w, "height": h,
+            "lod_px": a.lod_px, "n_sub": a.n_sub,
             "msaa": a.msaa, "segments": st.segments, "culled": st.culled,
             "instances": st.instances, "overflow": st.overflow, "triangles": st.triangles,
             "yarn_bytes": st.yarn_bytes, "bytes_per_control_point":
@@ -310,10 +358,11 @@ pub fn run(a: RenderArgs) -> Result<()> {
         outln!("{}", serde_json::to_string_pretty(&j)?);
     }
     eprintln!(
-        "knit render: {} segments ({} culled), {} fiber instances, {} triangles, {:.2} s{} -> {}",
+        "knit render: {} segments ({} culled), {} {}, {} triangles, {:.2} s{} -> {}",
         st.segments,
         st.culled,
         st.instances,
+        if a.method == RenderMethod::Lumislice { "lumislice pieces" } else { "fiber instances" },
         st.triangles,
         render_s,
         rel_rmse.map(|r| format!(", rel. RMSE {r:.4} against --compare")).unwrap_or_default(),

@@ -146,3 +146,35 @@ fn synth_material_yarn_by_lumislices() {
     assert!(head_on > 0.0 && grazing < head_on, "{head_on} vs {grazing}");
     assert!(d.path(".yarn-cache").is_dir(), "the table is cached beside the store");
 }
+
+/// `btf knit render --method lumislice`: the patch by the lumislices, its JSON naming the
+/// method, a covered and lit frame; without yarn shadows (eq. 10 off) it is brighter.
+#[test]
+fn knit_render_draws_lumislices() {
+    let d = Dir::new();
+    let base = [
+        "knit",
+        "render",
+        "--method",
+        "lumislice",
+        "--size",
+        "32,32",
+        "--light",
+        "dir:40,30,3",
+        "--cache",
+        "cache",
+        "--json",
+        "-o",
+    ];
+    let Some((out, err)) = run_gpu(&d, &[&base[..], &["a.exr"]].concat()) else { return };
+    assert!(err.contains("lumislice pieces"), "{err}");
+    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(j["method"], "lumislice", "{j}");
+    let cov = j["coverage"].as_f64().unwrap();
+    assert!(cov > 0.3 && cov <= 1.0 + 1e-6, "{j}");
+    let (out2, _) = run_gpu(&d, &[&base[..], &["b.exr", "--no-yarn-shadows"]].concat()).unwrap();
+    let j2: serde_json::Value = serde_json::from_str(&out2).unwrap();
+    let (m, m2) = (j["mean_radiance"].as_f64().unwrap(), j2["mean_radiance"].as_f64().unwrap());
+    assert!(m > 0.0 && m2 > m, "eq. 10 shades: {m} with, {m2} without");
+    assert!(d.path("cache").is_dir(), "the table is cached in --cache");
+}

@@ -362,8 +362,15 @@ fn fs_piece(in: PieceOut) -> MarchOut {
             break;
         }
     }
+    // A non-finite sample (seen once, at an exactly vertical orthographic view) must not
+    // reach the blended frame: the pixel keeps what is behind it.
+    let c = vec4<f32>(l, 1.0 - tr);
+    // (Exponent bits, not `c != c`: a fast-math compiler may fold that away.)
+    if any(((bitcast<vec4<u32>>(c) >> vec4<u32>(23u)) & vec4<u32>(0xffu)) == vec4<u32>(0xffu)) {
+        discard;
+    }
     var out: MarchOut;
-    out.color = vec4<f32>(l, 1.0 - tr);
+    out.color = c;
     return out;
 }
 
