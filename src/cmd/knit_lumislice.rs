@@ -1,9 +1,10 @@
 //! `btf knit lumislice -o DIR`: what accuracy costs in time for the lumislice renderer of
 //! [C03 §5] (issue #21, DESIGN §1.5 "What accuracy costs in time"). One flat chart patch
 //! (its Chen skeleton, no periodic copies) is rendered by the CPU volumetric reference
-//! (`yarn_ref::volume`: the union of all swept yarn volumes, the same density, Kajiya–Kay
-//! phase, light attenuated through every yarn; single scattering, and with `ms` variants
-//! also multiple scattering) once per camera, then by `yarn_render::LumisliceRenderer` over
+//! (`yarn_ref::volume`: the union of all swept yarn volumes, the same fibers' density on a
+//! 64² grid — finer than every table but `res64`'s —, Kajiya–Kay phase, light attenuated
+//! through every yarn; single scattering, and with `ms` variants also multiple scattering)
+//! once per camera, then by `yarn_render::LumisliceRenderer` over
 //! the variants, and by the plain tubes of the fiber renderer as the time baseline — all
 //! cells interleaved frame by frame in one run. Per cell: relative RMSE `√(Σ(g−r)²/Σr²)`
 //! over the frame, the ratio of mean radiances, median frame ms and its ratio to the tubes,
@@ -219,6 +220,9 @@ pub fn run(a: LumisliceArgs) -> Result<()> {
         bail!("--variants: give at least one");
     }
     let [ws, cs] = crate::args::numbers::<usize, 2>(&a.stitches, "--stitches")?;
+    if !(1..=64).contains(&ws) || !(1..=64).contains(&cs) {
+        bail!("--stitches {ws},{cs}: each 1..=64 (the reference marches every yarn)");
+    }
     let chart = load_chart(&a.chart)?;
     let params = load_yarn(&a.yarn)?;
     let lights: Vec<String> =

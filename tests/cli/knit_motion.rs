@@ -67,6 +67,8 @@ fn knit_lumislice_scores_variants_against_the_volume_reference() {
     }
     let e = d.fails(&["knit", "lumislice", "--variants", "shiny", "-o", "ls2"]);
     assert!(e.contains("--variants shiny"), "{e}");
+    let e = d.fails(&["knit", "lumislice", "--stitches", "400,4", "-o", "ls2"]);
+    assert!(e.contains("--stitches 400,4"), "{e}");
     let e = d.fails(&["knit", "lumislice", "--albedo", "1.5", "-o", "ls2"]);
     assert!(e.contains("--albedo 1.5"), "{e}");
     assert!(!d.path("ls2").exists());

@@ -775,24 +775,49 @@ impl YarnShadowLut {
         k0: f64,
         variant: ShadowVariant,
     ) -> Result<Self> {
+        Self::check(reach, k0)?;
+        Ok(Self::from_depths(&Self::depths(sigma_r, reach), reach, k0, variant))
+    }
+
+    /// Both variants (empirical, physical) from one set of chord optical depths.
+    pub fn both(sigma_r: &dyn Fn(f64) -> f64, reach: f64, k0: f64) -> Result<[Self; 2]> {
+        Self::check(reach, k0)?;
+        let t = Self::depths(sigma_r, reach);
+        Ok([ShadowVariant::Empirical, ShadowVariant::Physical]
+            .map(|v| Self::from_depths(&t, reach, k0, v)))
+    }
+
+    fn check(reach: f64, k0: f64) -> Result<()> {
         if !(reach.is_finite() && reach > 0.0) {
             return Err(Error::Invalid(format!("yarn shadow reach {reach} (> 0)")));
         }
         if !(k0.is_finite() && (0.0..=1.0).contains(&k0)) {
             return Err(Error::Invalid(format!("yarn shadow k0 {k0} (in [0, 1])")));
         }
-        let tau = |d: f64| {
-            let half = (reach * reach - d * d).max(0.0).sqrt();
-            let n = 2048;
-            let h = half / n as f64;
-            2.0 * h * (0..n).map(|k| sigma_r(d.hypot((k as f64 + 0.5) * h))).sum::<f64>()
-        };
-        let t0 = tau(0.0);
+        Ok(())
+    }
+
+    /// `τ(d)` at the table's distances: the chord ⟂ the yarn at distance `d`, 2048
+    /// midpoints a half chord (exact for a uniform disk).
+    fn depths(sigma_r: &dyn Fn(f64) -> f64, reach: f64) -> Vec<f64> {
         let n = Self::ENTRIES;
-        let values = (0..n)
+        (0..n)
             .map(|i| {
                 let d = reach * i as f64 / (n - 1) as f64;
-                let t = tau(d);
+                let half = (reach * reach - d * d).max(0.0).sqrt();
+                let m = 2048;
+                let h = half / m as f64;
+                2.0 * h * (0..m).map(|k| sigma_r(d.hypot((k as f64 + 0.5) * h))).sum::<f64>()
+            })
+            .collect()
+    }
+
+    fn from_depths(tau: &[f64], reach: f64, k0: f64, variant: ShadowVariant) -> Self {
+        let (n, t0) = (tau.len(), tau[0]);
+        let values = tau
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| {
                 let v = match variant {
                     ShadowVariant::Physical => (-t).exp(),
                     ShadowVariant::Empirical if t0 > 0.0 => {
@@ -803,7 +828,7 @@ impl YarnShadowLut {
                 if i == n - 1 { 1.0 } else { v as f32 }
             })
             .collect();
-        Ok(YarnShadowLut { reach, variant, k0, values })
+        YarnShadowLut { reach, variant, k0, values }
     }
 
     /// The table of a cross-section density's azimuthal average.

@@ -29,7 +29,9 @@
 //!   hidden whole per pixel (the paper's ID buffers resolve that per pixel; item 15's
 //!   depth-tested compositing, at box granularity);
 //! - the yarn colour is the table's ϖ (per yarn type), not the curve's colour: multiple
-//!   scattering is not linear in it.
+//!   scattering is not linear in it;
+//! - one eq. 10 table per frame, from the first yarn type's density profile, read by every
+//!   type at its own reach `R_y`.
 
 use crate::gpu_data::YarnBuffers;
 use crate::pack::PackedYarns;
@@ -242,7 +244,8 @@ impl LumisliceRenderer {
             }
             headers.push(h);
             reach = reach.max(l.reach());
-            // The eq. 10 tables of the first yarn type (both variants, so the flag picks).
+            // The eq. 10 tables of the first yarn type (both variants, so the flag picks); the
+            // other types read them at their own reach (one occluder profile per frame).
             if i == 0 {
                 let prof = radial_profile(l, 512);
                 let n = prof.len() - 1;
@@ -252,11 +255,10 @@ impl LumisliceRenderer {
                     let k = (x.floor() as usize).min(n - 1);
                     prof[k] + (x - k as f64) * (prof[k + 1] - prof[k])
                 };
-                for v in [ShadowVariant::Empirical, ShadowVariant::Physical] {
-                    let t = YarnShadowLut::new(&sig, l.reach(), settings.k0, v)
-                        .map_err(|e| Error::Invalid(format!("lumislice shadow table: {e}")))?;
-                    lut.extend(&t.values);
-                }
+                let [emp, phys] = YarnShadowLut::both(&sig, l.reach(), settings.k0)
+                    .map_err(|e| Error::Invalid(format!("lumislice shadow table: {e}")))?;
+                lut.extend(&emp.values);
+                lut.extend(&phys.values);
             }
         }
         let max = dev.limits().max_storage_buffer_binding_size;
@@ -732,21 +734,7 @@ impl LumisliceRenderer {
         cam: &FiberCamera,
         lights: &[FiberLight],
     ) -> Result<()> {
-        let (c, d) = (targets.0.texture(), targets.2.texture());
-        let fits = |t: &wgpu::Texture, format| {
-            (t.width(), t.height()) == size && t.sample_count() == SAMPLES && t.format() == format
-        };
-        if !fits(c, color_format(SAMPLES)) || !fits(d, DEPTH) || targets.1.is_none() {
-            return Err(Error::Invalid(format!(
-                "lumislice encode_into: targets {:?} {}×{} ×{} for a {}×{} frame at {SAMPLES} samples",
-                c.format(),
-                c.width(),
-                c.height(),
-                c.sample_count(),
-                size.0,
-                size.1
-            )));
-        }
+        crate::passes::draw::check_targets("lumislice", targets, size, SAMPLES)?;
         gpu.scoped("lumislice frame (into targets)", || {
             self.record(gpu, enc, cam, lights, size, targets, None)
         })??;

@@ -17,7 +17,7 @@ use crate::bcsdf;
 use crate::effects::{self, AoMode, FiberEffects};
 use crate::gpu_data::YarnBuffers;
 use crate::pack::PackedYarns;
-use crate::passes::draw::{DEPTH, DrawPass, FrameTargets, color_format};
+use crate::passes::draw::{DEPTH, DrawPass, FrameTargets};
 use crate::passes::lod::{DrawArgsRaw, LodPass};
 use crate::passes::shadow::{ShadowPass, ShadowPassRaw, ShadowViewsRaw, directional_views};
 use crate::view::{FiberCamera, FiberLight, ViewRaw, ViewSetup, lights_raw, to_cols};
@@ -437,28 +437,12 @@ impl FiberRenderer {
         cam: &FiberCamera,
         lights: &[FiberLight],
     ) -> Result<()> {
-        let samples = self.settings.msaa;
-        let c = color.texture();
-        let d = depth.texture();
-        let fits = |t: &wgpu::Texture, format| {
-            (t.width(), t.height()) == size && t.sample_count() == samples && t.format() == format
-        };
-        if !fits(c, color_format(samples)) || !fits(d, DEPTH) || (samples > 1) != resolve.is_some()
-        {
-            return Err(Error::Invalid(format!(
-                "encode_into: targets {:?} {}×{} ×{} and {:?} ×{} for a {}×{} frame of {:?}/{:?} at {samples} samples",
-                c.format(),
-                c.width(),
-                c.height(),
-                c.sample_count(),
-                d.format(),
-                d.sample_count(),
-                size.0,
-                size.1,
-                color_format(samples),
-                DEPTH
-            )));
-        }
+        crate::passes::draw::check_targets(
+            "fibers",
+            (color, resolve, depth),
+            size,
+            self.settings.msaa,
+        )?;
         let b = self.bindings(gpu, cam, lights, size)?;
         gpu.scoped("fiber frame (into targets)", || {
             self.record(gpu, enc, &b, (color, resolve, depth), None)

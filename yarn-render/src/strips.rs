@@ -733,27 +733,7 @@ impl StripRenderer {
         cam: &FiberCamera,
         lights: &[FiberLight],
     ) -> Result<()> {
-        let samples = self.settings.msaa;
-        let (c, d) = (targets.0.texture(), targets.2.texture());
-        let fits = |t: &wgpu::Texture, format| {
-            (t.width(), t.height()) == size && t.sample_count() == samples && t.format() == format
-        };
-        if !fits(c, color_format(samples))
-            || !fits(d, DEPTH)
-            || (samples > 1) != targets.1.is_some()
-        {
-            return Err(Error::Invalid(format!(
-                "strips encode_into: targets {:?} {}×{} ×{} / {:?} ×{} for a {}×{} frame at {samples} samples",
-                c.format(),
-                c.width(),
-                c.height(),
-                c.sample_count(),
-                d.format(),
-                d.sample_count(),
-                size.0,
-                size.1
-            )));
-        }
+        crate::passes::draw::check_targets("strips", targets, size, self.settings.msaa)?;
         gpu.scoped("strip frame (into targets)", || {
             self.record(gpu, enc, cam, lights, size, targets, None)
         })??;

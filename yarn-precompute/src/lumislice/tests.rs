@@ -274,6 +274,9 @@ fn yarn_shadow_table_matches_eq10_for_a_uniform_cylinder() {
     assert_eq!(e.at(2.0 * r), 1.0);
     assert!(e.values.windows(2).all(|w| w[1] >= w[0]), "monotone");
     assert!(YarnShadowLut::new(&|_| 1.0, r, 1.5, ShadowVariant::Empirical).is_err());
+    // Both variants from one set of depths: the same tables.
+    let [be, bp] = YarnShadowLut::both(&|x| if x <= r { sig } else { 0.0 }, r, k0).unwrap();
+    assert_eq!((be, bp), (e, p));
 }
 
 #[test]

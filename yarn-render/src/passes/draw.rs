@@ -229,6 +229,37 @@ impl DrawPass {
     }
 }
 
+/// Checks that another renderer's `(colour, resolve, depth)` targets fit a `size` frame at
+/// `samples` per pixel (formats, sizes, sample counts, a resolve target exactly under
+/// MSAA); `what` names the caller in the error.
+pub fn check_targets(
+    what: &str,
+    (color, resolve, depth): (&wgpu::TextureView, Option<&wgpu::TextureView>, &wgpu::TextureView),
+    size: (u32, u32),
+    samples: u32,
+) -> Result<()> {
+    let (c, d) = (color.texture(), depth.texture());
+    let fits = |t: &wgpu::Texture, format| {
+        (t.width(), t.height()) == size && t.sample_count() == samples && t.format() == format
+    };
+    if fits(c, color_format(samples)) && fits(d, DEPTH) && (samples > 1) == resolve.is_some() {
+        return Ok(());
+    }
+    Err(crate::Error::Invalid(format!(
+        "{what} encode_into: targets {:?} {}×{} ×{} and {:?} ×{} for a {}×{} frame of {:?}/{:?} at {samples} samples",
+        c.format(),
+        c.width(),
+        c.height(),
+        c.sample_count(),
+        d.format(),
+        d.sample_count(),
+        size.0,
+        size.1,
+        color_format(samples),
+        DEPTH
+    )))
+}
+
 /// The colour (resolved, and multisampled under MSAA) and depth targets of one offscreen
 /// frame, as the fiber and strip renderers draw into them.
 pub struct FrameTargets {
