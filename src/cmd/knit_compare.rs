@@ -1,6 +1,8 @@
-//! `btf knit compare --btf YARN.btf -o DIR`: the headline study of DESIGN §4.2 (issue #19's
-//! first comparison table) — one knit garment, three camera distances, every
-//! representation scored against the path-traced fibers:
+//! `btf knit compare [--btf YARN.btf] [--stretch 0,0.1,…] -o DIR`: the headline study of
+//! DESIGN §4.2 (issue #19's first comparison table, issue #21's final one) — one knit
+//! garment, three camera distances, every representation scored against the path-traced
+//! fibers, at rest and stretched. Without `--btf` the study first makes the yarn BTF by
+//! the reference itself (resumable), so the whole study is one command:
 //!
 //! - **R0** the reference: the explicit fibers of the whole garment path traced by
 //!   `yarn-ref` (the same yarn, chart, seed, flyaways, Khungurn BCSDF and bounces that
@@ -17,7 +19,9 @@
 //! - **R4** the BTF on the garment: the yarn BTF made by the reference
 //!   (`btf synth material --kind yarn`), compressed per view ([S03]'s PCA) to each
 //!   `--components`, rendered by `btf-render` per pixel with four-light/four-view blending
-//!   and shadow maps;
+//!   and shadow maps; and **R4 from fibers**, the same patch, sampling and store rendered
+//!   by R1's GPU fibers instead (`yarn_render::btf`, at `--btf-fibers-lod`), compressed to
+//!   the largest c — the BTF a lab gets in minutes instead of the reference's hour;
 //! - **R5** the baselines: the plain texture of the BTF mean (`btf-render`'s `plain`
 //!   baseline) and plain tubes of the yarn radius (`yarn-render`).
 //!
@@ -45,7 +49,11 @@
 //! time as a ratio to the plain texture drawn in the same run, preprocessing seconds and
 //! memory, and whether the representation follows deformation. Writes `compare.csv`,
 //! `report.md`, `pareto.png`, per-distance contact sheets, every image as EXR and a ꟻLIP heat
-//! map per cell (`images/flip-*.png`).
+//! map per cell (`images/flip-*.png`). With `--stretch` each strain's study goes into
+//! `stretch-S/`, and the top folder gets the final table over every strain (`report.md`:
+//! ꟻLIP and rel. RMSE per strain, frame-time ratio, preprocessing, memory, whether it
+//! follows deformation), `pareto-*px.png` (ꟻLIP against frame time, one series per strain)
+//! and the stretch summary (`stretch.md`, `stretch.csv`, `stretch-*px.png`).
 
 use super::knit_compare_report::{self as report, Cell, Distance, Scores};
 use super::knit_render::fiber_light;
@@ -54,6 +62,7 @@ use anyhow::{Context, Result, bail};
 use btf_core::compress::CompressParams;
 use btf_core::eigen::Quantization;
 use btf_core::store::BtfStore;
+use btf_core::zarr::DType;
 use btf_image::write::{write_exr_rgb, write_png, write_text};
 use clap::Args;
 use datasets::mesh::{Mesh, MeshKind, Resolution};
@@ -66,6 +75,7 @@ use yarn::knit::{
     Chart, KnotModel, KnotParams, SkeletonParams, StitchMesh, SurfaceMesh, UvLayout, chen_skeleton,
 };
 use yarn::params::YarnParams;
+use yarn_ref::btf::{YarnBtfOptions, YarnBtfSpec};
 use yarn_render::{
     FiberCamera, FiberLight, FiberRenderer, FiberSettings, PackOptions, PackedYarns,
 };
@@ -75,9 +85,41 @@ use yarn_render::{
 pub struct CompareArgs {
     /// The yarn BTF made by the reference (`btf synth material --kind yarn`): its
     /// provenance gives the chart, yarn, seed, colour, flyaways and bounces of every
-    /// representation.
+    /// representation. Without it the study makes one into `DIR/btf-reference.btf` from
+    /// `--chart`, `--yarn`, `--btf-size`, `--btf-spp`, `--btf-bounces` and
+    /// `--btf-sampling` (resumed when the folder has an unfinished one): the whole study
+    /// is then one command.
     #[arg(long)]
-    pub btf: PathBuf,
+    pub btf: Option<PathBuf>,
+    /// Chart of the BTF the study makes (only without `--btf`).
+    #[arg(long, conflicts_with = "btf")]
+    pub chart: Option<String>,
+    /// Yarn of the BTF the study makes (only without `--btf`).
+    #[arg(long, conflicts_with = "btf")]
+    pub yarn: Option<String>,
+    /// Texels per period of the BTF the study makes (only without `--btf`).
+    #[arg(long, conflicts_with = "btf", default_value_t = 32)]
+    pub btf_size: usize,
+    /// Samples per texel of the BTF the study makes (only without `--btf`).
+    #[arg(long, conflicts_with = "btf", default_value_t = 16)]
+    pub btf_spp: u32,
+    /// Path vertices of the BTF the study makes (only without `--btf`).
+    #[arg(long, conflicts_with = "btf", default_value_t = 8)]
+    pub btf_bounces: u32,
+    /// View and light sampling of the BTF the study makes (only without `--btf`).
+    #[arg(long, conflicts_with = "btf", default_value = "ubo81")]
+    pub btf_sampling: String,
+    /// Leave out R4 from fibers: the same BTF (patch, sampling, size, seed) rendered by the
+    /// GPU fibers instead of the path tracer (`DIR/btf-fibers.btf`, resumed like the
+    /// reference's), compressed to the largest `--components` and drawn on the garment.
+    #[arg(long)]
+    pub no_btf_fibers: bool,
+    /// LoD threshold ω^LoD (px) of the GPU fibers that render the BTF from fibers: 1 (the
+    /// renderer's and `btf synth material --method fibers`' default) draws a 32² BTF's
+    /// fibers as core strips at 0.17 s an image; 0 (full detail, every fiber) costs 2.8 s an
+    /// image here, 5 h for `ubo81` (BENCHMARKS.md).
+    #[arg(long, default_value_t = 1.0)]
+    pub btf_fibers_lod: f32,
     /// Output folder (compare.csv, report.md, pareto.png, sheet-*.png, images/).
     #[arg(short = 'o', long = "out", alias = "output")]
     pub output: PathBuf,
@@ -130,7 +172,10 @@ const FOV_DEG: f64 = 30.0;
 /// What the yarn BTF was made from, read back from its provenance.
 struct BtfSource {
     chart: Chart,
+    chart_source: String,
     params: YarnParams,
+    stitches: [usize; 2],
+    sampling: btf_core::Sampling,
     seed: u64,
     hairs: bool,
     bounces: u32,
@@ -168,6 +213,19 @@ fn btf_source(path: &Path) -> Result<BtfSource> {
         anyhow::anyhow!("--btf {}: provenance 'chart.text' missing", path.display())
     })?;
     let chart = Chart::parse(chart_text, "the BTF's provenance")?;
+    let chart_source =
+        field("chart")?.get("source").and_then(|t| t.as_str()).unwrap_or(&chart.name).to_owned();
+    let stitches: Vec<usize> = field("stitches")?
+        .as_array()
+        .map(|a| a.iter().filter_map(|v| v.as_u64()).map(|v| v as usize).collect())
+        .unwrap_or_default();
+    let [sw, sc] = stitches[..] else {
+        bail!("--btf {}: provenance 'stitches' is not two counts", path.display());
+    };
+    let meta = store.meta();
+    if meta.view_sampling != meta.light_sampling {
+        bail!("--btf {}: view and light samplings differ (a yarn BTF has one)", path.display());
+    }
     let yarn_text = field("yarn")?.get("params").and_then(|t| t.as_str()).ok_or_else(|| {
         anyhow::anyhow!("--btf {}: provenance 'yarn.params' missing", path.display())
     })?;
@@ -195,7 +253,10 @@ fn btf_source(path: &Path) -> Result<BtfSource> {
     }
     Ok(BtfSource {
         chart,
+        chart_source,
         params,
+        stitches: [sw, sc],
+        sampling: meta.view_sampling.clone(),
         seed: num("seed")? as u64,
         hairs: field("hairs")?.as_bool().unwrap_or(true),
         bounces: num("bounces")? as u32,
@@ -351,7 +412,9 @@ fn eye_for(target: [f64; 3], view: [f64; 3], ws: f64, px: f64, h: u32) -> [f64; 
 }
 
 pub fn run(a: CompareArgs) -> Result<()> {
-    guard::refuse_overlap(&[("-o", &a.output)], &[("--btf", &a.btf)])?;
+    if let Some(b) = &a.btf {
+        guard::refuse_overlap(&[("-o", &a.output)], &[("--btf", b)])?;
+    }
     let [w, h] = crate::args::numbers::<u32, 2>(&a.size, "--size")?;
     if w == 0 || h == 0 || w > 2048 || h > 2048 {
         bail!("--size {w},{h}: each side must be 1..=2048");
@@ -366,8 +429,11 @@ pub fn run(a: CompareArgs) -> Result<()> {
     if a.lod.iter().any(|l| !(l.is_finite() && *l > 0.0)) {
         bail!("--lod {:?}: thresholds in pixels, > 0 (full detail is always drawn)", a.lod);
     }
-    if a.components.iter().any(|c| *c == 0 || *c > 256) {
+    if a.components.is_empty() || a.components.iter().any(|c| *c == 0 || *c > 256) {
         bail!("--components {:?}: each 1..=256", a.components);
+    }
+    if !(a.btf_fibers_lod.is_finite() && a.btf_fibers_lod >= 0.0) {
+        bail!("--btf-fibers-lod {}: a threshold in pixels, ≥ 0", a.btf_fibers_lod);
     }
     if a.spp == 0 || a.repeat == 0 {
         bail!("--spp and --repeat must be ≥ 1");
@@ -376,8 +442,15 @@ pub fn run(a: CompareArgs) -> Result<()> {
         bail!("--light {}: the study uses one directional light (dir:THETA,PHI[,E])", a.light);
     };
     let view = btf_core::Direction::new(vt, vp).to_vector();
-    let src = btf_source(&a.btf)?;
-    let cw = src.chart.width;
+    // The yarn BTF: given, or made by the reference into the study's folder.
+    let (btf_path, spec) = match &a.btf {
+        Some(p) => (p.clone(), None),
+        None => (a.output.join("btf-reference.btf"), Some(reference_spec(&a)?)),
+    };
+    let cw = match &spec {
+        Some(spec) => spec.chart.width,
+        None => btf_source(&btf_path)?.chart.width,
+    };
     if a.wales == 0 || !a.wales.is_multiple_of(cw) || a.wales > 512 {
         bail!("--wales {}: a multiple of the chart's width {cw} up to 512", a.wales);
     }
@@ -388,9 +461,48 @@ pub fn run(a: CompareArgs) -> Result<()> {
     guard::output_folder(&a.output, "knit compare", a.fresh, &|n| {
         guard::report_output(n) || n.starts_with("stretch-")
     })?;
+    if let Some(spec) = spec.as_ref().filter(|_| !btf_path.exists()) {
+        // An unfinished store (`.partial`) is resumed; a finished one is reused below.
+        let opts = YarnBtfOptions {
+            resume: true,
+            progress: crate::progress::enabled(),
+            dtype: DType::F16,
+        };
+        eprintln!(
+            "knit compare: the reference's yarn BTF ({}² on {}, {} spp, {} bounces) into {}{}",
+            spec.size,
+            a.btf_sampling,
+            spec.spp,
+            spec.bounces,
+            btf_path.display(),
+            if opts.resume { ", resumed" } else { "" }
+        );
+        let r = yarn_ref::btf::generate_yarn_btf(spec, &btf_path, &opts)
+            .with_context(|| format!("making the reference's yarn BTF {}", btf_path.display()))?;
+        eprintln!(
+            "  {} images rendered, {} kept, {:.1} s",
+            r.images_written, r.images_skipped, r.seconds
+        );
+    }
+    let src = btf_source(&btf_path)?;
+    if let Some(spec) = &spec {
+        // A finished store of an earlier run: reused only if it is the one asked for.
+        let same = src.chart.to_text() == spec.chart.to_text()
+            && src.params == spec.params
+            && src.size == spec.size
+            && src.sampling == spec.sampling
+            && src.bounces == spec.bounces;
+        if !same {
+            bail!(
+                "{} was made with another chart, yarn, --btf-size, --btf-sampling or \
+                 --btf-bounces; run with --fresh to make it again",
+                btf_path.display()
+            );
+        }
+    }
 
     // R4 and R5-plain: the BTF compressed to each c (once for every strain).
-    let store = BtfStore::open(&a.btf)?;
+    let store = BtfStore::open(&btf_path)?;
     let mut eigs = Vec::new();
     let mut comps = a.components.clone();
     comps.sort_unstable();
@@ -405,9 +517,26 @@ pub fn run(a: CompareArgs) -> Result<()> {
         eigs.push((c, out, r.seconds, r.rel_rmse));
     }
     drop(store);
+    // R4 from fibers: the same BTF by the GPU fibers, at the largest c.
+    let from_fibers = if a.no_btf_fibers {
+        None
+    } else {
+        let path = a.output.join("btf-fibers.btf");
+        let made = fiber_btf(&gpu, &src, a.btf_fibers_lod, &path)?;
+        let c = *comps.last().expect("--components is not empty");
+        let out = a.output.join(format!("btf-fibers-c{c}.eig"));
+        let params =
+            CompressParams { components: c, quantization: Quantization::F16, resume: false };
+        let store = BtfStore::open(&path)?;
+        let r = btf_core::compress::compress(&store, &out, params, &|| ())
+            .with_context(|| format!("compressing {} to {c} components", path.display()))?;
+        eprintln!("  BTF from fibers c = {c}: rel. RMSE {:.3} in {:.2} s", r.rel_rmse, r.seconds);
+        Some(FromFibers { c, eig: out, pca_s: r.seconds, rel_rmse: r.rel_rmse, made })
+    };
     let setup = Setup { w, h, view, to_light, irradiance };
+    let inputs = Inputs { btf: &btf_path, eigs: &eigs, from_fibers: from_fibers.as_ref() };
     if a.stretch.is_empty() {
-        study(&a, &src, &gpu, &eigs, &a.output, None, &setup)?;
+        study(&a, &src, &gpu, &inputs, &a.output, None, &setup)?;
         return Ok(());
     }
     let mut runs = Vec::new();
@@ -415,11 +544,137 @@ pub fn run(a: CompareArgs) -> Result<()> {
         let out = a.output.join(format!("stretch-{eps}"));
         std::fs::create_dir_all(&out)?;
         eprintln!("knit compare: stretch {eps} along the wales");
-        let (cells, dists, clearance) = study(&a, &src, &gpu, &eigs, &out, Some(eps), &setup)?;
+        let (cells, dists, clearance) = study(&a, &src, &gpu, &inputs, &out, Some(eps), &setup)?;
         runs.push((eps, cells, dists, clearance));
     }
-    super::knit_compare_report::write_stretch(&a.output, &runs)?;
+    let header = format!(
+        "{} wales of `{}` in `{}` on the drape, {w} × {h} px, view {}, light {}; reference {} \
+         spp and {} bounces (R0) and 1 (R0 direct); yarn BTF `{}` ({}² texels per period){}. \
+         Reproduce: `{}`.",
+        a.wales,
+        src.chart.name,
+        src.params.name,
+        a.view,
+        a.light,
+        a.spp,
+        src.bounces,
+        btf_path.display(),
+        src.size,
+        from_fibers.as_ref().map_or(String::new(), |f| format!(
+            "; BTF from fibers `{}` ({} images rendered in {:.1} s, {} kept from an earlier run)",
+            a.output.join("btf-fibers.btf").display(),
+            f.made.images_written,
+            f.made.seconds,
+            f.made.images_skipped
+        )),
+        std::iter::once("btf".to_owned())
+            .chain(std::env::args().skip(1))
+            .collect::<Vec<_>>()
+            .join(" ")
+    );
+    super::knit_compare_report::write_stretch(&a.output, &runs, &header)?;
     Ok(())
+}
+
+/// The reference's yarn BTF the study makes without `--btf`.
+fn reference_spec(a: &CompareArgs) -> Result<YarnBtfSpec> {
+    let chart_name = a.chart.as_deref().unwrap_or("stockinette");
+    let yarn_name = a.yarn.as_deref().unwrap_or("cotton-2ply");
+    let mut inputs: Vec<(&str, &Path)> = Vec::new();
+    for (what, name) in [("--chart", chart_name), ("--yarn", yarn_name)] {
+        if Path::new(name).is_file() {
+            inputs.push((what, Path::new(name)));
+        }
+    }
+    guard::refuse_overlap(&[("-o", &a.output)], &inputs)?;
+    if !(1..=256).contains(&a.btf_size) || a.btf_spp == 0 || a.btf_bounces == 0 {
+        bail!(
+            "--btf-size {} (1..=256), --btf-spp {} and --btf-bounces {} (≥ 1)",
+            a.btf_size,
+            a.btf_spp,
+            a.btf_bounces
+        );
+    }
+    let chart = super::knit::load_chart(chart_name)?;
+    let params = super::knit::load_yarn(yarn_name)?;
+    let mut spec = YarnBtfSpec::new(chart, chart_name, params, a.btf_size);
+    spec.sampling = datasets::capture::parse_sampling(&a.btf_sampling)
+        .with_context(|| format!("--btf-sampling {}", a.btf_sampling))?;
+    spec.spp = a.btf_spp;
+    spec.bounces = a.btf_bounces;
+    Ok(spec)
+}
+
+/// R4 from fibers: the BTF of `src`'s patch rendered by the GPU fibers into `out` (resumed
+/// when `out` is an unfinished or finished run's).
+fn fiber_btf(
+    gpu: &btf_render::Gpu,
+    src: &BtfSource,
+    lod_px: f32,
+    out: &Path,
+) -> Result<yarn_render::btf::FiberBtfReport> {
+    let mut spec =
+        YarnBtfSpec::new(src.chart.clone(), &src.chart_source, src.params.clone(), src.size);
+    spec.sampling = src.sampling.clone();
+    spec.stitches = Some(src.stitches);
+    spec.seed = src.seed;
+    spec.color = src.color;
+    spec.hairs = src.hairs;
+    spec.method = "fibers".into();
+    if out.exists() {
+        // Finished by an earlier run: reused when it is this patch's.
+        let store = BtfStore::open(out)?;
+        let p = &store.meta().provenance;
+        let same = p["method"] == "fibers"
+            && p["size"].as_u64() == Some(src.size as u64)
+            && p["seed"].as_u64() == Some(src.seed)
+            && p["settings"]["lod_px"].as_f64() == Some(lod_px as f64)
+            && p["chart"]["text"].as_str() == Some(src.chart.to_text().as_str())
+            && store.meta().view_sampling == src.sampling;
+        if !same {
+            bail!(
+                "{} is not the BTF from fibers of this study's BTF; run with --fresh",
+                out.display()
+            );
+        }
+        eprintln!("knit compare: BTF from fibers reused from {}", out.display());
+        return Ok(yarn_render::btf::FiberBtfReport {
+            images_written: 0,
+            images_skipped: store.meta().view_sampling.len() * store.meta().light_sampling.len(),
+            seconds: 0.0,
+            instances: 0,
+        });
+    }
+    let opts =
+        YarnBtfOptions { resume: true, progress: crate::progress::enabled(), dtype: DType::F16 };
+    let settings = FiberSettings { lod_px, ..FiberSettings::default() };
+    let r = yarn_render::btf::generate_fiber_btf(gpu, &spec, settings, out, &opts)
+        .with_context(|| format!("making the yarn BTF by the GPU fibers {}", out.display()))?;
+    eprintln!(
+        "knit compare: BTF from fibers: {} images rendered, {} kept, {:.1} s -> {}",
+        r.images_written,
+        r.images_skipped,
+        r.seconds,
+        out.display()
+    );
+    Ok(r)
+}
+
+/// The BTF by the GPU fibers, compressed (R4 from fibers).
+struct FromFibers {
+    c: usize,
+    eig: PathBuf,
+    pca_s: f64,
+    rel_rmse: f64,
+    made: yarn_render::btf::FiberBtfReport,
+}
+
+/// What every strain's study shares: the BTF, its compressed stores (c, path, PCA seconds,
+/// PCA rel. RMSE) and the BTF from fibers.
+struct Inputs<'a> {
+    btf: &'a Path,
+    eigs: &'a [(usize, PathBuf, f64, f64)],
+    from_fibers: Option<&'a FromFibers>,
 }
 
 /// The fixed set-up of a study: frame size, view, light.
@@ -437,12 +692,13 @@ fn study(
     a: &CompareArgs,
     src: &BtfSource,
     gpu: &btf_render::Gpu,
-    eigs: &[(usize, PathBuf, f64, f64)],
+    inputs: &Inputs,
     out: &Path,
     stretch: Option<f64>,
     setup: &Setup,
 ) -> Result<(Vec<Cell>, Vec<Distance>, f64)> {
     let Setup { w, h, view, to_light, irradiance } = *setup;
+    let eigs = inputs.eigs;
     let images = out.join("images");
     std::fs::create_dir_all(&images)?;
     let t0 = Instant::now();
@@ -519,7 +775,8 @@ fn study(
     lods.dedup();
     let mut cells: Vec<Cell> = Vec::new();
     let mut jobs: Vec<Job> = Vec::new();
-    let n_cells = cams.len() * (lods.len() + 3 + eigs.len() + 1);
+    let n_cells =
+        cams.len() * (lods.len() + 3 + eigs.len() + usize::from(inputs.from_fibers.is_some()) + 1);
     // R2: the strip textures, baked once (cached across strains and runs).
     let t = Instant::now();
     let bakes = yarn_render::strips::bakes_for(
@@ -619,6 +876,18 @@ fn study(
             let frame = r.render(gpu)?;
             let bytes = r.material_bytes();
             cells.push(Cell::new("R4", &format!("BTF c = {c}"), ci, frame.rgb, prep, bytes, false));
+            jobs.push(Job::Btf(Box::new(r)));
+            bar.inc(1);
+        }
+        if let Some(f) = inputs.from_fibers {
+            let scene = btf_scene(out, &obj, &f.eig, cam, (w, h), to_light, irradiance)?;
+            let t = Instant::now();
+            let mut r = btf_render::Renderer::new(gpu, &scene, Default::default())?;
+            let prep = t.elapsed().as_secs_f64() + f.pca_s;
+            let frame = r.render(gpu)?;
+            let bytes = r.material_bytes();
+            let name = format!("BTF from fibers c = {}", f.c);
+            cells.push(Cell::new("R4", &name, ci, frame.rgb, prep, bytes, false));
             jobs.push(Job::Btf(Box::new(r)));
             bar.inc(1);
         }
@@ -741,7 +1010,7 @@ fn study(
         write_png(&out.join(format!("sheet-{tag}.png")), &sheet)?;
     }
     let info = report::Info {
-        btf: a.btf.display().to_string(),
+        btf: inputs.btf.display().to_string(),
         btf_size: src.size,
         wales: g.wales,
         courses: g.courses,
@@ -755,6 +1024,7 @@ fn study(
         r0_bytes,
         adapter: gpu.info.name.clone(),
         eig_errors: eigs.iter().map(|(c, _, s, e)| (*c, *s, *e)).collect(),
+        from_fibers: inputs.from_fibers.map(|f| (f.c, f.pca_s, f.rel_rmse, f.made.seconds)),
     };
     write_text(&out.join("compare.csv"), &report::csv(&cells, &dists))?;
     let md = report::markdown(&info, &cells, &dists);

@@ -140,6 +140,8 @@ pub struct Info {
     pub adapter: String,
     /// (c, PCA seconds, PCA rel. RMSE of the BTF itself).
     pub eig_errors: Vec<(usize, f64, f64)>,
+    /// The BTF from fibers: (c, PCA seconds, PCA rel. RMSE, seconds to render it).
+    pub from_fibers: Option<(usize, f64, f64, f64)>,
 }
 
 /// Median (NaN for none).
@@ -526,6 +528,14 @@ pub fn markdown(info: &Info, cells: &[Cell], dists: &[Distance]) -> String {
     for (c, sec, e) in &info.eig_errors {
         let _ = writeln!(s, "| {c} | {sec:.2} | {e:.3} |");
     }
+    if let Some((c, sec, e, made)) = info.from_fibers {
+        let _ = writeln!(
+            s,
+            "\nThe BTF from fibers (the same patch and sampling rendered by the GPU fibers in \
+             {made:.1} s; resumed runs count only the images rendered): c = {c}, PCA {sec:.2} s, \
+             PCA rel. RMSE {e:.3}."
+        );
+    }
     let _ = writeln!(s, "\n![error against time](pareto.png)");
     s
 }
@@ -568,6 +578,9 @@ fn short(c: &Cell) -> String {
     match c.repr {
         "R1" if c.name.contains("full") => "R1 full".into(),
         "R1" => format!("R1 {}", c.name.trim_start_matches("fibers LoD ").replace(' ', "")),
+        "R4" if c.name.starts_with("BTF from fibers") => {
+            format!("R4f {}", c.name.trim_start_matches("BTF from fibers ").replace(' ', ""))
+        }
         "R4" => format!("R4 {}", c.name.trim_start_matches("BTF ").replace(' ', "")),
         "R2" => "R2 strips".into(),
         "R3" => "R3 lumislices".into(),
@@ -587,10 +600,13 @@ fn stretch_followed(cells: &[Cell]) -> Vec<String> {
     let mut names: Vec<String> = Vec::new();
     let best_btf = cells
         .iter()
-        .filter(|c| c.repr == "R4")
+        .filter(|c| c.repr == "R4" && c.name.starts_with("BTF c = "))
         .max_by_key(|c| c.name.trim_start_matches("BTF c = ").parse::<usize>().unwrap_or(0))
         .map(|c| c.name.clone());
     names.extend(best_btf);
+    names.extend(
+        cells.iter().find(|c| c.name.starts_with("BTF from fibers")).map(|c| c.name.clone()),
+    );
     names.push("fibers full detail".into());
     if cells.iter().any(|c| c.name == "yarn strips") {
         names.push("yarn strips".into());
@@ -607,7 +623,11 @@ fn stretch_followed(cells: &[Cell]) -> Vec<String> {
 /// (the GPU fibers also against the direct-only reference, which isolates the geometry
 /// from the multiple-scattering gap), the first strain at which the BTF is worse than the
 /// fibers, `stretch.csv`, `stretch.md` and one plot per distance.
-pub fn write_stretch(out: &std::path::Path, runs: &[StretchRun]) -> anyhow::Result<()> {
+pub fn write_stretch(
+    out: &std::path::Path,
+    runs: &[StretchRun],
+    header: &str,
+) -> anyhow::Result<()> {
     let Some((_, cells0, dists0, _)) = runs.first() else { return Ok(()) };
     let names = stretch_followed(cells0);
     fn find<'a>(cells: &'a [Cell], d: usize, name: &str) -> Option<&'a Cell> {
@@ -745,6 +765,100 @@ pub fn write_stretch(out: &std::path::Path, runs: &[StretchRun]) -> anyhow::Resu
     btf_image::write::write_text(&out.join("stretch.csv"), &csv)?;
     btf_image::write::write_text(&out.join("stretch.md"), &md)?;
     eprintln!("{md}");
+    write_final(out, runs, header)
+}
+
+/// The study's `report.md` over every strain (DESIGN §4.2's final table): per distance one
+/// row per representation with its interior ꟻLIP and rel. RMSE against the reference of
+/// each strain, and its frame time over the plain texture's, preprocessing, memory and
+/// whether it follows deformation (from the first strain's run); and per distance a Pareto
+/// plot, ꟻLIP against frame-time ratio, one series per strain.
+fn write_final(out: &std::path::Path, runs: &[StretchRun], header: &str) -> anyhow::Result<()> {
+    let Some((_, cells0, dists0, _)) = runs.first() else { return Ok(()) };
+    let pct = |s: f64| format!("{:.0} %", s * 100.0);
+    let mut md = format!(
+        "# Every representation of a knit garment against the path-traced fibers\n\n{header}\n\n\
+         Per strain the garment is stretched along the wales and its yarns follow by the knot \
+         solver; the BTFs are the rest sample's, stretched with the UVs. ꟻLIP and rel. RMSE \
+         are on the interior against R0 (every bounce) of that strain; frame time, \
+         preprocessing and memory are the first strain's ({}). Each strain's full report is \
+         in `stretch-S/report.md`, the errors against strain in [stretch.md](stretch.md).\n\n",
+        pct(runs[0].0)
+    );
+    for (d, dist) in dists0.iter().enumerate() {
+        let _ = writeln!(md, "## {} px per stitch\n", dist.stitch_px);
+        let _ = write!(md, "| repr | what |");
+        for (s, ..) in runs {
+            let _ = write!(md, " ꟻLIP {} |", pct(*s));
+        }
+        for (s, ..) in runs {
+            let _ = write!(md, " rel. RMSE {} |", pct(*s));
+        }
+        let _ = writeln!(md, " frame / plain | prep s | GPU MiB | follows deformation |");
+        let _ = writeln!(md, "|---|---|{}---:|---:|---:|:-:|", "---:|".repeat(2 * runs.len()));
+        let value = |x: Option<f64>| match x {
+            Some(v) if v.is_finite() => format!(" {v:.3} |"),
+            Some(_) => " n/m |".to_string(),
+            None => " — |".to_string(),
+        };
+        let mut series = Vec::new();
+        for c0 in cells0.iter().filter(|c| c.distance == d) {
+            let per: Vec<Option<&Cell>> = runs
+                .iter()
+                .map(|(_, cells, ..)| cells.iter().find(|c| c.distance == d && c.name == c0.name))
+                .collect();
+            let mut line = format!("| {} | {} |", c0.repr, c0.name);
+            for c in &per {
+                line.push_str(&value(c.map(|c| c.vs_full.flip_interior)));
+            }
+            for c in &per {
+                line.push_str(&value(c.map(|c| c.vs_full.interior)));
+            }
+            let _ = writeln!(
+                md,
+                "{line} {:.2} | {:.2} | {:.1} | {} |",
+                c0.ms / c0.ms_plain,
+                c0.prep_s,
+                c0.bytes as f64 / 1048576.0,
+                if c0.deforms { "yes" } else { "no" }
+            );
+        }
+        for (s, cells, ..) in runs {
+            // x: the first strain's frame ratio of the same representation.
+            let pts: Vec<((f64, f64), String)> = cells
+                .iter()
+                .filter(|c| c.distance == d)
+                .filter_map(|c| {
+                    let c0 = cells0.iter().find(|k| k.distance == d && k.name == c.name)?;
+                    let (x, y) = (c0.ms / c0.ms_plain, c.vs_full.flip_interior);
+                    (x.is_finite() && y.is_finite() && x > 0.0 && y > 0.0)
+                        .then(|| ((x, y), short(c)))
+                })
+                .collect();
+            let mut sr =
+                Series::new(format!("strain {}", pct(*s)), pts.iter().map(|p| p.0).collect());
+            sr.points_only = true;
+            sr.labels = pts.into_iter().map(|p| p.1).collect();
+            series.push(sr);
+        }
+        let plot = Plot {
+            title: format!("{} px per stitch: error against frame time", dist.stitch_px),
+            x_label: "frame time / plain texture (same run, log)".into(),
+            y_label: "HDR-FLIP against R0, interior (log)".into(),
+            log_x: true,
+            log_y: true,
+            series,
+        };
+        let name = format!("pareto-{}px.png", dist.stitch_px);
+        btf_image::write::write_png(&out.join(&name), &btf_image::plot::render(&plot))?;
+        let _ = writeln!(
+            md,
+            "\n![error against time]({name})\n\n![errors against strain](stretch-{}px.png)\n",
+            dist.stitch_px
+        );
+    }
+    btf_image::write::write_text(&out.join("report.md"), &md)?;
+    crate::guard::outln!("{md}");
     Ok(())
 }
 

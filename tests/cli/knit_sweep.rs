@@ -276,7 +276,10 @@ fn knit_gpu_refusals_name_the_flag() {
 /// 8², 8 wales on the drape, one 64² camera. Every representation has its row with finite
 /// errors, the plain texture is its own time unit, the BTF made by the reference keeps the
 /// reference's mean radiance on the garment, and one bounce is darker than eight; the yarn
-/// strips (R2) have their row and their bake is cached.
+/// strips (R2) have their row and their bake is cached; the BTF from fibers (R4, the same
+/// patch rendered by the GPU fibers at full detail) keeps the GPU fibers' own mean radiance
+/// on the garment. Then the whole study as one command: no `--btf` (the study makes it),
+/// two strains, the final table and its Pareto plot.
 #[test]
 fn knit_compare_scores_every_representation_against_the_reference() {
     let d = Dir::new();
@@ -321,6 +324,8 @@ fn knit_compare_scores_every_representation_against_the_reference() {
         "1",
         "--bake-spp",
         "1",
+        "--btf-fibers-lod",
+        "0",
         "-o",
         "cmp",
     ];
@@ -333,7 +338,7 @@ fn knit_compare_scores_every_representation_against_the_reference() {
         .map(|l| l.split(',').map(|s| s.trim_matches('"').to_owned()).collect())
         .collect();
     let reprs: Vec<&str> = rows.iter().map(|r| r[1].as_str()).collect();
-    assert_eq!(reprs, ["R1", "R1", "R5", "R2", "R3", "R4", "R5"], "{csv}");
+    assert_eq!(reprs, ["R1", "R1", "R5", "R2", "R3", "R4", "R4", "R5"], "{csv}");
     let num = |r: &Vec<String>, k: usize| r[k].parse::<f64>().unwrap();
     for r in &rows {
         // interior, band, stitch scale, mean ratio, ꟻLIP interior and band against R0;
@@ -351,21 +356,53 @@ fn knit_compare_scores_every_representation_against_the_reference() {
     assert_eq!(heatmaps, rows.len(), "one ꟻLIP heat map per cell");
     let plain = rows.iter().find(|r| r[2].starts_with("plain texture")).unwrap();
     assert_eq!(num(plain, 13), 1.0, "the plain texture is the time unit");
-    let btf = rows.iter().find(|r| r[2].starts_with("BTF")).unwrap();
+    let btf = rows.iter().find(|r| r[2].starts_with("BTF c")).unwrap();
     let ratio = num(btf, 6);
     assert!((0.6..1.6).contains(&ratio), "BTF mean radiance / reference {ratio}");
+    // The BTF from fibers carries the fibers' light transport (one bounce, their shadows):
+    // its mean on the garment is the fibers' own (measured 1.01), not the reference's.
+    let from_fibers = rows.iter().find(|r| r[2].starts_with("BTF from fibers")).unwrap();
+    let fibers = rows.iter().find(|r| r[2] == "fibers full detail").unwrap();
+    let ratio = num(from_fibers, 6) / num(fibers, 6);
+    assert!((0.75..1.33).contains(&ratio), "BTF from fibers / fibers mean radiance {ratio}");
+    assert!(d.path("cmp/btf-fibers.btf").is_dir() && d.path("cmp/btf-fibers-c2.eig").is_dir());
     assert!(d.path("cmp/bake-cache").is_dir(), "the strips' bake is cached");
     for f in ["report.md", "pareto.png", "sheet-6px.png", "images/R0-6px.exr", "garment.obj"] {
         assert!(d.path("cmp").join(f).is_file(), "{f}");
     }
-    // The stretch study: the garment and its yarns stretched along the wales by 50 %.
-    let mut st: Vec<&str> = args[..args.len() - 2].to_vec();
-    st.extend(["--stretch", "0.5", "-o", "st"]);
+    // The whole study as one command: the reference's BTF made by the study itself (the
+    // same as y.btf), the garment and its yarns stretched along the wales by 0 and 50 %.
+    let mut st: Vec<&str> = args[4..args.len() - 4].to_vec();
+    st.splice(0..0, ["knit", "compare", "--chart", "stockinette", "--yarn", "fine-2ply"]);
+    st.extend(["--btf-size", "8", "--btf-sampling", "rings:0x1,45x4", "--btf-spp", "2"]);
+    st.extend(["--btf-bounces", "3", "--no-btf-fibers", "--stretch", "0,0.5", "-o", "st"]);
     let out = d.ok(&st);
-    assert!(out.contains("stretch study") || d.path("st/stretch.md").is_file(), "{out}");
+    assert!(out.contains("Every representation"), "{out}");
     let csv = std::fs::read_to_string(d.path("st/stretch.csv")).unwrap();
     let strains: Vec<&str> = csv.lines().skip(1).map(|l| l.split(',').next().unwrap()).collect();
-    assert!(!strains.is_empty() && strains.iter().all(|s| *s == "0.5"), "{csv}");
+    assert!(strains.contains(&"0") && strains.contains(&"0.5"), "{csv}");
+    // Made by the same command from the same chart, yarn and settings, its BTF is y.btf.
+    let (made, given) = (
+        btf_core::store::BtfStore::open(&d.path("st/btf-reference.btf")).unwrap(),
+        btf_core::store::BtfStore::open(&d.path("y.btf")).unwrap(),
+    );
+    // (y.btf in f32, the study's in f16: equal to f16's rounding.)
+    let (a, b) = (made.read_image(2, 3).unwrap(), given.read_image(2, 3).unwrap());
+    assert_eq!(a.len(), b.len());
+    assert!(a.iter().zip(&b).all(|(x, y)| (x - y).abs() <= 1e-3 * y.abs() + 1e-6));
+    // The final table: every representation of the rest run, one ꟻLIP column per strain.
+    let report = std::fs::read_to_string(d.path("st/report.md")).unwrap();
+    let table: Vec<&str> = report.lines().filter(|l| l.starts_with("| R")).collect();
+    assert_eq!(table.len(), 7, "{report}");
+    assert!(report.contains("ꟻLIP 0 %") && report.contains("ꟻLIP 50 %"), "{report}");
+    assert!(d.path("st/pareto-6px.png").is_file());
+    // A second run reuses the finished BTF (an unfinished one would be resumed) and refuses
+    // one made with other settings.
+    let mut again: Vec<&str> = st[..st.len() - 13].to_vec();
+    again.extend(["--btf-size", "6", "--btf-sampling", "rings:0x1,45x4", "--btf-spp", "2"]);
+    again.extend(["--btf-bounces", "3", "--no-btf-fibers", "--stretch", "0", "-o", "st"]);
+    let e = d.fails(&again);
+    assert!(e.contains("--fresh"), "{e}");
     for l in csv.lines().skip(1) {
         let rmse: f64 = l.split(',').nth(4).unwrap().parse().unwrap();
         assert!(rmse.is_finite() && rmse > 0.0, "{l}");

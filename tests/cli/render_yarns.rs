@@ -168,7 +168,8 @@ fn the_knit_swatch_renders_as_yarn_strips_lit_by_lights_and_an_environment() {
 }
 
 /// The same swatch with `method = "lumislice"`: the yarn volumes are drawn over the floor
-/// (the yarn region differs from the floor alone), and turning the light changes them.
+/// (the yarn region differs from the floor alone), turning the light changes them, and
+/// `btf view` draws them too (its turntable's first frame is `btf render`'s).
 #[test]
 fn the_knit_swatch_renders_as_lumislices() {
     let d = Dir::new();
@@ -218,6 +219,33 @@ fn the_knit_swatch_renders_as_lumislices() {
         .filter(|&&i| (0..3).any(|c| (lit[3 * i + c] - turned[3 * i + c]).abs() > 1e-3))
         .count();
     assert!(diff * 2 > yarn.len(), "the light moves over the yarns: {diff} of {}", yarn.len());
+    // In `btf view` (a headless turntable: camera and lights orbit together) the first frame
+    // is `btf render`'s, and the half turn shows the swatch from behind.
+    let o = d.btf(&[
+        "view",
+        "ls.toml",
+        "--turntable",
+        "2",
+        "--width",
+        "40",
+        "--height",
+        "40",
+        "-o",
+        "tt",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let png = |f: &str| image::open(d.path(f)).unwrap().to_rgb8().into_raw();
+    let (rendered, front, back) =
+        (png("ls.exr.png"), png("tt/turntable-0000.png"), png("tt/turntable-0001.png"));
+    let rel = |a: &[u8], b: &[u8]| {
+        let d2: f64 = a.iter().zip(b).map(|(x, y)| (*x as f64 - *y as f64).powi(2)).sum();
+        let a2: f64 = a.iter().map(|x| (*x as f64).powi(2)).sum();
+        (d2 / a2.max(1.0)).sqrt()
+    };
+    let (same, turned) = (rel(&rendered, &front), rel(&rendered, &back));
+    eprintln!("btf view turntable vs btf render: frame 0 {same:.2e}, half turn {turned:.3}");
+    assert!(same <= 1e-3, "turntable frame 0 against btf render: rel. RMSE {same:.2e}");
+    assert!(turned > 0.05, "the half turn shows another side: rel. RMSE {turned:.3}");
 }
 
 #[test]
