@@ -6,7 +6,6 @@ use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand};
 use datasets::material::preview::write_contact_sheet;
 use datasets::{EnvKind, EnvParams, GenerateOptions, MaterialKind, MaterialSpec};
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use yarn_ref::btf::{YarnBtfOptions, YarnBtfSpec, generate_yarn_btf};
 
@@ -248,10 +247,6 @@ pub fn run(cmd: SynthCmd) -> Result<()> {
     }
 }
 
-fn show_progress() -> bool {
-    std::env::var_os("BTF_NO_PROGRESS").is_none() && std::io::stderr().is_terminal()
-}
-
 fn parse_rgb(s: &str) -> Result<[f64; 3]> {
     let v = crate::args::numbers::<f64, 3>(s, "--albedo")?;
     if !v.iter().all(|x| x.is_finite() && (0.0..=1.0).contains(x)) {
@@ -265,7 +260,7 @@ fn material(a: MaterialArgs) -> Result<()> {
         if a.shard.shard.is_some() || a.shard.shard_count.is_some() {
             bail!("--shard is not available for --kind yarn yet (issue #23)");
         }
-        synth_yarn_material(&a, show_progress())?;
+        synth_yarn_material(&a, crate::progress::enabled())?;
         if let Some(dir) = a.preview {
             let store = btf_core::store::BtfStore::open(&a.output)?;
             eprintln!("preview -> {}", write_contact_sheet(&store, &dir, "yarn")?.display());
@@ -290,7 +285,7 @@ fn material(a: MaterialArgs) -> Result<()> {
     if shard.is_some() && a.preview.is_some() {
         bail!("--preview needs the whole store: give it to a run without --shard");
     }
-    let opts = GenerateOptions { resume: a.resume, progress: show_progress(), dtype, shard };
+    let opts = GenerateOptions { resume: a.resume, progress: crate::progress::enabled(), dtype, shard };
     let r = datasets::generate(&spec, &a.output, &opts)
         .with_context(|| format!("synthesising {} into {}", a.kind, a.output.display()))?;
     if let Some(s) = shard {
@@ -373,7 +368,7 @@ fn capture(a: CaptureArgs) -> Result<()> {
     spec.vignetting = a.vignetting;
     spec.seed = a.seed;
     spec.supersample = a.supersample;
-    let r = datasets::capture::capture(&spec, &a.out, show_progress())
+    let r = datasets::capture::capture(&spec, &a.out, crate::progress::enabled())
         .with_context(|| format!("capturing {} into {}", a.material, a.out.display()))?;
     eprintln!(
         "capture {}: {} images written, {} kept, {:.1} s -> {}",
