@@ -722,15 +722,17 @@ pub fn write_stretch(
                 .map(|(s, _, _, _)| format!("{:.0} %", s * 100.0))
                 .unwrap_or_else(|| "none of the strains measured".into())
         };
-        let strips_line = if names.iter().any(|n| n == "yarn strips") {
-            format!(
-                " Than the yarn strips: {} by rel. RMSE, {} by ꟻLIP.",
-                cross_with("yarn strips", &|c| c.vs_full.interior),
-                cross_with("yarn strips", &|c| c.vs_full.flip_interior)
-            )
-        } else {
-            String::new()
-        };
+        let strips_line: String = ["yarn strips", "lumislices"]
+            .iter()
+            .filter(|m| names.iter().any(|n| n == *m))
+            .map(|m| {
+                format!(
+                    " Than the {m}: {} by rel. RMSE, {} by ꟻLIP.",
+                    cross_with(m, &|c| c.vs_full.interior),
+                    cross_with(m, &|c| c.vs_full.flip_interior)
+                )
+            })
+            .collect();
         let cross = |f: &dyn Fn(&Cell) -> f64| {
             runs.iter()
                 .find(|(_, cells, _, _)| {

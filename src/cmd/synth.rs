@@ -285,7 +285,8 @@ fn material(a: MaterialArgs) -> Result<()> {
     if shard.is_some() && a.preview.is_some() {
         bail!("--preview needs the whole store: give it to a run without --shard");
     }
-    let opts = GenerateOptions { resume: a.resume, progress: crate::progress::enabled(), dtype, shard };
+    let opts =
+        GenerateOptions { resume: a.resume, progress: crate::progress::enabled(), dtype, shard };
     let r = datasets::generate(&spec, &a.output, &opts)
         .with_context(|| format!("synthesising {} into {}", a.kind, a.output.display()))?;
     if let Some(s) = shard {

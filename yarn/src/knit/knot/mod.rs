@@ -81,6 +81,9 @@
 //! has no yarn–yarn contact at run time (item 9); [`clearance`] measures what that costs.
 
 pub mod clearance;
+pub mod relax;
+#[cfg(test)]
+mod relax_tests;
 mod solve;
 
 use super::chart::Stitch;
@@ -92,6 +95,7 @@ use crate::{Error, Result};
 use rayon::prelude::*;
 
 pub use clearance::{Clearance, min_clearance};
+pub use relax::{ContactParams, RelaxStats};
 
 /// Solver settings ([H25 §5.2, §6.1]; DESIGN §3.4).
 #[derive(Debug, Clone, Copy, PartialEq)]
