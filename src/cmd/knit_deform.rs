@@ -12,7 +12,10 @@
 //! (median of `--repeat`, all faces in parallel) and how often the step guard fired.
 //! Writes `deform.csv`, `report.md`, `clearance.png` and `deviation.png` (plots against
 //! the strain), `yarns.png` (the centre lines seen from above: reference, solved, naive)
-//! and per case the solved and reference yarns as BCC in `yarns/`.
+//! and per case the solved and reference yarns as BCC in `yarns/`. With `--contact` each
+//! reference is also relaxed with the yarn–yarn contact penalty of DESIGN §3.3 item 1
+//! ([`yarn::knit::knot::relax`]): the contact reference's clearance and the solve's
+//! deviation from it over every CP (the geometry the model's missing contact costs).
 
 use super::knit::{chart_inputs_of, load_chart, load_yarn};
 use crate::guard::{self, outln};
@@ -23,7 +26,7 @@ use clap::Args;
 use image::RgbImage;
 use std::path::PathBuf;
 use std::time::Instant;
-use yarn::knit::knot::{KnotFrame, min_clearance};
+use yarn::knit::knot::{ContactParams, KnotFrame, min_clearance};
 use yarn::knit::{KnotModel, KnotParams, SkeletonParams, StitchMesh};
 
 /// `btf knit deform`.
@@ -71,6 +74,14 @@ pub struct DeformArgs {
     /// Gauss–Seidel sweeps allowed for the converged reference.
     #[arg(long, default_value_t = 500)]
     pub max_sweeps: usize,
+    /// Also relax every case's converged reference with the yarn–yarn contact penalty
+    /// (`yarn::knit::knot::relax`, DESIGN §3.3 item 1): the contact reference's clearance
+    /// and the knot solve's deviation from it (slow: seconds to minutes per case).
+    #[arg(long)]
+    pub contact: bool,
+    /// Levenberg–Marquardt steps allowed for the contact relaxation (`--contact`).
+    #[arg(long, default_value_t = 250)]
+    pub contact_iterations: usize,
     /// Drive the yarns by the drape simulation instead (a cloth falling over a sphere,
     /// `datasets`' drape): this many frames after the flat start, written as
     /// `drape/frame-K.bcc` with a per-frame table (0: the analytic maps).
@@ -110,6 +121,18 @@ struct Row {
     guard: usize,
     sweeps: usize,
     frames: [KnotFrame; 3],
+    /// With `--contact`: the contact reference's clearance, the GN solve's RMS and maximum
+    /// deviation from it over every CP (r), LM steps and seconds.
+    contact: Option<ContactRow>,
+}
+
+/// The contact reference of one case.
+struct ContactRow {
+    clearance: f64,
+    rms_gn: f64,
+    max_gn: f64,
+    steps: usize,
+    seconds: f64,
 }
 
 fn deviations(a: &KnotFrame, b: &KnotFrame, idx: &[usize], r: f64) -> (f64, f64) {
@@ -208,6 +231,26 @@ pub fn run(a: DeformArgs) -> Result<()> {
             Ok(min_clearance(&model.yarn_set(f, 1)?, mesh.lattice, r, 12).ratio)
         };
         let clearance = [clear(&naive)?, clear(&solved)?, clear(&reference)?];
+        let contact = if a.contact {
+            let c = ContactParams { max_iterations: a.contact_iterations, ..Default::default() };
+            let (relaxed, st) = model.relax_contact(&reference, &p, &c)?;
+            let all: Vec<usize> = (0..model.cp_count()).collect();
+            let (rms_gn, max_gn) = deviations(&solved, &relaxed, &all, r);
+            yarn::io::bcc::write_bcc(
+                &yarn_dir.join(format!("{name}-contact.bcc")),
+                &model.yarn_set(&relaxed, a.upsample)?,
+                &format!("btf knit deform {name}, chart {}, contact reference", chart.name),
+            )?;
+            Some(ContactRow {
+                clearance: clear(&relaxed)?,
+                rms_gn,
+                max_gn,
+                steps: st.iterations,
+                seconds: st.seconds,
+            })
+        } else {
+            None
+        };
         let info = format!("btf knit deform {name}, chart {}, {w} x {c}", chart.name);
         yarn::io::bcc::write_bcc(
             &yarn_dir.join(format!("{name}.bcc")),
@@ -234,6 +277,7 @@ pub fn run(a: DeformArgs) -> Result<()> {
             guard: solved.stats.guard_triggers,
             sweeps,
             frames: [naive, solved, reference],
+            contact,
         });
         bar.inc(1);
     }
@@ -254,7 +298,8 @@ fn write_outputs(
     let mut csv = String::from(
         "case,kind,strain,energy_initial,energy_solved,energy_reference,rms_naive_r,rms_knots_r,\
          rms_gn_r,max_naive_r,max_knots_r,max_gn_r,rms_length_strain,clearance_naive,\
-         clearance_gn,clearance_reference,solve_ms,guard_triggers,reference_sweeps\n",
+         clearance_gn,clearance_reference,solve_ms,guard_triggers,reference_sweeps,\
+         clearance_contact,rms_gn_contact_r,max_gn_contact_r,contact_steps,contact_s\n",
     );
     for x in rows {
         csv.push_str(&format!(
@@ -279,6 +324,14 @@ fn write_outputs(
             x.guard,
             x.sweeps
         ));
+        // The contact columns: empty without --contact (no NaN is written).
+        let contact = x.contact.as_ref().map_or(",,,,".to_string(), |k| {
+            format!(
+                "{:.4},{:.5},{:.5},{},{:.2}",
+                k.clearance, k.rms_gn, k.max_gn, k.steps, k.seconds
+            )
+        });
+        csv.insert_str(csv.len() - 1, &format!(",{contact}"));
     }
     write_text(&a.output.join("deform.csv"), &csv)?;
     let mut md = format!(
@@ -319,6 +372,24 @@ fn write_outputs(
             x.guard
         ));
     }
+    if rows.iter().any(|x| x.contact.is_some()) {
+        md.push_str(
+            "\n**The contact reference** (DESIGN §3.3 item 1): each converged reference relaxed \
+             with the yarn–yarn contact penalty (`yarn::knit::knot::relax`, Levenberg–Marquardt, \
+             every CP free): its clearance, and how far the Gauss–Newton knot solve is from it \
+             over every CP — what the model's missing contact costs in geometry.\n\n\
+             | case | clearance ref. → contact ref. | RMS / max dev. GN from contact ref. (r) | LM steps | s |\n\
+             |---|---|---|---:|---:|\n",
+        );
+        for x in rows {
+            if let Some(k) = &x.contact {
+                md.push_str(&format!(
+                    "| {} | {:.3} → {:.3} | {:.3} / {:.3} | {} | {:.1} |\n",
+                    x.name, x.clearance[2], k.clearance, k.rms_gn, k.max_gn, k.steps, k.seconds
+                ));
+            }
+        }
+    }
     md.push_str(
         "\n![clearance against strain](clearance.png)\n\n![deviation against strain](deviation.png)\n\n\
          ![centre lines from above: reference (orange), solved (blue), naive (grey)](yarns.png)\n",
@@ -345,6 +416,12 @@ fn write_outputs(
     let mut clear = series(&|x| x.clearance[1], "solved");
     clear.extend(series(&|x| x.clearance[2], "reference"));
     clear.extend(series(&|x| x.clearance[0], "naive"));
+    if rows.iter().all(|x| x.contact.is_some()) {
+        clear.extend(series(
+            &|x| x.contact.as_ref().map_or(f64::NAN, |k| k.clearance),
+            "contact reference",
+        ));
+    }
     let plot = Plot {
         title: format!("{chart}: minimum clearance between yarns"),
         x_label: "strain (engineering)".into(),

@@ -171,6 +171,42 @@ fn knit_deform_scores_knots_against_the_reference_and_writes_the_yarns() {
     let f = yarn::io::read_bcc(&d.path("def/yarns/shear-0.3.bcc")).unwrap();
     assert_eq!(f.set.curves.len(), 4);
     assert!(d.path("def/yarns/shear-0.3-reference.bcc").is_file());
+    // Without --contact the contact columns are empty (never NaN).
+    assert!(rows.iter().all(|r| r.len() == 24 && r[19..].iter().all(|c| c.is_empty())), "{csv}");
+    // --contact: each converged reference relaxed with the yarn–yarn contact penalty
+    // (DESIGN §3.3 item 1) reaches the clearance the knots lack (0.88 × 2r at rest).
+    d.ok(&[
+        "knit",
+        "deform",
+        "--chart",
+        "rib1x1",
+        "--stitches",
+        "4,2",
+        "--stretch",
+        "0",
+        "--stretch-course",
+        "0.2",
+        "--shear",
+        "0.3",
+        "--repeat",
+        "1",
+        "--contact",
+        "--contact-iterations",
+        "120",
+        "-o",
+        "con",
+    ]);
+    let csv = std::fs::read_to_string(d.path("con/deform.csv")).unwrap();
+    for r in csv.lines().skip(1).map(|l| l.split(',').collect::<Vec<_>>()) {
+        let (reference, contact) = (num(&r, 15), num(&r, 19));
+        eprintln!("{}: clearance reference {reference:.3}, contact reference {contact:.3}", r[0]);
+        assert!(contact >= 0.95 && contact > reference, "{r:?}");
+        assert!(num(&r, 21) > 0.0, "the knot solve is off the contact reference: {r:?}");
+    }
+    assert!(
+        std::fs::read_to_string(d.path("con/report.md")).unwrap().contains("contact reference")
+    );
+    assert!(d.path("con/yarns/rest-contact.bcc").is_file());
     // Cables are refused with the reason.
     let e = d.fails(&["knit", "deform", "--chart", "cable2x2", "--stitches", "8,4", "-o", "cab"]);
     assert!(e.contains("cable") && e.contains("unsupported"), "{e}");
