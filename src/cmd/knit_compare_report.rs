@@ -825,7 +825,7 @@ fn write_final(out: &std::path::Path, runs: &[StretchRun], header: &str) -> anyh
                 if c0.deforms { "yes" } else { "no" }
             );
         }
-        for (s, cells, ..) in runs {
+        for (k, (s, cells, ..)) in runs.iter().enumerate() {
             // x: the first strain's frame ratio of the same representation.
             let pts: Vec<((f64, f64), String)> = cells
                 .iter()
@@ -840,7 +840,10 @@ fn write_final(out: &std::path::Path, runs: &[StretchRun], header: &str) -> anyh
             let mut sr =
                 Series::new(format!("strain {}", pct(*s)), pts.iter().map(|p| p.0).collect());
             sr.points_only = true;
-            sr.labels = pts.into_iter().map(|p| p.1).collect();
+            // Labels on the first strain's points only (the others sit beside them).
+            if k == 0 {
+                sr.labels = pts.into_iter().map(|p| p.1).collect();
+            }
             series.push(sr);
         }
         let plot = Plot {
