@@ -324,3 +324,69 @@ fn slices_fail_edge_on_where_the_ray_march_does_not() {
     let last = &curve[curve.len() - 1];
     assert!(last[2] > 2.0 * last[1] && last[2] > curve[0][2], "slices edge-on: {curve:?}");
 }
+
+/// [C03 eq. 9]: slices composited back to front make the geometric series
+/// `Σ_k c α (1 − α)^k = c (1 − (1 − α)^N)`, so seen along a straight, untwisted yarn of
+/// uniform density (isotropic extinction σ, length L, N slabs of `α = 1 − e^{−σL/N}`) the
+/// coverage is `1 − e^{−σL}` for every slice count, and so is the ray march's (its steps
+/// compose the same series in f32). The colour per coverage is the slab's `c` in every
+/// mode. Bounds: the frame is f16 (2⁻¹¹ relative per blend), with 2 pieces × N slices
+/// blended one after another: `2N · 2⁻¹¹` relative for the coverage.
+#[test]
+fn slices_composite_to_eq9s_geometric_series() {
+    let Some(gpu) = Gpu::for_tests("lumislice_eq9") else { return };
+    let mut p = cotton();
+    p.ply_pitch = 1e3; // no twist: every slab is the same cross-section
+    let r = p.yarn_radius();
+    let (res, sigma, length) = (32usize, 450.0, 2e-3);
+    let mut grid = yarn_precompute::lumislice::SliceGrid {
+        res,
+        half_width: 1.25 * r,
+        sigma: vec![0.0; res * res],
+    };
+    for j in 0..res {
+        for i in 0..res {
+            let [x, y] = grid.centre(i, j);
+            if x.hypot(y) <= r {
+                grid.sigma[j * res + i] = sigma;
+            }
+        }
+    }
+    let s = LumisliceSettings {
+        res,
+        multiple: false,
+        extinction: yarn::density::Extinction::Isotropic,
+        ..Default::default()
+    };
+    let l = Lumislice::from_grid(&grid, p.ply_pitch, ALBEDO, &s, &|_| {}).unwrap();
+    // Along +z from 0 to L (3 CPs: two pieces with n_sub = 1), seen from above along it.
+    let curve =
+        YarnCurve::open(vec![[0.0, 0.0, 0.0], [0.0, 0.0, 0.5 * length], [0.0, 0.0, length]])
+            .unwrap();
+    let set = YarnSet::new(vec![curve], None).unwrap();
+    let packed = PackedYarns::new(&set, std::slice::from_ref(&p), &PackOptions::default()).unwrap();
+    let (w, h) = (33u32, 33u32);
+    let cam = FiberCamera::perspective([0.0, 0.0, 0.05], [0.0; 3], [0.0, 1.0, 0.0], 2.0);
+    let lights = [FiberLight::Directional { to_light: [0.6, 0.0, 0.8], irradiance: [1.0; 3] }];
+    let centre = (h / 2 * w + w / 2) as usize;
+    let want = 1.0 - (-sigma * length).exp();
+    let mut colours = Vec::new();
+    for slices in [0u32, 1, 3, 8] {
+        let rs = LumisliceRenderSettings { n_sub: 1, shadows: false, slices, ..Default::default() };
+        let ren = LumisliceRenderer::new(&gpu, &packed, std::slice::from_ref(&l), rs).unwrap();
+        let img = ren.render(&gpu, &cam, &lights, (w, h), [0.0; 4]).unwrap();
+        let px = img.pixels[centre];
+        let bound = 2.0 * slices.max(1) as f64 * 2f64.powi(-11) * want + 1e-4;
+        let cover = px[3] as f64;
+        eprintln!(
+            "eq. 9, {}: coverage {cover:.5} (1 − e^(−σL) = {want:.5}), colour / coverage {:.5}",
+            if slices == 0 { "ray march".to_string() } else { format!("{slices} slices") },
+            px[0] as f64 / cover
+        );
+        assert!((cover - want).abs() <= bound, "{slices} slices: coverage {cover} vs {want}");
+        colours.push(px[0] as f64 / cover);
+    }
+    for c in &colours {
+        assert!(*c > 0.0 && (c / colours[0] - 1.0).abs() < 0.01, "colour per coverage {colours:?}");
+    }
+}
