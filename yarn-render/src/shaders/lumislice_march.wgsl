@@ -265,8 +265,25 @@ struct MarchOut {
     @location(0) color: vec4<f32>,
 }
 
+// Whether every component is finite (exponent bits, not `v != v`: a fast-math compiler may
+// fold that away).
+fn finite4(v: vec4<f32>) -> bool {
+    return all(((bitcast<vec4<u32>>(v) >> vec4<u32>(23u)) & vec4<u32>(0xffu)) != vec4<u32>(0xffu));
+}
+
+// A box face or slice quad exactly edge-on to an orthographic view (a flat patch's pieces
+// seen from straight above: their frame's e1 is the surface normal, which is the view
+// direction) is a zero-area triangle that lavapipe still rasterizes, with non-finite
+// interpolants; the proper faces cover the same pixels, so its fragments are dropped.
+fn degenerate(world: vec3<f32>) -> bool {
+    return !finite4(vec4<f32>(world, 0.0));
+}
+
 @fragment
 fn fs_piece(in: PieceOut) -> MarchOut {
+    if degenerate(in.world) {
+        discard;
+    }
     let h = headers[in.ids.y];
     let lv = in.ids.z;
     let reach = in.ta.w;
@@ -362,11 +379,10 @@ fn fs_piece(in: PieceOut) -> MarchOut {
             break;
         }
     }
-    // A non-finite sample (seen once, at an exactly vertical orthographic view) must not
-    // reach the blended frame: the pixel keeps what is behind it.
+    // A safety net: no non-finite sample reaches the blended frame (the one seen came from
+    // the degenerate faces dropped above).
     let c = vec4<f32>(l, 1.0 - tr);
-    // (Exponent bits, not `c != c`: a fast-math compiler may fold that away.)
-    if any(((bitcast<vec4<u32>>(c) >> vec4<u32>(23u)) & vec4<u32>(0xffu)) == vec4<u32>(0xffu)) {
+    if !finite4(c) {
         discard;
     }
     var out: MarchOut;
@@ -448,6 +464,9 @@ fn vs_slice(@builtin(vertex_index) vi: u32, @builtin(instance_index) inst: u32) 
 
 @fragment
 fn fs_slice(in: SliceOut) -> MarchOut {
+    if degenerate(in.world) {
+        discard;
+    }
     let h = headers[in.ids.y];
     let lv = in.ids.z;
     let axis = in.axis.xyz;
