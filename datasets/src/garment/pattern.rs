@@ -388,6 +388,9 @@ impl Pattern {
     }
 }
 
+/// The least sleeve-cap height of a top, in units of the body's height / 1.76 m.
+const MIN_CAP: f64 = 0.03;
+
 /// Front and back of a top plus two sleeves.
 fn top(m: &Measurements, l: &Landmarks, o: &PatternOptions, long: bool) -> Result<Pattern> {
     let s = l.height / 1.76;
@@ -398,7 +401,7 @@ fn top(m: &Measurements, l: &Landmarks, o: &PatternOptions, long: bool) -> Resul
     let shoulder_x = l.shoulder[0][0] + 0.02 * s;
     let drop = 0.045 * s;
     let y_sh = len - drop;
-    let y_ap = y_sh - (l.shoulder[0][2] - l.armpit_z + 0.05 * s);
+    let y_ap_body = y_sh - (l.shoulder[0][2] - l.armpit_z + 0.05 * s);
     if len < (l.neck_base_z - l.armpit_z) + 0.12 {
         return Err(Error::Invalid(format!(
             "--length = {len} m is shorter than the armhole (at least {:.2} m)",
@@ -411,7 +414,7 @@ fn top(m: &Measurements, l: &Landmarks, o: &PatternOptions, long: bool) -> Resul
             l.neck_base_z - 0.05
         )));
     }
-    let body_panel = |neck_depth: f64| -> Vec<Edge> {
+    let body_panel = |neck_depth: f64, y_ap: f64| -> Vec<Edge> {
         let armhole_r = bezier(
             [
                 [w, y_ap],
@@ -446,22 +449,36 @@ fn top(m: &Measurements, l: &Landmarks, o: &PatternOptions, long: bool) -> Resul
             Edge::new("side_l", line([-w, y_ap], [-w, 0.0], 8)),
         ]
     };
-    let front = body_panel(0.085 * s);
-    let back = body_panel(0.025 * s);
-    let armhole_len = Edge::new("", front[2].points.clone()).length();
     // Sleeve: bicep width, cap whose half equals the armhole, underarm seam, cuff.
     let upper_r = l.arm_radius[0];
     let bicep = 2.0 * PI * upper_r + 0.07 * s;
     let half_b = bicep / 2.0;
-    if half_b >= armhole_len {
-        return Err(Error::Invalid("the armhole is shorter than half the sleeve's width".into()));
-    }
     let cap_half = |cap_h: f64| {
         bezier(
             [[half_b, 0.0], [0.64 * half_b, 0.45 * cap_h], [0.36 * half_b, cap_h], [0.0, cap_h]],
             48,
         )
     };
+    // The cap's half is sewn to the armhole, so the armhole must be at least as long as a
+    // cap of the least height MIN_CAP. A large size's arm is too thick for the armpit depth
+    // of its own body: the armhole is deepened then, as pattern drafting does for a wide
+    // bicep (a looser armhole), in 2 mm steps by at most 10 cm; sizes that fit keep theirs.
+    let needed = Edge::new("", cap_half(MIN_CAP * s)).length();
+    let armhole_of = |y_ap: f64| Edge::new("", body_panel(0.085 * s, y_ap)[2].points.clone());
+    let mut y_ap = y_ap_body;
+    while armhole_of(y_ap).length() < needed && y_ap_body - y_ap < 0.1 {
+        y_ap -= 0.002;
+    }
+    let front = body_panel(0.085 * s, y_ap);
+    let back = body_panel(0.025 * s, y_ap);
+    let armhole_len = Edge::new("", front[2].points.clone()).length();
+    if half_b >= armhole_len {
+        return Err(Error::Invalid(format!(
+            "the armhole ({armhole_len:.3} m, deepened by {:.3} m) is shorter than half the \
+             sleeve's width ({half_b:.3} m)",
+            y_ap_body - y_ap
+        )));
+    }
     let (mut lo, mut hi) = (0.0, armhole_len);
     for _ in 0..60 {
         let mid = 0.5 * (lo + hi);

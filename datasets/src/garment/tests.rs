@@ -160,3 +160,26 @@ fn garment_trousers_do_not_self_intersect() {
     let g = garment(GarmentKind::Trousers);
     assert_eq!(check::self_intersections(&g.mesh).len(), 0);
 }
+
+/// Every size drafts both tops, each sleeve cap as long as its armhole (the seam sewn
+/// between them). Size L's arm is too thick for its body's own armpit depth, so its
+/// armhole is deepened; S and M keep theirs.
+#[test]
+fn every_size_drafts_tops_whose_sleeve_caps_fit_their_armholes() {
+    use super::pattern::{Pattern, PatternOptions};
+    for size in [Size::S, Size::M, Size::L] {
+        let p = BodyParams::new(size);
+        let man = super::body::Mannequin::new(&p).unwrap();
+        for kind in [GarmentKind::TShirt, GarmentKind::Shirt] {
+            let pat =
+                Pattern::new(kind, &p.measurements, &man.landmarks, &PatternOptions::default())
+                    .unwrap_or_else(|e| panic!("{size:?} {kind:?}: {e}"));
+            let edge = |panel: usize, name: &str| {
+                pat.panels[panel].edges.iter().find(|e| e.name == name).unwrap().length()
+            };
+            let (armhole, cap) = (edge(0, "armhole_r"), edge(2, "cap_r"));
+            eprintln!("{size:?} {kind:?}: armhole {armhole:.4} m, sleeve cap half {cap:.4} m");
+            assert!((armhole - cap).abs() < 1e-3 * armhole, "{size:?} {kind:?}");
+        }
+    }
+}
