@@ -248,6 +248,43 @@ fn the_knit_swatch_renders_as_lumislices() {
     assert!(turned > 0.05, "the half turn shows another side: rel. RMSE {turned:.3}");
 }
 
+/// The knit swatch with its fiber-level yarns (`method = "fibers"`) in `btf view`: the
+/// headless turntable's first frame is `btf render`'s (camera and lights orbit together,
+/// so frame 0 is the scene itself), and the quarter turn shows the swatch and its yarns
+/// from the side.
+#[test]
+fn the_knit_swatch_turns_in_btf_view() {
+    let d = Dir::new();
+    example(&d);
+    let size = "48";
+    let o =
+        d.btf(&["render", "knit-swatch.toml", "--width", size, "--height", size, "-o", "r.png"]);
+    if String::from_utf8_lossy(&o.stderr).contains("no GPU adapter") {
+        assert!(std::env::var("BTF_REQUIRE_GPU").as_deref() != Ok("1"), "no GPU adapter");
+        return;
+    }
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let args = ["view", "knit-swatch.toml", "--turntable", "4", "--width", size, "--height", size];
+    let o = d.btf(&[&args[..], &["-o", "tt"]].concat());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let png = |f: &str| image::open(d.path(f)).unwrap().to_rgb8().into_raw();
+    let rel = |a: &[u8], b: &[u8]| {
+        let d2: f64 = a.iter().zip(b).map(|(x, y)| (*x as f64 - *y as f64).powi(2)).sum();
+        let a2: f64 = a.iter().map(|x| (*x as f64).powi(2)).sum();
+        (d2 / a2.max(1.0)).sqrt()
+    };
+    let rendered = png("r.png");
+    let (same, quarter) = (
+        rel(&rendered, &png("tt/turntable-0000.png")),
+        rel(&rendered, &png("tt/turntable-0001.png")),
+    );
+    eprintln!(
+        "knit swatch in btf view: frame 0 against btf render {same:.2e}, quarter turn {quarter:.3}"
+    );
+    assert!(same <= 1e-3, "turntable frame 0 against btf render: rel. RMSE {same:.2e}");
+    assert!(quarter > 0.05, "the quarter turn shows another side: rel. RMSE {quarter:.3}");
+}
+
 #[test]
 fn bad_yarns_entries_are_refused_by_the_binary_naming_the_key() {
     let d = Dir::new();
