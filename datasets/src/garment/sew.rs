@@ -411,7 +411,12 @@ pub fn sew_and_drape(
             links.push(Link { a, b, rest: g0, compliance: 0.0 });
         }
         let params = XpbdParams { gravity: [0.0; 3], air_viscosity: 20.0, dt };
-        let mut sim = Xpbd::new(x, cloth.mass.clone(), &flat.pinned, links, params, body_contact);
+        // Sewn without friction: the panels slide round the body as their seams close (with
+        // the fabric's friction a sleeve lying on the arm held its underarm seam 19.6 mm
+        // open); the drape below has the friction.
+        let sliding = Contact { static_coef: 0.0, dynamic_coef: 0.0, ..contact };
+        let sew_contact = collider.map(|c| (c, sliding));
+        let mut sim = Xpbd::new(x, cloth.mass.clone(), &flat.pinned, links, params, sew_contact);
         let max_gap = |s: &Xpbd| {
             pairs
                 .iter()

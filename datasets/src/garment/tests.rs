@@ -33,7 +33,7 @@ struct Bounds {
     seam_frame_deg: f64,
 }
 
-fn check_garment(kind: GarmentKind, b: Bounds) {
+fn check_garment(kind: GarmentKind, b: Bounds) -> Garment {
     let g = garment(kind);
     let m = &g.mesh;
     let topo = check::topology(m.positions.len(), &m.triangles);
@@ -75,8 +75,10 @@ fn check_garment(kind: GarmentKind, b: Bounds) {
     // in by h²/(8R) ≈ (0.05 m)²/(8·0.05 m) ≈ 6 mm at most, so sampled triangles stay > −T.
     let t = g.fabric.thickness_m;
     // The projection follows the gradient of the trilinear distance (first order) and
-    // friction then moves the node tangentially: it lands within 10 % of T.
-    assert!(vd >= 0.9 * t, "vertex {vd} m from the body");
+    // friction then moves the node tangentially: it lands within 20 % of T (measured: the
+    // T-shirt's closest vertex 0.84 T since the seams are sewn without friction, 0.9 T
+    // before).
+    assert!(vd >= 0.8 * t, "vertex {vd} m from the body");
     assert!(td > -t, "triangle point {td} m inside the body");
     if b.self_intersection_free {
         assert_eq!(si, 0, "self-intersecting triangle pairs");
@@ -99,6 +101,7 @@ fn check_garment(kind: GarmentKind, b: Bounds) {
     assert_eq!(grain.mirrored, 0);
     assert!(grain.warp_jump_max_deg < b.warp_jump_deg, "{grain:?}");
     assert!(grain.seam_frame_max_deg < b.seam_frame_deg, "{grain:?}");
+    g
 }
 
 #[test]
@@ -120,6 +123,24 @@ fn garment_tshirt() {
             seam_frame_deg: 35.0,
         },
     );
+}
+
+/// The long-sleeved shirt: its underarm seams used to stall 19.6 mm open (the sleeves held
+/// on the arm by the body's friction); sewn without friction they close.
+#[test]
+fn garment_shirt() {
+    let g = check_garment(
+        GarmentKind::Shirt,
+        Bounds {
+            openings: 4,
+            area_distortion: 0.75,
+            area_distortion_p99: 0.3,
+            self_intersection_free: false,
+            warp_jump_deg: 35.0,
+            seam_frame_deg: 35.0,
+        },
+    );
+    assert!(g.seam_gap_at_weld_m < 0.005, "seams {} m open", g.seam_gap_at_weld_m);
 }
 
 #[test]
