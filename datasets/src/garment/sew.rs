@@ -1,7 +1,8 @@
 //! From pattern to draped garment: the panels are triangulated evenly at the spacing that
 //! gives the requested vertex count (seam partners sampled with the same number of points),
 //! placed around the body, pulled together by seam springs (rest length 0, a capped
-//! pull) with the body as collider, welded into one mesh once the seams have closed (one
+//! pull) with the body as a frictionless collider (with friction a sleeve lying on the arm
+//! held its underarm seam open), welded into one mesh once the seams have closed (one
 //! position per seam point, the UVs kept per panel so a seam keeps its UV discontinuity),
 //! and draped under gravity with friction and self-collision until the kinetic energy stays
 //! below a threshold.
