@@ -125,24 +125,15 @@ fn knit_refusals_name_what_is_wrong() {
 #[test]
 fn knit_deform_scores_knots_against_the_reference_and_writes_the_yarns() {
     let d = Dir::new();
-    let out = d.ok(&[
-        "knit",
-        "deform",
-        "--chart",
-        "rib1x1",
-        "--stitches",
-        "4,4",
-        "--stretch",
-        "0,0.3",
-        "--stretch-course",
-        "0.2",
-        "--shear",
-        "0.3",
-        "--repeat",
-        "1",
-        "-o",
-        "def",
-    ]);
+    // One stretch-course and one shear case besides the wale stretches.
+    let deform = |stitches: &str, stretch: &str, more: &[&str]| -> String {
+        let mut args = vec!["knit", "deform", "--chart", "rib1x1", "--stitches", stitches];
+        args.extend(["--stretch", stretch, "--stretch-course", "0.2", "--shear", "0.3"]);
+        args.extend(["--repeat", "1"]);
+        args.extend(more);
+        d.ok(&args)
+    };
+    let out = deform("4,4", "0,0.3", &["-o", "def"]);
     assert!(out.contains("4 cases"), "{out}");
     let csv = std::fs::read_to_string(d.path("def/deform.csv")).unwrap();
     let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
@@ -175,27 +166,7 @@ fn knit_deform_scores_knots_against_the_reference_and_writes_the_yarns() {
     assert!(rows.iter().all(|r| r.len() == 24 && r[19..].iter().all(|c| c.is_empty())), "{csv}");
     // --contact: each converged reference relaxed with the yarn–yarn contact penalty
     // (DESIGN §3.3 item 1) reaches the clearance the knots lack (0.88 × 2r at rest).
-    d.ok(&[
-        "knit",
-        "deform",
-        "--chart",
-        "rib1x1",
-        "--stitches",
-        "4,2",
-        "--stretch",
-        "0",
-        "--stretch-course",
-        "0.2",
-        "--shear",
-        "0.3",
-        "--repeat",
-        "1",
-        "--contact",
-        "--contact-iterations",
-        "120",
-        "-o",
-        "con",
-    ]);
+    deform("4,2", "0", &["--contact", "--contact-iterations", "120", "-o", "con"]);
     let csv = std::fs::read_to_string(d.path("con/deform.csv")).unwrap();
     for r in csv.lines().skip(1).map(|l| l.split(',').collect::<Vec<_>>()) {
         let (reference, contact) = (num(&r, 15), num(&r, 19));

@@ -33,6 +33,16 @@ struct Bounds {
     seam_frame_deg: f64,
 }
 
+/// The bounds of both tops (T-shirt and shirt).
+const TOPS: Bounds = Bounds {
+    openings: 4,
+    area_distortion: 0.75,
+    area_distortion_p99: 0.3,
+    self_intersection_free: false,
+    warp_jump_deg: 35.0,
+    seam_frame_deg: 35.0,
+};
+
 fn check_garment(kind: GarmentKind, b: Bounds) -> Garment {
     let g = garment(kind);
     let m = &g.mesh;
@@ -112,34 +122,14 @@ fn garment_tshirt() {
     // 30.7°, seam frames 28.3° (at 1 and 1.5 spacings 5 and 8 pairs). The 1/600 s of the
     // first solver (3.3 spacings) damped that fold away and gave 0 pairs; at 10 000
     // vertices the T-shirt has 75 (BENCHMARKS.md).
-    check_garment(
-        GarmentKind::TShirt,
-        Bounds {
-            openings: 4,
-            area_distortion: 0.75,
-            area_distortion_p99: 0.3,
-            self_intersection_free: false,
-            warp_jump_deg: 35.0,
-            seam_frame_deg: 35.0,
-        },
-    );
+    check_garment(GarmentKind::TShirt, TOPS);
 }
 
 /// The long-sleeved shirt: its underarm seams used to stall 19.6 mm open (the sleeves held
 /// on the arm by the body's friction); sewn without friction they close.
 #[test]
 fn garment_shirt() {
-    let g = check_garment(
-        GarmentKind::Shirt,
-        Bounds {
-            openings: 4,
-            area_distortion: 0.75,
-            area_distortion_p99: 0.3,
-            self_intersection_free: false,
-            warp_jump_deg: 35.0,
-            seam_frame_deg: 35.0,
-        },
-    );
+    let g = check_garment(GarmentKind::Shirt, TOPS);
     assert!(g.seam_gap_at_weld_m < 0.005, "seams {} m open", g.seam_gap_at_weld_m);
 }
 

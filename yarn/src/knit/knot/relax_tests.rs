@@ -3,29 +3,8 @@
 //! invariance, the converged reference under shear and stretch, and parameter errors.
 
 use super::relax::Problem;
+use super::tests::{R, rigid, rotate_dir, setup};
 use super::*;
-use crate::knit::chart::Chart;
-
-const R: f64 = 1e-4;
-
-fn setup(chart: &str, w: usize, h: usize) -> (KnotModel, StitchMesh) {
-    let sk = SkeletonParams::new(R);
-    let (sw, sc) = sk.default_spacing();
-    let chart = Chart::builtin(chart).unwrap();
-    let mesh = StitchMesh::flat(&chart, w, h, sw, sc).unwrap();
-    (KnotModel::new(&mesh, &sk, (sw, sc)).unwrap(), mesh)
-}
-
-/// A rigid motion: rotation about (1, 2, 3) by 0.7 rad, then a translation.
-fn rigid(p: V3) -> V3 {
-    let axis = vec3::normalize([1.0, 2.0, 3.0]).unwrap();
-    vec3::add(vec3::rotate(p, axis, 0.7), [0.01, -0.02, 0.03])
-}
-
-fn rotate_dir(v: V3) -> V3 {
-    let axis = vec3::normalize([1.0, 2.0, 3.0]).unwrap();
-    vec3::rotate(v, axis, 0.7)
-}
 
 fn max_dev(a: &[V3], b: &[V3]) -> f64 {
     a.iter().zip(b).map(|(p, q)| vec3::distance(*p, *q)).fold(0.0, f64::max)

@@ -7,9 +7,9 @@ use super::*;
 use crate::curve::YarnCurve;
 use crate::knit::chart::Chart;
 
-const R: f64 = 1e-4;
+pub(super) const R: f64 = 1e-4;
 
-fn setup(chart: &str, w: usize, h: usize) -> (KnotModel, StitchMesh) {
+pub(super) fn setup(chart: &str, w: usize, h: usize) -> (KnotModel, StitchMesh) {
     let sk = SkeletonParams::new(R);
     let (sw, sc) = sk.default_spacing();
     let chart = Chart::builtin(chart).unwrap();
@@ -26,12 +26,12 @@ fn rms_dev(a: &[V3], b: &[V3], idx: &[usize]) -> f64 {
 }
 
 /// A rigid motion: rotation about (1, 2, 3) by 0.7 rad, then a translation.
-fn rigid(p: V3) -> V3 {
+pub(super) fn rigid(p: V3) -> V3 {
     let axis = vec3::normalize([1.0, 2.0, 3.0]).unwrap();
     vec3::add(vec3::rotate(p, axis, 0.7), [0.01, -0.02, 0.03])
 }
 
-fn rotate_dir(v: V3) -> V3 {
+pub(super) fn rotate_dir(v: V3) -> V3 {
     let axis = vec3::normalize([1.0, 2.0, 3.0]).unwrap();
     vec3::rotate(v, axis, 0.7)
 }
