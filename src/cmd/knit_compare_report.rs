@@ -803,6 +803,15 @@ fn write_final(out: &std::path::Path, runs: &[StretchRun], header: &str) -> anyh
             Some(_) => " n/m |".to_string(),
             None => " — |".to_string(),
         };
+        // R0 with one bounce: the multiple-scattering gap the one-bounce methods inherit.
+        let mut line = "| R0 | one bounce (the multiple-scattering gap) |".to_string();
+        for (_, _, dists, _) in runs {
+            line.push_str(&value(dists.get(d).map(|x| x.ms_gap.flip_interior)));
+        }
+        for (_, _, dists, _) in runs {
+            line.push_str(&value(dists.get(d).map(|x| x.ms_gap.interior)));
+        }
+        let _ = writeln!(md, "{line} — | — | — | yes |");
         let mut series = Vec::new();
         for c0 in cells0.iter().filter(|c| c.distance == d) {
             let per: Vec<Option<&Cell>> = runs

@@ -393,7 +393,8 @@ fn knit_compare_scores_every_representation_against_the_reference() {
     // The final table: every representation of the rest run, one ꟻLIP column per strain.
     let report = std::fs::read_to_string(d.path("st/report.md")).unwrap();
     let table: Vec<&str> = report.lines().filter(|l| l.starts_with("| R")).collect();
-    assert_eq!(table.len(), 7, "{report}");
+    assert_eq!(table.len(), 8, "R0 one bounce and seven representations: {report}");
+    assert!(table[0].starts_with("| R0 | one bounce"), "{report}");
     assert!(report.contains("ꟻLIP 0 %") && report.contains("ꟻLIP 50 %"), "{report}");
     assert!(d.path("st/pareto-6px.png").is_file());
     // A second run reuses the finished BTF (an unfinished one would be resumed) and refuses
