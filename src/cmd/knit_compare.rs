@@ -628,7 +628,9 @@ fn fiber_btf(
         let same = p["method"] == "fibers"
             && p["size"].as_u64() == Some(src.size as u64)
             && p["seed"].as_u64() == Some(src.seed)
-            && p["settings"]["lod_px"].as_f64() == Some(lod_px as f64)
+            // (f32 in the provenance: compared as f32, 0.1 is not 0.1f32 as f64)
+            && p["settings"]["lod_px"].as_f64().map(|v| v as f32) == Some(lod_px)
+            && p["stitches"] == serde_json::json!(src.stitches)
             && p["chart"]["text"].as_str() == Some(src.chart.to_text().as_str())
             && store.meta().view_sampling == src.sampling;
         if !same {

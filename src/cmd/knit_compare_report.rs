@@ -405,6 +405,11 @@ fn measured(x: f64, decimals: usize) -> String {
     if x.is_finite() { format!("{x:.decimals$}") } else { String::new() }
 }
 
+/// A score as Markdown text: `n/m` where it was not measured (no NaN in a report).
+fn shown(x: f64, decimals: usize) -> String {
+    if x.is_finite() { format!("{x:.decimals$}") } else { "n/m".into() }
+}
+
 /// `compare.csv`.
 pub fn csv(cells: &[Cell], dists: &[Distance]) -> String {
     let mut s = String::from(
@@ -416,21 +421,21 @@ pub fn csv(cells: &[Cell], dists: &[Distance]) -> String {
         let d = &dists[c.distance];
         let _ = writeln!(
             s,
-            "{},{},\"{}\",{:.5},{:.5},{:.5},{:.4},{},{},{:.5},{:.5},{:.4},{:.3},{:.3},{:.3},{},{}",
+            "{},{},\"{}\",{},{},{},{},{},{},{},{},{},{},{},{:.3},{},{}",
             d.stitch_px,
             c.repr,
             c.name,
-            c.vs_full.interior,
-            c.vs_full.band,
-            c.vs_full.stitch_scale,
-            c.vs_full.mean_ratio,
+            measured(c.vs_full.interior, 5),
+            measured(c.vs_full.band, 5),
+            measured(c.vs_full.stitch_scale, 5),
+            measured(c.vs_full.mean_ratio, 4),
             measured(c.vs_full.flip_interior, 4),
             measured(c.vs_full.flip_band, 4),
-            c.vs_direct.interior,
-            c.vs_direct.band,
-            c.vs_direct.mean_ratio,
-            c.ms,
-            c.ms / c.ms_plain,
+            measured(c.vs_direct.interior, 5),
+            measured(c.vs_direct.band, 5),
+            measured(c.vs_direct.mean_ratio, 4),
+            measured(c.ms, 3),
+            measured(c.ms / c.ms_plain, 3),
             c.prep_s,
             c.bytes,
             c.deforms
@@ -478,20 +483,19 @@ pub fn markdown(info: &Info, cells: &[Cell], dists: &[Distance]) -> String {
             s,
             "## A stitch covers {} px\n\nInterior {} px, band {} px (±{} px). Reference {:.1} s \
              (direct only {:.1} s). Multiple-scattering gap (R0 direct against R0): interior \
-             {:.3}, band {:.3}, stitch scale {:.3}, mean ratio {:.3}, ꟻLIP interior {:.3}, band \
-             {:.3}.\n",
+             {}, band {}, stitch scale {}, mean ratio {}, ꟻLIP interior {}, band {}.\n",
             d.stitch_px,
             d.interior_px,
             d.band_count,
             d.band_px,
             d.ref_s,
             d.direct_s,
-            d.ms_gap.interior,
-            d.ms_gap.band,
-            d.ms_gap.stitch_scale,
-            d.ms_gap.mean_ratio,
-            d.ms_gap.flip_interior,
-            d.ms_gap.flip_band
+            shown(d.ms_gap.interior, 3),
+            shown(d.ms_gap.band, 3),
+            shown(d.ms_gap.stitch_scale, 3),
+            shown(d.ms_gap.mean_ratio, 3),
+            shown(d.ms_gap.flip_interior, 3),
+            shown(d.ms_gap.flip_band, 3)
         );
         let _ = writeln!(
             s,
@@ -502,18 +506,17 @@ pub fn markdown(info: &Info, cells: &[Cell], dists: &[Distance]) -> String {
         for c in cells.iter().filter(|c| c.distance == k) {
             let _ = writeln!(
                 s,
-                "| {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} \
-                 | {:.1} | {} |",
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.2} | {:.1} | {} |",
                 c.repr,
                 c.name,
-                c.vs_full.interior,
-                c.vs_full.band,
-                c.vs_full.stitch_scale,
-                c.vs_full.mean_ratio,
-                c.vs_full.flip_interior,
-                c.vs_full.flip_band,
-                c.vs_direct.interior,
-                c.ms / c.ms_plain,
+                shown(c.vs_full.interior, 3),
+                shown(c.vs_full.band, 3),
+                shown(c.vs_full.stitch_scale, 3),
+                shown(c.vs_full.mean_ratio, 3),
+                shown(c.vs_full.flip_interior, 3),
+                shown(c.vs_full.flip_band, 3),
+                shown(c.vs_direct.interior, 3),
+                shown(c.ms / c.ms_plain, 2),
                 c.prep_s,
                 c.bytes as f64 / 1048576.0,
                 if c.deforms { "yes" } else { "no" }
@@ -827,8 +830,8 @@ fn write_final(out: &std::path::Path, runs: &[StretchRun], header: &str) -> anyh
             }
             let _ = writeln!(
                 md,
-                "{line} {:.2} | {:.2} | {:.1} | {} |",
-                c0.ms / c0.ms_plain,
+                "{line} {} | {:.2} | {:.1} | {} |",
+                shown(c0.ms / c0.ms_plain, 2),
                 c0.prep_s,
                 c0.bytes as f64 / 1048576.0,
                 if c0.deforms { "yes" } else { "no" }

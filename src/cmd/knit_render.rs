@@ -287,12 +287,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
         }
         RenderMethod::Lumislice => {
             // The table in the yarn's colour (ϖ), from the first curve.
-            let albedo = set
-                .curves
-                .first()
-                .and_then(|c| c.colors.first().copied())
-                .unwrap_or([0.8; 3])
-                .map(|v| v.clamp(0.0, 1.0));
+            let albedo = yarn_render::lumislice::table_albedo(&set);
             let table = yarn_precompute::Lumislice::for_params(
                 &params,
                 albedo,

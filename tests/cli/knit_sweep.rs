@@ -397,8 +397,15 @@ fn knit_compare_scores_every_representation_against_the_reference() {
     assert!(table[0].starts_with("| R0 | one bounce"), "{report}");
     assert!(report.contains("ꟻLIP 0 %") && report.contains("ꟻLIP 50 %"), "{report}");
     assert!(d.path("st/pareto-6px.png").is_file());
-    // A second run reuses the finished BTF (an unfinished one would be resumed) and refuses
-    // one made with other settings.
+    // A second run reuses the finished BTF (an unfinished one would be resumed: the writer's
+    // own tests) and refuses one made with other settings.
+    let stamp = || std::fs::metadata(d.path("st/btf-reference.btf/zarr.json")).unwrap().modified();
+    let before = stamp().unwrap();
+    let mut same: Vec<&str> = st[..st.len() - 3].to_vec();
+    same.extend(["0", "-o", "st"]);
+    assert_eq!(same[same.len() - 4], "--stretch", "{same:?}");
+    d.ok(&same);
+    assert_eq!(stamp().unwrap(), before, "the finished reference BTF was made again");
     let mut again: Vec<&str> = st[..st.len() - 13].to_vec();
     again.extend(["--btf-size", "6", "--btf-sampling", "rings:0x1,45x4", "--btf-spp", "2"]);
     again.extend(["--btf-bounces", "3", "--no-btf-fibers", "--stretch", "0", "-o", "st"]);

@@ -48,6 +48,17 @@ use yarn_precompute::{Lumislice, YarnShadowLut};
 const MARCH_WGSL: &str = include_str!("shaders/lumislice_march.wgsl");
 const CENTRE_WGSL: &str = include_str!("shaders/lumislice_centerline.wgsl");
 
+/// The albedo ϖ a yarn set's lumislice table is computed for: its first curve's colour,
+/// clamped to [0, 1] (mid grey 0.8 without curves). The table carries the colour, one per
+/// yarn type (multiple scattering is not linear in ϖ).
+pub fn table_albedo(set: &yarn::YarnSet) -> [f32; 3] {
+    set.curves
+        .first()
+        .and_then(|c| c.colors.first().copied())
+        .unwrap_or([0.8; 3])
+        .map(|v| v.clamp(0.0, 1.0))
+}
+
 /// The march pass's WGSL (generator and view in front).
 pub fn source() -> String {
     format!("{}\n{}\n{MARCH_WGSL}", crate::FIBER_GEN_WGSL, crate::FIBER_VIEW_WGSL)

@@ -466,7 +466,8 @@ fn top(m: &Measurements, l: &Landmarks, o: &PatternOptions, long: bool) -> Resul
     let needed = Edge::new("", cap_half(MIN_CAP * s)).length();
     let armhole_of = |y_ap: f64| Edge::new("", body_panel(0.085 * s, y_ap)[2].points.clone());
     let mut y_ap = y_ap_body;
-    while armhole_of(y_ap).length() < needed && y_ap_body - y_ap < 0.1 {
+    // (never below 5 cm above the hem: a short --length keeps its side seams)
+    while armhole_of(y_ap).length() < needed && y_ap_body - y_ap < 0.1 && y_ap > 0.052 {
         y_ap -= 0.002;
     }
     let front = body_panel(0.085 * s, y_ap);

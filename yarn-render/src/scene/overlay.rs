@@ -145,13 +145,7 @@ impl YarnOverlay {
                             y.index, scene.effects.msaa
                         )));
                     }
-                    let color = y
-                        .set
-                        .curves
-                        .first()
-                        .and_then(|c| c.colors.first().copied())
-                        .unwrap_or([0.8; 3])
-                        .map(|v| v.clamp(0.0, 1.0));
+                    let color = crate::lumislice::table_albedo(&y.set);
                     let table = yarn_precompute::Lumislice::for_params(
                         &y.params,
                         color,
