@@ -87,6 +87,35 @@ fn garment_tshirt_is_deterministic_and_has_four_openings() {
     assert_eq!(boundary(&f), (4, 0), "neck, hem and two cuffs; no non-manifold edge");
 }
 
+/// The crossing pairs `btf synth garment` reports on its summary line.
+fn crossings(stderr: &str) -> usize {
+    let before = stderr.split(" crossing triangle pairs").next().unwrap();
+    before.rsplit(' ').next().unwrap().parse().unwrap()
+}
+
+/// `--cloth-contact` makes the trousers free of crossings (their legs cross at the crotch
+/// without it), at rest, with their three openings.
+#[test]
+fn garment_cloth_contact_keeps_the_trousers_legs_apart() {
+    let d = Dir::new();
+    let base = ["synth", "garment", "--kind", "trousers", "--vertices", "1500"];
+    let run = |extra: &[&str]| {
+        let mut a = base.to_vec();
+        a.extend_from_slice(extra);
+        let o = d.btf(&a);
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(o.status.success(), "{err}");
+        err
+    };
+    let plain = run(&["-o", "plain.obj"]);
+    let contact = run(&["--cloth-contact", "-o", "contact.obj"]);
+    assert!(crossings(&plain) > 0, "{plain}");
+    assert_eq!(crossings(&contact), 0, "{contact}");
+    assert!(contact.contains("rest reached"), "{contact}");
+    let (_, f) = read_obj(&d.path("contact.obj"));
+    assert_eq!(boundary(&f), (3, 0), "waist and two hems; no non-manifold edge");
+}
+
 #[test]
 fn garment_body_is_closed() {
     let d = Dir::new();

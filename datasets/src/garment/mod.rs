@@ -18,6 +18,7 @@ pub mod mesher;
 pub mod pattern;
 pub mod preview;
 pub mod sdf;
+pub mod self_contact;
 pub mod sew;
 #[cfg(test)]
 mod tests;

@@ -550,18 +550,42 @@ fn top(m: &Measurements, l: &Landmarks, o: &PatternOptions, long: bool) -> Resul
         let up_out = normalize_or([-down[2] * side, 0.0, down[0] * side], [0.0, 0.0, 1.0]);
         let up_out = if up_out[2] < 0.0 { scale(up_out, -1.0) } else { up_out };
         let r = upper_r + 0.03 * s;
+        // The sleeve's tube starts 7 cm down the arm, and further until no point of it lies
+        // within 1 cm of the body panels' ellipses: a cap placed through the body panels
+        // would stay through them (the sewing's cloth–cloth contact keeps every layer on
+        // the side it starts on), so the seams are left for the sewing to close.
+        let sleeve_at = |shift: f64| Placement::Wrap {
+            origin: add(joint, scale(down, 0.07 * s + shift)),
+            axis: scale(down, -1.0),
+            reference: up_out,
+            y0: under + cap_h,
+            x_range: [-half_b, half_b],
+            phi_range: [-0.96 * PI, 0.96 * PI],
+            semi: vec![(0.0, [r * 0.95, r * 0.95]), (under + cap_h, [r, r])],
+        };
+        let crosses_body = |pl: &Placement| {
+            (0..=24).any(|i| {
+                (0..=48).any(|j| {
+                    let q = [
+                        -half_b + 2.0 * half_b * j as f64 / 48.0,
+                        (under + cap_h) * i as f64 / 24.0,
+                    ];
+                    let x = pl.place(q);
+                    let y = x[2] - hem_z;
+                    let [a, b] = interpolate_semi(&semi, y);
+                    (0.0..=len + 0.01).contains(&y)
+                        && (x[0] / (a + 0.01)).powi(2) + (x[1] / (b + 0.01)).powi(2) < 1.0
+                })
+            })
+        };
+        let mut shift = 0.0;
+        while crosses_body(&sleeve_at(shift)) && shift < 0.5 {
+            shift += 0.005;
+        }
         panels.push(Panel {
             name: if side > 0.0 { "sleeve_l".into() } else { "sleeve_r".into() },
             edges: sleeve_edges.clone(),
-            placement: Placement::Wrap {
-                origin: add(joint, scale(down, 0.07 * s)),
-                axis: scale(down, -1.0),
-                reference: up_out,
-                y0: under + cap_h,
-                x_range: [-half_b, half_b],
-                phi_range: [-0.96 * PI, 0.96 * PI],
-                semi: vec![(0.0, [r * 0.95, r * 0.95]), (under + cap_h, [r, r])],
-            },
+            placement: sleeve_at(shift),
         });
     }
     let e = |p: usize, name: &str| EdgeRef { panel: p, edge: panels[p].edge(name) };
@@ -767,10 +791,13 @@ fn trousers(m: &Measurements, l: &Landmarks, o: &PatternOptions) -> Result<Patte
         let leg_axis = normalize_or(sub(hip_joint, ankle), [0.0, 0.0, 1.0]);
         let leg_origin = add(ankle, scale(leg_axis, -(ankle_z - (waist_z - len)) / leg_axis[2]));
         let thigh_r = l.leg_radius[0] + gap;
+        // The legs' tubes must not cross each other: across the body (along x) each
+        // reaches at most to 1 cm short of the centre plane.
+        let inner = |y: f64, r: f64| r.min((leg_origin[0] + leg_axis[0] * y).abs() - 0.01);
         let leg_semi = vec![
-            (0.0, [l.leg_radius[2] + 0.035 * s; 2]),
-            (knee_y, [l.leg_radius[1] + 0.03 * s; 2]),
-            (y_c, [thigh_r, thigh_r]),
+            (0.0, [inner(0.0, l.leg_radius[2] + 0.035 * s), l.leg_radius[2] + 0.035 * s]),
+            (knee_y, [inner(knee_y, l.leg_radius[1] + 0.03 * s), l.leg_radius[1] + 0.03 * s]),
+            (y_c, [inner(y_c, thigh_r), thigh_r]),
         ];
         let pelvis_semi = vec![
             (y_c, [l.hip_ab[0] + gap, l.hip_ab[1] + gap]),
