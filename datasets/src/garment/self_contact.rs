@@ -74,16 +74,6 @@ pub struct SelfContact {
     cell: f64,
     pairs: Vec<Pair>,
     built_at: Vec<V3>,
-    /// Candidate lists built so far.
-    pub rebuilds: usize,
-    /// Projections that moved something, summed over all sub-steps.
-    pub projections: u64,
-    /// Seconds spent building candidate lists and projecting.
-    pub seconds: [f64; 2],
-    /// Candidate (node, triangle) tests, summed over the builds.
-    pub tested: u64,
-    /// Pairs kept, summed over the builds.
-    pub kept: u64,
 }
 
 impl SelfContact {
@@ -116,11 +106,6 @@ impl SelfContact {
             cell: spacing.max(distance) + 2.0 * (distance + margin),
             pairs: Vec::new(),
             built_at: Vec::new(),
-            rebuilds: 0,
-            projections: 0,
-            seconds: [0.0; 2],
-            tested: 0,
-            kept: 0,
         }
     }
 
@@ -156,7 +141,7 @@ impl SelfContact {
         let grid = HashGrid::build(&boxes, self.cell);
         let old = std::mem::take(&mut self.pairs);
         let this = &*self;
-        let per_node: Vec<(u64, Vec<Pair>)> = x
+        let per_node: Vec<Vec<Pair>> = x
             .par_iter()
             .enumerate()
             .map(|(i, &p)| {
@@ -197,29 +182,18 @@ impl SelfContact {
                     };
                     out.push(Pair { node: i, tri: t, side });
                 }
-                (found.len() as u64, out)
+                out
             })
             .collect();
-        let mut pairs = Vec::new();
-        for (tested, out) in per_node {
-            self.tested += tested;
-            pairs.extend(out);
-        }
-        self.kept += pairs.len() as u64;
-        self.pairs = pairs;
+        self.pairs = per_node.concat();
         self.built_at = x.to_vec();
-        self.rebuilds += 1;
     }
 
     /// Projects every violated pair once, in list order (deterministic); `prev` holds the positions at the start of the sub-step: friction acts on the
     /// node's motion relative to the triangle since then.
     pub fn project(&mut self, x: &mut [V3], prev: &[V3], inv_mass: &[f64]) {
-        let t0 = std::time::Instant::now();
         self.refresh(x);
-        let t1 = std::time::Instant::now();
-        self.seconds[0] += (t1 - t0).as_secs_f64();
         let d = self.distance;
-        let mut moved = 0;
         for pr in &mut self.pairs {
             let tri = self.triangles[pr.tri as usize];
             let i = pr.node as usize;
@@ -279,10 +253,7 @@ impl SelfContact {
                 x[j] = sub(x[j], scale(n, inv_mass[j] * b[k] * dl));
                 x[j] = crate::vec3::add(x[j], scale(slip, inv_mass[j] * b[k]));
             }
-            moved += 1;
         }
-        self.projections += moved;
-        self.seconds[1] += t1.elapsed().as_secs_f64();
     }
 }
 

@@ -384,9 +384,9 @@ fn push_out(x: &mut [V3], collider: &dyn Collider, clearance: f64) {
 /// Smooths the crossings a sewing left where several seams meet (an armpit's few triangle
 /// pairs): the corners of every crossing pair and `1 + round/4` rings round them are moved
 /// halfway to the mean of their neighbours, ten sweeps a round, until the check finds none
-/// or 40 rounds have passed. Returns the rounds taken and the crossing pairs left. A local
-/// fold flattens under smoothing; the drape's contact then keeps the layers apart.
-fn untangle(x: &mut [V3], triangles: &[[u32; 3]]) -> (usize, usize) {
+/// or 40 rounds have passed; pinned vertices stay. Returns the rounds taken. A local fold
+/// flattens under smoothing; the drape's contact then keeps the layers apart.
+fn untangle(x: &mut [V3], triangles: &[[u32; 3]], pinned: &[bool]) -> usize {
     let mut nbr: Vec<Vec<u32>> = vec![Vec::new(); x.len()];
     for t in triangles {
         for k in 0..3 {
@@ -418,6 +418,9 @@ fn untangle(x: &mut [V3], triangles: &[[u32; 3]]) -> (usize, usize) {
         for _ in 0..10 {
             for &v in &region {
                 let n = &nbr[v as usize];
+                if pinned[v as usize] || n.is_empty() {
+                    continue;
+                }
                 let mean = scale(
                     n.iter().fold([0.0; 3], |s, &j| add(s, x[j as usize])),
                     1.0 / n.len() as f64,
@@ -428,7 +431,7 @@ fn untangle(x: &mut [V3], triangles: &[[u32; 3]]) -> (usize, usize) {
         si = crossings(x);
         round += 1;
     }
-    (round, si.len())
+    round
 }
 
 /// Progress callback: `(stage, fraction done)`.
@@ -610,7 +613,7 @@ pub fn sew_and_drape(
     let cloth = build_cloth(nw, &triangles, &tri_uv, &flat.uv, fabric);
     let mut untangle_rounds = 0;
     if settings.cloth_contact {
-        untangle_rounds += untangle(&mut xw, &triangles).0;
+        untangle_rounds += untangle(&mut xw, &triangles, &pinned);
     }
     if let Some(c) = collider {
         push_out(&mut xw, c, fabric.thickness_m);
@@ -630,8 +633,11 @@ pub fn sew_and_drape(
         run_to_rest(&mut sim, settings, &mut |t| progress("draping", t / settings.drape_max_s));
     // Crossings the drape made (two creases passing between their nodes, which the node–
     // triangle contact does not see) are smoothed out and the drape resumed, twice at most.
-    for _ in 0..if settings.cloth_contact { 2 } else { 0 } {
-        let (rounds, _) = untangle(&mut sim.x, &triangles);
+    for _ in 0..2 {
+        if !settings.cloth_contact {
+            break;
+        }
+        let rounds = untangle(&mut sim.x, &triangles, &pinned);
         if rounds == 0 {
             break;
         }
@@ -686,6 +692,51 @@ mod tests {
     use super::*;
     use crate::garment::body::Mannequin;
     use crate::garment::{BodyParams, PatternOptions, Size, check};
+
+    /// Two parallel sheets 1 cm apart, one node of the upper one pushed 1 cm through the
+    /// lower: smoothing removes the crossings in one round and leaves a pinned node where
+    /// it was.
+    #[test]
+    fn untangle_flattens_a_node_poked_through_another_sheet() {
+        let n = 7;
+        let mut x = Vec::new();
+        let mut triangles = Vec::new();
+        for (sheet, z) in [0.0, 0.01].into_iter().enumerate() {
+            let base = (sheet * n * n) as u32;
+            for j in 0..n {
+                for i in 0..n {
+                    x.push([i as f64 * 0.01, j as f64 * 0.01, z]);
+                }
+            }
+            for j in 0..n - 1 {
+                for i in 0..n - 1 {
+                    let v = base + (j * n + i) as u32;
+                    let w = n as u32;
+                    triangles.push([v, v + 1, v + w + 1]);
+                    triangles.push([v, v + w + 1, v + w]);
+                }
+            }
+        }
+        let poked = n * n + 3 * n + 3;
+        x[poked][2] = -0.01;
+        let mut pinned = vec![false; x.len()];
+        // The poked node's neighbour in its own sheet: smoothing would pull it down.
+        let held = n * n + 3 * n + 4;
+        pinned[held] = true;
+        let crossings = |x: &[V3]| {
+            let m =
+                Mesh { positions: x.to_vec(), triangles: triangles.clone(), ..Default::default() };
+            check::self_intersections(&m).len()
+        };
+        assert!(crossings(&x) > 0);
+        let before = x[held];
+        assert_eq!(untangle(&mut x, &triangles, &pinned), 1);
+        assert_eq!(crossings(&x), 0);
+        assert_eq!(x[held], before);
+        assert!(x[poked][2] > 0.0, "{:?}", x[poked]);
+        // Nothing to do: no round.
+        assert_eq!(untangle(&mut x, &triangles, &pinned), 0);
+    }
 
     /// Every garment's panels are placed apart: no triangle of one panel crosses another
     /// panel (the cloth–cloth contact of the sewing and the drape keeps each layer on the

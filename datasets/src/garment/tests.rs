@@ -115,8 +115,8 @@ fn check_garment(kind: GarmentKind, b: Bounds) -> Garment {
 
 #[test]
 fn garment_tshirt() {
-    // The grain bounds of the trousers (35°): the coarse T-shirt's seams turn its frames by
-    // up to 27° at the armpit.
+    // The tops' grain bounds (35°): measured warp jump 15.1°, seam frames 16.1° (the shirt
+    // 23.9° and 20.9°), turned at the armpit where four panels meet.
     check_garment(GarmentKind::TShirt, TOPS);
 }
 
