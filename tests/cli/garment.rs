@@ -93,8 +93,9 @@ fn crossings(stderr: &str) -> usize {
     before.rsplit(' ').next().unwrap().parse().unwrap()
 }
 
-/// `--cloth-contact` makes the trousers free of crossings (their legs cross at the crotch
-/// without it), at rest, with their three openings.
+/// Cloth–cloth contact (on unless `--no-cloth-contact`) makes the trousers free of
+/// crossings (their legs cross at the crotch without it), at rest, with their three
+/// openings.
 #[test]
 fn garment_cloth_contact_keeps_the_trousers_legs_apart() {
     let d = Dir::new();
@@ -107,8 +108,8 @@ fn garment_cloth_contact_keeps_the_trousers_legs_apart() {
         assert!(o.status.success(), "{err}");
         err
     };
-    let plain = run(&["-o", "plain.obj"]);
-    let contact = run(&["--cloth-contact", "-o", "contact.obj"]);
+    let plain = run(&["--no-cloth-contact", "-o", "plain.obj"]);
+    let contact = run(&["-o", "contact.obj"]);
     assert!(crossings(&plain) > 0, "{plain}");
     assert_eq!(crossings(&contact), 0, "{contact}");
     assert!(contact.contains("rest reached"), "{contact}");

@@ -879,7 +879,7 @@ fn trousers(m: &Measurements, l: &Landmarks, o: &PatternOptions) -> Result<Patte
 fn scarf(l: &Landmarks, o: &PatternOptions) -> Result<Pattern> {
     let s = l.height / 1.76;
     let len = o.length_m.unwrap_or(1.5 * s);
-    let width = 0.2 * s;
+    let width = 0.12 * s;
     if len > 2.0 * (l.neck_base_z - 0.1) + 0.6 {
         return Err(Error::Invalid(format!(
             "--length = {len} m: the scarf's ends would reach the floor"
@@ -891,34 +891,48 @@ fn scarf(l: &Landmarks, o: &PatternOptions) -> Result<Pattern> {
         Edge::new("end_b", line([width / 2.0, len], [-width / 2.0, len], 8)),
         Edge::new("side_l", line([-width / 2.0, len], [-width / 2.0, 0.0], 8)),
     ];
-    let z_top = l.neck_base_z + 0.05 * s;
-    let xo = l.neck_radius + 0.075 * s;
+    // Round the back of the neck the band stands as a cowl: a half cylinder of radius `xo`
+    // with the width vertical, from 4 cm under the neck's base up to just under the head
+    // (a cylinder is developable, so the rectangle lies on it unstretched); in front it
+    // turns forward and down, twisting until its width lies across the chest, and hangs
+    // straight by `hang`. (A flat ring round the neck, width horizontal, as this pattern had
+    // before, squeezed the band's inner edge to 41 % of its length and crumpled it: 586
+    // crossing triangle pairs at 10 000 vertices, 3 002 when that edge lay inside the neck.)
+    let z_c = l.neck_base_z - 0.04 * s + 0.5 * width;
+    let xo = l.neck_radius + 0.03 * s;
     let front_y = -(l.chest_ab[1] + 0.05 * s);
-    let back_y = l.neck_radius + 0.03 * s;
-    // Round the back of the neck: a half circle of radius xo through (±xo, 0).
-    let mut path = Vec::new();
-    let mut side = Vec::new();
-    let top_len = 2.0 * (back_y - 0.0) + PI * xo + 2.0 * (-front_y);
-    let hang = ((len - top_len) / 2.0).max(0.05);
-    path.push([xo, front_y, z_top - hang]);
-    side.push([1.0, 0.0, 0.0]);
-    path.push([xo, front_y, z_top - 0.04]);
-    side.push([1.0, 0.0, 0.0]);
-    path.push([xo, 0.0, z_top]);
-    side.push([1.0, 0.0, 0.0]);
-    for k in 0..=16 {
-        let a = PI * k as f64 / 16.0;
-        path.push([
-            xo * a.cos(),
-            back_y * 0.0 + xo * 0.0 + xo * a.sin() * (back_y / xo).max(1.0),
-            z_top,
-        ]);
-        side.push([a.cos(), a.sin(), 0.0]);
-    }
-    path.push([-xo, front_y, z_top - 0.04]);
-    side.push([-1.0, 0.0, 0.0]);
-    path.push([-xo, front_y, z_top - hang]);
-    side.push([-1.0, 0.0, 0.0]);
+    let path_for = |hang: f64| {
+        let mut path = Vec::new();
+        let mut side = Vec::new();
+        path.push([xo, front_y, z_c - hang]);
+        side.push([1.0, 0.0, 0.0]);
+        path.push([xo, front_y, z_c - 0.06 * s]);
+        side.push([1.0, 0.0, 0.0]);
+        // The twist is done halfway to the corner: twisting up to it, the band's edge dipped
+        // below the corner into the hanging part (16 crossing pairs as placed in size S).
+        path.push([xo, 0.5 * front_y, z_c - 0.03 * s]);
+        side.push([1.0, 0.0, 0.0]);
+        path.push([xo, 0.0, z_c]);
+        side.push([0.0, 0.0, 1.0]);
+        for k in 0..=16 {
+            let a = PI * k as f64 / 16.0;
+            path.push([xo * a.cos(), xo * a.sin(), z_c]);
+            side.push([0.0, 0.0, 1.0]);
+        }
+        path.push([-xo, 0.5 * front_y, z_c - 0.03 * s]);
+        side.push([-1.0, 0.0, 0.0]);
+        path.push([-xo, front_y, z_c - 0.06 * s]);
+        side.push([-1.0, 0.0, 0.0]);
+        path.push([-xo, front_y, z_c - hang]);
+        side.push([-1.0, 0.0, 0.0]);
+        (path, side)
+    };
+    let path_length = |p: &[V3]| p.windows(2).map(|w| length(sub(w[1], w[0]))).sum::<f64>();
+    // The path's length grows by 2 per metre of hang: the hang that makes it as long as the
+    // scarf (an estimate from the half circle alone was 0.28 m short at size M, and the
+    // placement stacked the last rows of the scarf onto one line at the path's end).
+    let hang = (1.0 + (len - path_length(&path_for(1.0).0)) / 2.0).max(0.05);
+    let (mut path, side) = path_for(hang);
     path.dedup();
     let panels = vec![Panel {
         name: "scarf".into(),

@@ -1,5 +1,5 @@
 //! The garment tests of issue #22 on coarse meshes (1 500 vertices, a few seconds each,
-//! with cloth–cloth contact):
+//! with cloth–cloth contact, the default):
 //! openings, contact with the body, self-intersection, triangle quality, rest, metric UVs
 //! and grain. One mannequin (size M) is built once and shared.
 
@@ -15,7 +15,6 @@ fn body() -> &'static Body {
 fn garment(kind: GarmentKind) -> Garment {
     let mut o = GarmentOptions::new(Size::M);
     o.vertices = 1500;
-    o.drape.cloth_contact = true;
     let (g, _) = make(kind, &o, Some(body().clone()), &mut |_, _| {}).unwrap();
     g
 }
