@@ -85,7 +85,7 @@ pub struct Xpbd<'a> {
     pub time: f64,
     params: XpbdParams,
     body: Option<(&'a dyn Collider, Contact)>,
-    /// Cloth–cloth contact, projected after the links and before the body.
+    /// Cloth–cloth contact, projected after the links, alternated with the body.
     pub cloth: Option<SelfContact>,
     pred: Vec<V3>,
     touched: Vec<u32>,
@@ -165,8 +165,8 @@ impl<'a> Xpbd<'a> {
         self.pred[i] = q;
     }
 
-    /// One sub-step: predict, one sweep over the links, cloth–cloth contact, contact with the
-    /// body, velocities.
+    /// One sub-step: predict, one sweep over the links, cloth–cloth contact and contact with
+    /// the body ([`CONTACT_ROUNDS`] times when the cloth has contact), velocities.
     pub fn step(&mut self) {
         let p = self.params;
         let dt = p.dt;

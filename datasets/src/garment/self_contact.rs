@@ -43,6 +43,15 @@
 //! In a flat sheet the nearest other triangles are then a triangle's height away (8.6 mm
 //! at 10 000 vertices, 4.3 mm at 40 000, against d = 3 mm), so a sheet does not push its
 //! own nodes; across a seam the two first rows are free to meet however they approach.
+//! Given the panels' flat shapes ([`SelfContact::with_rest_shape`]) a node also ignores
+//! its own panel's triangles within a radius in the flat panel (the garments use the list's
+//! reach, 3d): a flat sheet then has no pair with itself at any resolution. At 10 000
+//! vertices that changes nothing (the one-ring already covers 3d); at 40 000, where the
+//! reach is two mesh spacings, the second and third rings had filled the list (~20 pairs a
+//! node, each projected three times a sub-step) and the T-shirt took more than 395 s
+//! (stopped) — with the exclusion 116 s. A fold tighter than the radius goes unseen:
+//! at 3d = 9 mm along the panel, a U-fold whose legs come within d of each other is a
+//! crease of radius < 1.5 mm, below what the meshes resolve.
 //! Tried and dropped: keeping the one-ring's triangles of other panels, and of the node's
 //! own panel within 45° of the normal (the influence cone of [C03 §4.1.2]) — the panels'
 //! first rows then met at the armpit junction from several sides and held the side seams
@@ -76,6 +85,12 @@ pub struct SelfContact {
     weld: Vec<u32>,
     /// Welded one-ring of each welded vertex (itself included), sorted.
     ring: Vec<Vec<u32>>,
+    /// Panel coordinates: each triangle's panel and corners, each node's (panel, point) for
+    /// every panel it lies on; empty when not given ([`SelfContact::with_rest_shape`]).
+    tri_rest: Vec<(u16, [[f64; 2]; 3])>,
+    node_rest: Vec<Vec<(u16, [f64; 2])>>,
+    /// A node ignores the triangles of its own panel within this distance in the panel (m).
+    rest_exclusion: f64,
     /// Distance kept between a node and a triangle (m).
     distance: f64,
     /// Friction between cloth layers.
@@ -112,6 +127,9 @@ impl SelfContact {
             triangles,
             weld,
             ring,
+            tri_rest: Vec::new(),
+            node_rest: Vec::new(),
+            rest_exclusion: 0.0,
             distance,
             friction: Friction { static_coef: 0.0, dynamic_coef: 0.0 },
             margin,
@@ -123,9 +141,38 @@ impl SelfContact {
 
     /// Whether triangle `t` has a corner in node `i`'s welded one-ring (the node itself
     /// included).
-    fn excluded(&self, i: u32, t: &[u32; 3]) -> bool {
+    fn excluded(&self, i: u32, t: &[u32; 3], ti: u32) -> bool {
         let r = &self.ring[self.weld[i as usize] as usize];
-        t.iter().any(|&c| r.binary_search(&self.weld[c as usize]).is_ok())
+        if t.iter().any(|&c| r.binary_search(&self.weld[c as usize]).is_ok()) {
+            return true;
+        }
+        let Some((panel, q)) = self.tri_rest.get(ti as usize) else {
+            return false;
+        };
+        let lift = |p: [f64; 2]| [p[0], p[1], 0.0];
+        self.node_rest[i as usize].iter().any(|&(pn, p)| {
+            pn == *panel && {
+                let (c, _) = closest_point_triangle(lift(p), lift(q[0]), lift(q[1]), lift(q[2]));
+                let e = sub(lift(p), c);
+                dot(e, e) < self.rest_exclusion * self.rest_exclusion
+            }
+        })
+    }
+
+    /// Also ignores, for every node, the triangles of its own panel that lie within
+    /// `radius` of it in the flat panel: `tri_rest[t]` is triangle `t`'s panel and its
+    /// corners' panel coordinates, `node_rest[i]` node `i`'s (panel, coordinates) on every
+    /// panel it lies on (a seam node on two).
+    pub fn with_rest_shape(
+        mut self,
+        tri_rest: Vec<(u16, [[f64; 2]; 3])>,
+        node_rest: Vec<Vec<(u16, [f64; 2])>>,
+        radius: f64,
+    ) -> Self {
+        self.tri_rest = tri_rest;
+        self.node_rest = node_rest;
+        self.rest_exclusion = radius;
+        self
     }
 
     /// Rebuilds the candidate list when some node has moved half the margin since the last
@@ -167,16 +214,13 @@ impl SelfContact {
                 let mut out = Vec::new();
                 for t in found {
                     let tri = this.triangles[t as usize];
-                    if this.excluded(i, &tri) {
-                        continue;
-                    }
                     let q = tri.map(|k| x[k as usize]);
-                    let n = cross(sub(q[1], q[0]), sub(q[2], q[0]));
                     let (c, b) = closest_point_triangle(p, q[0], q[1], q[2]);
                     let v = sub(p, c);
-                    if dot(v, v) > reach * reach {
+                    if dot(v, v) > reach * reach || this.excluded(i, &tri, t) {
                         continue;
                     }
+                    let n = cross(sub(q[1], q[0]), sub(q[2], q[0]));
                     let side = match old.binary_search_by(|o| (o.node, o.tri).cmp(&(i, t))) {
                         Ok(k) => old[k].side,
                         Err(_) if b.iter().all(|&bk| bk > 0.0) => {

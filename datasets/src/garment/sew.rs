@@ -525,12 +525,24 @@ pub fn sew_and_drape(
         let sew_contact = collider.map(|c| (c, sliding));
         let mut sim = Xpbd::new(x, cloth.mass.clone(), &flat.pinned, links, params, sew_contact);
         if settings.cloth_contact {
-            sim.cloth = Some(SelfContact::new(
-                flat.triangles.clone(),
-                new_id.clone(),
-                fabric.thickness_m,
-                h,
-            ));
+            let tri_rest: Vec<(u16, [[f64; 2]; 3])> = flat
+                .triangles
+                .iter()
+                .zip(&flat.triangle_panel)
+                .map(|(t, &p)| (p, t.map(|k| flat.uv[k as usize])))
+                .collect();
+            let mut node_rest: Vec<Vec<(u16, [f64; 2])>> = vec![Vec::new(); n0];
+            for (t, &p) in flat.triangles.iter().zip(&flat.triangle_panel) {
+                for &k in t {
+                    if node_rest[k as usize].is_empty() {
+                        node_rest[k as usize].push((p, flat.uv[k as usize]));
+                    }
+                }
+            }
+            sim.cloth = Some(
+                SelfContact::new(flat.triangles.clone(), new_id.clone(), fabric.thickness_m, h)
+                    .with_rest_shape(tri_rest, node_rest, 3.0 * fabric.thickness_m),
+            );
         }
         let max_gap = |s: &Xpbd| {
             pairs
@@ -632,8 +644,27 @@ pub fn sew_and_drape(
     let mut sim =
         Xpbd::new(xw, cloth.mass.clone(), &pinned, links_of(&cloth), params, body_contact);
     if settings.cloth_contact {
+        // Each node ignores its own panel within the list's reach (3d) in the flat panel:
+        // a flat sheet's own triangles are never candidates, at any resolution (at 40 000
+        // vertices the reach is two mesh spacings, and the second and third rings filled
+        // the list: ~20 pairs a node, each projected three times a sub-step).
+        let tri_rest: Vec<(u16, [[f64; 2]; 3])> = tri_uv
+            .iter()
+            .zip(&triangle_panel)
+            .map(|(t, &p)| (p, t.map(|k| flat.uv[k as usize])))
+            .collect();
+        let mut node_rest: Vec<Vec<(u16, [f64; 2])>> = vec![Vec::new(); nw];
+        for ((t, tu), &p) in triangles.iter().zip(&tri_uv).zip(&triangle_panel) {
+            for k in 0..3 {
+                let r = &mut node_rest[t[k] as usize];
+                if !r.iter().any(|&(q, _)| q == p) {
+                    r.push((p, flat.uv[tu[k] as usize]));
+                }
+            }
+        }
         let mut layers =
-            SelfContact::new(triangles.clone(), (0..nw as u32).collect(), fabric.thickness_m, h);
+            SelfContact::new(triangles.clone(), (0..nw as u32).collect(), fabric.thickness_m, h)
+                .with_rest_shape(tri_rest, node_rest, 3.0 * fabric.thickness_m);
         // The drape has the fabric's friction between its layers too (the sewing has none).
         layers.friction = fabric.friction;
         sim.cloth = Some(layers);
