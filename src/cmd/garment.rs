@@ -74,8 +74,8 @@ pub struct GarmentArgs {
     /// Garment length (m).
     #[arg(long)]
     pub length: Option<f64>,
-    /// Sew and drape without cloth–cloth contact: faster (at 10 000 vertices 11–22 s
-    /// instead of 16–25 s), but layers pass through each other — the T-shirt, the shirt and
+    /// Sew and drape without cloth–cloth contact: faster (at 10 000 vertices 12–19 s
+    /// instead of 15–27 s), but layers pass through each other — the T-shirt, the shirt and
     /// the trousers come out with 139–385 crossing triangle pairs (BENCHMARKS.md,
     /// "Cloth–cloth contact").
     #[arg(long)]

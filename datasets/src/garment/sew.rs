@@ -105,7 +105,7 @@ pub struct DrapeSettings {
     /// Cloth–cloth contact ([`super::self_contact`]) while sewing and draping, and
     /// [`untangle`] after the weld and the drape. On by default: at 10 000 vertices it takes
     /// the T-shirt, shirt, trousers and skirt from 139 / 139 / 385 / 0 crossing triangle
-    /// pairs to none, all at rest, in 16–25 s instead of 11–22 s (BENCHMARKS.md).
+    /// pairs to none, all at rest, in 15–27 s instead of 12–19 s (BENCHMARKS.md).
     pub cloth_contact: bool,
 }
 
