@@ -695,7 +695,7 @@ pub fn sew_and_drape(
     }
     // A crumple the drape makes again after every resume (a seam junction whose corners
     // sum to more than 360°: the shirt's armpit at 10 000 vertices, 403°) is smoothed once
-    // more and left: the vertices it moves, and how far, are reported.
+    // more and left; how far that moved a vertex is reported.
     let mut final_smoothing_m = 0.0;
     if settings.cloth_contact {
         let before = sim.x.clone();
