@@ -435,4 +435,27 @@ mod tests {
         assert_eq!(c.pairs[0].side, -1.0);
         assert!((x[3][2] + d).abs() < 1e-12, "{:?}", x[3]);
     }
+
+    /// Given the panels' flat shapes, a node ignores its own panel's triangles within the
+    /// radius in the panel (a coplanar neighbour 5 mm beyond an edge, inside the 9 mm list
+    /// reach, is a pair without them) but not another panel's at the same place.
+    #[test]
+    fn own_panel_triangles_near_in_the_panel_are_ignored() {
+        let tri = vec![[0u32, 1, 2]];
+        let d = 0.003;
+        let x = vec![[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.0, 0.1, 0.0], [0.05, -0.005, 0.0]];
+        let w = [0.0, 0.0, 0.0, 1.0];
+        let uv = |p: V3| [p[0], p[1]];
+        let tri_rest = vec![(0u16, [uv(x[0]), uv(x[1]), uv(x[2])])];
+        for (node_panel, pairs) in [(None, 1), (Some(0u16), 0), (Some(1), 1)] {
+            let mut c = SelfContact::new(tri.clone(), vec![0, 1, 2, 3], d, 0.1);
+            if let Some(p) = node_panel {
+                let node_rest = vec![vec![], vec![], vec![], vec![(p, uv(x[3]))]];
+                c = c.with_rest_shape(tri_rest.clone(), node_rest, 3.0 * d);
+            }
+            let mut y = x.clone();
+            c.project(&mut y, &x, &w, &mut Vec::new());
+            assert_eq!(c.pairs.len(), pairs, "node on panel {node_panel:?}");
+        }
+    }
 }

@@ -443,6 +443,31 @@ fn untangle(x: &mut [V3], triangles: &[[u32; 3]], pinned: &[bool]) -> usize {
     round
 }
 
+/// The panels' flat shapes for [`SelfContact::with_rest_shape`]: each triangle's panel and
+/// its corners' panel coordinates (`uv[tri_uv[t][k]]`), and for each of the `n` nodes its
+/// (panel, coordinates) on every panel it lies on.
+#[allow(clippy::type_complexity)]
+fn rest_shape(
+    n: usize,
+    triangles: &[[u32; 3]],
+    tri_uv: &[[u32; 3]],
+    triangle_panel: &[u16],
+    uv: &[[f64; 2]],
+) -> (Vec<(u16, [[f64; 2]; 3])>, Vec<Vec<(u16, [f64; 2])>>) {
+    let tri_rest =
+        tri_uv.iter().zip(triangle_panel).map(|(t, &p)| (p, t.map(|k| uv[k as usize]))).collect();
+    let mut node_rest: Vec<Vec<(u16, [f64; 2])>> = vec![Vec::new(); n];
+    for ((t, tu), &p) in triangles.iter().zip(tri_uv).zip(triangle_panel) {
+        for k in 0..3 {
+            let r = &mut node_rest[t[k] as usize];
+            if !r.iter().any(|&(q, _)| q == p) {
+                r.push((p, uv[tu[k] as usize]));
+            }
+        }
+    }
+    (tri_rest, node_rest)
+}
+
 /// Progress callback: `(stage, fraction done)`.
 pub type Progress<'a> = dyn FnMut(&str, f64) + 'a;
 
@@ -525,20 +550,8 @@ pub fn sew_and_drape(
         let sew_contact = collider.map(|c| (c, sliding));
         let mut sim = Xpbd::new(x, cloth.mass.clone(), &flat.pinned, links, params, sew_contact);
         if settings.cloth_contact {
-            let tri_rest: Vec<(u16, [[f64; 2]; 3])> = flat
-                .triangles
-                .iter()
-                .zip(&flat.triangle_panel)
-                .map(|(t, &p)| (p, t.map(|k| flat.uv[k as usize])))
-                .collect();
-            let mut node_rest: Vec<Vec<(u16, [f64; 2])>> = vec![Vec::new(); n0];
-            for (t, &p) in flat.triangles.iter().zip(&flat.triangle_panel) {
-                for &k in t {
-                    if node_rest[k as usize].is_empty() {
-                        node_rest[k as usize].push((p, flat.uv[k as usize]));
-                    }
-                }
-            }
+            let (tri_rest, node_rest) =
+                rest_shape(n0, &flat.triangles, &flat.triangles, &flat.triangle_panel, &flat.uv);
             sim.cloth = Some(
                 SelfContact::new(flat.triangles.clone(), new_id.clone(), fabric.thickness_m, h)
                     .with_rest_shape(tri_rest, node_rest, 3.0 * fabric.thickness_m),
@@ -648,20 +661,7 @@ pub fn sew_and_drape(
         // a flat sheet's own triangles are never candidates, at any resolution (at 40 000
         // vertices the reach is two mesh spacings, and the second and third rings filled
         // the list: ~20 pairs a node, each projected three times a sub-step).
-        let tri_rest: Vec<(u16, [[f64; 2]; 3])> = tri_uv
-            .iter()
-            .zip(&triangle_panel)
-            .map(|(t, &p)| (p, t.map(|k| flat.uv[k as usize])))
-            .collect();
-        let mut node_rest: Vec<Vec<(u16, [f64; 2])>> = vec![Vec::new(); nw];
-        for ((t, tu), &p) in triangles.iter().zip(&tri_uv).zip(&triangle_panel) {
-            for k in 0..3 {
-                let r = &mut node_rest[t[k] as usize];
-                if !r.iter().any(|&(q, _)| q == p) {
-                    r.push((p, flat.uv[tu[k] as usize]));
-                }
-            }
-        }
+        let (tri_rest, node_rest) = rest_shape(nw, &triangles, &tri_uv, &triangle_panel, &flat.uv);
         let mut layers =
             SelfContact::new(triangles.clone(), (0..nw as u32).collect(), fabric.thickness_m, h)
                 .with_rest_shape(tri_rest, node_rest, 3.0 * fabric.thickness_m);
