@@ -21,7 +21,7 @@ choices! {
         Skirt = "skirt",
         /// Scarf laid round the neck.
         Scarf = "scarf",
-        /// Curtain panel hanging from a rod (no body).
+        /// Curtain panel gathered in six pleats on a rod behind the mannequin (not draped on it).
         Curtain = "curtain",
         /// The mannequin alone (closed mesh).
         Body = "body",

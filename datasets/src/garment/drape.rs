@@ -12,6 +12,15 @@
 //! penetration, else reduced by `μ_k` times it). Velocities are `(x_new − x_old)/Δt`,
 //! damped by `exp(−c Δt)` (air viscosity `c`).
 //!
+//! Tried and dropped (session 20): viscous links (Kelvin–Voigt, force `k (C + τ Ċ)`,
+//! damped inside the solve [XPBD eq. 26] with `γ = τ / Δt`). With `τ` = 2 ms it stopped
+//! an oscillation that grew in the plane of the curtain while it hung flat (6·10⁻⁴ J/kg at
+//! 0.7 s to 0.26 J/kg at 3.8 s at 10 000 vertices; alternating the sweep's direction made
+//! it worse, 6.8 J/kg at 4 s) and brought the 10 000-vertex shirt to rest after 1.04 s
+//! instead of 1.80 s, but rest was then declared while the cloth still crept: at 1 500
+//! vertices the shirt's most distorted triangle went from 0.46 to 0.78 and a triangle dipped
+//! 3.1 mm into the body. The curtain now hangs in pleats and rests after 1.9 s without it.
+//!
 //! Cloth–cloth contact ([`super::self_contact`]) is projected after the links, then the
 //! body, alternated [`CONTACT_ROUNDS`] times (the later rounds re-project only the nodes the
 //! cloth contact moved).

@@ -170,15 +170,76 @@ pub enum Placement {
         /// Panel row of the first path point.
         y0: f64,
     },
-    /// Flat: `origin + x·ex + y·ey`.
-    Flat {
+    /// Hung in pleats: panel `y` runs along `ey`, panel `x` along the wave
+    /// `origin + X·ex + A sin(2π n X / span)·ez` ([`Pleats`]), at arc length `x` from its
+    /// start — isometric, so a panel `width` wide is gathered onto `span`.
+    Pleated {
         /// Position of the panel's origin.
         origin: V3,
-        /// Image of the panel's `+x`.
+        /// Direction of the rod (the gathered panel's `+x`).
         ex: V3,
         /// Image of the panel's `+y`.
         ey: V3,
+        /// Direction the pleats stand out in.
+        ez: V3,
+        /// The wave.
+        pleats: Pleats,
     },
+}
+
+/// A sine wave `Y = A sin(2π n X / span)`, `0 ≤ X ≤ span`, whose arc length is a given
+/// width: a panel that wide gathered into `n` pleats over `span`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pleats {
+    /// Amplitude `A` (m).
+    pub amplitude: f64,
+    /// Wave number `2π n / span` (1/m).
+    wave_number: f64,
+    /// Arc length at `X = span·i / (len − 1)` (m).
+    arc: Vec<f64>,
+    span: f64,
+}
+
+impl Pleats {
+    /// `n` pleats gathering `width` onto `span < width` (the amplitude found by bisection on
+    /// the wave's arc length).
+    pub fn new(width: f64, span: f64, n: usize) -> Pleats {
+        let k = 2.0 * PI * n as f64 / span;
+        const SAMPLES: usize = 4097;
+        let arc_of = |a: f64| {
+            let dx = span / (SAMPLES - 1) as f64;
+            let slope = |x: f64| (1.0 + (a * k * (k * x).cos()).powi(2)).sqrt();
+            let mut arc = vec![0.0; SAMPLES];
+            for i in 1..SAMPLES {
+                let x = (i - 1) as f64 * dx;
+                // Simpson's rule on each sample interval.
+                arc[i] =
+                    arc[i - 1] + dx / 6.0 * (slope(x) + 4.0 * slope(x + 0.5 * dx) + slope(x + dx));
+            }
+            arc
+        };
+        let (mut lo, mut hi) = (0.0, width);
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if arc_of(mid)[SAMPLES - 1] < width {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let amplitude = 0.5 * (lo + hi);
+        Pleats { amplitude, wave_number: k, arc: arc_of(amplitude), span }
+    }
+
+    /// The point `(X, Y)` at arc length `s` along the wave (clamped to its ends).
+    pub fn at(&self, s: f64) -> [f64; 2] {
+        let last = self.arc.len() - 1;
+        let i = self.arc.partition_point(|&a| a <= s).clamp(1, last);
+        let (a0, a1) = (self.arc[i - 1], self.arc[i]);
+        let t = ((s - a0) / (a1 - a0)).clamp(0.0, 1.0);
+        let x = self.span * ((i - 1) as f64 + t) / last as f64;
+        [x, self.amplitude * (self.wave_number * x).sin()]
+    }
 }
 
 impl Placement {
@@ -217,8 +278,9 @@ impl Placement {
                 }
                 path[0]
             }
-            Placement::Flat { origin, ex, ey } => {
-                add(*origin, add(scale(*ex, p[0]), scale(*ey, p[1])))
+            Placement::Pleated { origin, ex, ey, ez, pleats } => {
+                let [x, y] = pleats.at(p[0]);
+                add(*origin, add(add(scale(*ex, x), scale(*ez, y)), scale(*ey, p[1])))
             }
         }
     }
@@ -948,7 +1010,8 @@ fn scarf(l: &Landmarks, o: &PatternOptions) -> Result<Pattern> {
     })
 }
 
-/// A curtain panel 1.2 m wide gathered onto a 0.9 m rod, 1.5 m high.
+/// A curtain panel 1.2 m wide gathered in six pleats onto a 0.9 m rod, 1.5 m high, hung
+/// 0.45 m behind the mannequin (which faces `−y`) with its hem 0.1 m above the floor.
 fn curtain(o: &PatternOptions) -> Result<Pattern> {
     let (w, h) = (1.2, o.length_m.unwrap_or(1.5));
     if h > 4.0 {
@@ -956,6 +1019,7 @@ fn curtain(o: &PatternOptions) -> Result<Pattern> {
             "--length = {h} m: a curtain panel is at most 4 m high"
         )));
     }
+    let span = 0.9;
     let edges = vec![
         Edge::new("hem", line([0.0, 0.0], [w, 0.0], 8)),
         Edge::new("side_r", line([w, 0.0], [w, h], 8)),
@@ -965,10 +1029,12 @@ fn curtain(o: &PatternOptions) -> Result<Pattern> {
     let panels = vec![Panel {
         name: "curtain".into(),
         edges,
-        placement: Placement::Flat {
-            origin: [-w / 2.0, 0.0, 0.1],
+        placement: Placement::Pleated {
+            origin: [-span / 2.0, 0.45, 0.1],
             ex: [1.0, 0.0, 0.0],
             ey: [0.0, 0.0, 1.0],
+            ez: [0.0, 1.0, 0.0],
+            pleats: Pleats::new(w, span, 6),
         },
     }];
     Ok(Pattern {
