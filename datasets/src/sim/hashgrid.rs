@@ -70,11 +70,22 @@ impl HashGrid {
     /// Items registered in the cell holding `p` (may include items of other cells that
     /// share its hash; callers test the candidates exactly).
     pub fn query(&self, p: V3) -> &[u32] {
+        &self.items[self.query_range(p)]
+    }
+
+    /// Where [`HashGrid::query`]'s items lie in [`HashGrid::items`] (for callers that keep
+    /// per-entry data alongside, read in order).
+    pub fn query_range(&self, p: V3) -> std::ops::Range<usize> {
         if self.items.is_empty() {
-            return &[];
+            return 0..0;
         }
         let table = self.starts.len() - 1;
         let c = hash(self.cell_of(p), table);
-        &self.items[self.starts[c] as usize..self.starts[c + 1] as usize]
+        self.starts[c] as usize..self.starts[c + 1] as usize
+    }
+
+    /// Every registration, bucket after bucket.
+    pub fn items(&self) -> &[u32] {
+        &self.items
     }
 }
