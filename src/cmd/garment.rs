@@ -5,6 +5,7 @@
 use crate::args::choices;
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use datasets::garment::checkpoint::{Checkpointing, Snapshot};
 use datasets::garment::{Body, GarmentKind, GarmentOptions, Size, check};
 use std::path::PathBuf;
 
@@ -80,6 +81,17 @@ pub struct GarmentArgs {
     /// "Cloth–cloth contact").
     #[arg(long)]
     pub no_cloth_contact: bool,
+    /// Go on from the snapshot an interrupted run of the same command left in `OUT.partial`
+    /// (written every 10 s of sewing and draping; the result is bit for bit that of an
+    /// uninterrupted run). Without it a run starts over.
+    #[arg(long)]
+    pub resume: bool,
+    /// Seconds of wall time between snapshots (tests: 0 snapshots at every chance).
+    #[arg(long, default_value_t = 10.0, hide = true)]
+    pub snapshot_every: f64,
+    /// Stop with an error after this many snapshots, as an interruption would (tests).
+    #[arg(long, hide = true)]
+    pub stop_after_snapshots: Option<usize>,
     /// Also write the body the garment was draped on (OBJ, material `body`).
     #[arg(long, value_name = "FILE")]
     pub body_out: Option<PathBuf>,
@@ -157,10 +169,75 @@ pub fn run(a: GarmentArgs) -> Result<()> {
     if !crate::progress::enabled() {
         bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }
-    let (g, body) = datasets::garment::make(kind, &o, body_file, &mut |stage, f| {
-        bar.set_message(stage.to_owned());
-        bar.set_position((f.clamp(0.0, 1.0) * 1000.0) as u64);
+    // Snapshots go to OUT.partial, keyed by everything that shapes the garment (the body
+    // file by its bytes), and are removed once the garment is written.
+    let partial = crate::guard::partial_of(&a.output);
+    let mut fingerprint = format!("{kind:?}\n{o:?}\n").into_bytes();
+    if let Some(p) = &a.body {
+        fingerprint
+            .extend(std::fs::read(p).with_context(|| format!("reading --body {}", p.display()))?);
+    }
+    let key = datasets::garment::checkpoint::fingerprint(&fingerprint);
+    let from = if a.resume && partial.is_file() {
+        let bytes = std::fs::read(&partial)
+            .with_context(|| format!("reading the snapshot {}", partial.display()))?;
+        let s = Snapshot::from_bytes(&bytes).with_context(|| format!("{}", partial.display()))?;
+        if s.key != key {
+            bail!(
+                "{} was written by the command with other parameters (kind, size, vertices, \
+                 body, lengths); run that command with --resume, or this one without it to \
+                 start over",
+                partial.display()
+            );
+        }
+        eprintln!("resuming from {} (phase {})", partial.display(), s.phase);
+        Some(s)
+    } else {
+        if a.resume {
+            eprintln!("no snapshot at {}: starting from the beginning", partial.display());
+        }
+        None
+    };
+    if !(a.snapshot_every >= 0.0 && a.snapshot_every < 1e9) {
+        bail!("--snapshot-every = {}: give seconds, 0 or more", a.snapshot_every);
+    }
+    let mut saved = 0;
+    let mut save = |s: &Snapshot| {
+        if a.stop_after_snapshots.is_some_and(|n| saved >= n) {
+            return Err(datasets::Error::Invalid(format!(
+                "stopped after {saved} snapshots (--stop-after-snapshots)"
+            )));
+        }
+        btf_core::fs::write_atomic(&partial, &s.to_bytes())
+            .map_err(|e| datasets::Error::Invalid(format!("{}: {e}", partial.display())))?;
+        saved += 1;
+        Ok(())
+    };
+    let every = std::time::Duration::from_secs_f64(a.snapshot_every);
+    let mut checkpoints = Checkpointing::new(key, from, every, &mut save)?;
+    let (g, body) = datasets::garment::make_resumable(
+        kind,
+        &o,
+        body_file,
+        &mut |stage, f| {
+            bar.set_message(stage.to_owned());
+            bar.set_position((f.clamp(0.0, 1.0) * 1000.0) as u64);
+        },
+        Some(&mut checkpoints),
+    )
+    .map_err(|e| {
+        let e = anyhow::Error::from(e);
+        if partial.is_file() {
+            e.context(format!(
+                "the work done so far is kept in {}; run the same command with --resume to \
+                 continue",
+                partial.display()
+            ))
+        } else {
+            e
+        }
     })?;
+    drop(checkpoints);
     bar.finish_and_clear();
     let secs = t0.elapsed().as_secs_f64();
     datasets::write_obj(&g.mesh, &a.output, &comment)?;
@@ -171,6 +248,11 @@ pub fn run(a: GarmentArgs) -> Result<()> {
             &format!("{comment} (its body)"),
             Some("body"),
         )?;
+    }
+    if partial.is_file() {
+        std::fs::remove_file(&partial).with_context(|| {
+            format!("removing the finished run's snapshot {}", partial.display())
+        })?;
     }
     let topo = check::topology(g.mesh.positions.len(), &g.mesh.triangles);
     eprintln!(

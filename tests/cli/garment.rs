@@ -1,6 +1,6 @@
 //! End-to-end tests of `btf synth garment` (issue #22): the command is deterministic,
 //! writes one manifold OBJ whose boundary loops are the garment's openings, and refuses bad
-//! parameters naming the parameter. Coarse meshes (`--vertices 1500`) keep each run to
+//! parameters naming the parameter; interrupted, it resumes to the same file. Coarse meshes (`--vertices 1500`) keep each run to
 //! seconds; full sizes are in BENCHMARKS.md.
 
 use crate::common::Dir;
@@ -81,6 +81,26 @@ fn garment_tshirt_is_deterministic_and_has_four_openings() {
     let (ta, tb) =
         (std::fs::read(d.path("a.obj")).unwrap(), std::fs::read(d.path("b.obj")).unwrap());
     assert!(ta == tb, "two runs wrote different files");
+    // Interrupted (after its third snapshot, as a kill would leave it) and resumed, a run
+    // writes the same file; the snapshot is gone once the garment is written.
+    let mut c = args.to_vec();
+    c.extend(["-o", "c.obj", "--snapshot-every", "0"]);
+    let mut stopped = c.clone();
+    stopped.extend(["--stop-after-snapshots", "3"]);
+    let e = d.fails(&stopped);
+    assert!(e.contains("--resume") && d.path("c.obj.partial").is_file(), "{e}");
+    assert!(!d.path("c.obj").exists(), "an interrupted run wrote its output");
+    // Other parameters do not resume it.
+    let mut other = stopped.clone();
+    other.extend(["--length", "0.7", "--resume"]);
+    let e = d.fails(&other);
+    assert!(e.contains("other parameters"), "{e}");
+    c.push("--resume");
+    let o = d.btf(&c);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success() && err.contains("resuming from"), "{err}");
+    assert!(std::fs::read(d.path("c.obj")).unwrap() == ta, "the resumed run wrote another file");
+    assert!(!d.path("c.obj.partial").exists(), "the snapshot was left behind");
     let (v, f) = read_obj(&d.path("a.obj"));
     // The mesher aims at the vertex count; seams welded remove the partners' duplicates.
     assert!((1000..=1800).contains(&v.len()), "{} vertices", v.len());

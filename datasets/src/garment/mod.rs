@@ -12,6 +12,7 @@
 
 pub mod body;
 pub mod check;
+pub mod checkpoint;
 pub mod drape;
 pub mod isosurface;
 pub mod mesher;
@@ -66,6 +67,18 @@ pub fn make(
     body: Option<Body>,
     progress: &mut sew::Progress<'_>,
 ) -> Result<(Garment, Body)> {
+    make_resumable(kind, o, body, progress, None)
+}
+
+/// [`make`], taking snapshots of the sewing and drape as it goes and resuming one
+/// ([`checkpoint`]); the result is bit for bit that of an uninterrupted run.
+pub fn make_resumable(
+    kind: GarmentKind,
+    o: &GarmentOptions,
+    body: Option<Body>,
+    progress: &mut sew::Progress<'_>,
+    checkpoints: Option<&mut checkpoint::Checkpointing<'_>>,
+) -> Result<(Garment, Body)> {
     let man = body::Mannequin::new(&o.body)?;
     let pattern = Pattern::new(kind, &o.body.measurements, &man.landmarks, &o.pattern)?;
     progress("body", 0.0);
@@ -73,7 +86,15 @@ pub fn make(
         Some(b) => b,
         None => Body::new(&o.body)?,
     };
-    let g = sew::sew_and_drape(pattern, Some(&body), o.vertices, &o.fabric, &o.drape, progress)?;
+    let g = sew::sew_and_drape(
+        pattern,
+        Some(&body),
+        o.vertices,
+        &o.fabric,
+        &o.drape,
+        progress,
+        checkpoints,
+    )?;
     Ok((g, body))
 }
 

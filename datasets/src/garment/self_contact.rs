@@ -223,6 +223,35 @@ impl SelfContact {
         self
     }
 
+    /// The candidate list (node, triangle, remembered side) and the positions it was built
+    /// at, for a snapshot ([`super::checkpoint`]).
+    pub fn list(&self) -> (Vec<(u32, u32, f64)>, Vec<V3>) {
+        (self.pairs.iter().map(|p| (p.node, p.tri, p.side)).collect(), self.built_at.clone())
+    }
+
+    /// Restores a list taken by [`SelfContact::list`]; pairs naming a node or triangle this
+    /// contact does not have are refused.
+    pub fn set_list(&mut self, pairs: &[(u32, u32, f64)], built_at: Vec<V3>) -> crate::Result<()> {
+        let n = self.weld.len();
+        if let Some(&(node, tri, _)) = pairs
+            .iter()
+            .find(|&&(node, tri, _)| node as usize >= n || tri as usize >= self.triangles.len())
+        {
+            return Err(crate::Error::Invalid(format!(
+                "garment snapshot: contact pair (node {node}, triangle {tri}) outside the mesh"
+            )));
+        }
+        if !built_at.is_empty() && built_at.len() != n {
+            return Err(crate::Error::Invalid(format!(
+                "garment snapshot: contact list built at {} positions for {n} nodes",
+                built_at.len()
+            )));
+        }
+        self.pairs = pairs.iter().map(|&(node, tri, side)| Pair { node, tri, side }).collect();
+        self.built_at = built_at;
+        Ok(())
+    }
+
     /// Rebuilds the candidate list when some node has moved half the margin since the last
     /// build (or there is none yet).
     fn refresh(&mut self, x: &[V3]) {

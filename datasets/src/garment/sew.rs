@@ -29,6 +29,7 @@
 //! flat too).
 
 use super::body::Body;
+use super::checkpoint::{Checkpointing, Snapshot};
 use super::drape::{Contact, Link, Xpbd, XpbdParams};
 use super::mesher::{P2, triangulate};
 use super::pattern::{GarmentKind, Pattern};
@@ -353,10 +354,20 @@ fn links_of(cloth: &Cloth) -> Vec<Link> {
 
 /// Sub-steps until the kinetic energy per kilogram stays below the threshold for the hold
 /// time, or the longest drape is reached; `progress` gets the simulated time.
-fn run_to_rest(sim: &mut Xpbd<'_>, s: &DrapeSettings, progress: &mut dyn FnMut(f64)) -> RestReport {
-    let start = sim.time;
-    let mut quiet_since: Option<f64> = None;
-    let mut r = RestReport::default();
+///
+/// Resuming `from` a snapshot of this run (its positions, velocities, time and contact list
+/// already restored into `sim`) takes its start, step count and quiet period; `save` is
+/// offered the state every 64 sub-steps (sim, run start, steps, quiet period start).
+fn run_to_rest(
+    sim: &mut Xpbd<'_>,
+    s: &DrapeSettings,
+    progress: &mut dyn FnMut(f64),
+    from: Option<&Snapshot>,
+    save: &mut SaveFn<'_>,
+) -> Result<RestReport> {
+    let start = from.map_or(sim.time, |f| f.run_start);
+    let mut quiet_since: Option<f64> = from.and_then(|f| f.quiet_since);
+    let mut r = RestReport { steps: from.map_or(0, |f| f.steps as usize), ..Default::default() };
     while sim.time - start < s.drape_max_s {
         sim.step();
         r.steps += 1;
@@ -372,13 +383,48 @@ fn run_to_rest(sim: &mut Xpbd<'_>, s: &DrapeSettings, progress: &mut dyn FnMut(f
         } else {
             quiet_since = None;
         }
-        if r.steps % 64 == 0 {
+        if r.steps.is_multiple_of(64) {
             progress(t);
+            save(sim, start, r.steps as u64, quiet_since)?;
         }
     }
     r.end_time_s = sim.time - start;
     r.settle_time_s = quiet_since.unwrap_or(r.end_time_s);
-    r
+    Ok(r)
+}
+
+/// What [`run_to_rest`] offers its state to: (sim, run start, steps, quiet period start).
+type SaveFn<'a> = dyn FnMut(&Xpbd<'_>, f64, u64, Option<f64>) -> Result<()> + 'a;
+
+/// The drape's runs combined: `acc` (the runs before) followed by `more`.
+fn combine(acc: Option<RestReport>, more: RestReport) -> RestReport {
+    let Some(mut d) = acc else {
+        return more;
+    };
+    d.steps += more.steps;
+    d.end_time_s += more.end_time_s;
+    d.settle_time_s = d.end_time_s - more.end_time_s + more.settle_time_s;
+    d.settled = more.settled;
+    d.kinetic_energy_per_kg = more.kinetic_energy_per_kg;
+    d
+}
+
+/// Puts a snapshot's positions, velocities, time and contact list into `sim`.
+fn restore(sim: &mut Xpbd<'_>, s: &Snapshot) -> Result<()> {
+    if s.x.len() != sim.x.len() {
+        return Err(Error::Invalid(format!(
+            "garment snapshot holds {} positions, the garment has {}",
+            s.x.len(),
+            sim.x.len()
+        )));
+    }
+    sim.x = s.x.clone();
+    sim.v = s.v.clone();
+    sim.time = s.time;
+    if let Some(c) = &mut sim.cloth {
+        c.set_list(&s.pairs, s.built_at.clone())?;
+    }
+    Ok(())
 }
 
 fn push_out(x: &mut [V3], collider: &dyn Collider, clearance: f64) {
@@ -480,7 +526,10 @@ pub fn sew_and_drape(
     fabric: &Fabric,
     settings: &DrapeSettings,
     progress: &mut Progress<'_>,
+    mut checkpoints: Option<&mut Checkpointing<'_>>,
 ) -> Result<Garment> {
+    let resume = checkpoints.as_mut().and_then(|c| c.from.take());
+    let drape_from = resume.as_ref().filter(|s| s.phase >= 1);
     if !(200..=400_000).contains(&vertices) {
         return Err(Error::Invalid(format!("--vertices = {vertices} is outside 200 … 400000")));
     }
@@ -533,7 +582,11 @@ pub fn sew_and_drape(
     let mut gap = 0.0;
     let mut x = flat.x.clone();
     let dt = settings.substep_for(h, fabric);
-    if !flat.pairs.is_empty() {
+    if let Some(s) = drape_from {
+        sewing = s.sewing;
+        gap = s.gap;
+    }
+    if !flat.pairs.is_empty() && drape_from.is_none() {
         let mut links = links_of(&cloth);
         let first_seam = links.len();
         let pairs: Vec<(u32, u32)> = flat.pairs.iter().copied().filter(|&(a, b)| a != b).collect();
@@ -565,6 +618,10 @@ pub fn sew_and_drape(
         };
         let close_s = settings.sew_close_s;
         let mut steps = 0;
+        if let Some(s) = resume.as_ref().filter(|s| s.phase == 0) {
+            restore(&mut sim, s)?;
+            steps = s.steps as usize;
+        }
         while sim.time < settings.sew_max_s {
             let f = (1.0 - sim.time / close_s).max(0.0);
             for (l, &g0) in sim.links[first_seam..].iter_mut().zip(&gap0) {
@@ -577,6 +634,28 @@ pub fn sew_and_drape(
                 if sim.time >= close_s && max_gap(&sim) < 0.15 * h {
                     break;
                 }
+            }
+            if steps % 64 == 0
+                && let Some(c) = checkpoints.as_deref_mut()
+                && c.due()
+            {
+                let (pairs, built_at) = sim.cloth.as_ref().map(|c| c.list()).unwrap_or_default();
+                (c.save)(&Snapshot {
+                    key: c.key,
+                    phase: 0,
+                    time: sim.time,
+                    run_start: 0.0,
+                    steps: steps as u64,
+                    x: sim.x.clone(),
+                    v: sim.v.clone(),
+                    pairs,
+                    built_at,
+                    quiet_since: None,
+                    sewing: RestReport::default(),
+                    gap: 0.0,
+                    drape: None,
+                    untangle_rounds: 0,
+                })?;
             }
         }
         gap = max_gap(&sim);
@@ -646,11 +725,15 @@ pub fn sew_and_drape(
     // Drape: gravity, the body, until the kinetic energy stays low.
     let cloth = build_cloth(nw, &triangles, &tri_uv, &flat.uv, fabric);
     let mut untangle_rounds = 0;
-    if settings.cloth_contact {
-        untangle_rounds += untangle(&mut xw, &triangles, &pinned);
-    }
-    if let Some(c) = collider {
-        push_out(&mut xw, c, fabric.thickness_m);
+    if let Some(s) = drape_from {
+        untangle_rounds = s.untangle_rounds as usize;
+    } else {
+        if settings.cloth_contact {
+            untangle_rounds += untangle(&mut xw, &triangles, &pinned);
+        }
+        if let Some(c) = collider {
+            push_out(&mut xw, c, fabric.thickness_m);
+        }
     }
     let params =
         XpbdParams { gravity: [0.0, 0.0, -9.81], air_viscosity: settings.air_viscosity, dt };
@@ -669,30 +752,64 @@ pub fn sew_and_drape(
         layers.friction = fabric.friction;
         sim.cloth = Some(layers);
     }
-    let mut drape =
-        run_to_rest(&mut sim, settings, &mut |t| progress("draping", t / settings.drape_max_s));
+    if let Some(s) = drape_from {
+        restore(&mut sim, s)?;
+    }
     // Crossings the drape made (two creases passing between their nodes, which the node–
     // triangle contact does not see) are smoothed out and the drape resumed, twice at most.
-    for _ in 0..2 {
-        if !settings.cloth_contact {
-            break;
+    let first_run = drape_from.map_or(0, |s| s.phase as usize - 1).min(2);
+    let mut acc: Option<RestReport> = drape_from.and_then(|s| s.drape);
+    for run in first_run..3 {
+        let resumed = drape_from.filter(|_| run == first_run);
+        if run > 0 && resumed.is_none() {
+            if !settings.cloth_contact {
+                break;
+            }
+            let rounds = untangle(&mut sim.x, &triangles, &pinned);
+            if rounds == 0 {
+                break;
+            }
+            untangle_rounds += rounds;
+            if let Some(c) = collider {
+                push_out(&mut sim.x, c, fabric.thickness_m);
+            }
         }
-        let rounds = untangle(&mut sim.x, &triangles, &pinned);
-        if rounds == 0 {
-            break;
-        }
-        untangle_rounds += rounds;
-        if let Some(c) = collider {
-            push_out(&mut sim.x, c, fabric.thickness_m);
-        }
-        let more =
-            run_to_rest(&mut sim, settings, &mut |t| progress("draping", t / settings.drape_max_s));
-        drape.steps += more.steps;
-        drape.end_time_s += more.end_time_s;
-        drape.settle_time_s = drape.end_time_s - more.end_time_s + more.settle_time_s;
-        drape.settled = more.settled;
-        drape.kinetic_energy_per_kg = more.kinetic_energy_per_kg;
+        let (before, rounds_so_far) = (acc, untangle_rounds as u64);
+        let mut save = |sim: &Xpbd<'_>, start: f64, steps: u64, quiet: Option<f64>| {
+            let Some(c) = checkpoints.as_deref_mut() else {
+                return Ok(());
+            };
+            if !c.due() {
+                return Ok(());
+            }
+            let (pairs, built_at) = sim.cloth.as_ref().map(|c| c.list()).unwrap_or_default();
+            (c.save)(&Snapshot {
+                key: c.key,
+                phase: run as u32 + 1,
+                time: sim.time,
+                run_start: start,
+                steps,
+                x: sim.x.clone(),
+                v: sim.v.clone(),
+                pairs,
+                built_at,
+                quiet_since: quiet,
+                sewing,
+                gap,
+                drape: before,
+                untangle_rounds: rounds_so_far,
+            })
+        };
+        let more = run_to_rest(
+            &mut sim,
+            settings,
+            &mut |t| progress("draping", t / settings.drape_max_s),
+            resumed,
+            &mut save,
+        )?;
+        acc = Some(combine(acc, more));
     }
+    let drape = acc.unwrap_or_default();
     // A crumple the drape makes again after every resume (a seam junction whose corners
     // sum to more than 360°: the shirt's armpit at 10 000 vertices, 403°) is smoothed once
     // more and left; how far that moved a vertex is reported.
