@@ -5,7 +5,8 @@
 //! draped under gravity by the XPBD solver of [`drape`] ([`sew`]; the draft used the explicit
 //! mass–spring simulation of [`crate::sim`], whose ~50 µs time step made a garment take
 //! minutes — it stays for the knit animation); [`check`]
-//! measures what the tests assert (openings, penetration, self-intersection, strain, grain).
+//! measures what the tests assert (openings, penetration, self-intersection, strain, grain);
+//! [`checkpoint`] snapshots a long sewing and drape so that it can be resumed bit for bit.
 //!
 //! One call makes a garment on its mannequin: [`draped`] (`kind`, `size`) for the demo,
 //! [`make`] with [`GarmentOptions`] for everything else.

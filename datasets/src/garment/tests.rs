@@ -331,15 +331,19 @@ fn a_resumed_garment_is_bit_identical_to_an_uninterrupted_one() {
         saved.push(s.to_bytes());
         Ok(())
     };
+    let run = |ck: &mut Checkpointing<'_>| {
+        super::make_resumable(
+            GarmentKind::TShirt,
+            &o,
+            Some(body().clone()),
+            &mut |_, _| {},
+            Some(ck),
+        )
+        .unwrap()
+        .0
+    };
     let mut ck = Checkpointing::new(key, None, std::time::Duration::ZERO, &mut keep).unwrap();
-    let (whole, _) = super::make_resumable(
-        GarmentKind::TShirt,
-        &o,
-        Some(body().clone()),
-        &mut |_, _| {},
-        Some(&mut ck),
-    )
-    .unwrap();
+    let whole = run(&mut ck);
     let snapshots: Vec<Snapshot> = saved.iter().map(|b| Snapshot::from_bytes(b).unwrap()).collect();
     let sewing: Vec<&Snapshot> = snapshots.iter().filter(|s| s.phase == 0).collect();
     let draping: Vec<&Snapshot> = snapshots.iter().filter(|s| s.phase >= 1).collect();
@@ -355,14 +359,7 @@ fn a_resumed_garment_is_bit_identical_to_an_uninterrupted_one() {
         let mut ck =
             Checkpointing::new(key, Some(from.clone()), std::time::Duration::ZERO, &mut note)
                 .unwrap();
-        let (resumed, _) = super::make_resumable(
-            GarmentKind::TShirt,
-            &o,
-            Some(body().clone()),
-            &mut |_, _| {},
-            Some(&mut ck),
-        )
-        .unwrap();
+        let resumed = run(&mut ck);
         assert_eq!(resumed.mesh.positions, whole.mesh.positions, "resumed at phase {}", from.phase);
         assert_eq!(resumed.drape, whole.drape);
         assert_eq!(resumed.sewing, whole.sewing);
