@@ -12,14 +12,22 @@
 //! penetration, else reduced by `μ_k` times it). Velocities are `(x_new − x_old)/Δt`,
 //! damped by `exp(−c Δt)` (air viscosity `c`).
 //!
-//! Tried and dropped (session 20): viscous links (Kelvin–Voigt, force `k (C + τ Ċ)`,
-//! damped inside the solve [XPBD eq. 26] with `γ = τ / Δt`). With `τ` = 2 ms it stopped
-//! an oscillation that grew in the plane of the curtain while it hung flat (6·10⁻⁴ J/kg at
-//! 0.7 s to 0.26 J/kg at 3.8 s at 10 000 vertices; alternating the sweep's direction made
-//! it worse, 6.8 J/kg at 4 s) and brought the 10 000-vertex shirt to rest after 1.04 s
-//! instead of 1.80 s, but rest was then declared while the cloth still crept: at 1 500
+//! Links may be viscoelastic (Kelvin–Voigt: force `k (C + τ Ċ)`, relaxation time `τ`),
+//! damped inside the constraint solve [XPBD eq. 26]:
+//! `Δλ = −(C + γ ∇C·(x − xⁿ)) / ((1 + γ)(w_a + w_b) + α̃)` with `γ = α̃ β̃ / Δt`; for a
+//! damping coefficient `β = τ k` that is `γ = τ / Δt`, the same for every link whatever its
+//! stiffness. It damps only motion that changes a link's length, not a rigid swing, and
+//! leaves the rest shape unchanged (at rest `x = xⁿ`). The sewing uses it only for cloth
+//! that hangs free of the body (the curtain, [`super::sew::DrapeSettings`]): hung flat, the
+//! curtain never came to rest without it — an oscillation of its free side edges in the
+//! sheet's own plane grew from 6·10⁻⁴ J/kg at 0.7 s to 0.26 J/kg at 3.8 s at 10 000 vertices
+//! against the air viscosity, under the single Gauss–Seidel sweep per sub-step (alternating
+//! the sweep's direction made it worse: 6.8 J/kg at 4 s) — and hung in pleats at 40 000
+//! vertices its lower part kept moving at 0.2–0.3 m/s (6–12·10⁻⁴ J/kg for 4 s, contact or
+//! not); with `τ` = 2 ms it rests after 2.2 s. The garments on the body rub on it and do
+//! without: with `τ` = 2 ms their rest was declared while the cloth still crept (at 1 500
 //! vertices the shirt's most distorted triangle went from 0.46 to 0.78 and a triangle dipped
-//! 3.1 mm into the body. The curtain now hangs in pleats and rests after 1.9 s without it.
+//! 3.1 mm into the body).
 //!
 //! Cloth–cloth contact ([`super::self_contact`]) is projected after the links, then the
 //! body, alternated [`CONTACT_ROUNDS`] times (the later rounds re-project only the nodes the
@@ -76,6 +84,8 @@ pub struct XpbdParams {
     pub air_viscosity: f64,
     /// Sub-step (s).
     pub dt: f64,
+    /// Relaxation time `τ` of the links' viscous damping (s; 0 for purely elastic links).
+    pub link_damping_s: f64,
 }
 
 /// Positions and velocities of the cloth, advanced by [`Xpbd::step`].
@@ -189,6 +199,7 @@ impl<'a> Xpbd<'a> {
             self.pred[i] = add(self.x[i], scale(v, dt));
         }
         let inv_dt2 = 1.0 / (dt * dt);
+        let gamma = p.link_damping_s / dt;
         for l in &self.links {
             let (a, b) = (l.a as usize, l.b as usize);
             let w = self.inv_mass[a] + self.inv_mass[b];
@@ -201,7 +212,9 @@ impl<'a> Xpbd<'a> {
                 continue;
             }
             let c = len - l.rest;
-            let dl = -c / (w + l.compliance * inv_dt2);
+            // The link's lengthening over the sub-step so far, ∇C·(x − xⁿ) [XPBD eq. 26].
+            let stretch = dot(sub(sub(self.pred[b], self.x[b]), sub(self.pred[a], self.x[a])), d);
+            let dl = -(c + gamma * stretch / len) / ((1.0 + gamma) * w + l.compliance * inv_dt2);
             let g = scale(d, dl / len);
             self.pred[a] = sub(self.pred[a], scale(g, self.inv_mass[a]));
             self.pred[b] = add(self.pred[b], scale(g, self.inv_mass[b]));
@@ -251,7 +264,7 @@ mod tests {
     use super::*;
 
     /// A chain of 20 nodes hanging from a pinned end comes to rest with the links at
-    /// their stretched length: link `k` from the bottom carries the weight `k m g`, so with
+    /// their stretched length (the links' damping does not change it): link `k` from the bottom carries the weight `k m g`, so with
     /// compliance `α` it is `r + α k m g` long (exact for the equilibrium of XPBD, whose
     /// fixed point is the spring equilibrium).
     #[test]
@@ -264,7 +277,12 @@ mod tests {
         let links = (0..n - 1)
             .map(|i| Link { a: i as u32, b: i as u32 + 1, rest: r, compliance: alpha })
             .collect();
-        let params = XpbdParams { gravity: [0.0, 0.0, -9.81], air_viscosity: 5.0, dt: 1e-3 };
+        let params = XpbdParams {
+            gravity: [0.0, 0.0, -9.81],
+            air_viscosity: 5.0,
+            dt: 1e-3,
+            link_damping_s: 0.002,
+        };
         let mut s = Xpbd::new(x, vec![m; n], &pinned, links, params, None);
         for _ in 0..20_000 {
             s.step();
@@ -279,6 +297,43 @@ mod tests {
                 (got - expect).abs() < 0.01 * (expect - r) + 1e-6,
                 "link {i}: {got} vs {expect}"
             );
+        }
+    }
+
+    /// A node on a damped link oscillates as `m ẍ = −k x − τ k ẋ`: successive peaks of its
+    /// stretch shrink by `exp(−τ k T_d / 2m)`, `T_d` the damped period. The integrator's own
+    /// damping, `π ω₀ Δt` a period (1.6 % at `Δt = T_d / 1 250`), is made negligible with
+    /// `Δt = T_d / 31 000` (0.06 %): without the link's damping the peaks stay within 0.1 %.
+    #[test]
+    fn a_damped_link_decays_at_the_kelvin_voigt_rate() {
+        let (m, k, r) = (0.01, 100.0, 0.1);
+        let peaks = |tau: f64| {
+            let x = vec![[0.0; 3], [r + 1e-3, 0.0, 0.0]];
+            let links = vec![Link { a: 0, b: 1, rest: r, compliance: 1.0 / k }];
+            let params =
+                XpbdParams { gravity: [0.0; 3], air_viscosity: 0.0, dt: 2e-6, link_damping_s: tau };
+            let mut s = Xpbd::new(x, vec![m; 2], &[true, false], links, params, None);
+            let mut stretch = [f64::NAN; 3];
+            let mut found = Vec::new();
+            while found.len() < 3 {
+                s.step();
+                stretch = [stretch[1], stretch[2], s.x[1][0] - r];
+                if stretch[1] > stretch[0] && stretch[1] >= stretch[2] {
+                    found.push(stretch[1]);
+                }
+            }
+            (found[1] / found[0], found[2] / found[1])
+        };
+        let (a, b) = peaks(0.0);
+        assert!((a - 1.0).abs() < 1e-3 && (b - 1.0).abs() < 1e-3, "undamped: {a} {b}");
+        let tau = 2e-3;
+        let w0 = (k / m).sqrt();
+        let zeta = 0.5 * tau * w0;
+        let period = 2.0 * std::f64::consts::PI / (w0 * (1.0 - zeta * zeta).sqrt());
+        let expect = (-0.5 * tau * k / m * period).exp();
+        let (a, b) = peaks(tau);
+        for got in [a, b] {
+            assert!((got / expect - 1.0).abs() < 0.02, "peak ratio {got} vs {expect}");
         }
     }
 }

@@ -108,6 +108,10 @@ pub struct DrapeSettings {
     /// the T-shirt, shirt, trousers and skirt from 139 / 139 / 385 / 0 crossing triangle
     /// pairs to none, all at rest, in 15–27 s instead of 12–19 s (BENCHMARKS.md).
     pub cloth_contact: bool,
+    /// Relaxation time of the links' viscous damping (s) for cloth hanging free of the body
+    /// (the curtain; see [`super::drape`]: without it the 40 000-vertex curtain never came
+    /// to rest). Garments on the body have none.
+    pub free_hanging_damping_s: f64,
 }
 
 impl DrapeSettings {
@@ -133,6 +137,7 @@ impl Default for DrapeSettings {
             substep_s: 1.0 / 600.0,
             wave_spacings_per_substep: 2.0,
             cloth_contact: true,
+            free_hanging_damping_s: 0.002,
         }
     }
 }
@@ -550,6 +555,7 @@ pub fn sew_and_drape(
         dynamic_coef: fabric.friction.dynamic_coef,
     };
     let body_contact = collider.map(|c| (c, contact));
+    let link_damping_s = if collider.is_none() { settings.free_hanging_damping_s } else { 0.0 };
     // Weld seam partners (union–find; the smallest id is the root).
     let mut parent: Vec<u32> = (0..n0 as u32).collect();
     fn root(p: &mut [u32], mut i: u32) -> u32 {
@@ -595,7 +601,7 @@ pub fn sew_and_drape(
         for (&(a, b), &g0) in pairs.iter().zip(&gap0) {
             links.push(Link { a, b, rest: g0, compliance: 0.0 });
         }
-        let params = XpbdParams { gravity: [0.0; 3], air_viscosity: 20.0, dt };
+        let params = XpbdParams { gravity: [0.0; 3], air_viscosity: 20.0, dt, link_damping_s };
         // Sewn without friction: the panels slide round the body as their seams close (with
         // the fabric's friction a sleeve lying on the arm held its underarm seam 19.6 mm
         // open); the drape below has the friction.
@@ -735,8 +741,12 @@ pub fn sew_and_drape(
             push_out(&mut xw, c, fabric.thickness_m);
         }
     }
-    let params =
-        XpbdParams { gravity: [0.0, 0.0, -9.81], air_viscosity: settings.air_viscosity, dt };
+    let params = XpbdParams {
+        gravity: [0.0, 0.0, -9.81],
+        air_viscosity: settings.air_viscosity,
+        dt,
+        link_damping_s,
+    };
     let mut sim =
         Xpbd::new(xw, cloth.mass.clone(), &pinned, links_of(&cloth), params, body_contact);
     if settings.cloth_contact {
