@@ -170,6 +170,9 @@ fn garment_refuses_bad_parameters_naming_them() {
             .contains("--vertices")
     );
     assert!(d.fails(&["synth", "garment", "--kind", "dress", "-o", "g.obj"]).contains("--kind"));
+    // A mesh finer than the cloth's half-thickness (the scarf's small panel at 40 000).
+    let e = d.fails(&["synth", "garment", "--kind", "scarf", "--vertices", "40000", "-o", "g.obj"]);
+    assert!(e.contains("--vertices") && e.contains("half-thickness"), "{e}");
     assert!(
         d.fails(&["synth", "garment", "--kind", "skirt", "--sleeve-length", "0.3", "-o", "g.obj"])
             .contains("--sleeve-length")

@@ -540,6 +540,21 @@ pub fn sew_and_drape(
     }
     let area = pattern.area();
     let h = (2.0 * area / (3f64.sqrt() * vertices as f64)).sqrt();
+    // Cloth–cloth contact keeps layers a half-thickness apart and finds candidates within
+    // three: on a mesh finer than the half-thickness a node's list holds ~100 triangles of
+    // every layer near it (the scarf at 40 000 vertices, h = 2.1 mm: 4.3 million pairs, its
+    // drape 0.04 s after 16 minutes).
+    if settings.cloth_contact && h < fabric.thickness_m {
+        let most = (2.0 * area / (3f64.sqrt() * fabric.thickness_m.powi(2))) as usize;
+        return Err(Error::Invalid(format!(
+            "--vertices = {vertices} makes the {}'s mesh spacing {:.1} mm, finer than the \
+             cloth's {:.1} mm half-thickness that cloth–cloth contact keeps between layers; \
+             at most {most} vertices for it (or --no-cloth-contact)",
+            pattern.kind.name(),
+            1e3 * h,
+            1e3 * fabric.thickness_m
+        )));
+    }
     let mut flat = layout(&pattern, h)?;
     let collider: Option<&dyn Collider> =
         if pattern.kind.on_body() { body.map(|b| &b.sdf as &dyn Collider) } else { None };
