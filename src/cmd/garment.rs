@@ -182,14 +182,6 @@ pub fn run(a: GarmentArgs) -> Result<()> {
         let bytes = std::fs::read(&partial)
             .with_context(|| format!("reading the snapshot {}", partial.display()))?;
         let s = Snapshot::from_bytes(&bytes).with_context(|| format!("{}", partial.display()))?;
-        if s.key != key {
-            bail!(
-                "{} was written by the command with other parameters (kind, size, vertices, \
-                 body, lengths); run that command with --resume, or this one without it to \
-                 start over",
-                partial.display()
-            );
-        }
         eprintln!("resuming from {} (phase {})", partial.display(), s.phase);
         Some(s)
     } else {
@@ -201,20 +193,30 @@ pub fn run(a: GarmentArgs) -> Result<()> {
     if !(a.snapshot_every >= 0.0 && a.snapshot_every < 1e9) {
         bail!("--snapshot-every = {}: give seconds, 0 or more", a.snapshot_every);
     }
-    let mut saved = 0;
+    // This run's work is in OUT.partial once it has resumed or saved one; a snapshot another
+    // run left there is not this run's to point at.
+    let resumed = from.is_some();
+    let saved = std::cell::Cell::new(0usize);
     let mut save = |s: &Snapshot| {
-        if a.stop_after_snapshots.is_some_and(|n| saved >= n) {
+        let saved_so_far = saved.get();
+        if a.stop_after_snapshots.is_some_and(|n| saved_so_far >= n) {
             return Err(datasets::Error::Invalid(format!(
-                "stopped after {saved} snapshots (--stop-after-snapshots)"
+                "stopped after {saved_so_far} snapshots (--stop-after-snapshots)"
             )));
         }
         btf_core::fs::write_atomic(&partial, &s.to_bytes())
             .map_err(|e| datasets::Error::Invalid(format!("{}: {e}", partial.display())))?;
-        saved += 1;
+        saved.set(saved_so_far + 1);
         Ok(())
     };
     let every = std::time::Duration::from_secs_f64(a.snapshot_every);
-    let mut checkpoints = Checkpointing::new(key, from, every, &mut save)?;
+    let mut checkpoints = Checkpointing::new(key, from, every, &mut save).with_context(|| {
+        format!(
+            "{} is another run's (run that command with --resume, or this one without it to \
+             start over)",
+            partial.display()
+        )
+    })?;
     let (g, body) = datasets::garment::make_resumable(
         kind,
         &o,
@@ -227,7 +229,7 @@ pub fn run(a: GarmentArgs) -> Result<()> {
     )
     .map_err(|e| {
         let e = anyhow::Error::from(e);
-        if partial.is_file() {
+        if partial.is_file() && (resumed || saved.get() > 0) {
             e.context(format!(
                 "the work done so far is kept in {}; run the same command with --resume to \
                  continue",

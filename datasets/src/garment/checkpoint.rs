@@ -188,8 +188,18 @@ impl Snapshot {
                 x.len()
             )));
         }
-        if !x.iter().chain(&v).all(|p| p.iter().all(|c| c.is_finite())) || !time.is_finite() {
-            return Err(Error::Invalid("garment snapshot: a non-finite position or time".into()));
+        if !x.iter().chain(&v).chain(&built_at).all(|p| p.iter().all(|c| c.is_finite()))
+            || ![time, run_start, gap].iter().all(|t| t.is_finite())
+        {
+            return Err(Error::Invalid(
+                "garment snapshot: a non-finite position, velocity, time or gap".into(),
+            ));
+        }
+        if let Some(&(node, tri, side)) = pairs.iter().find(|p| ![-1.0, 0.0, 1.0].contains(&p.2)) {
+            return Err(Error::Invalid(format!(
+                "garment snapshot: contact pair (node {node}, triangle {tri}) has side {side}, \
+                 not −1, 0 or 1"
+            )));
         }
         Ok(Snapshot {
             key,
@@ -304,6 +314,15 @@ mod tests {
         bad[at..at + 8].copy_from_slice(&u64::MAX.to_le_bytes());
         let e = Snapshot::from_bytes(&bad).unwrap_err().to_string();
         assert!(e.contains("positions") && e.contains("do not fit"), "{e}");
+        // A NaN velocity, and a contact side that is not ±1 or 0 (the last 8 bytes).
+        let mut nan = bytes.clone();
+        let v0 = at + 8 + 2 * 24 + 8;
+        nan[v0..v0 + 8].copy_from_slice(&f64::NAN.to_le_bytes());
+        assert!(Snapshot::from_bytes(&nan).unwrap_err().to_string().contains("non-finite"));
+        let mut side = bytes.clone();
+        let n = side.len();
+        side[n - 8..].copy_from_slice(&0.5f64.to_le_bytes());
+        assert!(Snapshot::from_bytes(&side).unwrap_err().to_string().contains("side 0.5"));
         let mut foreign = bytes;
         foreign[0] = b'X';
         assert!(Snapshot::from_bytes(&foreign).unwrap_err().to_string().contains("magic"));

@@ -264,9 +264,9 @@ mod tests {
     use super::*;
 
     /// A chain of 20 nodes hanging from a pinned end comes to rest with the links at
-    /// their stretched length (the links' damping does not change it): link `k` from the bottom carries the weight `k m g`, so with
-    /// compliance `α` it is `r + α k m g` long (exact for the equilibrium of XPBD, whose
-    /// fixed point is the spring equilibrium).
+    /// their stretched length, the links' damping notwithstanding: link `k` from the bottom
+    /// carries the weight `k m g`, so with compliance `α` it is `r + α k m g` long (exact for
+    /// the equilibrium of XPBD, whose fixed point is the spring equilibrium).
     #[test]
     fn hanging_chain_stretches_by_its_compliance() {
         let n = 20;

@@ -414,6 +414,50 @@ fn combine(acc: Option<RestReport>, more: RestReport) -> RestReport {
     d
 }
 
+/// Where a run stands besides the solver's own state: its phase (0 sewing, `k + 1` the
+/// drape's `k`-th run) and what [`Snapshot`] records of the phases before.
+struct Stage {
+    phase: u32,
+    sewing: RestReport,
+    gap: f64,
+    drape: Option<RestReport>,
+    untangle_rounds: u64,
+}
+
+/// Gives `c` a snapshot of `sim` when one is due.
+fn offer(
+    c: Option<&mut Checkpointing<'_>>,
+    sim: &Xpbd<'_>,
+    stage: &Stage,
+    run_start: f64,
+    steps: u64,
+    quiet_since: Option<f64>,
+) -> Result<()> {
+    let Some(c) = c else {
+        return Ok(());
+    };
+    if !c.due() {
+        return Ok(());
+    }
+    let (pairs, built_at) = sim.cloth.as_ref().map(|c| c.list()).unwrap_or_default();
+    (c.save)(&Snapshot {
+        key: c.key,
+        phase: stage.phase,
+        time: sim.time,
+        run_start,
+        steps,
+        x: sim.x.clone(),
+        v: sim.v.clone(),
+        pairs,
+        built_at,
+        quiet_since,
+        sewing: stage.sewing,
+        gap: stage.gap,
+        drape: stage.drape,
+        untangle_rounds: stage.untangle_rounds,
+    })
+}
+
 /// Puts a snapshot's positions, velocities, time and contact list into `sim`.
 fn restore(sim: &mut Xpbd<'_>, s: &Snapshot) -> Result<()> {
     if s.x.len() != sim.x.len() {
@@ -656,27 +700,15 @@ pub fn sew_and_drape(
                     break;
                 }
             }
-            if steps % 64 == 0
-                && let Some(c) = checkpoints.as_deref_mut()
-                && c.due()
-            {
-                let (pairs, built_at) = sim.cloth.as_ref().map(|c| c.list()).unwrap_or_default();
-                (c.save)(&Snapshot {
-                    key: c.key,
+            if steps % 64 == 0 {
+                let stage = Stage {
                     phase: 0,
-                    time: sim.time,
-                    run_start: 0.0,
-                    steps: steps as u64,
-                    x: sim.x.clone(),
-                    v: sim.v.clone(),
-                    pairs,
-                    built_at,
-                    quiet_since: None,
                     sewing: RestReport::default(),
                     gap: 0.0,
                     drape: None,
                     untangle_rounds: 0,
-                })?;
+                };
+                offer(checkpoints.as_deref_mut(), &sim, &stage, 0.0, steps as u64, None)?;
             }
         }
         gap = max_gap(&sim);
@@ -799,31 +831,15 @@ pub fn sew_and_drape(
                 push_out(&mut sim.x, c, fabric.thickness_m);
             }
         }
-        let (before, rounds_so_far) = (acc, untangle_rounds as u64);
+        let stage = Stage {
+            phase: run as u32 + 1,
+            sewing,
+            gap,
+            drape: acc,
+            untangle_rounds: untangle_rounds as u64,
+        };
         let mut save = |sim: &Xpbd<'_>, start: f64, steps: u64, quiet: Option<f64>| {
-            let Some(c) = checkpoints.as_deref_mut() else {
-                return Ok(());
-            };
-            if !c.due() {
-                return Ok(());
-            }
-            let (pairs, built_at) = sim.cloth.as_ref().map(|c| c.list()).unwrap_or_default();
-            (c.save)(&Snapshot {
-                key: c.key,
-                phase: run as u32 + 1,
-                time: sim.time,
-                run_start: start,
-                steps,
-                x: sim.x.clone(),
-                v: sim.v.clone(),
-                pairs,
-                built_at,
-                quiet_since: quiet,
-                sewing,
-                gap,
-                drape: before,
-                untangle_rounds: rounds_so_far,
-            })
+            offer(checkpoints.as_deref_mut(), sim, &stage, start, steps, quiet)
         };
         let more = run_to_rest(
             &mut sim,
