@@ -7,7 +7,8 @@
 //! ([C03 §5]) to numbered PNG frames and a contact sheet.
 //!
 //! Per frame (`animate.csv`, `animate.md`): simulation steps, halvings and milliseconds,
-//! the knot solve in milliseconds, the render in seconds. **Resumable**: the simulation is
+//! the knot solve in milliseconds (with `--relaxed-rest`: plus the contact-relaxed template
+//! carried on top, [`yarn::knit::knot::detail`]), the render in seconds. **Resumable**: the simulation is
 //! cached in `DIR/cache/sim-<key>.bin` (written atomically once it has run), and frames
 //! whose files exist are not redone, so an interrupted run picks up where it stopped when
 //! run again with the same arguments; `--fresh` starts over.
@@ -22,6 +23,7 @@ use datasets::sim::knit::LoopGrid;
 use datasets::sim::scenes::{DropTarget, ScarfDrop, ScarfSize, ScarfStretch, SceneRun};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+use yarn::knit::knot::{ContactParams, RestDetail};
 use yarn::knit::{KnotModel, KnotParams, SkeletonParams, StitchMesh};
 use yarn::params::YarnParams;
 
@@ -83,6 +85,11 @@ pub struct AnimateArgs {
     /// Gauss–Newton iterations of the knot solver per frame.
     #[arg(long, default_value_t = 3)]
     pub iterations: usize,
+    /// Carry the chart's contact-relaxed template on top of every knot solve (the rest
+    /// detail of `yarn::knit::knot::detail`, DESIGN §3.3 item 1: yarns 0.88 → ~1.0 × 2r
+    /// apart at rest).
+    #[arg(long)]
+    pub relaxed_rest: bool,
     /// Remove this command's earlier outputs from the folder first (no resume).
     #[arg(long)]
     pub fresh: bool,
@@ -302,6 +309,22 @@ pub fn run(a: AnimateArgs) -> Result<()> {
     rest.lattice = None;
     let model = KnotModel::new(&rest, &sk, (ws, cs))?;
     let kp = KnotParams { iterations: a.iterations, ..KnotParams::default() };
+    let detail = if a.relaxed_rest {
+        let d = RestDetail::relax(&model, &rest, &kp, &ContactParams::default())
+            .context("relaxing the chart's template (--relaxed-rest)")?;
+        outln!(
+            "knit animate: rest detail relaxed on a {} × {} patch in {:.1} s, clearance {:.3} → \
+             {:.3} × 2r",
+            d.patch.0,
+            d.patch.1,
+            d.stats.seconds,
+            d.stats.clearance_before,
+            d.stats.clearance_after
+        );
+        Some(d)
+    } else {
+        None
+    };
     let smoothed = run.smoothed()?;
     // The camera frames every position of every frame.
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
@@ -341,8 +364,11 @@ pub fn run(a: AnimateArgs) -> Result<()> {
         mesh.normals = grid_normals(grid, &smoothed[k]);
         mesh.lattice = None;
         let t = Instant::now();
-        let frame =
+        let mut frame =
             model.solve(&mesh, &kp).with_context(|| format!("frame {k}: the knot solve"))?;
+        if let Some(d) = &detail {
+            frame = d.apply(&model, &mesh, &frame).with_context(|| format!("frame {k}"))?;
+        }
         row.solve_ms = t.elapsed().as_secs_f64() * 1e3;
         let set = model.yarn_set(&frame, 4)?;
         if want_png {

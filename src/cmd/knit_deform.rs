@@ -16,6 +16,11 @@
 //! reference is also relaxed with the yarn–yarn contact penalty of DESIGN §3.3 item 1
 //! ([`yarn::knit::knot::relax`]): the contact reference's clearance and the solve's
 //! deviation from it over every CP (the geometry the model's missing contact costs).
+//! With `--relaxed-rest` the chart's template is relaxed with that penalty once (on a flat
+//! periodic patch) and carried on top of every solve as the rest detail
+//! ([`yarn::knit::knot::detail`], DESIGN §3.3 item 1): the solve + detail's clearance, its
+//! cost per frame and, with `--contact`, its deviation from the contact reference;
+//! `yarns/CASE-detail.bcc`.
 
 use super::knit::{chart_inputs_of, load_chart, load_yarn};
 use crate::guard::{self, outln};
@@ -26,7 +31,7 @@ use clap::Args;
 use image::RgbImage;
 use std::path::PathBuf;
 use std::time::Instant;
-use yarn::knit::knot::{ContactParams, KnotFrame, min_clearance};
+use yarn::knit::knot::{ContactParams, KnotFrame, RestDetail, min_clearance};
 use yarn::knit::{KnotModel, KnotParams, SkeletonParams, StitchMesh};
 
 /// `btf knit deform`.
@@ -79,6 +84,11 @@ pub struct DeformArgs {
     /// and the knot solve's deviation from it (slow: seconds to minutes per case).
     #[arg(long)]
     pub contact: bool,
+    /// Carry the contact-relaxed template on top of every solve (the rest detail of
+    /// `yarn::knit::knot::detail`, DESIGN §3.3 item 1): relaxed once on a flat periodic
+    /// patch of the chart, reported beside the plain solve.
+    #[arg(long)]
+    pub relaxed_rest: bool,
     /// Levenberg–Marquardt steps allowed for the contact relaxation (`--contact`).
     #[arg(long, default_value_t = 250)]
     pub contact_iterations: usize,
@@ -124,6 +134,18 @@ struct Row {
     /// With `--contact`: the contact reference's clearance, the GN solve's RMS and maximum
     /// deviation from it over every CP (r), LM steps and seconds.
     contact: Option<ContactRow>,
+    /// With `--relaxed-rest`: the solve + rest detail.
+    detail: Option<DetailRow>,
+}
+
+/// The solve with the rest detail of one case.
+struct DetailRow {
+    clearance: f64,
+    /// Median milliseconds to add the detail to a solved frame.
+    apply_ms: f64,
+    /// With `--contact`: RMS and maximum deviation from the contact reference over every
+    /// CP (r).
+    contact_dev: Option<(f64, f64)>,
 }
 
 /// The contact reference of one case.
@@ -208,6 +230,24 @@ pub fn run(a: DeformArgs) -> Result<()> {
     for &g in &a.shear {
         cases.push((format!("shear-{g}"), "shear", g, [[1.0, g], [0.0, 1.0]]));
     }
+    let detail = if a.relaxed_rest {
+        let c = ContactParams::default();
+        let d = RestDetail::relax(&model, &rest, &p, &c)?;
+        outln!(
+            "  rest detail: {} × {} patch relaxed in {} LM steps ({:.1} s), clearance {:.3} → \
+             {:.3} × 2r, largest offset {:.3} r",
+            d.patch.0,
+            d.patch.1,
+            d.stats.iterations,
+            d.stats.seconds,
+            d.stats.clearance_before,
+            d.stats.clearance_after,
+            d.max_offset_over_r()
+        );
+        Some(d)
+    } else {
+        None
+    };
     let knots = model.knot_cps();
     let bar = crate::progress::bar(cases.len() as u64, "cases");
     let mut rows = Vec::new();
@@ -231,9 +271,33 @@ pub fn run(a: DeformArgs) -> Result<()> {
             Ok(min_clearance(&model.yarn_set(f, 1)?, mesh.lattice, r, 12).ratio)
         };
         let clearance = [clear(&naive)?, clear(&solved)?, clear(&reference)?];
+        let detailed = match &detail {
+            Some(d) => {
+                let mut times = Vec::with_capacity(a.repeat);
+                let mut f = d.apply(&model, &mesh, &solved)?;
+                for _ in 0..a.repeat {
+                    let t = Instant::now();
+                    f = d.apply(&model, &mesh, &solved)?;
+                    times.push(t.elapsed().as_secs_f64() * 1e3);
+                }
+                times.sort_by(f64::total_cmp);
+                yarn::io::bcc::write_bcc(
+                    &yarn_dir.join(format!("{name}-detail.bcc")),
+                    &model.yarn_set(&f, a.upsample)?,
+                    &format!("btf knit deform {name}, chart {}, solve + rest detail", chart.name),
+                )?;
+                Some((f, times[times.len() / 2]))
+            }
+            None => None,
+        };
+        let mut detail_contact = None;
         let contact = if a.contact {
             let c = ContactParams { max_iterations: a.contact_iterations, ..Default::default() };
             let (relaxed, st) = model.relax_contact(&reference, &p, &c)?;
+            if let Some((f, _)) = &detailed {
+                let all: Vec<usize> = (0..model.cp_count()).collect();
+                detail_contact = Some(deviations(f, &relaxed, &all, r));
+            }
             let all: Vec<usize> = (0..model.cp_count()).collect();
             let (rms_gn, max_gn) = deviations(&solved, &relaxed, &all, r);
             yarn::io::bcc::write_bcc(
@@ -262,6 +326,12 @@ pub fn run(a: DeformArgs) -> Result<()> {
             &model.yarn_set(&reference, a.upsample)?,
             &format!("{info}, converged reference"),
         )?;
+        let detail = match &detailed {
+            Some((f, ms)) => {
+                Some(DetailRow { clearance: clear(f)?, apply_ms: *ms, contact_dev: detail_contact })
+            }
+            None => None,
+        };
         rows.push(Row {
             name,
             kind,
@@ -278,6 +348,7 @@ pub fn run(a: DeformArgs) -> Result<()> {
             sweeps,
             frames: [naive, solved, reference],
             contact,
+            detail,
         });
         bar.inc(1);
     }
@@ -299,7 +370,8 @@ fn write_outputs(
         "case,kind,strain,energy_initial,energy_solved,energy_reference,rms_naive_r,rms_knots_r,\
          rms_gn_r,max_naive_r,max_knots_r,max_gn_r,rms_length_strain,clearance_naive,\
          clearance_gn,clearance_reference,solve_ms,guard_triggers,reference_sweeps,\
-         clearance_contact,rms_gn_contact_r,max_gn_contact_r,contact_steps,contact_s\n",
+         clearance_contact,rms_gn_contact_r,max_gn_contact_r,contact_steps,contact_s,\
+         clearance_gn_detail,detail_ms,rms_gn_detail_contact_r,max_gn_detail_contact_r\n",
     );
     for x in rows {
         csv.push_str(&format!(
@@ -332,6 +404,13 @@ fn write_outputs(
             )
         });
         csv.insert_str(csv.len() - 1, &format!(",{contact}"));
+        // The rest-detail columns: empty without --relaxed-rest (and the deviation without
+        // --contact).
+        let detail = x.detail.as_ref().map_or(",,,".to_string(), |d| {
+            let dev = d.contact_dev.map_or(",".to_string(), |(a, b)| format!("{a:.5},{b:.5}"));
+            format!("{:.4},{:.4},{dev}", d.clearance, d.apply_ms)
+        });
+        csv.insert_str(csv.len() - 1, &format!(",{detail}"));
     }
     write_text(&a.output.join("deform.csv"), &csv)?;
     let mut md = format!(
@@ -390,6 +469,27 @@ fn write_outputs(
             }
         }
     }
+    if rows.iter().any(|x| x.detail.is_some()) {
+        md.push_str(
+            "\n**The relaxed rest** (DESIGN §3.3 item 1, `yarn::knit::knot::detail`): the \
+             chart's template relaxed once with the contact penalty on a flat periodic patch and \
+             carried on top of every solve in each CP's frame — its clearance against the plain \
+             solve's, what adding it costs per frame and, with `--contact`, how far the solve + \
+             detail is from the contact reference.\n\n\
+             | case | clearance GN → GN + detail | detail ms | RMS / max dev. GN + detail from contact ref. (r) |\n\
+             |---|---|---:|---|\n",
+        );
+        for x in rows {
+            if let Some(d) = &x.detail {
+                let dev =
+                    d.contact_dev.map_or("—".to_string(), |(a, b)| format!("{a:.3} / {b:.3}"));
+                md.push_str(&format!(
+                    "| {} | {:.3} → {:.3} | {:.3} | {dev} |\n",
+                    x.name, x.clearance[1], d.clearance, d.apply_ms
+                ));
+            }
+        }
+    }
     md.push_str(
         "\n![clearance against strain](clearance.png)\n\n![deviation against strain](deviation.png)\n\n\
          ![centre lines from above: reference (orange), solved (blue), naive (grey)](yarns.png)\n",
@@ -416,6 +516,12 @@ fn write_outputs(
     let mut clear = series(&|x| x.clearance[1], "solved");
     clear.extend(series(&|x| x.clearance[2], "reference"));
     clear.extend(series(&|x| x.clearance[0], "naive"));
+    if rows.iter().all(|x| x.detail.is_some()) {
+        clear.extend(series(
+            &|x| x.detail.as_ref().map_or(f64::NAN, |d| d.clearance),
+            "solved + rest detail",
+        ));
+    }
     if rows.iter().all(|x| x.contact.is_some()) {
         clear.extend(series(
             &|x| x.contact.as_ref().map_or(f64::NAN, |k| k.clearance),

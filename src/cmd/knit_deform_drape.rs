@@ -11,7 +11,9 @@
 //! knit), the clearance between yarns / 2r, and the deviation from the converged reference
 //! (block Gauss–Seidel). Writes `drape/frame-K.bcc`, `drape.csv`, `drape.md`,
 //! `drape-strain.png` and with `--render W,H` the GPU fibers of every frame
-//! (`drape/frame-K.png`) and a contact sheet `drape.png`.
+//! (`drape/frame-K.png`) and a contact sheet `drape.png`. With `--relaxed-rest` the
+//! solved and the converged frames carry the contact-relaxed template
+//! ([`yarn::knit::knot::detail`]) and the solve time includes adding it.
 
 use super::knit_deform::DeformArgs;
 use crate::guard::outln;
@@ -20,7 +22,7 @@ use btf_image::plot::{Plot, Series};
 use btf_image::write::{write_png, write_text};
 use datasets::mesh::cloth::{DrapeParams, drape_frames};
 use std::time::Instant;
-use yarn::knit::knot::min_clearance;
+use yarn::knit::knot::{KnotFrame, min_clearance};
 use yarn::knit::{Chart, KnotModel, KnotParams, SkeletonParams, StitchMesh, UvLayout};
 use yarn::params::YarnParams;
 
@@ -101,6 +103,23 @@ pub fn run(a: &DeformArgs, chart: &Chart, params: &YarnParams, p: &KnotParams) -
     // The flat start is the rest: its gauge (whole courses over the cloth change the course
     // spacing by less than chart.height / courses) is the templates'.
     let model = KnotModel::new(&meshes[0], &sk, (ws, layout.course_dv * s))?;
+    // With --relaxed-rest the solved and the converged frames both carry the rest detail.
+    let detail = if a.relaxed_rest {
+        Some(yarn::knit::knot::RestDetail::relax(
+            &model,
+            &meshes[0],
+            p,
+            &yarn::knit::knot::ContactParams::default(),
+        )?)
+    } else {
+        None
+    };
+    let with_detail = |mesh: &StitchMesh, f: KnotFrame| -> Result<KnotFrame> {
+        Ok(match &detail {
+            Some(d) => d.apply(&model, mesh, &f)?,
+            None => f,
+        })
+    };
     let dir = a.output.join("drape");
     std::fs::create_dir_all(&dir)?;
     outln!(
@@ -130,7 +149,7 @@ pub fn run(a: &DeformArgs, chart: &Chart, params: &YarnParams, p: &KnotParams) -
     let dt = dp.duration_s / a.drape as f64;
     for (k, mesh) in meshes.iter().enumerate() {
         let t = Instant::now();
-        let frame = model.solve(mesh, p)?;
+        let frame = with_detail(mesh, model.solve(mesh, p)?)?;
         let solve_ms = t.elapsed().as_secs_f64() * 1e3;
         let set = model.yarn_set(&frame, a.upsample)?;
         yarn::io::bcc::write_bcc(
@@ -138,7 +157,7 @@ pub fn run(a: &DeformArgs, chart: &Chart, params: &YarnParams, p: &KnotParams) -
             &set,
             &format!("btf knit deform --drape, frame {k}"),
         )?;
-        let (reference, _) = model.reference(mesh, p, a.max_sweeps)?;
+        let reference = with_detail(mesh, model.reference(mesh, p, a.max_sweeps)?.0)?;
         let knots = model.knot_cps();
         let rms_vs_ref = (knots
             .iter()

@@ -162,18 +162,41 @@ fn knit_deform_scores_knots_against_the_reference_and_writes_the_yarns() {
     let f = yarn::io::read_bcc(&d.path("def/yarns/shear-0.3.bcc")).unwrap();
     assert_eq!(f.set.curves.len(), 4);
     assert!(d.path("def/yarns/shear-0.3-reference.bcc").is_file());
-    // Without --contact the contact columns are empty (never NaN).
-    assert!(rows.iter().all(|r| r.len() == 24 && r[19..].iter().all(|c| c.is_empty())), "{csv}");
+    // Without --contact and --relaxed-rest their columns are empty (never NaN).
+    assert!(rows.iter().all(|r| r.len() == 28 && r[19..].iter().all(|c| c.is_empty())), "{csv}");
     // --contact: each converged reference relaxed with the yarn–yarn contact penalty
     // (DESIGN §3.3 item 1) reaches the clearance the knots lack (0.88 × 2r at rest).
-    deform("4,2", "0", &["--contact", "--contact-iterations", "120", "-o", "con"]);
+    // --relaxed-rest: the template relaxed once on a 4 × 4 patch and carried on every
+    // solve (yarn::knit::knot::detail) lifts the solve's clearance too.
+    let out = deform(
+        "4,2",
+        "0",
+        &["--contact", "--contact-iterations", "120", "--relaxed-rest", "-o", "con"],
+    );
+    assert!(out.contains("rest detail: 4 × 4 patch"), "{out}");
     let csv = std::fs::read_to_string(d.path("con/deform.csv")).unwrap();
     for r in csv.lines().skip(1).map(|l| l.split(',').collect::<Vec<_>>()) {
         let (reference, contact) = (num(&r, 15), num(&r, 19));
-        eprintln!("{}: clearance reference {reference:.3}, contact reference {contact:.3}", r[0]);
+        let (gn, gn_detail) = (num(&r, 14), num(&r, 24));
+        eprintln!(
+            "{}: clearance reference {reference:.3}, contact reference {contact:.3}, GN {gn:.3}, \
+             GN + rest detail {gn_detail:.3}; RMS from the contact reference GN {:.3} r, GN + \
+             detail {:.3} r",
+            r[0],
+            num(&r, 20),
+            num(&r, 26)
+        );
         assert!(contact >= 0.95 && contact > reference, "{r:?}");
         assert!(num(&r, 21) > 0.0, "the knot solve is off the contact reference: {r:?}");
+        // Measured: 0.997, 0.962, 0.896 (rest, 20 % course stretch, 30 % shear).
+        assert!(gn_detail > gn && gn_detail >= 0.88, "{r:?}");
+        assert!(num(&r, 25) >= 0.0 && num(&r, 27) >= num(&r, 26), "{r:?}");
+        if r[0] == "rest" {
+            assert!(num(&r, 26) < num(&r, 20), "the relaxed rest is nearer: {r:?}");
+        }
     }
+    assert!(d.path("con/yarns/rest-detail.bcc").is_file());
+    assert!(std::fs::read_to_string(d.path("con/report.md")).unwrap().contains("relaxed rest"));
     assert!(
         std::fs::read_to_string(d.path("con/report.md")).unwrap().contains("contact reference")
     );

@@ -285,6 +285,25 @@ impl StitchMesh {
         let n = vec3::normalize_or(bl(n00, n10, n01, n11), n00);
         (p, n)
     }
+
+    /// The derivatives `(∂x/∂w, ∂x/∂c)` of the bilinear map [`Self::eval`] at stitch
+    /// coordinates `(w, c)` (the cell that `eval` uses there).
+    pub fn derivatives(&self, w: f64, c: f64) -> (V3, V3) {
+        let (i, j) = (w.floor() as i64, c.floor() as i64);
+        let (i, j) = if self.lattice.is_some() {
+            (i, j)
+        } else {
+            (i.clamp(0, self.wales as i64 - 1), j.clamp(0, self.courses as i64 - 1))
+        };
+        let (s, t) = (w - i as f64, c - j as f64);
+        let p00 = self.corner(j, i).0;
+        let p10 = self.corner(j, i + 1).0;
+        let p01 = self.corner(j + 1, i).0;
+        let p11 = self.corner(j + 1, i + 1).0;
+        let dw = vec3::lerp(vec3::sub(p10, p00), vec3::sub(p11, p01), t);
+        let dc = vec3::lerp(vec3::sub(p01, p00), vec3::sub(p11, p10), s);
+        (dw, dc)
+    }
 }
 
 #[cfg(test)]

@@ -65,14 +65,16 @@
 //! it (0.85 at 30 % shear, 0.86 at 10 % course compression), and on the drape — where the
 //! cloth compresses and creases within a stitch — the knots make it *worse* than naive
 //! interpolation (the length terms push compressed loops sideways through their
-//! neighbours): the model's missing contact (DESIGN §3.3 item 9). The templates are the
-//! projected skeleton, not relaxed with a contact penalty (DESIGN §3.3 item 1: not built) —
-//! and a relaxation over the knots' `(θ, l)` could not lift the rest clearance: between a
-//! contact (`±h` apart along `n`) and the side points (`2r` apart in the plane, depth 0)
-//! the two chords are `2 √(r² t² + h² (1 − t)²)` apart at `t` along them, least at
-//! `t = h² / (r² + h²)`: `√2 r` (0.71 × 2r) at `h = r`, set by eq. 1–2 alone; the spline
-//! rounds that to 0.88. Only a larger lift or side points off
-//! the face plane would, which is no longer [H25]'s knot.
+//! neighbours): the model's missing contact (DESIGN §3.3 item 9). The knots' templates are
+//! the projected skeleton — and a relaxation over the knots' `(θ, l)` could not lift the
+//! rest clearance: between a contact (`±h` apart along `n`) and the side points (`2r`
+//! apart in the plane, depth 0) the two chords are `2 √(r² t² + h² (1 − t)²)` apart at `t`
+//! along them, least at `t = h² / (r² + h²)`: `√2 r` (0.71 × 2r) at `h = r`, set by eq. 1–2
+//! alone; the spline rounds that to 0.88. Only a larger lift or side points off the face
+//! plane would, which is no longer [H25]'s knot. The contact-relaxed template of DESIGN
+//! §3.3 item 1 ([`relax`]) is therefore carried as a detail layer on top of the solve
+//! ([`detail`]): the rest mesh gives the relaxed template (0.996 × 2r) and the solve itself
+//! is unchanged.
 //!
 //! **References** ([`KnotModel::reference`], DESIGN §3.5): the same energy minimised over
 //! *all* faces jointly by block Gauss–Seidel (each face solved with its neighbours' current
@@ -81,6 +83,9 @@
 //! has no yarn–yarn contact at run time (item 9); [`clearance`] measures what that costs.
 
 pub mod clearance;
+pub mod detail;
+#[cfg(test)]
+mod detail_tests;
 pub mod relax;
 #[cfg(test)]
 mod relax_tests;
@@ -95,6 +100,7 @@ use crate::{Error, Result};
 use rayon::prelude::*;
 
 pub use clearance::{Clearance, min_clearance};
+pub use detail::RestDetail;
 pub use relax::{ContactParams, RelaxStats};
 
 /// Solver settings ([H25 §5.2, §6.1]; DESIGN §3.4).
@@ -255,6 +261,8 @@ pub struct KnotModel {
     skeleton: SkeletonParams,
     spacing: (f64, f64),
     sources: Vec<Source>,
+    /// Per CP: `(course, loop, key index)` of the skeleton key it comes from.
+    cells: Vec<[u32; 3]>,
     course_start: Vec<usize>,
     faces: Vec<FaceTemplate>,
     stencils: Vec<Stencil>,
@@ -358,6 +366,7 @@ impl KnotModel {
         }
         // CP sources, course by course.
         let mut sources = Vec::new();
+        let mut cells = Vec::new();
         let mut course_start = vec![0];
         for c in 0..courses {
             let loops = if periodic { wales } else { wales + 1 };
@@ -398,6 +407,7 @@ impl KnotModel {
                         _ => Source::Interp(*key),
                     };
                     sources.push(src);
+                    cells.push([c as u32, w as u32, i as u32]);
                 }
             }
             course_start.push(sources.len());
@@ -410,6 +420,7 @@ impl KnotModel {
             skeleton: skeleton.clone(),
             spacing,
             sources,
+            cells,
             course_start,
             faces,
             stencils: Vec::new(),
@@ -480,6 +491,28 @@ impl KnotModel {
     /// `(course, wale)` of knot face `f`.
     pub fn face_cell(&self, f: usize) -> (usize, usize) {
         (self.faces[f].course, self.faces[f].wale)
+    }
+
+    /// `(course, loop, key index)` of CP `i`: the skeleton key ([`super::skeleton::loop_keys`]
+    /// of loop cell `(course, loop)`) it comes from; `loop` = the wales on the closing CP of
+    /// an open course.
+    pub fn cp_cell(&self, i: usize) -> [u32; 3] {
+        self.cells[i]
+    }
+
+    /// The rest gauge `(wale, course)` in metres.
+    pub fn spacing(&self) -> (f64, f64) {
+        self.spacing
+    }
+
+    /// The skeleton parameters the model was built with.
+    pub fn skeleton(&self) -> &SkeletonParams {
+        &self.skeleton
+    }
+
+    /// Whether the model's mesh is a periodic patch.
+    pub fn is_periodic(&self) -> bool {
+        self.periodic
     }
 
     /// Indices of the CPs that belong to knots (the ones the solver moves).
