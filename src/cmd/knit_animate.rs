@@ -8,10 +8,10 @@
 //!
 //! Per frame (`animate.csv`, `animate.md`): simulation steps, halvings and milliseconds,
 //! the knot solve in milliseconds (with `--relaxed-rest`: plus the contact-relaxed template
-//! carried on top, [`yarn::knit::knot::detail`]), the render in seconds. **Resumable**: the simulation is
-//! cached in `DIR/cache/sim-<key>.bin` (written atomically once it has run), and frames
-//! whose files exist are not redone, so an interrupted run picks up where it stopped when
-//! run again with the same arguments; `--fresh` starts over.
+//! carried on top, [`yarn::knit::knot::detail`]), the render in seconds. **Resumable**:
+//! the simulation is cached in `DIR/cache/sim-<key>.bin` (written atomically once it has
+//! run), and frames whose files exist are not redone, so an interrupted run picks up where
+//! it stopped when run again with the same arguments; `--fresh` starts over.
 
 use super::knit::{chart_inputs_of, load_chart, load_yarn};
 use crate::guard::{self, outln};

@@ -108,6 +108,28 @@ fn knit_animate_writes_frames_and_resumes() {
     assert!(err.contains("from the cache"), "{err}");
     let csv = std::fs::read_to_string(d.path("an/animate.csv")).unwrap();
     assert!(rows(&csv).iter().all(|r| r["solve_ms"].is_empty()), "nothing redone: {csv}");
+    // --relaxed-rest: the chart's contact-relaxed template rides on every solve; the flat
+    // start's yarns move apart (the template's 0.88 × 2r, the relaxed rest's ~1.0).
+    let out = d.ok(&[
+        "knit",
+        "animate",
+        "--loops",
+        "4,4",
+        "--seconds",
+        "0.04",
+        "--relaxed-rest",
+        "-o",
+        "an3",
+    ]);
+    assert!(out.contains("rest detail relaxed"), "{out}");
+    let clearance = |dir: &str| {
+        let set = yarn::io::read_bcc(&d.path(&format!("{dir}/frames/frame-0000.bcc"))).unwrap().set;
+        let r = yarn::params::YarnParams::preset("cotton-2ply").unwrap().yarn_radius();
+        yarn::knit::knot::min_clearance(&set, None, r, 8).ratio
+    };
+    let (plain, relaxed) = (clearance("an"), clearance("an3"));
+    eprintln!("flat start: clearance {plain:.3} → {relaxed:.3} × 2r with --relaxed-rest");
+    assert!(plain < 0.9 && relaxed > 0.95, "{plain} → {relaxed}");
     let e = d.fails(&["knit", "animate", "--loops", "5,4", "-o", "an2"]);
     assert!(e.contains("--loops 5,4"), "{e}");
     let e = d.fails(&["knit", "animate", "--seconds", "0", "-o", "an2"]);
