@@ -33,6 +33,7 @@ pub mod btf;
 pub mod effects;
 pub mod error;
 pub mod gpu_data;
+pub mod knot;
 pub mod lumislice;
 pub mod pack;
 pub mod passes;
@@ -66,6 +67,7 @@ pub fn wgsl_programs() -> Vec<(&'static str, String)> {
         ("strip_regular", strips::source()),
         ("lumislice_march", lumislice::source()),
         ("lumislice_centerline", lumislice::centerline_source()),
+        ("knot_solve", knot::source()),
     ]
 }
 

@@ -70,7 +70,7 @@ fn gpu_fibers_equal_the_cpu_generator_to_1e_5_of_the_yarn_radius() {
 #[test]
 fn every_wgsl_file_is_valid() {
     let programs = yarn_render::wgsl_programs();
-    assert_eq!(programs.len(), 7);
+    assert_eq!(programs.len(), 8);
     for (name, src) in programs {
         btf_render::gpu::validate_wgsl(name, &src).unwrap();
     }

@@ -6,6 +6,7 @@ mod coherence;
 mod common;
 mod effects;
 mod expand;
+mod knot;
 mod lod;
 mod lumislice;
 mod oblique;

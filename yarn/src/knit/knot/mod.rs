@@ -857,6 +857,81 @@ impl KnotModel {
         self.solve_with(mesh, p, false)
     }
 
+    /// What a data-parallel solver needs of a frame before iterating (the initial guess of
+    /// [`Self::solve_with`]): face frames, initial `Θ`, every CP and its normal.
+    pub fn prepare(&self, mesh: &StitchMesh, p: &KnotParams) -> Result<Prepared> {
+        p.validate()?;
+        let (frames, theta) = self.frames(mesh, p.beta)?;
+        let (points, normals) = self.points(mesh, &frames, &theta);
+        Ok(Prepared { frames, theta, points, normals, lattice: mesh.lattice })
+    }
+
+    /// The frame of solved parameters `theta` (one per knot face) from a [`Prepared`]
+    /// initial guess: the knot points re-evaluated, the other CPs kept.
+    pub fn frame_from_theta(
+        &self,
+        prep: Prepared,
+        theta: Vec<Theta>,
+        stats: SolveStats,
+    ) -> Result<KnotFrame> {
+        if theta.len() != self.faces.len() || prep.frames.len() != self.faces.len() {
+            return Err(Error::Invalid(format!(
+                "knot deformation: {} parameter sets and {} frames for {} knot faces",
+                theta.len(),
+                prep.frames.len(),
+                self.faces.len()
+            )));
+        }
+        if let Some(f) = theta.iter().position(|t| t.iter().any(|x| !x.is_finite())) {
+            return Err(Error::Invalid(format!(
+                "knot deformation: knot face {f} (course {}, wale {}) has non-finite \
+                 parameters {:?}",
+                self.faces[f].course, self.faces[f].wale, theta[f]
+            )));
+        }
+        let Prepared { frames, points: mut pts, normals, lattice, .. } = prep;
+        let l1 = lattice.map_or([0.0; 3], |l| l[1]);
+        self.set_knot_points(&mut pts, &frames, &theta, l1);
+        Ok(KnotFrame { points: pts, normals, theta, stats, lattice })
+    }
+
+    /// The stencils flattened for a data-parallel solver (see [`FlatStencils`]).
+    pub fn flat_stencils(&self) -> FlatStencils {
+        let mut out = FlatStencils::default();
+        for (f, st) in self.stencils.iter().enumerate() {
+            let tpl = &self.faces[f];
+            out.faces.push(FlatFace {
+                sigma: tpl.sigma,
+                b_own: tpl.b_own,
+                locals: (out.locals.len() as u32, st.locals.len() as u32),
+                residuals: (out.residuals.len() as u32, st.residuals.len() as u32),
+            });
+            for l in &st.locals {
+                out.locals.push(FlatLocal {
+                    global: l.global as u32,
+                    wrap: l.wrap,
+                    owned: l.owned.map(|(knot, role, own, course_wrap)| FlatKnotPoint {
+                        knot,
+                        role: match role {
+                            Role::C0 => 0,
+                            Role::C1 => 1,
+                            Role::P => 2,
+                        },
+                        own,
+                        course_wrap,
+                    }),
+                });
+            }
+            for r in &st.residuals {
+                out.residuals.push(match *r {
+                    Residual::Length { a, b, rest } => FlatResidual { a, b, c: None, rest },
+                    Residual::Angle { a, b, c, rest } => FlatResidual { a, b, c: Some(c), rest },
+                });
+            }
+        }
+        out
+    }
+
     /// The converged reference (DESIGN §3.5 (b)): block Gauss–Seidel over the faces, each
     /// solved to convergence with its neighbours' current points, until no parameter moves
     /// by more than `1e-12` in a sweep (at most `max_sweeps`). Returns the frame and the
@@ -1044,6 +1119,87 @@ impl KnotModel {
         });
         YarnSet::new(curves.into_iter().collect::<Result<_>>()?, period)
     }
+}
+
+/// The initial guess of one frame ([`KnotModel::prepare`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Prepared {
+    /// Per knot face: its frame on the deformed mesh.
+    pub frames: Vec<FaceFrame>,
+    /// Per knot face: the initial parameters.
+    pub theta: Vec<Theta>,
+    /// Every CP at the initial parameters (the fixed neighbours of each face solve).
+    pub points: Vec<V3>,
+    /// The surface normal at every CP.
+    pub normals: Vec<V3>,
+    /// The mesh's lattice (periodic patches).
+    pub lattice: Option<[V3; 2]>,
+}
+
+/// A knot point of a face's stencil: knot 0/1, role (0 = `c0`, 1 = `c1`, 2 = the side
+/// point `p`), the face's own yarn or the loop below, lattice periods along the courses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FlatKnotPoint {
+    /// Knot 0 or 1 of the face.
+    pub knot: u8,
+    /// 0 = `c0`, 1 = `c1`, 2 = the side point `p`.
+    pub role: u8,
+    /// The face's own yarn (else the loop below).
+    pub own: bool,
+    /// Lattice periods along the courses.
+    pub course_wrap: i8,
+}
+
+/// A point of a face's stencil: CP `global` shifted by `wrap` lattice periods along the
+/// wales; `owned` when it is one of the face's own knot points (else it is held fixed).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FlatLocal {
+    /// The CP's index.
+    pub global: u32,
+    /// Lattice periods along the wales.
+    pub wrap: i32,
+    /// The face's own knot point it is, if it is one.
+    pub owned: Option<FlatKnotPoint>,
+}
+
+/// A residual of a face's stencil over its locals: the relative length of `a → b`
+/// (`c = None`) or the cosine of the turn at `b` of `a → b → c`, against `rest`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FlatResidual {
+    /// First local.
+    pub a: u16,
+    /// Second local (the corner of a turn).
+    pub b: u16,
+    /// Third local of a turn; `None` for a length.
+    pub c: Option<u16>,
+    /// Rest length (metres) or rest cosine.
+    pub rest: f64,
+}
+
+/// A knot face: its template's side signs and its ranges of locals and residuals
+/// (`(start, count)`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FlatFace {
+    /// +1 knit, −1 purl.
+    pub sigma: f64,
+    /// Sign of `b` at the own yarn's side point, per knot.
+    pub b_own: [f64; 2],
+    /// `(start, count)` in [`FlatStencils::locals`].
+    pub locals: (u32, u32),
+    /// `(start, count)` in [`FlatStencils::residuals`].
+    pub residuals: (u32, u32),
+}
+
+/// Every knot face's stencil in flat arrays, for a data-parallel solver (the WGSL port in
+/// `yarn-render`): the same points and residuals the CPU face solve evaluates.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct FlatStencils {
+    /// Per knot face.
+    pub faces: Vec<FlatFace>,
+    /// Every face's stencil points.
+    pub locals: Vec<FlatLocal>,
+    /// Every face's residuals.
+    pub residuals: Vec<FlatResidual>,
 }
 
 /// The flat canonical rest mesh of `mesh`'s topology at gauge `spacing`.
