@@ -3,7 +3,8 @@
 //! ξ and Ψ on/off, PCSS, MSAA, the plain strips; DESIGN §3.5) (issue
 //! #19, DESIGN §2.5 "What accuracy costs in time", with the per-cell metrics of §4.2's
 //! headline study). One chart patch (hair flyaways off: DESIGN §2.5's R-approx, the fiber set
-//! the real-time model draws) is path traced by `yarn-ref` once per camera and shading
+//! the fiber renderer draws; with `--hairs` on, and the strips get [H25 §4.4]'s flyaway
+//! overlay, whose cost and error the `no-flyaways` strip variant shows) is path traced by `yarn-ref` once per camera and shading
 //! model; then `yarn-render` draws it over the grid ω^LoD ([W19 eq. 4]) × shading ([W19
 //! eq. 5] simple, [W19 eq. 6] Khungurn) × n_max, plus the plain-tube baseline, all cells
 //! interleaved frame by frame in one run. Per cell: relative RMSE `√(Σ(g−r)²/Σr²)` over the
@@ -102,10 +103,15 @@ pub struct SweepArgs {
     /// Yarn-strip cells [H25] to add, one per variant: full (8 × 8 bake directions,
     /// 64 × 32 texels, 4 tangents, ξ, Ψ, PCSS 0.5°), plain (no textures: the plain shaded
     /// strips), no-xi, no-psi, k1 (one tangent per texel, as [H25]), dirs4 (4 × 4
-    /// directions), tex32 (32 × 16 texels), tex128 (128 × 64), hard (PCSS off), msaa1.
-    /// Bakes are cached in DIR/bake-cache.
+    /// directions), tex32 (32 × 16 texels), tex128 (128 × 64), hard (PCSS off), msaa1,
+    /// no-flyaways (the full strips without the flyaway overlay; needs `--hairs`). Bakes are
+    /// cached in DIR/bake-cache.
     #[arg(long, value_delimiter = ',')]
     pub strips: Vec<String>,
+    /// Hair flyaways in the reference patch (the yarn as it is; default off: the fiber set
+    /// the GPU fibers draw, which have no hairs) and the flyaway overlay on the strips.
+    #[arg(long)]
+    pub hairs: bool,
     /// Camera rays per texel of the strip bakes.
     #[arg(long, default_value_t = 16)]
     pub bake_spp: u32,
@@ -115,8 +121,19 @@ pub struct SweepArgs {
 }
 
 /// The strip variants `--strips` knows.
-pub const STRIP_VARIANTS: [&str; 10] =
-    ["full", "plain", "no-xi", "no-psi", "k1", "dirs4", "tex32", "tex128", "hard", "msaa1"];
+pub const STRIP_VARIANTS: [&str; 11] = [
+    "full",
+    "plain",
+    "no-xi",
+    "no-psi",
+    "k1",
+    "dirs4",
+    "tex32",
+    "tex128",
+    "hard",
+    "msaa1",
+    "no-flyaways",
+];
 
 /// The renderer and bake settings of strip variant `name` (see `--strips`).
 fn strip_variant(
@@ -138,6 +155,7 @@ fn strip_variant(
         "tex128" => (b.width, b.height) = (128, 64),
         "hard" => s.light_angle_deg = 0.0,
         "msaa1" => s.msaa = 1,
+        "no-flyaways" => s.flyaways = false,
         other => bail!("--strips {other}: one of {}", STRIP_VARIANTS.join(", ")),
     }
     Ok((s, b))
@@ -240,6 +258,9 @@ fn validate(a: &SweepArgs) -> Result<()> {
     }
     for v in &a.strips {
         strip_variant(v, a.msaa, a.bake_spp, a.seed)?;
+        if v == "no-flyaways" && !a.hairs {
+            bail!("--strips no-flyaways: the strips have no flyaway overlay without --hairs");
+        }
     }
     Ok(())
 }
@@ -460,7 +481,7 @@ pub fn run(a: SweepArgs) -> Result<()> {
     let (stitches, patch_tiles) = grow_period(base, &params, view, &dists, (w, h), &a.view)?;
     let popts = PatchOptions {
         stitches: Some(stitches),
-        generation: GenOptions { seed: a.seed, hairs: false, ..GenOptions::default() },
+        generation: GenOptions { seed: a.seed, hairs: a.hairs, ..GenOptions::default() },
         ..PatchOptions::default()
     };
     let t0 = Instant::now();
@@ -470,10 +491,11 @@ pub fn run(a: SweepArgs) -> Result<()> {
         &yarn_ref::SceneOptions { period: Some(patch.period), backing_z: Some(patch.backing_z()) },
     )?;
     eprintln!(
-        "knit sweep: {} × {} stitches, {} fibers (no hairs), scene built in {:.1} s",
+        "knit sweep: {} × {} stitches, {} fibers ({}), scene built in {:.1} s",
         stitches[0],
         stitches[1],
         patch.fibers.fiber_count(),
+        if a.hairs { "with hairs" } else { "no hairs" },
         t0.elapsed().as_secs_f64()
     );
     let ws = SkeletonParams::new(params.yarn_radius()).default_spacing().0;
@@ -620,6 +642,12 @@ fn gpu_grid(
     let bar = crate::progress::bar((total * (1 + a.repeat as usize)) as u64, "GPU cells");
     let mut cells = Vec::new();
     let mut renderers = Vec::new();
+    // The strips' flyaway textures ([H25 §4.4]) when the reference has hairs.
+    let flyaways = if a.hairs && !a.strips.is_empty() {
+        Some(yarn_render::strips::flyaways_for(std::slice::from_ref(params), a.seed)?)
+    } else {
+        None
+    };
     for (ci, cam) in cams.iter().enumerate() {
         let packed = PackedYarns::new(
             &patch.yarns,
@@ -710,6 +738,9 @@ fn gpu_grid(
                     bakes.iter().map(|k| k.mean_residual()).sum::<f64>() / bakes.len() as f64
                 );
                 let mut r = yarn_render::StripRenderer::new(gpu, &packed, &bakes, b, ss)?;
+                if let Some(f) = &flyaways {
+                    r.set_flyaways(gpu, f)?;
+                }
                 if let Some(fit) = &env.srbf {
                     let table = yarn_precompute::ImTable::build(b, fit.lambda)?;
                     r.set_environment(gpu, Some((fit, &table)))?;

@@ -140,9 +140,14 @@ pub(crate) fn markdown(
         cams.iter().map(|c| format!("{} ({}×{} periods)", c.name, c.tiles, c.tiles)).collect();
     let _ = writeln!(
         s,
-        "Cameras (viewing direction θ,φ = {}° for all): {}. Hair flyaways off in both (R-approx). Frame ms: median of {} interleaved frames; × tubes: against the plain tubes of the same camera and shading in this run.\n",
+        "Cameras (viewing direction θ,φ = {}° for all): {}. {} Frame ms: median of {} interleaved frames; × tubes: against the plain tubes of the same camera and shading in this run.\n",
         a.view,
         tiles.join(", "),
+        if a.hairs {
+            "Hair flyaways on in the reference (`--hairs`; the GPU fibers draw none, the strips their flyaway overlay)."
+        } else {
+            "Hair flyaways off in both (R-approx)."
+        },
         a.repeat
     );
     s.push_str("| camera | shading | n_max | method | ω^LoD px | instances | triangles | rel. RMSE interior | (px) | rel. RMSE silhouette | (px) | rel. RMSE covered | vs full detail | mean / ref | frame ms | × tubes | × fibers |\n");

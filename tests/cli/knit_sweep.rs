@@ -172,6 +172,32 @@ fn knit_sweep_strips_cells_are_scored_and_timed_against_the_fibers() {
     for x in ["gpu-btf-khungurn-strips-tex32.exr", "bake-cache"] {
         assert!(d.path("sw").join(x).exists(), "{x}");
     }
+    // --hairs: the reference with the yarn's hair flyaways, the strips with and without
+    // their flyaway overlay ([H25 §4.4]); no-flyaways needs --hairs.
+    let mut hairy: Vec<&str> = args.to_vec();
+    let i = hairy.iter().position(|x| *x == "tex32,plain,no-psi").unwrap();
+    hairy[i] = "tex32,no-flyaways";
+    hairy.pop();
+    hairy.extend(["sw-hairs", "--hairs"]);
+    let Some(out) = run_gpu(&d, &hairy) else { return };
+    assert!(out.contains("Hair flyaways on in the reference"), "{out}");
+    let csv = std::fs::read_to_string(d.path("sw-hairs/sweep.csv")).unwrap();
+    let h = rows(&csv);
+    let g = |m: &str, k: &str| -> f64 {
+        let row = h.iter().find(|x| x["method"] == m).unwrap_or_else(|| panic!("{m}: {csv}"));
+        row[k].parse().unwrap()
+    };
+    // The overlay adds the hairs' coverage: the strips with it are brighter.
+    eprintln!(
+        "--hairs: mean / reference strips {:.4}, without the overlay {:.4}; rel. RMSE {:.4} / {:.4}",
+        g("strips-tex32", "mean_ratio"),
+        g("strips-no-flyaways", "mean_ratio"),
+        g("strips-tex32", "rel_rmse_all"),
+        g("strips-no-flyaways", "rel_rmse_all")
+    );
+    assert!(g("strips-tex32", "mean_ratio") > g("strips-no-flyaways", "mean_ratio"), "{csv}");
+    let e = d.fails(&["knit", "sweep", "--strips", "no-flyaways", "-o", "nf"]);
+    assert!(e.contains("--hairs"), "{e}");
     // --method strips: the yarn BTF by the strips, an ordinary store.
     let Some(_) = run_gpu(
         &d,
