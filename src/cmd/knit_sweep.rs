@@ -104,8 +104,9 @@ pub struct SweepArgs {
     /// 64 × 32 texels, 4 tangents, ξ, Ψ, PCSS 0.5°), plain (no textures: the plain shaded
     /// strips), no-xi, no-psi, k1 (one tangent per texel, as [H25]), dirs4 (4 × 4
     /// directions), tex32 (32 × 16 texels), tex128 (128 × 64), hard (PCSS off), msaa1,
-    /// no-flyaways (the full strips without the flyaway overlay; needs `--hairs`). Bakes are
-    /// cached in DIR/bake-cache.
+    /// no-flyaways (the full strips without the flyaway overlay; needs `--hairs`), srbfN
+    /// (the full strips with N SRBFs instead of `--srbfs`, e.g. srbf4, srbf32; needs
+    /// `--env`). Bakes are cached in DIR/bake-cache.
     #[arg(long, value_delimiter = ',')]
     pub strips: Vec<String>,
     /// Hair flyaways in the reference patch (the yarn as it is; default off: the fiber set
@@ -135,6 +136,12 @@ pub const STRIP_VARIANTS: [&str; 11] = [
     "no-flyaways",
 ];
 
+/// The SRBF count of strip variant `srbfN` (N in 1..=MAX_SRBFS), else `None`.
+fn srbf_count(name: &str) -> Option<usize> {
+    let n: usize = name.strip_prefix("srbf")?.parse().ok()?;
+    (1..=yarn_render::strips::MAX_SRBFS).contains(&n).then_some(n)
+}
+
 /// The renderer and bake settings of strip variant `name` (see `--strips`).
 fn strip_variant(
     name: &str,
@@ -156,7 +163,12 @@ fn strip_variant(
         "hard" => s.light_angle_deg = 0.0,
         "msaa1" => s.msaa = 1,
         "no-flyaways" => s.flyaways = false,
-        other => bail!("--strips {other}: one of {}", STRIP_VARIANTS.join(", ")),
+        other if srbf_count(other).is_some() => {}
+        other => bail!(
+            "--strips {other}: one of {}, srbfN (N in 1..={})",
+            STRIP_VARIANTS.join(", "),
+            yarn_render::strips::MAX_SRBFS
+        ),
     }
     Ok((s, b))
 }
@@ -260,6 +272,9 @@ fn validate(a: &SweepArgs) -> Result<()> {
         strip_variant(v, a.msaa, a.bake_spp, a.seed)?;
         if v == "no-flyaways" && !a.hairs {
             bail!("--strips no-flyaways: the strips have no flyaway overlay without --hairs");
+        }
+        if srbf_count(v).is_some() && a.env.is_none() {
+            bail!("--strips {v}: SRBFs fit an environment; give --env");
         }
     }
     Ok(())
@@ -467,7 +482,23 @@ pub fn run(a: SweepArgs) -> Result<()> {
     let ambient = env
         .as_ref()
         .map_or([0.0; 3], |m| m.integral().map(|x| (x / (4.0 * std::f64::consts::PI)) as f32));
-    let light_env = LightEnv { ambient, srbf };
+    // The fits of the srbfN strip variants.
+    let mut per_count = Vec::new();
+    if let Some(map) = &env {
+        for v in &a.strips {
+            if let Some(n) = srbf_count(v)
+                && !per_count.iter().any(|(k, _)| *k == n)
+            {
+                let f = yarn_precompute::SrbfFit::fit(map, n)?;
+                eprintln!(
+                    "strips {v}: {n} SRBFs, λ {:.2}, fit error {:.3}, power ratio {:.3}",
+                    f.lambda, f.rel_error, f.power_ratio[1]
+                );
+                per_count.push((n, f));
+            }
+        }
+    }
+    let light_env = LightEnv { ambient, srbf, per_count };
     let bcsdfs: Vec<(String, yarn::bcsdf::FiberBcsdf)> = a
         .shading
         .iter()
@@ -613,6 +644,8 @@ struct LightEnv {
     ambient: [f32; 3],
     /// The strips' SRBF fit.
     srbf: Option<yarn_precompute::SrbfFit>,
+    /// The fits of the `srbfN` strip variants: `(N, fit)`.
+    per_count: Vec<(usize, yarn_precompute::SrbfFit)>,
 }
 
 /// Builds every cell's renderer, renders each once (stats, error), then times
@@ -741,7 +774,11 @@ fn gpu_grid(
                 if let Some(f) = &flyaways {
                     r.set_flyaways(gpu, f)?;
                 }
-                if let Some(fit) = &env.srbf {
+                let fit = match srbf_count(v) {
+                    Some(n) => env.per_count.iter().find(|(k, _)| *k == n).map(|(_, f)| f),
+                    None => env.srbf.as_ref(),
+                };
+                if let Some(fit) = fit {
                     let table = yarn_precompute::ImTable::build(b, fit.lambda)?;
                     r.set_environment(gpu, Some((fit, &table)))?;
                 }

@@ -198,6 +198,31 @@ fn knit_sweep_strips_cells_are_scored_and_timed_against_the_fibers() {
     assert!(g("strips-tex32", "mean_ratio") > g("strips-no-flyaways", "mean_ratio"), "{csv}");
     let e = d.fails(&["knit", "sweep", "--strips", "no-flyaways", "-o", "nf"]);
     assert!(e.contains("--hairs"), "{e}");
+    // srbfN under an environment: the strips with N SRBFs beside the default 16.
+    d.ok(&["synth", "env", "--kind", "sky", "--width", "32", "-o", "sky.exr"]);
+    let mut sky: Vec<&str> = args.to_vec();
+    let i = sky.iter().position(|x| *x == "tex32,plain,no-psi").unwrap();
+    sky[i] = "tex32,srbf4";
+    sky.pop();
+    sky.extend(["sw-sky", "--env", "sky.exr"]);
+    let Some(out) = run_gpu(&d, &sky) else { return };
+    assert!(out.contains("strips-srbf4") || out.contains("srbf4"), "{out}");
+    let csv = std::fs::read_to_string(d.path("sw-sky/sweep.csv")).unwrap();
+    let k = rows(&csv);
+    let m = |name: &str| -> f64 {
+        let row = k.iter().find(|x| x["method"] == name).unwrap_or_else(|| panic!("{name}: {csv}"));
+        row["mean_ratio"].parse().unwrap()
+    };
+    eprintln!(
+        "sky: mean / reference, 16 SRBFs (tex32) {:.4}, 4 SRBFs {:.4}",
+        m("strips-tex32"),
+        m("strips-srbf4")
+    );
+    assert!(m("strips-srbf4") > 0.0 && m("strips-srbf4") != m("strips-tex32"), "{csv}");
+    let e = d.fails(&["knit", "sweep", "--strips", "srbf4", "-o", "nf"]);
+    assert!(e.contains("--env"), "{e}");
+    let e = d.fails(&["knit", "sweep", "--strips", "srbf64", "-o", "nf"]);
+    assert!(e.contains("srbfN"), "{e}");
     // --method strips: the yarn BTF by the strips, an ordinary store.
     let Some(_) = run_gpu(
         &d,
