@@ -77,18 +77,32 @@ pub fn run(out: &Path, width: u32) -> Result<()> {
     let rest_mesh = StitchMesh::flat(&chart, 8, 8, ws, cs)?;
     let model = KnotModel::new(&rest_mesh, &sk, (ws, cs))?;
     let stretched = rest_mesh.stretch(0.0, stretch)?;
+    // The stitch template relaxed once with yarn–yarn contact (DESIGN §3.3 item 1), carried
+    // on top of every solve: the yarns touch instead of overlapping.
+    let kp = KnotParams::default();
+    let detail = yarn::knit::knot::RestDetail::relax(
+        &model,
+        &rest_mesh,
+        &kp,
+        &yarn::knit::knot::ContactParams::default(),
+    )?;
     let t = Instant::now();
-    let frame = model.solve(&stretched, &KnotParams::default())?;
+    let plain = model.solve(&stretched, &kp)?;
+    let frame = detail.apply(&model, &stretched, &plain)?;
     let solve_ms = t.elapsed().as_secs_f64() * 1e3;
-    let clearance = yarn::knit::knot::min_clearance(
-        &model.yarn_set(&frame, 1)?,
-        stretched.lattice,
-        sk.yarn_radius,
-        8,
-    )
-    .ratio;
+    let clear = |f: &yarn::knit::KnotFrame| -> Result<f64> {
+        Ok(yarn::knit::knot::min_clearance(
+            &model.yarn_set(f, 1)?,
+            stretched.lattice,
+            sk.yarn_radius,
+            8,
+        )
+        .ratio)
+    };
+    let (clearance, clearance_plain) = (clear(&frame)?, clear(&plain)?);
+    let rest = detail.apply(&model, &rest_mesh, &model.solve(&rest_mesh, &kp)?)?;
     let mut panels = Vec::new();
-    for (f, label) in [(model.rest(), "rest"), (&frame, "stretched 30 % along the wales")] {
+    for (f, label) in [(&rest, "rest"), (&frame, "stretched 30 % along the wales")] {
         let mut ys = model.yarn_set(f, 1)?;
         ys.period = None;
         let pk = PackedYarns::new(&ys, std::slice::from_ref(&params), &PackOptions::default())?;
@@ -192,6 +206,7 @@ pub fn run(out: &Path, width: u32) -> Result<()> {
         "knot_faces": model.knot_faces(),
         "knot_solve_ms": solve_ms,
         "stretch_clearance": clearance,
+        "stretch_clearance_plain": clearance_plain,
         "png": "knit/knit.png",
         "width": size.0, "height": size.1,
         "stitches": [8, 8],
