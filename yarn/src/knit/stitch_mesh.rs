@@ -262,15 +262,21 @@ impl StitchMesh {
         self.chart.at(course, wale)
     }
 
-    /// Point and unit normal at stitch coordinates `(w, c)` (see the module documentation).
-    pub fn eval(&self, w: f64, c: f64) -> (V3, V3) {
+    /// The cell `(i, j)` holding stitch coordinates `(w, c)` (clamped to the mesh on an
+    /// open one) and the coordinates `(s, t)` within it.
+    fn cell_at(&self, w: f64, c: f64) -> (i64, i64, f64, f64) {
         let (i, j) = (w.floor() as i64, c.floor() as i64);
         let (i, j) = if self.lattice.is_some() {
             (i, j)
         } else {
             (i.clamp(0, self.wales as i64 - 1), j.clamp(0, self.courses as i64 - 1))
         };
-        let (s, t) = (w - i as f64, c - j as f64);
+        (i, j, w - i as f64, c - j as f64)
+    }
+
+    /// Point and unit normal at stitch coordinates `(w, c)` (see the module documentation).
+    pub fn eval(&self, w: f64, c: f64) -> (V3, V3) {
+        let (i, j, s, t) = self.cell_at(w, c);
         let (p00, n00) = self.corner(j, i);
         let (p10, n10) = self.corner(j, i + 1);
         let (p01, n01) = self.corner(j + 1, i);
@@ -289,13 +295,7 @@ impl StitchMesh {
     /// The derivatives `(∂x/∂w, ∂x/∂c)` of the bilinear map [`Self::eval`] at stitch
     /// coordinates `(w, c)` (the cell that `eval` uses there).
     pub fn derivatives(&self, w: f64, c: f64) -> (V3, V3) {
-        let (i, j) = (w.floor() as i64, c.floor() as i64);
-        let (i, j) = if self.lattice.is_some() {
-            (i, j)
-        } else {
-            (i.clamp(0, self.wales as i64 - 1), j.clamp(0, self.courses as i64 - 1))
-        };
-        let (s, t) = (w - i as f64, c - j as f64);
+        let (i, j, s, t) = self.cell_at(w, c);
         let p00 = self.corner(j, i).0;
         let p10 = self.corner(j, i + 1).0;
         let p01 = self.corner(j + 1, i).0;

@@ -123,3 +123,31 @@ fn uv_lookup_on_a_cylinder_with_a_seam() {
         "{e}"
     );
 }
+
+#[test]
+fn derivatives_are_those_of_the_bilinear_map() {
+    // A flat patch with its corners displaced (non-parallelogram cells, out of plane),
+    // periodic and open: ∂x/∂w and ∂x/∂c against central differences of `eval` inside a
+    // cell (the map is bilinear there, so the difference is exact up to rounding).
+    let mut m = StitchMesh::flat(&stockinette(), 4, 4, 0.004, 0.003).unwrap();
+    for (i, p) in m.corners.iter_mut().enumerate() {
+        let x = i as f64;
+        p[0] += 4e-4 * (1.7 * x).sin();
+        p[1] += 3e-4 * (2.3 * x).cos();
+        p[2] += 5e-4 * (0.9 * x).sin();
+    }
+    for lattice in [m.lattice, None] {
+        let mut m = m.clone();
+        m.lattice = lattice;
+        for k in 0..40 {
+            let (w, c) = (0.13 + 0.097 * k as f64, 0.21 + 0.083 * k as f64);
+            let (w, c) = (w.floor() + 0.1 + 0.8 * w.fract(), c.floor() + 0.1 + 0.8 * c.fract());
+            let h = 1e-6;
+            let (dw, dc) = m.derivatives(w, c);
+            let fw = vec3::scale(vec3::sub(m.eval(w + h, c).0, m.eval(w - h, c).0), 0.5 / h);
+            let fc = vec3::scale(vec3::sub(m.eval(w, c + h).0, m.eval(w, c - h).0), 0.5 / h);
+            assert!(vec3::distance(dw, fw) < 1e-9, "∂x/∂w at ({w}, {c}): {dw:?} vs {fw:?}");
+            assert!(vec3::distance(dc, fc) < 1e-9, "∂x/∂c at ({w}, {c}): {dc:?} vs {fc:?}");
+        }
+    }
+}
