@@ -322,10 +322,12 @@ pub fn write(
         });
         if let Some((png, strain, faces, ms, clearance, plain)) = &k.stretch {
             let without = plain.map_or(String::new(), |p| {
-                format!(" ({p:.2} with the fit alone, whose stitch template lets touching yarns overlap)")
+                format!(
+                    "; {p:.2} with the fit alone, whose stitch template lets touching yarns overlap"
+                )
             });
             page.push(Block::Para(format!(
-                "When the knit stretches, its yarns follow the stitches: the patch pulled {:.0} % along its wales, the yarn moved by fitting two crossing \"knots\" per stitch (Huang et al. 2025) and the stitch template, relaxed once so that touching yarns do not overlap, carried on top — {} stitches in {:.1} ms on this machine's CPU. The fit itself keeps no yarn apart from another: at the closest point the yarns' centre lines are {:.2} yarn diameters apart{without} (below 1 they overlap).",
+                "When the knit stretches, its yarns follow the stitches: the patch pulled {:.0} % along its wales, the yarn moved by fitting two crossing \"knots\" per stitch (Huang et al. 2025) and the stitch template, relaxed once so that touching yarns do not overlap, carried on top — {} stitches in {:.1} ms on this machine's CPU. The fit itself keeps no yarn apart from another: at the closest point the yarns' centre lines are {:.2} yarn diameters apart (below 1 they overlap{without}).",
                 strain * 100.0,
                 faces,
                 ms,
