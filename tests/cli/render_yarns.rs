@@ -377,3 +377,85 @@ fn btf_relight_draws_the_yarns_in_every_rotation() {
         assert!(yarn > n / 20 && yarn < n / 2, "{yarn}");
     }
 }
+
+/// A scene of `[[yarns]]` alone (no BTF meshes or materials): the binary draws the yarns
+/// over the background as the standalone fiber renderer does; an environment light there
+/// is refused naming the light (its visibility lives on BTF meshes).
+#[test]
+fn a_scene_of_yarns_alone_renders_its_yarns_over_the_background() {
+    let d = Dir::new();
+    std::fs::copy(Path::new(EXAMPLES).join("swatch.obj"), d.path("swatch.obj")).unwrap();
+    let text = std::fs::read_to_string(Path::new(EXAMPLES).join("knit-swatch.toml")).unwrap();
+    let alone = text[..text.find("\n[[meshes]]").unwrap()].to_string()
+        + "\n"
+        + &text[text.find("\n[[yarns]]").unwrap()..];
+    std::fs::write(d.path("alone.toml"), &alone).unwrap();
+    let size = SIZE.to_string();
+    let o = d.btf(&[
+        "render",
+        "alone.toml",
+        "--width",
+        &size,
+        "--height",
+        &size,
+        "-o",
+        "a.png",
+        "--exr",
+        "a.exr",
+    ]);
+    if String::from_utf8_lossy(&o.stderr).contains("no GPU adapter") {
+        assert!(std::env::var("BTF_REQUIRE_GPU").as_deref() != Ok("1"), "no GPU adapter");
+        return;
+    }
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (_, _, cli) = read_exr(&d.path("a.exr"));
+    let Some(gpu) = Gpu::for_tests("a_scene_of_yarns_alone") else { return };
+    let path = d.path("alone.toml");
+    let mut scene = Scene::load(&path).unwrap();
+    (scene.output.width, scene.output.height) = (SIZE, SIZE);
+    let yarns = yarn_render::scene::build(&scene, &path).unwrap();
+    let options = RenderOptions { extra_bounds: bounds_f32(&yarns), ..Default::default() };
+    let camera = *Renderer::new(&gpu, &scene, options).unwrap().camera();
+    let y = &scene.yarns[0];
+    let bake = yarn_precompute::BakeSettings { seed: y.seed, ..Default::default() };
+    let fibers = FiberRenderer::with_bake(
+        &gpu,
+        &yarns[0].packed,
+        &scene_bcsdf().unwrap(),
+        settings(&scene, y),
+        &bake,
+        None,
+    )
+    .unwrap();
+    let lights = fiber_lights(&scene.lights);
+    let img = fibers.render(&gpu, &fiber_camera(&camera), &lights, (SIZE, SIZE), [0.0; 4]).unwrap();
+    // Every pixel: the yarn's premultiplied radiance plus (1 − α) of the background, to the
+    // f16 rounding of the frame (2⁻¹¹ of values below 2, two terms).
+    let bg = scene.output.background;
+    let n = (SIZE * SIZE) as usize;
+    let mut worst = 0.0f64;
+    for i in 0..n {
+        for c in 0..3 {
+            let want = img.pixels[i][c] as f64 + (1.0 - img.pixels[i][3] as f64) * bg[c] as f64;
+            worst = worst.max((cli[3 * i + c] as f64 - want).abs());
+        }
+    }
+    let covered = (0..n).filter(|&i| img.pixels[i][3] > 0.0).count();
+    eprintln!("yarns alone: {covered} of {n} pixels with yarn, worst difference {worst:.2e}");
+    assert!(covered > n / 10, "{covered}");
+    assert!(worst < 2e-3, "{worst}");
+    // An environment light needs BTF meshes: refused naming the light.
+    d.ok(&["synth", "env", "--kind", "sky", "--width", "16", "-o", "sky.exr"]);
+    let env = format!("{alone}\n[[lights]]\nkind = \"environment\"\npath = \"sky.exr\"\n");
+    std::fs::write(d.path("alone-env.toml"), env).unwrap();
+    let e = d.fails(&["render", "alone-env.toml", "-o", "e.png"]);
+    assert!(e.contains("lights[1]") && e.contains("[[meshes]]"), "{e}");
+    assert!(!d.path("e.png").exists());
+    // Neither meshes nor yarns: the error names meshes.
+    let empty = text[..text.find("\n[[meshes]]").unwrap()].to_string()
+        + "\n"
+        + &text[text.find("\n[camera]").unwrap()..];
+    std::fs::write(d.path("empty.toml"), empty).unwrap();
+    let e = d.fails(&["render", "empty.toml", "-o", "x.png"]);
+    assert!(e.contains("meshes"), "{e}");
+}

@@ -113,9 +113,12 @@ impl SceneGeometry {
             }
         }
         let slot_of_triangle = order.iter().map(|&t| slot_of_desc[tri_desc[t]]).collect();
+        // A scene of [[yarns]] alone has no corners: one zeroed corner keeps the vertex
+        // buffer bindable (an empty slice cannot be bound); no draw reads it.
+        let padding = [<CornerVertex as bytemuck::Zeroable>::zeroed()];
         let corner_buffer = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("corners"),
-            contents: bytemuck::cast_slice(&corners),
+            contents: bytemuck::cast_slice(if corners.is_empty() { &padding } else { &corners }),
             usage: wgpu::BufferUsages::VERTEX,
         });
         SceneGeometry {

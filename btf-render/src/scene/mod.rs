@@ -28,9 +28,11 @@ pub struct Scene {
     /// Image size, exposure, background.
     #[serde(default)]
     pub output: Output,
-    /// Meshes (all drawn).
+    /// Meshes (all drawn; none in a scene of `[[yarns]]` alone).
+    #[serde(default)]
     pub meshes: Vec<MeshDesc>,
-    /// BTF materials, matched to mesh material names.
+    /// BTF materials, matched to mesh material names (none without meshes).
+    #[serde(default)]
     pub materials: Vec<MaterialDesc>,
     /// The camera.
     pub camera: Camera,
@@ -223,11 +225,19 @@ impl Scene {
         if !(o.exposure.is_finite() && o.exposure > 0.0 && o.exposure <= btf_core::MAX_RADIANCE) {
             return bad("output.exposure".into(), "must be a positive number ≤ 1e12");
         }
-        if self.meshes.is_empty() {
-            return bad("meshes".into(), "at least one [[meshes]] entry is needed");
+        if self.meshes.is_empty() && self.yarns.is_empty() {
+            return bad("meshes".into(), "at least one [[meshes]] (or [[yarns]]) entry is needed");
         }
-        if self.materials.is_empty() {
+        if self.materials.is_empty() && !self.meshes.is_empty() {
             return bad("materials".into(), "at least one [[materials]] entry is needed");
+        }
+        if let (true, Some((i, _))) = (self.meshes.is_empty(), self.environment()) {
+            return bad(
+                format!("lights[{i}]"),
+                "an environment light needs a [[meshes]] entry (its visibility maps and \
+                 eigenweightsets are the BTF meshes'); [[yarns]] alone take point and \
+                 directional lights",
+            );
         }
         for (i, m) in self.materials.iter().enumerate() {
             if !(m.uv_scale.is_finite() && m.uv_scale > 0.0) {
