@@ -94,6 +94,14 @@ struct Summary {
 /// Runs `btf relight`.
 pub fn run(args: RelightArgs) -> Result<()> {
     let mut scene = args.scene.load_unvalidated()?;
+    if scene.meshes.is_empty() {
+        bail!(
+            "{}: relight lights a scene by environment maps, whose visibility and \
+             eigenweightsets belong to BTF meshes; this scene has [[yarns]] alone (render it \
+             with btf render under point and directional lights)",
+            args.scene.scene.display()
+        );
+    }
     let env_index = attach_environment(&mut scene, &args)?;
     scene.validate(&args.scene.scene)?;
     let mut jobs = plan(&args, &scene, env_index)?;

@@ -451,6 +451,10 @@ fn a_scene_of_yarns_alone_renders_its_yarns_over_the_background() {
     let e = d.fails(&["render", "alone-env.toml", "-o", "e.png"]);
     assert!(e.contains("lights[1]") && e.contains("[[meshes]]"), "{e}");
     assert!(!d.path("e.png").exists());
+    // So is relighting it by environment maps, before any output folder is made.
+    let e = d.fails(&["relight", "alone.toml", "--env", "sky.exr", "--out", "rl"]);
+    assert!(e.contains("[[yarns]] alone"), "{e}");
+    assert!(!d.path("rl").exists());
     // Neither meshes nor yarns: the error names meshes.
     let empty = text[..text.find("\n[[meshes]]").unwrap()].to_string()
         + "\n"
