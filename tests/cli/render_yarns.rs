@@ -23,6 +23,31 @@ fn example(d: &Dir) {
     d.ok(&["compress", "corduroy.btf", "-o", "corduroy.eigen", "--components", "8"]);
 }
 
+/// The scene at `path` (at SIZE²), the render options that frame its yarns, and its first
+/// `[[yarns]]` entry drawn by `FiberRenderer` alone with the scene's camera and lights
+/// over a clear of 0.
+fn standalone(gpu: &Gpu, path: &Path) -> (Scene, RenderOptions, yarn_render::FiberImage) {
+    let mut scene = Scene::load(path).unwrap();
+    (scene.output.width, scene.output.height) = (SIZE, SIZE);
+    let yarns = yarn_render::scene::build(&scene, path).unwrap();
+    let options = RenderOptions { extra_bounds: bounds_f32(&yarns), ..Default::default() };
+    let camera = *Renderer::new(gpu, &scene, options).unwrap().camera();
+    let y = &scene.yarns[0];
+    let bake = yarn_precompute::BakeSettings { seed: y.seed, ..Default::default() };
+    let fibers = FiberRenderer::with_bake(
+        gpu,
+        &yarns[0].packed,
+        &scene_bcsdf().unwrap(),
+        settings(&scene, y),
+        &bake,
+        None,
+    )
+    .unwrap();
+    let lights = fiber_lights(&scene.lights);
+    let img = fibers.render(gpu, &fiber_camera(&camera), &lights, (SIZE, SIZE), [0.0; 4]).unwrap();
+    (scene, options, img)
+}
+
 #[test]
 fn the_knit_swatch_example_renders_its_yarns_as_the_standalone_fiber_renderer_does() {
     let d = Dir::new();
@@ -50,25 +75,7 @@ fn the_knit_swatch_example_renders_its_yarns_as_the_standalone_fiber_renderer_do
     assert_eq!((w, h), (SIZE as usize, SIZE as usize));
     // The same yarns, camera and lights through FiberRenderer alone.
     let Some(gpu) = Gpu::for_tests("knit_swatch_example") else { return };
-    let path = d.path("knit-swatch.toml");
-    let mut scene = Scene::load(&path).unwrap();
-    (scene.output.width, scene.output.height) = (SIZE, SIZE);
-    let yarns = yarn_render::scene::build(&scene, &path).unwrap();
-    let options = RenderOptions { extra_bounds: bounds_f32(&yarns), ..Default::default() };
-    let camera = *Renderer::new(&gpu, &scene, options).unwrap().camera();
-    let y = &scene.yarns[0];
-    let bake = yarn_precompute::BakeSettings { seed: y.seed, ..Default::default() };
-    let fibers = FiberRenderer::with_bake(
-        &gpu,
-        &yarns[0].packed,
-        &scene_bcsdf().unwrap(),
-        settings(&scene, y),
-        &bake,
-        None,
-    )
-    .unwrap();
-    let lights = fiber_lights(&scene.lights);
-    let img = fibers.render(&gpu, &fiber_camera(&camera), &lights, (SIZE, SIZE), [0.0; 4]).unwrap();
+    let (scene, options, img) = standalone(&gpu, &d.path("knit-swatch.toml"));
     let floor = Renderer::new(&gpu, &scene, options).unwrap().render(&gpu).unwrap();
     // MSAA resolves the mean of a pixel's samples, and both passes shade once per pixel:
     // where the standalone yarns cover a fraction α of the samples (over a clear of 0), the
@@ -410,25 +417,7 @@ fn a_scene_of_yarns_alone_renders_its_yarns_over_the_background() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let (_, _, cli) = read_exr(&d.path("a.exr"));
     let Some(gpu) = Gpu::for_tests("a_scene_of_yarns_alone") else { return };
-    let path = d.path("alone.toml");
-    let mut scene = Scene::load(&path).unwrap();
-    (scene.output.width, scene.output.height) = (SIZE, SIZE);
-    let yarns = yarn_render::scene::build(&scene, &path).unwrap();
-    let options = RenderOptions { extra_bounds: bounds_f32(&yarns), ..Default::default() };
-    let camera = *Renderer::new(&gpu, &scene, options).unwrap().camera();
-    let y = &scene.yarns[0];
-    let bake = yarn_precompute::BakeSettings { seed: y.seed, ..Default::default() };
-    let fibers = FiberRenderer::with_bake(
-        &gpu,
-        &yarns[0].packed,
-        &scene_bcsdf().unwrap(),
-        settings(&scene, y),
-        &bake,
-        None,
-    )
-    .unwrap();
-    let lights = fiber_lights(&scene.lights);
-    let img = fibers.render(&gpu, &fiber_camera(&camera), &lights, (SIZE, SIZE), [0.0; 4]).unwrap();
+    let (scene, _, img) = standalone(&gpu, &d.path("alone.toml"));
     // Every pixel: the yarn's premultiplied radiance plus (1 − α) of the background, to the
     // f16 rounding of the frame (2⁻¹¹ of values below 2, two terms).
     let bg = scene.output.background;
