@@ -242,4 +242,30 @@ fn knit_deform_follows_the_drape_frame_by_frame() {
         assert!(d.path(&format!("dr/drape/frame-{k:03}.bcc")).is_file());
     }
     assert!(d.path("dr/drape-strain.png").is_file() && d.path("dr/drape.md").is_file());
+    // --relaxed-rest: the flat start carries the relaxed template (the yarns touch instead
+    // of overlapping); the drape's bent frames are what BENCHMARKS.md reports.
+    d.ok(&[
+        "knit",
+        "deform",
+        "--chart",
+        "rib1x1",
+        "--drape",
+        "1",
+        "--wales",
+        "8",
+        "--cloth-res",
+        "12",
+        "--max-sweeps",
+        "30",
+        "--relaxed-rest",
+        "-o",
+        "drr",
+    ]);
+    let csv = std::fs::read_to_string(d.path("drr/drape.csv")).unwrap();
+    let relaxed: Vec<Vec<f64>> =
+        csv.lines().skip(1).map(|l| l.split(',').map(|x| x.parse().unwrap()).collect()).collect();
+    assert_eq!(relaxed.len(), 2);
+    eprintln!("flat start: clearance {:.3} → {:.3} with --relaxed-rest", rows[0][8], relaxed[0][8]);
+    assert!(relaxed[0][8] > 0.95 && rows[0][8] < 0.9, "{csv}");
+    assert!(relaxed[0][3] < 1e-18, "the solve itself is untouched at rest: {csv}");
 }

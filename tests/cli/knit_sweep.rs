@@ -176,7 +176,7 @@ fn knit_sweep_strips_cells_are_scored_and_timed_against_the_fibers() {
     // their flyaway overlay ([H25 §4.4]); no-flyaways needs --hairs.
     let mut hairy: Vec<&str> = args.to_vec();
     let i = hairy.iter().position(|x| *x == "tex32,plain,no-psi").unwrap();
-    hairy[i] = "tex32,no-flyaways";
+    hairy[i] = "full,no-flyaways";
     hairy.pop();
     hairy.extend(["sw-hairs", "--hairs"]);
     let Some(out) = run_gpu(&d, &hairy) else { return };
@@ -190,19 +190,20 @@ fn knit_sweep_strips_cells_are_scored_and_timed_against_the_fibers() {
     // The overlay adds the hairs' coverage: the strips with it are brighter.
     eprintln!(
         "--hairs: mean / reference strips {:.4}, without the overlay {:.4}; rel. RMSE {:.4} / {:.4}",
-        g("strips-tex32", "mean_ratio"),
+        g("strips-full", "mean_ratio"),
         g("strips-no-flyaways", "mean_ratio"),
-        g("strips-tex32", "rel_rmse_all"),
+        g("strips-full", "rel_rmse_all"),
         g("strips-no-flyaways", "rel_rmse_all")
     );
-    assert!(g("strips-tex32", "mean_ratio") > g("strips-no-flyaways", "mean_ratio"), "{csv}");
+    // The same bake, so only the overlay differs.
+    assert!(g("strips-full", "mean_ratio") > g("strips-no-flyaways", "mean_ratio"), "{csv}");
     let e = d.fails(&["knit", "sweep", "--strips", "no-flyaways", "-o", "nf"]);
     assert!(e.contains("--hairs"), "{e}");
     // srbfN under an environment: the strips with N SRBFs beside the default 16.
     d.ok(&["synth", "env", "--kind", "sky", "--width", "32", "-o", "sky.exr"]);
     let mut sky: Vec<&str> = args.to_vec();
     let i = sky.iter().position(|x| *x == "tex32,plain,no-psi").unwrap();
-    sky[i] = "tex32,srbf4";
+    sky[i] = "full,srbf16,srbf4";
     sky.pop();
     sky.extend(["sw-sky", "--env", "sky.exr"]);
     let Some(out) = run_gpu(&d, &sky) else { return };
@@ -214,11 +215,14 @@ fn knit_sweep_strips_cells_are_scored_and_timed_against_the_fibers() {
         row["mean_ratio"].parse().unwrap()
     };
     eprintln!(
-        "sky: mean / reference, 16 SRBFs (tex32) {:.4}, 4 SRBFs {:.4}",
-        m("strips-tex32"),
+        "sky: mean / reference, 16 SRBFs (full) {:.4}, srbf16 {:.4}, 4 SRBFs {:.4}",
+        m("strips-full"),
+        m("strips-srbf16"),
         m("strips-srbf4")
     );
-    assert!(m("strips-srbf4") > 0.0 && m("strips-srbf4") != m("strips-tex32"), "{csv}");
+    // srbf16 is the default count fitted again: the same frame; 4 lobes another.
+    assert_eq!(m("strips-srbf16"), m("strips-full"), "{csv}");
+    assert!(m("strips-srbf4") > 0.0 && m("strips-srbf4") != m("strips-full"), "{csv}");
     let e = d.fails(&["knit", "sweep", "--strips", "srbf4", "-o", "nf"]);
     assert!(e.contains("--env"), "{e}");
     let e = d.fails(&["knit", "sweep", "--strips", "srbf64", "-o", "nf"]);

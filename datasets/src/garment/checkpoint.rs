@@ -190,9 +190,12 @@ impl Snapshot {
         }
         if !x.iter().chain(&v).chain(&built_at).all(|p| p.iter().all(|c| c.is_finite()))
             || ![time, run_start, gap].iter().all(|t| t.is_finite())
+            || !(quiet.is_nan() || quiet.is_finite())
         {
             return Err(Error::Invalid(
-                "garment snapshot: a non-finite position, velocity, time or gap".into(),
+                "garment snapshot: a non-finite position, velocity, time, quiet-period start or \
+                 gap"
+                .into(),
             ));
         }
         if let Some(&(node, tri, side)) = pairs.iter().find(|p| ![-1.0, 0.0, 1.0].contains(&p.2)) {
@@ -323,6 +326,14 @@ mod tests {
         let n = side.len();
         side[n - 8..].copy_from_slice(&0.5f64.to_le_bytes());
         assert!(Snapshot::from_bytes(&side).unwrap_err().to_string().contains("side 0.5"));
+        // The quiet period's start: none (NaN on disk) reads back as none; infinite is
+        // refused (a rest declared at an infinite time).
+        let none = Snapshot { quiet_since: None, ..sample() };
+        assert_eq!(Snapshot::from_bytes(&none.to_bytes()).unwrap(), none);
+        let mut inf = bytes.clone();
+        let q = 8 + 8 + 4 + 8 + 8;
+        inf[q..q + 8].copy_from_slice(&f64::INFINITY.to_le_bytes());
+        assert!(Snapshot::from_bytes(&inf).unwrap_err().to_string().contains("quiet-period"));
         let mut foreign = bytes;
         foreign[0] = b'X';
         assert!(Snapshot::from_bytes(&foreign).unwrap_err().to_string().contains("magic"));
