@@ -78,6 +78,14 @@ pub struct RenderArgs {
     /// Constant environment radiance R,G,B for the ambient term [W19 eq. 7] (default none).
     #[arg(long)]
     pub ambient: Option<String>,
+    /// Environment map (equirectangular EXR/HDR), optionally ,SCALE, as `btf knit ref --env`
+    /// takes it: fitted by --srbfs SRBF lobes, each with its tube shadow map ([H25 eq. 14–17]
+    /// at every fiber's own tangent); replaces --ambient.
+    #[arg(long)]
+    pub env: Option<String>,
+    /// SRBF lobes of the --env fit (1..=32).
+    #[arg(long, default_value_t = 16)]
+    pub srbfs: usize,
     /// Directory of the precomputation cache (core texture, self-shadow volume, AO).
     #[arg(long)]
     pub cache: Option<PathBuf>,
@@ -189,7 +197,19 @@ pub fn run(a: RenderArgs) -> Result<()> {
     if let Some(c) = &a.compare {
         inputs.push(("compare", c.as_path()));
     }
+    let env_path = a.env.as_deref().map(|e| PathBuf::from(e.split(',').next().unwrap_or(e)));
+    if let Some(e) = &env_path {
+        inputs.push(("env", e.as_path()));
+    }
     guard::refuse_overlap(&[("-o", &image)], &inputs)?;
+    if a.env.is_some() && a.method == RenderMethod::Lumislice {
+        bail!(
+            "--env: the lumislices take point and directional lights only ([C03] has no environment)"
+        );
+    }
+    if !(1..=yarn_render::strips::MAX_SRBFS).contains(&a.srbfs) {
+        bail!("--srbfs {}: 1..={}", a.srbfs, yarn_render::strips::MAX_SRBFS);
+    }
     let kind = match ext(&image).as_str() {
         "exr" => btf_core::fs::EXR,
         "png" => btf_core::fs::PNG,
@@ -234,8 +254,9 @@ pub fn run(a: RenderArgs) -> Result<()> {
     )?;
     let pack_s = t0.elapsed().as_secs_f64();
     let lights: Vec<FiberLight> = a.lights.iter().map(|s| fiber_light(s)).collect::<Result<_>>()?;
-    if lights.is_empty() {
-        bail!("no light: give --light dir:THETA,PHI or --light point:X,Y,Z,I");
+    let env = a.env.as_deref().map(super::knit_sweep::env_map).transpose()?;
+    if lights.is_empty() && env.is_none() {
+        bail!("no light: give --light dir:THETA,PHI, --light point:X,Y,Z,I or --env FILE");
     }
     let cam = camera(&a.camera, period, packed.bounds, z_ref)?;
     let ambient = match &a.ambient {
@@ -273,14 +294,29 @@ pub fn run(a: RenderArgs) -> Result<()> {
     let gpu = btf_render::Gpu::new()?;
     let (img, render_s) = match a.method {
         RenderMethod::Fibers => {
-            let renderer = FiberRenderer::with_bake(
+            let b = bcsdf(a.shading.as_str())?;
+            let mut renderer = FiberRenderer::with_bake(
                 &gpu,
                 &packed,
-                &bcsdf(a.shading.as_str())?,
+                &b,
                 settings,
                 &yarn_precompute::BakeSettings { seed: a.patch.seed, ..Default::default() },
                 a.cache.as_deref(),
             )?;
+            if let Some(map) = &env {
+                let fit = yarn_precompute::SrbfFit::fit(map, a.srbfs)?;
+                let table = yarn_precompute::ImTable::build(&b, fit.lambda)?;
+                eprintln!(
+                    "environment: {} SRBFs ({} of non-zero weight), λ {:.2}, fit error {:.3}, \
+                     power ratio {:.3}",
+                    fit.centres.len(),
+                    yarn_render::strips::env_data(&fit, &table).1.len(),
+                    fit.lambda,
+                    fit.rel_error,
+                    fit.power_ratio[1]
+                );
+                renderer.set_environment(&gpu, Some((&fit, &table)))?;
+            }
             let t1 = std::time::Instant::now();
             let img = renderer.render(&gpu, &cam, &lights, (w, h), [0.0, 0.0, 0.0, 0.0])?;
             (img, t1.elapsed().as_secs_f64())

@@ -69,13 +69,18 @@ pub struct SweepArgs {
     #[arg(long = "light")]
     pub lights: Vec<String>,
     /// Environment map (equirectangular EXR/HDR, e.g. from `btf synth env`), optionally
-    /// ,SCALE: the reference samples it; the GPU fibers get its constant ambient term
-    /// ([W19 eq. 7–8]); the strips its SRBF fit and I_M table ([H25 eq. 14–17]).
+    /// ,SCALE: the reference samples it; the GPU fibers and the strips get its SRBF fit
+    /// and I_M table ([H25 eq. 14–17]; the fibers at their own tangents), each lobe with
+    /// its tube shadow map.
     #[arg(long)]
     pub env: Option<String>,
-    /// SRBFs of the strips' environment fit.
+    /// SRBFs of the environment fit.
     #[arg(long, default_value_t = 16)]
     pub srbfs: usize,
+    /// Under --env, light the GPU fibers (and tubes) by [W19]'s constant ambient term of the
+    /// map's power (eq. 7–8, with AO) instead of the SRBF lobes: the comparison.
+    #[arg(long)]
+    pub ambient_fibers: bool,
     /// LoD thresholds ω^LoD in pixels (0: every fiber of every segment).
     #[arg(long, value_delimiter = ',', default_value = "0,0.5,1,2,4")]
     pub lod_px: Vec<f32>,
@@ -404,7 +409,7 @@ fn cameras(
 }
 
 /// `--env FILE[,SCALE]`: the map scaled.
-fn env_map(spec: &str) -> Result<btf_image::EnvMap> {
+pub(crate) fn env_map(spec: &str) -> Result<btf_image::EnvMap> {
     let (path, scale) = match spec.split_once(',') {
         Some((p, s)) => {
             (p, s.parse::<f64>().with_context(|| format!("--env '{spec}': bad scale"))?)
@@ -464,11 +469,12 @@ pub fn run(a: SweepArgs) -> Result<()> {
     if !(1..=yarn_render::strips::MAX_SRBFS).contains(&a.srbfs) {
         bail!("--srbfs {}: 1..={}", a.srbfs, yarn_render::strips::MAX_SRBFS);
     }
-    let srbf = env
-        .as_ref()
-        .filter(|_| !a.strips.is_empty())
-        .map(|m| yarn_precompute::SrbfFit::fit(m, a.srbfs))
-        .transpose()?;
+    if a.ambient_fibers && env.is_none() {
+        bail!(
+            "--ambient-fibers: the constant ambient term stands in for an environment; give --env"
+        );
+    }
+    let srbf = env.as_ref().map(|m| yarn_precompute::SrbfFit::fit(m, a.srbfs)).transpose()?;
     if let Some(f) = &srbf {
         eprintln!(
             "environment: {} SRBFs, λ {:.2}, fit error {:.3}, power ratio {:.3}",
@@ -498,7 +504,7 @@ pub fn run(a: SweepArgs) -> Result<()> {
             }
         }
     }
-    let light_env = LightEnv { ambient, srbf, per_count };
+    let light_env = LightEnv { ambient, srbf, per_count, ambient_fibers: a.ambient_fibers };
     let bcsdfs: Vec<(String, yarn::bcsdf::FiberBcsdf)> = a
         .shading
         .iter()
@@ -642,8 +648,10 @@ fn rel_rmse(g: &[[f32; 4]], f: &[[f32; 4]]) -> f64 {
 struct LightEnv {
     /// The fibers' constant ambient radiance.
     ambient: [f32; 3],
-    /// The strips' SRBF fit.
+    /// The SRBF fit (strips, and fibers unless `ambient_fibers`).
     srbf: Option<yarn_precompute::SrbfFit>,
+    /// Fibers by the constant ambient term, not the SRBFs.
+    ambient_fibers: bool,
     /// The fits of the `srbfN` strip variants: `(N, fit)`.
     per_count: Vec<(usize, yarn_precompute::SrbfFit)>,
 }
@@ -692,6 +700,13 @@ fn gpu_grid(
             },
         )?;
         for (si, (sname, b)) in bcsdfs.iter().enumerate() {
+            // The fibers' SRBF environment: the I_M table of this BCSDF, once.
+            let fiber_env = match &env.srbf {
+                Some(fit) if !env.ambient_fibers => {
+                    Some((fit, yarn_precompute::ImTable::build(b, fit.lambda)?))
+                }
+                _ => None,
+            };
             for &n_max in &n_maxes {
                 let mut full: Option<Vec<[f32; 4]>> = None;
                 for &lod in &lods {
@@ -708,6 +723,9 @@ fn gpu_grid(
                     };
                     let mut r = FiberRenderer::new(gpu, &packed, b, settings)?;
                     r.set_ambient(env.ambient);
+                    if let Some((fit, table)) = &fiber_env {
+                        r.set_environment(gpu, Some((fit, table)))?;
+                    }
                     let img = r.render(gpu, &cam.gpu, lights, size, [0.0; 4])?;
                     let [interior, band, all] = errors(&img.pixels, &refs[ci][si]);
                     let full = full.get_or_insert_with(|| img.pixels.clone());

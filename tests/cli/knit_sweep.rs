@@ -3,7 +3,8 @@
 //! and `btf knit sweep` on a tiny grid (32², ω^LoD ∈ {0, 2}, 4 spp): its CSV rows and
 //! numbers (finite errors, the tubes row at ratio 1, fewer instances at the coarser LoD,
 //! triangles = instances·2·n_sub), the Markdown, plot and reference images; and refusals
-//! that name the flag. GPU runs are skipped without an adapter unless `BTF_REQUIRE_GPU=1`.
+//! that name the flag; `knit render --env` (the fibers lit by the map's SRBF lobes).
+//! GPU runs are skipped without an adapter unless `BTF_REQUIRE_GPU=1`.
 
 use crate::common::Dir;
 
@@ -42,6 +43,32 @@ fn knit_render_stats_and_compare_against_itself_is_zero() {
     let js = run_gpu(&d, &[&RENDER[..], &["b.exr", "--compare", "a.exr"]].concat()).unwrap();
     let j: serde_json::Value = serde_json::from_str(&js).unwrap();
     assert_eq!(j["rel_rmse"].as_f64(), Some(0.0), "{j}");
+}
+
+/// `btf knit render --env`: an environment map alone lights the fibers through its SRBF
+/// lobes, whose tube shadow maps darken the patch (against `--no-yarn-shadows`); the
+/// lumislices and an SRBF count out of range are refused naming the flag.
+#[test]
+fn knit_render_lights_the_fibers_by_an_environment_map() {
+    let d = Dir::new();
+    d.ok(&["synth", "env", "--kind", "sky", "--width", "32", "-o", "sky.exr"]);
+    let base = ["knit", "render", "--size", "32,32", "--lod-px", "1", "--env", "sky.exr"];
+    let Some(_) = run_gpu(&d, &[&base[..], &["-o", "env.exr"]].concat()) else { return };
+    run_gpu(&d, &[&base[..], &["--no-yarn-shadows", "-o", "free.exr"]].concat()).unwrap();
+    let mean = |f: &str| {
+        let (_, _, px) = crate::common::read_exr(&d.path(f));
+        px.iter().map(|&x| x as f64).sum::<f64>() / px.len() as f64
+    };
+    let (shadowed, free) = (mean("env.exr"), mean("free.exr"));
+    eprintln!("knit render --env: mean radiance {shadowed:.4e}, without yarn shadows {free:.4e}");
+    assert!(shadowed > 0.0 && shadowed.is_finite(), "{shadowed}");
+    assert!(shadowed < 0.98 * free, "the lobes' yarn shadows darken: {shadowed} vs {free}");
+    let e = d.fails(&[&base[..], &["--method", "lumislice", "-o", "ls.exr"]].concat());
+    assert!(e.contains("--env"), "{e}");
+    let e = d.fails(&[&base[..], &["--srbfs", "0", "-o", "x.exr"]].concat());
+    assert!(e.contains("--srbfs"), "{e}");
+    let e = d.fails(&["knit", "sweep", "--ambient-fibers", "-o", "sw"]);
+    assert!(e.contains("--ambient-fibers") && e.contains("--env"), "{e}");
 }
 
 /// The CSV as rows of named cells.

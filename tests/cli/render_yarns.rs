@@ -112,25 +112,18 @@ fn the_knit_swatch_example_renders_its_yarns_as_the_standalone_fiber_renderer_do
     assert!(changed <= yarn.len() && changed * 10 >= yarn.len() * 9, "{changed}");
 }
 
-/// The same swatch with `method = "strips"`: the yarn strips are drawn (the yarn region
-/// differs from the floor alone), and an environment light reaches them through its SRBF
-/// fit (adding a sky brightens the yarn region; rotating it changes it).
+/// The swatch's fibers and the same swatch with `method = "strips"`: the yarns are drawn
+/// (the yarn region differs from the floor alone), and an environment light reaches them
+/// through its SRBF fit (adding a sky brightens the yarn region; rotating it changes it —
+/// a constant ambient term would not).
 #[test]
-fn the_knit_swatch_renders_as_yarn_strips_lit_by_lights_and_an_environment() {
+fn the_knit_swatch_yarns_are_lit_by_lights_and_an_environment_through_srbfs() {
     let d = Dir::new();
     example(&d);
     let text = std::fs::read_to_string(d.path("knit-swatch.toml")).unwrap();
     let strips = text.replacen("method = \"fibers\"", "method = \"strips\"", 1);
     assert_ne!(strips, text);
-    std::fs::write(d.path("strips.toml"), &strips).unwrap();
     d.ok(&["synth", "env", "--kind", "sky", "--width", "64", "-o", "sky.exr"]);
-    let env = |rot: f64| {
-        format!(
-            "{strips}\n[[lights]]\nkind = \"environment\"\npath = \"sky.exr\"\nexposure = 2e-3\nrotation_deg = {rot}\nvisibility_res = 4\n"
-        )
-    };
-    std::fs::write(d.path("strips-env.toml"), env(0.0)).unwrap();
-    std::fs::write(d.path("strips-env-rot.toml"), env(120.0)).unwrap();
     let no_yarns = text[..text.find("\n[[yarns]]").unwrap()].to_string()
         + "\n"
         + &text[text.find("\n[camera]").unwrap()..];
@@ -157,21 +150,50 @@ fn the_knit_swatch_renders_as_yarn_strips_lit_by_lights_and_an_environment() {
         Some(read_exr(&d.path(exr)).2)
     };
     let Some(floor) = render("floor.toml", "floor.exr") else { return };
-    let lit = render("strips.toml", "strips.exr").unwrap();
-    let env0 = render("strips-env.toml", "env0.exr").unwrap();
-    let env1 = render("strips-env-rot.toml", "env1.exr").unwrap();
-    let n = 48 * 48;
-    let yarn: Vec<usize> = (0..n)
-        .filter(|&i| (0..3).any(|c| (lit[3 * i + c] - floor[3 * i + c]).abs() > 1e-3))
-        .collect();
-    assert!(yarn.len() > n / 10, "the strips cover part of the frame: {}", yarn.len());
-    let sum = |img: &[f32]| {
-        yarn.iter().map(|&i| (0..3).map(|c| img[3 * i + c] as f64).sum::<f64>()).sum::<f64>()
-    };
-    let (s_lit, s0, s1) = (sum(&lit), sum(&env0), sum(&env1));
-    eprintln!("yarn region: directional {s_lit:.3}, + sky {s0:.3}, + sky rotated 120° {s1:.3}");
-    assert!(s0 > 1.01 * s_lit, "the sky adds light to the strips: {s0} vs {s_lit}");
-    assert!((s1 - s0).abs() > 1e-3 * s0, "rotating the sky changes the strips: {s1} vs {s0}");
+    for (method, scene) in [("fibers", &text), ("strips", &strips)] {
+        let env = |rot: f64| {
+            format!(
+                "{scene}\n[[lights]]\nkind = \"environment\"\npath = \"sky.exr\"\nexposure = 2e-3\nrotation_deg = {rot}\nvisibility_res = 4\n"
+            )
+        };
+        std::fs::write(d.path(&format!("{method}.toml")), scene).unwrap();
+        std::fs::write(d.path(&format!("{method}-env.toml")), env(0.0)).unwrap();
+        std::fs::write(d.path(&format!("{method}-env-rot.toml")), env(120.0)).unwrap();
+        let lit = render(&format!("{method}.toml"), &format!("{method}.exr")).unwrap();
+        let env0 = render(&format!("{method}-env.toml"), &format!("{method}-env0.exr")).unwrap();
+        let env1 =
+            render(&format!("{method}-env-rot.toml"), &format!("{method}-env1.exr")).unwrap();
+        let n = 48 * 48;
+        let yarn: Vec<usize> = (0..n)
+            .filter(|&i| (0..3).any(|c| (lit[3 * i + c] - floor[3 * i + c]).abs() > 1e-3))
+            .collect();
+        assert!(yarn.len() > n / 10, "the {method} cover part of the frame: {}", yarn.len());
+        let sum = |img: &[f32]| {
+            yarn.iter().map(|&i| (0..3).map(|c| img[3 * i + c] as f64).sum::<f64>()).sum::<f64>()
+        };
+        // Per pixel: how far the rotation moves the frame against what the sky adds.
+        let dist = |a: &[f32], b: &[f32]| {
+            yarn.iter()
+                .map(|&i| {
+                    (0..3).map(|c| (a[3 * i + c] as f64 - b[3 * i + c] as f64).powi(2)).sum::<f64>()
+                })
+                .sum::<f64>()
+                .sqrt()
+        };
+        let (s_lit, s0, s1) = (sum(&lit), sum(&env0), sum(&env1));
+        let (added, turned) = (dist(&env0, &lit), dist(&env1, &env0));
+        eprintln!(
+            "{method}, yarn region: directional {s_lit:.3}, + sky {s0:.3}, + sky rotated 120° \
+             {s1:.3}; per pixel the rotation moves {:.3} of what the sky adds",
+            turned / added
+        );
+        assert!(s0 > 1.01 * s_lit, "the sky adds light to the {method}: {s0} vs {s_lit}");
+        // A constant ambient term would not move at all.
+        assert!(
+            turned > 0.05 * added,
+            "rotating the sky changes the {method}: {turned} vs {added}"
+        );
+    }
 }
 
 /// The same swatch with `method = "lumislice"`: the yarn volumes are drawn over the floor

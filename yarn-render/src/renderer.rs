@@ -5,13 +5,17 @@
 //! packed control points; nothing per fiber point is ever stored ([W19 §5]).
 //!
 //! The effects of [`FiberEffects`] ([W19 §4]): self-shadows from the precomputed volume,
-//! AO, a constant ambient light, and tube shadow maps of other yarns for directional
-//! lights (at most four; point lights get self-shadows only).
+//! AO, the environment — a constant ambient term ([W19 eq. 7–8]) or, with
+//! [`FiberRenderer::set_environment`], the map's SRBF lobes through the `I_M` table of
+//! [H25 eq. 16–17] read at each fiber's own tangent — and tube shadow maps of other yarns
+//! (`crate::passes::shadow`) for the first four directional or point lights (a point light:
+//! one perspective map, or six cube faces when it is near or among the yarns) and for
+//! every SRBF lobe. [W19] lights its fibers by delta lights and a constant ambient only;
+//! the lobes carry the map's directions, so rotating the environment moves the
+//! highlights and the shadows.
 //!
-//! Not yet here (issue #19, DESIGN §2.4): core fibers with their texture, environment maps,
-//! hair flyaways on the GPU. Without the core texture LoD simply drops the innermost
-//! fibers; [`FiberSettings::n_max`] = all and `lod_px ≤ 0` draw every fiber (the
-//! full-detail mode the CPU reference is compared with).
+//! [`FiberSettings::n_max`] = all and `lod_px ≤ 0` draw every fiber (the full-detail mode
+//! the CPU reference is compared with). Not yet here (issue #19): hair flyaways on the GPU.
 
 use crate::bcsdf;
 use crate::effects::{self, AoMode, FiberEffects};
@@ -19,7 +23,7 @@ use crate::gpu_data::YarnBuffers;
 use crate::pack::PackedYarns;
 use crate::passes::draw::{DEPTH, DrawPass, FrameTargets};
 use crate::passes::lod::{DrawArgsRaw, LodPass};
-use crate::passes::shadow::{ShadowPass, ShadowPassRaw, ShadowViewsRaw, directional_views};
+use crate::passes::shadow::{ShadowPass, ShadowPassRaw, ShadowViewsRaw, frame_views, views_raw};
 use crate::view::{FiberCamera, FiberLight, ViewRaw, ViewSetup, lights_raw, to_cols};
 use crate::{Error, Result};
 use btf_render::Gpu;
@@ -139,6 +143,10 @@ pub struct FiberRenderer {
     instances: wgpu::Buffer,
     args: wgpu::Buffer,
     capacity: u32,
+    /// The SRBF environment ([`FiberRenderer::set_environment`]): the shader's buffer and
+    /// the lobe centres (one tube shadow map each).
+    env: Option<(wgpu::Buffer, Vec<[f64; 3]>)>,
+    no_env: wgpu::Buffer,
 }
 
 fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
@@ -264,6 +272,8 @@ impl FiberRenderer {
             centre,
             radius,
             capacity,
+            env: None,
+            no_env: storage("fiber env (none)", bytemuck::cast_slice(&[0.0f32; 4])),
         })
     }
 
@@ -277,6 +287,46 @@ impl FiberRenderer {
     pub fn set_ambient(&mut self, radiance: [f32; 3]) {
         self.settings.effects.ambient =
             radiance.map(|x| if x.is_finite() && x > 0.0 { x } else { 0.0 });
+    }
+
+    /// Lights the next frames with an environment fitted by SRBFs ([H25 eq. 14]) through the
+    /// `I_M` table of this renderer's BCSDF at the fit's λ ([H25 eq. 16]), in place of the
+    /// constant ambient term: per fiber fragment and lobe `j`, `W_j · I_M(θ_j, θ_o, Δφ)` in
+    /// the frame of the fiber's own tangent, times the self-shadow towards `ω_j` and the
+    /// lobe's tube shadow map (when yarn shadows are on). `None` removes it. The table must
+    /// have been built from the same BCSDF as the renderer ([`yarn_precompute::ImTable::build`]).
+    pub fn set_environment(
+        &mut self,
+        gpu: &Gpu,
+        env: Option<(&yarn_precompute::SrbfFit, &yarn_precompute::ImTable)>,
+    ) -> Result<()> {
+        let Some((fit, table)) = env else {
+            self.env = None;
+            return Ok(());
+        };
+        let n = fit.centres.len();
+        let max = crate::strips::MAX_SRBFS;
+        if n == 0 || n > max || fit.weights.len() != n {
+            return Err(Error::Invalid(format!("fibers: {n} SRBFs (1..={max})")));
+        }
+        if (table.lambda - fit.lambda).abs() > 1e-9 * fit.lambda {
+            return Err(Error::Invalid(format!(
+                "fibers: I_M table for λ = {} but the fit has λ = {}",
+                table.lambda, fit.lambda
+            )));
+        }
+        let finite = fit.centres.iter().flatten().chain(fit.weights.iter().flatten());
+        if !finite.into_iter().all(|x| x.is_finite()) || !fit.lambda.is_finite() {
+            return Err(Error::Invalid("fibers: non-finite SRBF fit".into()));
+        }
+        let (data, dirs) = crate::strips::env_data(fit, table);
+        let buffer = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("fiber env"),
+            contents: bytemuck::cast_slice(&data),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        self.env = Some((buffer, dirs));
+        Ok(())
     }
 
     /// The frame uniform for `cam` and `lights` at `size`.
@@ -320,17 +370,17 @@ impl FiberRenderer {
         })
     }
 
-    /// The tube shadow passes of `lights` (the first [`MAX_SHADOW_MAPS`] directional lights,
-    /// when yarn shadows are on) and the uniform the fiber shader reads them with.
+    /// The tube shadow passes of `lights` (the first four directional or point lights) and
+    /// of the environment's SRBFs, when yarn shadows are on, and the uniform the fiber
+    /// shader reads them with.
     fn shadow_views(&self, lights: &[FiberLight]) -> Result<(Vec<ShadowPassRaw>, ShadowViewsRaw)> {
         let size = self.settings.shadow_map;
         if !self.settings.effects.yarn_shadows || self.settings.tubes {
-            let views =
-                ShadowViewsRaw { texel: [1.0 / size as f32, 2e-3, 0.0, 0.0], ..Default::default() };
-            return Ok((Vec::new(), views));
+            return Ok((Vec::new(), ShadowViewsRaw::empty(size)));
         }
-        let (p, v, _) = directional_views(lights, self.origin, self.centre, self.radius, size)?;
-        Ok((p, v))
+        let srbfs = self.env.as_ref().map_or(&[][..], |e| &e.1[..]);
+        let v = frame_views(lights, srbfs, self.origin, self.centre, self.radius, size)?;
+        Ok((v.iter().map(|m| m.pass).collect(), views_raw(&v, size)))
     }
 
     /// The frame uniform, shadow maps and bind groups of one frame.
@@ -397,6 +447,7 @@ impl FiberRenderer {
                     resource: wgpu::BindingResource::Sampler(&self.shadow_sampler),
                 },
                 entry(8, &vbuf),
+                entry(9, self.env.as_ref().map_or(&self.no_env, |e| &e.0)),
             ],
         });
         Ok(FrameBindings { g_lod, g_draw, maps, passes })

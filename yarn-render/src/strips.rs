@@ -6,7 +6,8 @@
 //! ambient term, with MSAA. Two passes per frame:
 //!
 //! - `yarn_tube_shadow` ([`crate::passes::shadow`]): the strip shadow pass of [H25 §5.2] —
-//!   light-facing strips of the yarn radius, depth only, one map per directional light;
+//!   light-facing strips of the yarn radius, depth only, one map per directional light
+//!   and SRBF, one perspective map (or six cube faces, hard) per point light;
 //! - `strip_regular` (`shaders/strip_regular.wgsl`): one instance per yarn segment,
 //!   vertex-pulled from the same control points as the fibers (`yarn_point`), in place of
 //!   the paper's geometry shader (lavapipe has none).
@@ -35,7 +36,7 @@ use crate::bcsdf;
 use crate::gpu_data::YarnBuffers;
 use crate::pack::PackedYarns;
 use crate::passes::draw::{DEPTH, FrameTargets, SHADING_WGSL, color_format};
-use crate::passes::shadow::{MAX_SHADOW_MAPS, ShadowPass, ShadowPassRaw, light_views};
+use crate::passes::shadow::{ShadowPass, ShadowPassRaw, frame_views};
 use crate::renderer::{FiberImage, FiberStats};
 use crate::view::{FiberCamera, FiberLight, MAX_LIGHTS, ViewRaw, ViewSetup, lights_raw, to_cols};
 use crate::{Error, Result};
@@ -73,7 +74,7 @@ pub struct StripSettings {
     pub psi: bool,
     /// Multiply by the yarn colour.
     pub tint: bool,
-    /// Strip shadow maps for directional lights.
+    /// Strip shadow maps for the first four point or directional lights and every SRBF.
     pub shadows: bool,
     /// PCSS light angular radius (degrees; 0: hard shadow map, one tap).
     pub light_angle_deg: f64,
@@ -119,11 +120,37 @@ struct StripHeaderRaw {
 
 /// The most SRBFs of an environment.
 pub const MAX_SRBFS: usize = 32;
-/// Shadow maps of one frame: the directional lights' and one per SRBF.
-const MAX_STRIP_MAPS: usize = MAX_SHADOW_MAPS + MAX_SRBFS;
+/// An SRBF environment as the strip and fiber shaders read it (`env`): count, λ, unused ×2;
+/// per SRBF its direction (xyz, 0) and weight (rgb, 0); then `I_M` on 16³ nodes, RGB —
+/// and the centres of the SRBFs kept, in that order (one shadow map each). SRBFs whose
+/// weight is at most 1e-6 of the largest in every channel are left out: the non-negative
+/// fit zeroes many of them (a sky of 16 lobes keeps a few), and each costs a shadow map
+/// and a term per fragment for nothing.
+pub fn env_data(
+    fit: &yarn_precompute::SrbfFit,
+    table: &yarn_precompute::ImTable,
+) -> (Vec<f32>, Vec<[f64; 3]>) {
+    let top = fit.weights.iter().flatten().fold(0.0f64, |m, &w| m.max(w));
+    let kept: Vec<usize> = (0..fit.centres.len())
+        .filter(|&j| fit.weights[j].iter().any(|&w| w > 1e-6 * top))
+        .collect();
+    let mut data = vec![kept.len() as f32, fit.lambda as f32, 0.0, 0.0];
+    for &j in &kept {
+        let (c, w) = (fit.centres[j], fit.weights[j]);
+        data.extend([c[0] as f32, c[1] as f32, c[2] as f32, 0.0]);
+        data.extend([w[0] as f32, w[1] as f32, w[2] as f32, 0.0]);
+    }
+    table.values.iter().for_each(|v| data.extend(v));
+    (data, kept.iter().map(|&j| fit.centres[j]).collect())
+}
 
-/// The strip shader's shadow uniform: per map its light (directional light `i`, or SRBF
-/// `j` as `MAX_LIGHTS + j`) and its PCSS scale.
+/// Shadow maps of one frame: the lights' (six cube faces for a point light among the
+/// yarns) and one per SRBF (`crate::passes::shadow::frame_views`).
+const MAX_STRIP_MAPS: usize = crate::passes::shadow::MAX_FIBER_MAPS;
+
+/// The strip shader's shadow uniform: per map its light (light `i`, or SRBF `j` as
+/// `MAX_LIGHTS + j`), its PCSS scale and its biases (depth, and metres along the light ray
+/// for perspective maps).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct StripShadowRaw {
@@ -132,6 +159,7 @@ struct StripShadowRaw {
     light: [[u32; 4]; MAX_STRIP_MAPS / 4],
     texel: [f32; 4],
     pcss: [[f32; 4]; MAX_STRIP_MAPS / 4],
+    bias: [[f32; 4]; MAX_STRIP_MAPS],
 }
 
 impl Default for StripShadowRaw {
@@ -462,19 +490,14 @@ impl StripRenderer {
                 table.lambda, fit.lambda
             )));
         }
-        let mut data = vec![n as f32, fit.lambda as f32, 0.0, 0.0];
-        for (c, w) in fit.centres.iter().zip(&fit.weights) {
-            data.extend([c[0] as f32, c[1] as f32, c[2] as f32, 0.0]);
-            data.extend([w[0] as f32, w[1] as f32, w[2] as f32, 0.0]);
-        }
-        table.values.iter().for_each(|v| data.extend(v));
+        let (data, dirs) = env_data(fit, table);
         let buffer = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("strip env"),
             contents: bytemuck::cast_slice(&data),
             usage: wgpu::BufferUsages::STORAGE,
         });
         let angle_deg = (1.0 / fit.lambda.sqrt()).atan().to_degrees().min(44.0);
-        self.env = Some(StripEnv { buffer, dirs: fit.centres.clone(), angle_deg });
+        self.env = Some(StripEnv { buffer, dirs, angle_deg });
         Ok(())
     }
 
@@ -568,37 +591,33 @@ impl StripRenderer {
     fn shadow_views(&self, lights: &[FiberLight]) -> Result<(Vec<ShadowPassRaw>, StripShadowRaw)> {
         let size = self.settings.shadow_map;
         let mut raw =
-            StripShadowRaw { texel: [1.0 / size as f32, 2e-3, 0.0, 0.0], ..Default::default() };
+            StripShadowRaw { texel: [1.0 / size as f32, 0.0, 0.0, 0.0], ..Default::default() };
         if !self.settings.shadows {
             return Ok((Vec::new(), raw));
         }
-        // (direction, light index, PCSS angle in degrees)
-        let mut maps: Vec<([f64; 3], u32, f64)> = Vec::new();
-        for (i, l) in lights.iter().enumerate() {
-            if let FiberLight::Directional { to_light, .. } = *l
-                && maps.len() < MAX_SHADOW_MAPS
-            {
-                maps.push((to_light, i as u32, self.settings.light_angle_deg));
-            }
-        }
-        if let Some(e) = &self.env {
-            for (j, d) in e.dirs.iter().enumerate() {
-                maps.push((*d, (MAX_LIGHTS + j) as u32, e.angle_deg));
-            }
-        }
-        let dirs: Vec<[f64; 3]> = maps.iter().map(|m| m.0).collect();
-        let views = light_views(&dirs, self.origin, self.centre, self.radius, size)?;
+        let srbfs = self.env.as_ref().map_or(&[][..], |e| &e.dirs[..]);
+        let views = frame_views(lights, srbfs, self.origin, self.centre, self.radius, size)?;
         let metres_per_texel = 2.0 * self.radius / size as f64;
-        for (m, ((pass, dpm), (_, light, angle))) in views.iter().zip(&maps).enumerate() {
-            raw.view_proj[m] = pass.view_proj;
-            raw.light[m / 4][m % 4] = *light;
+        for (m, v) in views.iter().enumerate() {
+            raw.view_proj[m] = v.pass.view_proj;
+            raw.light[m / 4][m % 4] = v.light;
+            raw.bias[m] = [v.bias[0], v.bias[1], 0.0, 0.0];
+            // PCSS on the orthographic maps: a directional light's angular radius or an
+            // SRBF's 1/√λ; a point light's perspective maps are hard (one tap).
+            let angle = match (v.light as usize).checked_sub(MAX_LIGHTS) {
+                Some(_) => self.env.as_ref().map_or(0.0, |e| e.angle_deg),
+                None => match lights[v.light as usize] {
+                    FiberLight::Directional { .. } => self.settings.light_angle_deg,
+                    FiberLight::Point { .. } => 0.0,
+                },
+            };
             // Penumbra (texels) = depth gap / (depth per metre) · tan(angle) / (metres per texel).
             let tan = angle.to_radians().tan();
             raw.pcss[m / 4][m % 4] =
-                if tan > 0.0 { (tan / (dpm * metres_per_texel)) as f32 } else { 0.0 };
+                if tan > 0.0 { (tan / (v.depth_per_metre * metres_per_texel)) as f32 } else { 0.0 };
         }
-        raw.n[0] = maps.len() as u32;
-        Ok((views.into_iter().map(|v| v.0).collect(), raw))
+        raw.n[0] = views.len() as u32;
+        Ok((views.into_iter().map(|v| v.pass).collect(), raw))
     }
 
     /// Records the shadow and strip passes of one frame into `enc`.

@@ -79,6 +79,7 @@ impl DrawPass {
                     count: None,
                 },
                 buf(8, fs, wgpu::BufferBindingType::Uniform),
+                buf(9, fs, ro),
             ],
         });
         let src = source();

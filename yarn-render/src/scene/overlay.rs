@@ -3,9 +3,9 @@
 //! [W19 eq. 5–6]) — or, with `method = "strips"`, by the yarn strips of [H25] (textures
 //! baked once per yarn and colour, cached with the fiber bakes) — into btf-render's own
 //! colour and depth targets, after its BTF pass, with its camera matrix and the scene's
-//! lights. With `method = "strips"` the environment is not the ambient term but its fit by
-//! 16 SRBFs with the `I_M` table ([H25 eq. 14–17], `yarn_precompute::srbf`), fitted once per
-//! map and rotated about `+z` with the environment; each SRBF has a strip shadow map.
+//! lights. The environment reaches fibers and strips as its fit by 16 SRBFs with the `I_M`
+//! table ([H25 eq. 14–17], `yarn_precompute::srbf`), fitted once per map and rotated about
+//! `+z` with the environment; each SRBF has a tube (strip) shadow map.
 //!
 //! **How the two renderers meet — choice (a), drawing into shared targets.** btf-render
 //! keeps its depth buffer when an overlay is present and hands the overlay its colour
@@ -22,11 +22,13 @@
 //!
 //! **Radiometry.** Both write linear radiance; the exposure is applied once, when the frame
 //! is written. Directional lights give perpendicular irradiance `E` and point lights
-//! intensity `I` in both renderers (DESIGN §3). The environment light becomes the fiber
-//! renderer's constant ambient term ([W19 eq. 7–8] with AO): the uniform radiance of the
-//! same power, `f · (1/4π) ∫ L_env dω`. It does not change with the environment's rotation
-//! about `+z` (only a new map or exposure changes it), and it has no visibility of the
-//! meshes. Yarns and meshes do not shadow each other (each casts shadows on itself only).
+//! intensity `I` in both renderers (DESIGN §3). The environment light reaches the yarns
+//! by its SRBF lobes (above), each shadowed by the other yarns through its tube shadow map
+//! and by the yarn's own fibers through the self-shadow volume — [W19]'s constant ambient
+//! term ([W19 eq. 7–8] with AO, the uniform radiance of the same power) measured 2.1× the
+//! reference's mean radiance on a stockinette patch under a constant sky, the lobes 1.16×
+//! (`tests/gpu/lights.rs`). The lobes have no visibility of the meshes: yarns and meshes
+//! do not shadow each other (each casts shadows on itself only).
 
 use super::SceneYarn;
 use crate::{
@@ -52,7 +54,7 @@ pub fn fiber_camera(cam: &CameraSetup) -> FiberCamera {
     }
 }
 
-/// The scene's point and directional lights (the environment is the ambient term).
+/// The scene's point and directional lights (the environment goes by SRBFs).
 pub fn fiber_lights(lights: &[Light]) -> Vec<FiberLight> {
     let f = |v: &[f32; 3]| v.map(f64::from);
     lights
@@ -69,8 +71,8 @@ pub fn fiber_lights(lights: &[Light]) -> Vec<FiberLight> {
         .collect()
 }
 
-/// The constant ambient radiance standing in for the environment light (see the module
-/// documentation).
+/// The constant ambient radiance of the environment light's power ([W19 eq. 7–8]): what the
+/// fibers fall back to if the SRBF environment is removed (see the module documentation).
 pub fn ambient(env: Option<OverlayEnvironment>) -> [f32; 3] {
     env.map_or([0.0; 3], |e| e.mean_radiance().map(|x| x as f32))
 }
@@ -115,12 +117,12 @@ pub enum YarnDrawer {
 pub struct YarnOverlay {
     renderers: Vec<YarnDrawer>,
     bcsdf: FiberBcsdf,
-    /// The strips' environment: the map it was fitted to (path, revision), its SRBF fit
-    /// and I_M table, refitted when the map changes.
+    /// The yarns' environment (fibers and strips): the map it was fitted to (path,
+    /// revision), its SRBF fit and I_M table, refitted when the map changes.
     srbf: Option<(std::path::PathBuf, u64, yarn_precompute::SrbfFit, yarn_precompute::ImTable)>,
 }
 
-/// SRBFs of the strips' environment fit in scenes ([H25 §6]: 16).
+/// SRBFs of the yarns' environment fit in scenes ([H25 §6]: 16).
 pub const SCENE_SRBFS: usize = 16;
 
 impl YarnOverlay {
@@ -195,12 +197,9 @@ impl YarnOverlay {
         Ok(YarnOverlay { renderers, bcsdf, srbf: None })
     }
 
-    /// The strips' SRBF environment for this frame: fitted once per map (path and
+    /// The yarns' SRBF environment for this frame: fitted once per map (path and
     /// revision), rotated about `+z` and scaled by the exposure per frame.
-    fn strip_environment(
-        &mut self,
-        view: &OverlayView<'_>,
-    ) -> Result<Option<yarn_precompute::SrbfFit>> {
+    fn environment(&mut self, view: &OverlayView<'_>) -> Result<Option<yarn_precompute::SrbfFit>> {
         let (Some(oe), Some(desc)) = (
             view.environment,
             view.scene.lights.iter().find_map(|l| match l {
@@ -215,14 +214,14 @@ impl YarnOverlay {
         if fresh {
             let map = btf_image::EnvMap::load(&desc.path).map_err(|e| {
                 crate::Error::Invalid(format!(
-                    "[[yarns]] strips: environment {}: {e}",
+                    "[[yarns]]: environment {}: {e}",
                     desc.path.display()
                 ))
             })?;
             let fit = yarn_precompute::SrbfFit::fit(&map, SCENE_SRBFS)
-                .map_err(|e| crate::Error::Invalid(format!("[[yarns]] strips: SRBF fit: {e}")))?;
+                .map_err(|e| crate::Error::Invalid(format!("[[yarns]]: SRBF fit: {e}")))?;
             let table = yarn_precompute::ImTable::build(&self.bcsdf, fit.lambda)
-                .map_err(|e| crate::Error::Invalid(format!("[[yarns]] strips: I_M table: {e}")))?;
+                .map_err(|e| crate::Error::Invalid(format!("[[yarns]]: I_M table: {e}")))?;
             self.srbf = Some((desc.path.clone(), oe.revision, fit, table));
         }
         let Some((_, _, fit, _)) = &self.srbf else { return Ok(None) };
@@ -263,8 +262,8 @@ impl Overlay for YarnOverlay {
         let cam = fiber_camera(view.camera);
         let lights = fiber_lights(&view.scene.lights);
         let ambient = ambient(view.environment);
-        let has_strips = self.renderers.iter().any(|r| matches!(r, YarnDrawer::Strips(_)));
-        let env = if has_strips { self.strip_environment(view).map_err(to_render)? } else { None };
+        let lobed = self.renderers.iter().any(|r| !matches!(r, YarnDrawer::Lumislice(_)));
+        let env = if lobed { self.environment(view).map_err(to_render)? } else { None };
         // The table stays where it was built (it changes only with the map).
         let table = self.srbf.as_ref().map(|s| &s.3);
         // Opaque drawers first, then the blended lumislices over them.
@@ -273,9 +272,12 @@ impl Overlay for YarnOverlay {
         for r in opaque.into_iter().chain(blended) {
             let t = (targets.color, targets.resolve, targets.depth);
             match r {
+                // The environment through SRBFs with the lobes' tube shadow maps; the ambient
+                // term stays for when there is none.
                 YarnDrawer::Fibers(r) => {
                     r.set_ambient(ambient);
-                    r.encode_into(gpu, encoder, t, targets.size, &cam, &lights)
+                    r.set_environment(gpu, env.as_ref().zip(table))
+                        .and_then(|_| r.encode_into(gpu, encoder, t, targets.size, &cam, &lights))
                 }
                 YarnDrawer::Strips(r) => {
                     // The environment through SRBFs ([H25 eq. 17]), not the ambient term.

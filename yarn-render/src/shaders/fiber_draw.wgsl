@@ -38,15 +38,21 @@ struct Effects {
 @group(1) @binding(7) var shadow_cmp: sampler_comparison;
 @group(1) @binding(8) var<uniform> shadow_views: ShadowViews;
 
-// World (origin-relative) → light clip per shadowed directional light; count in n.x, the
-// light index each map belongs to in lights.
+// World (origin-relative) → light clip per shadow map (passes/shadow.rs): count in n.x,
+// per map the light it belongs to (light i, or SRBF j as 8 + j) and its biases.
 struct ShadowViews {
-    view_proj: array<mat4x4<f32>, 4>,
+    view_proj: array<mat4x4<f32>, 56>,
     n: vec4<u32>,
-    light: vec4<u32>,
-    // Texel size of the maps (1/size), depth bias, unused ×2.
+    light: array<vec4<u32>, 14>,
+    // Depth bias (clip depth), bias along the light ray (metres), unused ×2.
+    bias: array<vec4<f32>, 56>,
+    // Texel size of the maps (1/size), unused ×3.
     texel: vec4<f32>,
 }
+
+// The environment (renderer.rs set_environment): count, λ, unused ×2; per SRBF its
+// direction (xyz, 0) and weight (rgb, 0); then I_M on 16³ nodes (θ_j, θ_o, Δφ), RGB.
+@group(1) @binding(9) var<storage, read> env: array<f32>;
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
@@ -489,22 +495,27 @@ fn ambient_integral(e: Effects, theta_o: f32) -> vec3<f32> {
     return mix(v0, v1, f);
 }
 
-// Visibility of light `li` past other yarns: the tube shadow map of that light (if any),
-// read at the yarn centre moved towards the light by the tube radius (so a yarn never
-// shadows itself through its own tube; self-shadows are the volume's), 3 × 3 PCF.
+// Visibility of light `li` (or SRBF j as 8 + j) past other yarns: the first tube shadow
+// map of that light that sees the point (a point light may have six cube faces), read at
+// the yarn centre moved towards the light by the tube radius (so a yarn never shadows
+// itself through its own tube; self-shadows are the volume's), 3 × 3 PCF.
 fn yarn_visibility(li: u32, centre: vec3<f32>, wi: vec3<f32>, radius: f32) -> f32 {
     for (var m = 0u; m < shadow_views.n.x; m++) {
-        if shadow_views.light[m] != li {
+        if shadow_views.light[m / 4u][m % 4u] != li {
             continue;
         }
-        let p = centre + wi * (radius * 1.05);
+        let b = shadow_views.bias[m];
+        let p = centre + wi * (radius * 1.05 + b.y);
         let c = shadow_views.view_proj[m] * vec4<f32>(p, 1.0);
+        if c.w <= 0.0 {
+            continue;
+        }
         let ndc = c.xyz / c.w;
         let uv = vec2<f32>(0.5 * ndc.x + 0.5, 0.5 - 0.5 * ndc.y);
         if any(uv < vec2<f32>(0.0)) || any(uv > vec2<f32>(1.0)) {
-            return 1.0;
+            continue;
         }
-        let depth = ndc.z - shadow_views.texel.y;
+        let depth = ndc.z - b.x;
         var v = 0.0;
         for (var dy = -1; dy <= 1; dy++) {
             for (var dx = -1; dx <= 1; dx++) {
@@ -612,7 +623,23 @@ fn fs_main(in_raw: VertexOut) -> FragmentOut {
         let vis = self_transmittance(ef, in, wi, wo) * yarn_visibility(i, in.centre, wi, radius);
         l += bcsdf_cos(wi, wo, tan) * e * vis;
     }
-    if any(view.ambient.rgb > vec3<f32>(0.0)) {
+    let n_env = u32(env[0]);
+    if n_env > 0u {
+        // The environment by SRBFs [H25 eq. 14–17] with the fiber's own tangent: per lobe
+        // the BCSDF's integral against it (I_M), the self-shadow towards its centre and its
+        // tube shadow map.
+        let first_im = 4u + 8u * n_env;
+        let ao_ = fiber_angles(wo, tan);
+        for (var j = 0u; j < n_env; j++) {
+            let wj = vec3<f32>(env[4u + 8u * j], env[5u + 8u * j], env[6u + 8u * j]);
+            let weight = vec3<f32>(env[8u + 8u * j], env[9u + 8u * j], env[10u + 8u * j]);
+            let aj = fiber_angles(wj, tan);
+            let im = im_at(first_im, aj.w, ao_.w, acos(clamp(dot(aj.xyz, ao_.xyz), -1.0, 1.0)));
+            let vis = self_transmittance(ef, in, wj, wo)
+                * yarn_visibility(8u + j, in.centre, wj, radius);
+            l += weight * im * vis;
+        }
+    } else if any(view.ambient.rgb > vec3<f32>(0.0)) {
         let to = asin(clamp(dot(wo, tan), -1.0, 1.0));
         l += view.ambient.rgb * ambient_integral(ef, to) * ambient_occlusion(ef, in.q);
     }

@@ -1,7 +1,8 @@
-// Fiber shading shared by fiber_draw and strip_regular (both declare `view`, `lobes` and
-// `q_nodes` in their own group 1): the lobe records of bcsdf.rs, the fiber BCSDF of
-// yarn::bcsdf evaluated as FiberBcsdf::eval does, the view direction, and the hashed
-// sample masks of strips narrower than their coverage.
+// Fiber shading shared by fiber_draw and strip_regular (both declare `view`, `lobes`,
+// `q_nodes` and the SRBF environment `env` in their own group 1): the lobe records of
+// bcsdf.rs, the fiber BCSDF of yarn::bcsdf evaluated as FiberBcsdf::eval does, the view
+// direction, the hashed sample masks of strips narrower than their coverage, and the
+// SRBF environment's I_M table [H25 eq. 16] with the fiber-frame angles it is read at.
 
 struct Lobe {
     // Colour A_p (linear RGB).
@@ -108,3 +109,33 @@ fn coverage_mask(c: f32, instance: u32, pixel: vec2<u32>) -> u32 {
     return ((bits << rot) | (bits >> (ni - rot))) & full;
 }
 
+// I_M at (θ_j, θ_o, Δφ), trilinear on the 16³ nodes (yarn_precompute::ImTable::at).
+fn im_at(first: u32, theta_j: f32, theta_o: f32, dphi: f32) -> vec3<f32> {
+    let n = 16u;
+    let cj = clamp((theta_j + 0.5 * PI) / PI * 15.0, 0.0, 15.0);
+    let co = clamp((theta_o + 0.5 * PI) / PI * 15.0, 0.0, 15.0);
+    let cp = clamp(dphi / PI * 15.0, 0.0, 15.0);
+    let j = min(u32(floor(cj)), 14u);
+    let o = min(u32(floor(co)), 14u);
+    let p = min(u32(floor(cp)), 14u);
+    let f = vec3<f32>(cj - f32(j), co - f32(o), cp - f32(p));
+    var out = vec3<f32>(0.0);
+    for (var c = 0u; c < 8u; c++) {
+        let d = vec3<u32>(c & 1u, (c >> 1u) & 1u, (c >> 2u) & 1u);
+        let w = select(1.0 - f.x, f.x, d.x == 1u) * select(1.0 - f.y, f.y, d.y == 1u)
+            * select(1.0 - f.z, f.z, d.z == 1u);
+        let a = first + 3u * (((j + d.x) * n + o + d.y) * n + p + d.z);
+        out += w * vec3<f32>(env[a], env[a + 1u], env[a + 2u]);
+    }
+    return out;
+}
+
+// The angles of ω in a fiber frame with tangent t: θ from the normal plane, and the
+// in-plane unit projection (for Δφ).
+fn fiber_angles(w: vec3<f32>, t: vec3<f32>) -> vec4<f32> {
+    let s = clamp(dot(w, t), -1.0, 1.0);
+    let p = w - t * s;
+    let l = length(p);
+    let q = select(vec3<f32>(0.0), p / l, l > 1e-6);
+    return vec4<f32>(q, asin(s));
+}

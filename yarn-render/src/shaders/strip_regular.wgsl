@@ -26,14 +26,16 @@ struct StripHeader {
 
 // Maps: the directional lights' (light i) and one per SRBF (light 8 + j).
 struct ShadowViews {
-    view_proj: array<mat4x4<f32>, 36>,
+    view_proj: array<mat4x4<f32>, 56>,
     // Maps in use, unused ×3.
     n: vec4<u32>,
-    light: array<vec4<u32>, 9>,
-    // 1/size, depth bias, unused, unused.
+    light: array<vec4<u32>, 14>,
+    // 1/size, unused ×3.
     texel: vec4<f32>,
     // Per map: PCSS penumbra texels per unit of light-clip depth gap (0: hard, one tap).
-    pcss: array<vec4<f32>, 9>,
+    pcss: array<vec4<f32>, 14>,
+    // Per map: depth bias (clip depth), bias along the light ray (metres), unused ×2.
+    bias: array<vec4<f32>, 56>,
 }
 
 @group(1) @binding(0) var<uniform> view: View;
@@ -151,7 +153,8 @@ fn factor3(h: StripHeader, t: u32, first: u32, b: Bins) -> vec3<f32> {
     return o;
 }
 
-// PCSS [H25 §4.5] of light li's strip shadow map at the yarn centre moved towards the
+// PCSS [H25 §4.5] of light li's strip shadow map (the first of its maps that sees the
+// point: a point light among the yarns has cube faces) at the yarn centre moved towards the
 // light by the yarn radius: a 4 × 4 blocker search over the widest penumbra, then a 4 × 4
 // comparison PCF over the penumbra the mean blocker depth gives; pcss = 0 is the hard
 // shadow map with one comparison tap (DESIGN §3.5's PCSS limit).
@@ -160,14 +163,18 @@ fn strip_visibility(li: u32, centre: vec3<f32>, wi: vec3<f32>, radius: f32) -> f
         if shadow_views.light[m / 4u][m % 4u] != li {
             continue;
         }
-        let p = centre + wi * (radius * 1.05);
+        let b = shadow_views.bias[m];
+        let p = centre + wi * (radius * 1.05 + b.y);
         let c = shadow_views.view_proj[m] * vec4<f32>(p, 1.0);
+        if c.w <= 0.0 {
+            continue;
+        }
         let ndc = c.xyz / c.w;
         let uv = vec2<f32>(0.5 * ndc.x + 0.5, 0.5 - 0.5 * ndc.y);
         if any(uv < vec2<f32>(0.0)) || any(uv > vec2<f32>(1.0)) {
-            return 1.0;
+            continue;
         }
-        let depth = ndc.z - shadow_views.texel.y;
+        let depth = ndc.z - b.x;
         let k = shadow_views.pcss[m / 4u][m % 4u];
         let texel = shadow_views.texel.x;
         if k <= 0.0 {
@@ -214,37 +221,6 @@ fn light_at(i: u32, p: vec3<f32>) -> vec4<f32> {
     let dl = light.pos_dir.xyz - p;
     let d2 = max(dot(dl, dl), 1e-20);
     return vec4<f32>(dl / sqrt(d2), 1.0 / d2);
-}
-
-// I_M at (θ_j, θ_o, Δφ), trilinear on the 16³ nodes (yarn_precompute::ImTable::at).
-fn im_at(first: u32, theta_j: f32, theta_o: f32, dphi: f32) -> vec3<f32> {
-    let n = 16u;
-    let cj = clamp((theta_j + 0.5 * PI) / PI * 15.0, 0.0, 15.0);
-    let co = clamp((theta_o + 0.5 * PI) / PI * 15.0, 0.0, 15.0);
-    let cp = clamp(dphi / PI * 15.0, 0.0, 15.0);
-    let j = min(u32(floor(cj)), 14u);
-    let o = min(u32(floor(co)), 14u);
-    let p = min(u32(floor(cp)), 14u);
-    let f = vec3<f32>(cj - f32(j), co - f32(o), cp - f32(p));
-    var out = vec3<f32>(0.0);
-    for (var c = 0u; c < 8u; c++) {
-        let d = vec3<u32>(c & 1u, (c >> 1u) & 1u, (c >> 2u) & 1u);
-        let w = select(1.0 - f.x, f.x, d.x == 1u) * select(1.0 - f.y, f.y, d.y == 1u)
-            * select(1.0 - f.z, f.z, d.z == 1u);
-        let a = first + 3u * (((j + d.x) * n + o + d.y) * n + p + d.z);
-        out += w * vec3<f32>(env[a], env[a + 1u], env[a + 2u]);
-    }
-    return out;
-}
-
-// The angles of ω in a fiber frame with tangent t: θ from the normal plane, and the
-// in-plane unit projection (for Δφ).
-fn fiber_angles(w: vec3<f32>, t: vec3<f32>) -> vec4<f32> {
-    let s = clamp(dot(w, t), -1.0, 1.0);
-    let p = w - t * s;
-    let l = length(p);
-    let q = select(vec3<f32>(0.0), p / l, l > 1e-6);
-    return vec4<f32>(q, asin(s));
 }
 
 fn ambient_at(h: StripHeader, theta_o: f32) -> vec3<f32> {

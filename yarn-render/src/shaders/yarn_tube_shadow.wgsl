@@ -1,11 +1,13 @@
 // yarn_tube_shadow (render, depth only): the shadow map of the yarns as thick tubes
-// [W19 §4.1] for one directional light — each segment a light-facing strip of the yarn
+// [W19 §4.1] for one light (a directional light, an SRBF lobe, or a point light's
+// perspective map or cube face) — each segment a light-facing strip of the yarn
 // diameter (flyaways left out, DESIGN §2.3 item 14), vertex-pulled from the same control
 // points as the fibers (yarn_point of the generator), n_sub + 1 points per segment.
 
 struct ShadowPass {
     view_proj: mat4x4<f32>,
-    // Unit direction towards the light, unused.
+    // Unit direction towards the light (w = 0) or the point light's origin-relative
+    // position (w = 1).
     to_light: vec4<f32>,
     // Subdivisions per segment, unused ×3.
     n: vec4<u32>,
@@ -23,6 +25,7 @@ fn vs_shadow(@builtin(vertex_index) vi: u32, @builtin(instance_index) seg: u32)
     let yp = yarn_point(seg, t);
     let c = curves[segments[seg].ids.x];
     let radius = yarn_params[c.ids.x].c.z;
-    let across = normalize_or(cross(yp.t, sp.to_light.xyz), any_perpendicular(yp.t));
+    let wl = select(sp.to_light.xyz, sp.to_light.xyz - yp.pos, sp.to_light.w != 0.0);
+    let across = normalize_or(cross(yp.t, wl), any_perpendicular(yp.t));
     return sp.view_proj * vec4<f32>(yp.pos + across * (radius * side), 1.0);
 }

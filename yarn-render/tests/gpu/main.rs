@@ -7,6 +7,7 @@ mod common;
 mod effects;
 mod expand;
 mod knot;
+mod lights;
 mod lod;
 mod lumislice;
 mod oblique;

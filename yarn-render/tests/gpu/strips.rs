@@ -333,3 +333,74 @@ fn the_flyaway_overlay_adds_the_baked_hair_coverage() {
         .collect();
     assert!(pair[0] == pair[1], "an empty overlay changed the frame");
 }
+
+/// Point lights cast strip shadows too: from afar (one perspective map) the frame is the
+/// directional light's of the same irradiance, shadows and all; from among the yarns (cube
+/// faces) the upper yarn's shadow darkens the lower one.
+#[test]
+fn point_lights_cast_strip_shadows_like_the_directional_light() {
+    let Some(gpu) = Gpu::for_tests("point_lights_cast_strip_shadows") else { return };
+    let p = cotton();
+    let r = p.yarn_radius();
+    let bcsdf = FiberBcsdf::khungurn(&KhungurnParams::default()).unwrap();
+    let s = StripBakeSettings { spp: 4, directions: 2, ..StripBakeSettings::small() };
+    let bake = StripBake::bake(&p, &bcsdf, COLOR, &s, &|_| {}).unwrap();
+    // Two straight yarns 40 radii long crossing, the upper 4 radii above the lower.
+    let line = |a: [f64; 3], b: [f64; 3], up: [f64; 3]| {
+        let pts: Vec<[f64; 3]> =
+            (0..=20).map(|i| [0, 1, 2].map(|k| a[k] + (b[k] - a[k]) * i as f64 / 20.0)).collect();
+        YarnCurve::open(pts).unwrap().with_normals(vec![up; 21]).unwrap().with_color(COLOR)
+    };
+    let l = 20.0 * r;
+    let set = YarnSet::new(
+        vec![
+            line([-l, 0.0, 0.0], [l, 0.0, 0.0], [0.0, 0.0, 1.0]),
+            line([0.0, -l, 4.0 * r], [0.0, l, 4.0 * r], [0.0, 0.0, 1.0]),
+        ],
+        None,
+    )
+    .unwrap();
+    let packed = PackedYarns::new(
+        &set,
+        std::slice::from_ref(&p),
+        &PackOptions { seed: 1, frame_samples_per_segment: 16, tiles: [1, 1] },
+    )
+    .unwrap();
+    let cam = FiberCamera::orthographic([0.0, 0.0, 1.0], [0.0; 3], [0.0, 1.0, 0.0], 2.0 * l);
+    let frame = |shadows: bool, light: FiberLight| {
+        let settings = StripSettings { shadows, light_angle_deg: 0.0, ..Default::default() };
+        let rd = StripRenderer::new(&gpu, &packed, std::slice::from_ref(&bake), &bcsdf, settings)
+            .unwrap();
+        rd.render(&gpu, &cam, &[light], (96, 96), [0.0; 4]).unwrap().pixels
+    };
+    let rel = |a: &[[f32; 4]], b: &[[f32; 4]]| {
+        let (mut num, mut den) = (0.0, 0.0);
+        for (x, y) in a.iter().zip(b) {
+            for c in 0..3 {
+                num += (x[c] as f64 - y[c] as f64).powi(2);
+                den += (y[c] as f64).powi(2);
+            }
+        }
+        (num / den).sqrt()
+    };
+    let mean = |a: &[[f32; 4]]| a.iter().map(|q| (q[0] + q[1] + q[2]) as f64).sum::<f64>();
+    let dir = [0.5f64, 0.0, 0.866];
+    let d = 300.0 * l;
+    let directional = FiberLight::Directional { to_light: dir, irradiance: [2.0; 3] };
+    let far = FiberLight::Point { position: dir.map(|x| x * d), intensity: [2.0 * d * d; 3] };
+    let near = FiberLight::Point { position: [2.0 * r, 0.0, 10.0 * r], intensity: [2e-6; 3] };
+    let (d_on, d_off) = (frame(true, directional), frame(false, directional));
+    let (f_on, f_off) = (frame(true, far), frame(false, far));
+    let (n_on, n_off) = (frame(true, near), frame(false, near));
+    let shadow = rel(&d_on, &d_off);
+    let (e_on, e_off) = (rel(&f_on, &d_on), rel(&f_off, &d_off));
+    let darker = mean(&n_on) / mean(&n_off);
+    eprintln!(
+        "strips: the shadow changes the directional frame by {shadow:.3}; far point vs \
+         directional {e_on:.4} with shadows, {e_off:.4} without; the near point light's \
+         shadows keep {darker:.3} of its light"
+    );
+    assert!(shadow > 0.05, "the upper yarn must shadow the lower: {shadow}");
+    assert!(e_on < 0.1 * shadow + e_off, "far point light vs directional: {e_on}");
+    assert!(darker < 0.99, "the cube faces' shadow: {darker}");
+}
