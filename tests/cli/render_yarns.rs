@@ -405,6 +405,20 @@ fn btf_relight_draws_the_yarns_in_every_rotation() {
         // The swatch covers about a tenth of the frame at 64² (799 of 4096 pixels touched).
         assert!(yarn > n / 20 && yarn < n / 2, "{yarn}");
     }
+    // The yarns turn with the environment (its SRBF lobes rotate; a constant ambient
+    // term would not): their pixels change between the two rotations.
+    let yarn: Vec<usize> =
+        (0..n).filter(|&i| (0..3).any(|c| frames[0][3 * i + c] != frames[2][3 * i + c])).collect();
+    let moved = |a: &[f32], b: &[f32]| {
+        yarn.iter()
+            .map(|&i| (0..3).map(|c| (a[3 * i + c] - b[3 * i + c]).abs() as f64).sum::<f64>())
+            .sum::<f64>()
+    };
+    let total: f64 =
+        yarn.iter().map(|&i| (0..3).map(|c| frames[0][3 * i + c].abs() as f64).sum::<f64>()).sum();
+    let turned = moved(&frames[0], &frames[1]) / total;
+    eprintln!("the yarn pixels change by {turned:.3} (mean relative) between the two rotations");
+    assert!(turned > 0.01, "the yarns did not turn with the sky: {turned}");
 }
 
 /// A scene of `[[yarns]]` alone (no BTF meshes or materials): the binary draws the yarns
