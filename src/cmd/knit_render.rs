@@ -306,16 +306,16 @@ pub fn run(a: RenderArgs) -> Result<()> {
             if let Some(map) = &env {
                 let fit = yarn_precompute::SrbfFit::fit(map, a.srbfs)?;
                 let table = yarn_precompute::ImTable::build(&b, fit.lambda)?;
+                renderer.set_environment(&gpu, Some((&fit, &table)))?;
                 eprintln!(
                     "environment: {} SRBFs ({} of non-zero weight), λ {:.2}, fit error {:.3}, \
                      power ratio {:.3}",
                     fit.centres.len(),
-                    yarn_render::strips::env_data(&fit, &table).1.len(),
+                    renderer.srbf_lobes(),
                     fit.lambda,
                     fit.rel_error,
                     fit.power_ratio[1]
                 );
-                renderer.set_environment(&gpu, Some((&fit, &table)))?;
             }
             let t1 = std::time::Instant::now();
             let img = renderer.render(&gpu, &cam, &lights, (w, h), [0.0, 0.0, 0.0, 0.0])?;

@@ -97,7 +97,6 @@ fn main() {
     .unwrap();
     let fit = SrbfFit::fit(&map, 16).unwrap();
     let table = ImTable::build(&bcsdf, fit.lambda).unwrap();
-    let kept = yarn_render::strips::env_data(&fit, &table).1.len();
     let ambient = map.integral().map(|x| (x / (4.0 * std::f64::consts::PI)) as f32);
     let make = |tubes: bool, effects: FiberEffects| {
         let settings = FiberSettings { tubes, effects, ..Default::default() };
@@ -115,6 +114,7 @@ fn main() {
     cases.push(Case { name: "ambient", renderer: amb, lights: vec![], maps: 0 });
     let mut srbf = make(false, fx);
     srbf.set_environment(&gpu, Some((&fit, &table))).unwrap();
+    let kept = srbf.srbf_lobes();
     cases.push(Case { name: "srbf16", renderer: srbf, lights: vec![], maps: kept });
     let mut free = make(false, FiberEffects { yarn_shadows: false, ..fx });
     free.set_environment(&gpu, Some((&fit, &table))).unwrap();

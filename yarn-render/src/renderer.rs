@@ -304,29 +304,14 @@ impl FiberRenderer {
             self.env = None;
             return Ok(());
         };
-        let n = fit.centres.len();
-        let max = crate::strips::MAX_SRBFS;
-        if n == 0 || n > max || fit.weights.len() != n {
-            return Err(Error::Invalid(format!("fibers: {n} SRBFs (1..={max})")));
-        }
-        if (table.lambda - fit.lambda).abs() > 1e-9 * fit.lambda {
-            return Err(Error::Invalid(format!(
-                "fibers: I_M table for λ = {} but the fit has λ = {}",
-                table.lambda, fit.lambda
-            )));
-        }
-        let finite = fit.centres.iter().flatten().chain(fit.weights.iter().flatten());
-        if !finite.into_iter().all(|x| x.is_finite()) || !fit.lambda.is_finite() {
-            return Err(Error::Invalid("fibers: non-finite SRBF fit".into()));
-        }
-        let (data, dirs) = crate::strips::env_data(fit, table);
-        let buffer = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("fiber env"),
-            contents: bytemuck::cast_slice(&data),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
+        let (buffer, dirs) = crate::strips::env_buffer(gpu, "fibers", fit, table)?;
         self.env = Some((buffer, dirs));
         Ok(())
+    }
+
+    /// SRBF lobes of the environment in use (those of non-zero weight; 0 without one).
+    pub fn srbf_lobes(&self) -> usize {
+        self.env.as_ref().map_or(0, |e| e.1.len())
     }
 
     /// The frame uniform for `cam` and `lights` at `size`.

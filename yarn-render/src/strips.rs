@@ -120,20 +120,37 @@ struct StripHeaderRaw {
 
 /// The most SRBFs of an environment.
 pub const MAX_SRBFS: usize = 32;
-/// An SRBF environment as the strip and fiber shaders read it (`env`): count, λ, unused ×2;
-/// per SRBF its direction (xyz, 0) and weight (rgb, 0); then `I_M` on 16³ nodes, RGB —
-/// and the centres of the SRBFs kept, in that order (one shadow map each). SRBFs whose
-/// weight is at most 1e-6 of the largest in every channel are left out: the non-negative
-/// fit zeroes many of them (a sky of 16 lobes keeps a few), and each costs a shadow map
-/// and a term per fragment for nothing.
-pub fn env_data(
+/// An SRBF environment as the strip and fiber shaders read it (`env`), uploaded: count, λ,
+/// unused ×2; per SRBF its direction (xyz, 0) and weight (rgb, 0); then `I_M` on 16³
+/// nodes, RGB — and the centres of the SRBFs kept, in that order (one shadow map each).
+/// SRBFs whose weight is at most 1e-6 of the largest in every channel are left out: the
+/// non-negative fit zeroes some of them, and each costs a shadow map and a term per
+/// fragment for nothing. `who` names the renderer in errors: more than [`MAX_SRBFS`] or
+/// no SRBFs, weights and centres of different counts, non-finite values, or a table for
+/// another λ are refused.
+pub fn env_buffer(
+    gpu: &Gpu,
+    who: &str,
     fit: &yarn_precompute::SrbfFit,
     table: &yarn_precompute::ImTable,
-) -> (Vec<f32>, Vec<[f64; 3]>) {
+) -> Result<(wgpu::Buffer, Vec<[f64; 3]>)> {
+    let n = fit.centres.len();
+    if n == 0 || n > MAX_SRBFS || fit.weights.len() != n {
+        return Err(Error::Invalid(format!("{who}: {n} SRBFs (1..={MAX_SRBFS})")));
+    }
+    if (table.lambda - fit.lambda).abs() > 1e-9 * fit.lambda {
+        return Err(Error::Invalid(format!(
+            "{who}: I_M table for λ = {} but the fit has λ = {}",
+            table.lambda, fit.lambda
+        )));
+    }
+    let mut values = fit.centres.iter().flatten().chain(fit.weights.iter().flatten());
+    if !(values.all(|x| x.is_finite()) && fit.lambda.is_finite()) {
+        return Err(Error::Invalid(format!("{who}: non-finite SRBF fit")));
+    }
     let top = fit.weights.iter().flatten().fold(0.0f64, |m, &w| m.max(w));
-    let kept: Vec<usize> = (0..fit.centres.len())
-        .filter(|&j| fit.weights[j].iter().any(|&w| w > 1e-6 * top))
-        .collect();
+    let kept: Vec<usize> =
+        (0..n).filter(|&j| fit.weights[j].iter().any(|&w| w > 1e-6 * top)).collect();
     let mut data = vec![kept.len() as f32, fit.lambda as f32, 0.0, 0.0];
     for &j in &kept {
         let (c, w) = (fit.centres[j], fit.weights[j]);
@@ -141,7 +158,12 @@ pub fn env_data(
         data.extend([w[0] as f32, w[1] as f32, w[2] as f32, 0.0]);
     }
     table.values.iter().for_each(|v| data.extend(v));
-    (data, kept.iter().map(|&j| fit.centres[j]).collect())
+    let buffer = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("srbf env"),
+        contents: bytemuck::cast_slice(&data),
+        usage: wgpu::BufferUsages::STORAGE,
+    });
+    Ok((buffer, kept.iter().map(|&j| fit.centres[j]).collect()))
 }
 
 /// Shadow maps of one frame: the lights' (six cube faces for a point light among the
@@ -480,22 +502,7 @@ impl StripRenderer {
             self.env = None;
             return Ok(());
         };
-        let n = fit.centres.len();
-        if n == 0 || n > MAX_SRBFS || fit.weights.len() != n {
-            return Err(Error::Invalid(format!("strips: {n} SRBFs (1..={MAX_SRBFS})")));
-        }
-        if (table.lambda - fit.lambda).abs() > 1e-9 * fit.lambda {
-            return Err(Error::Invalid(format!(
-                "strips: I_M table for λ = {} but the fit has λ = {}",
-                table.lambda, fit.lambda
-            )));
-        }
-        let (data, dirs) = env_data(fit, table);
-        let buffer = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("strip env"),
-            contents: bytemuck::cast_slice(&data),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
+        let (buffer, dirs) = env_buffer(gpu, "strips", fit, table)?;
         let angle_deg = (1.0 / fit.lambda.sqrt()).atan().to_degrees().min(44.0);
         self.env = Some(StripEnv { buffer, dirs, angle_deg });
         Ok(())

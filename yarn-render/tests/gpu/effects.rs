@@ -4,87 +4,19 @@
 //! exact fiber-level shadows, and a constant environment through the ambient integral
 //! and AO must give the reference's mean radiance.
 
+use crate::lights::{Setup, mean, reference, rel_rmse, renderer, setup};
 use btf_render::Gpu;
-use yarn::bcsdf::{FiberBcsdf, KhungurnParams};
-use yarn::fiber::GenOptions;
-use yarn::knit::Chart;
-use yarn_ref::patch::{KnitPatch, PatchOptions};
-use yarn_ref::{
-    Background, Camera, EnvLight, FiberScene, Light, PathSettings, RenderSettings, Scene,
-    SceneOptions, Shading, render,
-};
-use yarn_render::{
-    AoMode, FiberCamera, FiberEffects, FiberLight, FiberRenderer, FiberSettings, PackOptions,
-    PackedYarns,
-};
-
-struct Setup {
-    patch: KnitPatch,
-    packed: PackedYarns,
-    bcsdf: FiberBcsdf,
-    view: [f64; 3],
-}
-
-fn setup() -> Setup {
-    let chart = Chart::builtin("stockinette").unwrap();
-    let params = crate::common::cotton();
-    let g = GenOptions { hairs: false, seed: 5, ..Default::default() };
-    let patch =
-        KnitPatch::new(&chart, &params, &PatchOptions { generation: g, ..Default::default() })
-            .unwrap();
-    let packed = PackedYarns::new(
-        &patch.yarns,
-        std::slice::from_ref(&params),
-        &PackOptions { seed: 5, frame_samples_per_segment: 16, tiles: [3, 3] },
-    )
-    .unwrap();
-    let bcsdf = FiberBcsdf::khungurn(&KhungurnParams::default()).unwrap();
-    Setup { patch, packed, bcsdf, view: btf_core::Direction::new(45.0, 30.0).to_vector() }
-}
-
-const SIZE: usize = 48;
-
-fn reference(s: &Setup, lights: &[Light], spp: u32) -> Vec<f32> {
-    let scene = FiberScene::new(
-        &s.patch.fibers,
-        &SceneOptions { period: Some(s.patch.period), backing_z: None },
-    )
-    .unwrap();
-    let shading = Shading::Fiber { bcsdf: std::sync::Arc::new(s.bcsdf.clone()), tint: true };
-    let sc = Scene { fibers: &scene, lights, shading: &shading };
-    let p = s.patch.period;
-    let cam = Camera::oblique(s.view, s.patch.z_ref, p.origin, p.size).unwrap();
-    let mut rs = RenderSettings::new(SIZE, SIZE, spp);
-    rs.path = PathSettings { max_bounces: 1, rr_start: 100, background: Background::Black };
-    render(&sc, &cam, &rs).unwrap().0.rgb
-}
+use yarn_ref::{EnvLight, Light};
+use yarn_render::{AoMode, FiberEffects, FiberLight};
 
 fn gpu_image(gpu: &Gpu, s: &Setup, lights: &[FiberLight], effects: FiberEffects) -> Vec<f32> {
-    let settings = FiberSettings { lod_px: 0.0, effects, ..Default::default() };
-    let r = FiberRenderer::new(gpu, &s.packed, &s.bcsdf, settings).unwrap();
-    let p = s.patch.period;
-    let cam = FiberCamera::oblique(s.view, s.patch.z_ref, p.origin, p.size);
-    let img = r.render(gpu, &cam, lights, (SIZE as u32, SIZE as u32), [0.0; 4]).unwrap();
-    img.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect()
-}
-
-fn rel_rmse(a: &[f32], b: &[f32]) -> f64 {
-    let (mut num, mut den) = (0.0, 0.0);
-    for (x, y) in a.iter().zip(b) {
-        num += (*x as f64 - *y as f64).powi(2);
-        den += (*y as f64).powi(2);
-    }
-    (num / den).sqrt()
-}
-
-fn mean(a: &[f32]) -> f64 {
-    a.iter().map(|x| *x as f64).sum::<f64>() / a.len() as f64
+    crate::lights::frame(gpu, s, &renderer(gpu, s, effects), lights)
 }
 
 #[test]
 fn shadows_bring_the_gpu_patch_to_the_reference() {
     let Some(gpu) = Gpu::for_tests("shadows_bring_the_gpu_patch_to_the_reference") else { return };
-    let s = setup();
+    let s = setup(true);
     let to_light = btf_core::Direction::new(30.0, 200.0).to_vector();
     let r = reference(&s, &[Light::Directional { to_light, irradiance: [3.0; 3] }], 32);
     let l = [FiberLight::Directional { to_light, irradiance: [3.0; 3] }];
@@ -107,7 +39,7 @@ fn shadows_bring_the_gpu_patch_to_the_reference() {
 #[test]
 fn constant_environment_through_the_ambient_integral_and_ao() {
     let Some(gpu) = Gpu::for_tests("constant_environment_through_the_ambient") else { return };
-    let s = setup();
+    let s = setup(true);
     let env = EnvLight::new(btf_image::EnvMap::constant(32, [1.0; 3]).unwrap(), 1.0);
     let r = reference(&s, &[Light::Environment(env)], 32);
     let mut out = Vec::new();

@@ -1,6 +1,7 @@
 //! Point lights with their tube shadow maps (one perspective map from afar, cube faces from
 //! among the yarns) and the environment by SRBF lobes, against the CPU reference on
-//! stockinette (R-approx: the same fibers, no hairs), oblique BTF view, one bounce.
+//! stockinette (R-approx: the same fibers, no hairs), oblique BTF view, one bounce. The
+//! scene, reference and GPU frame helpers serve `effects.rs` too.
 
 use btf_render::Gpu;
 use yarn::bcsdf::{FiberBcsdf, KhungurnParams};
@@ -19,7 +20,7 @@ use yarn_render::{
 
 const SIZE: usize = 48;
 
-struct Setup {
+pub(crate) struct Setup {
     patch: KnitPatch,
     packed: PackedYarns,
     bcsdf: FiberBcsdf,
@@ -29,7 +30,7 @@ struct Setup {
     periodic: bool,
 }
 
-fn setup(periodic: bool) -> Setup {
+pub(crate) fn setup(periodic: bool) -> Setup {
     let chart = Chart::builtin("stockinette").unwrap();
     let params = crate::common::cotton();
     let g = GenOptions { hairs: false, seed: 5, ..Default::default() };
@@ -48,7 +49,7 @@ fn setup(periodic: bool) -> Setup {
     Setup { patch, packed, bcsdf, view, periodic }
 }
 
-fn reference(s: &Setup, lights: &[Light], spp: u32) -> Vec<f32> {
+pub(crate) fn reference(s: &Setup, lights: &[Light], spp: u32) -> Vec<f32> {
     let period = s.periodic.then_some(s.patch.period);
     let scene =
         FiberScene::new(&s.patch.fibers, &SceneOptions { period, backing_z: None }).unwrap();
@@ -61,19 +62,19 @@ fn reference(s: &Setup, lights: &[Light], spp: u32) -> Vec<f32> {
     render(&sc, &cam, &rs).unwrap().0.rgb
 }
 
-fn renderer(gpu: &Gpu, s: &Setup, effects: FiberEffects) -> FiberRenderer {
+pub(crate) fn renderer(gpu: &Gpu, s: &Setup, effects: FiberEffects) -> FiberRenderer {
     let settings = FiberSettings { lod_px: 0.0, effects, ..Default::default() };
     FiberRenderer::new(gpu, &s.packed, &s.bcsdf, settings).unwrap()
 }
 
-fn frame(gpu: &Gpu, s: &Setup, r: &FiberRenderer, lights: &[FiberLight]) -> Vec<f32> {
+pub(crate) fn frame(gpu: &Gpu, s: &Setup, r: &FiberRenderer, lights: &[FiberLight]) -> Vec<f32> {
     let p = s.patch.period;
     let cam = FiberCamera::oblique(s.view, s.patch.z_ref, p.origin, p.size);
     let img = r.render(gpu, &cam, lights, (SIZE as u32, SIZE as u32), [0.0; 4]).unwrap();
     img.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect()
 }
 
-fn rel_rmse(a: &[f32], b: &[f32]) -> f64 {
+pub(crate) fn rel_rmse(a: &[f32], b: &[f32]) -> f64 {
     let (mut num, mut den) = (0.0, 0.0);
     for (x, y) in a.iter().zip(b) {
         num += (*x as f64 - *y as f64).powi(2);
@@ -82,7 +83,7 @@ fn rel_rmse(a: &[f32], b: &[f32]) -> f64 {
     (num / den).sqrt()
 }
 
-fn mean(a: &[f32]) -> f64 {
+pub(crate) fn mean(a: &[f32]) -> f64 {
     a.iter().map(|x| *x as f64).sum::<f64>() / a.len() as f64
 }
 
