@@ -116,6 +116,10 @@ fn main() {
     srbf.set_environment(&gpu, Some((&fit, &table))).unwrap();
     let kept = srbf.srbf_lobes();
     cases.push(Case { name: "srbf16", renderer: srbf, lights: vec![], maps: kept });
+    let hard_settings = FiberSettings { soft_lobes: false, ..Default::default() };
+    let mut hard = FiberRenderer::new(&gpu, &packed, &bcsdf, hard_settings).unwrap();
+    hard.set_environment(&gpu, Some((&fit, &table))).unwrap();
+    cases.push(Case { name: "srbf16-hard", renderer: hard, lights: vec![], maps: kept });
     let mut free = make(false, FiberEffects { yarn_shadows: false, ..fx });
     free.set_environment(&gpu, Some((&fit, &table))).unwrap();
     cases.push(Case { name: "srbf16-no-yarn-shadows", renderer: free, lights: vec![], maps: 0 });

@@ -36,9 +36,9 @@ use crate::bcsdf;
 use crate::gpu_data::YarnBuffers;
 use crate::pack::PackedYarns;
 use crate::passes::draw::{DEPTH, FrameTargets, SHADING_WGSL, color_format};
-use crate::passes::shadow::{ShadowPass, ShadowPassRaw, frame_views};
+use crate::passes::shadow::{ShadowPass, ShadowPassRaw, ShadowViewsRaw, frame_views, views_raw};
 use crate::renderer::{FiberImage, FiberStats};
-use crate::view::{FiberCamera, FiberLight, MAX_LIGHTS, ViewRaw, ViewSetup, lights_raw, to_cols};
+use crate::view::{FiberCamera, FiberLight, ViewRaw, ViewSetup, lights_raw, to_cols};
 use crate::{Error, Result};
 use btf_render::Gpu;
 use std::path::Path;
@@ -164,30 +164,6 @@ pub fn env_buffer(
         usage: wgpu::BufferUsages::STORAGE,
     });
     Ok((buffer, kept.iter().map(|&j| fit.centres[j]).collect()))
-}
-
-/// Shadow maps of one frame: the lights' (six cube faces for a point light among the
-/// yarns) and one per SRBF (`crate::passes::shadow::frame_views`).
-const MAX_STRIP_MAPS: usize = crate::passes::shadow::MAX_FIBER_MAPS;
-
-/// The strip shader's shadow uniform: per map its light (light `i`, or SRBF `j` as
-/// `MAX_LIGHTS + j`), its PCSS scale and its biases (depth, and metres along the light ray
-/// for perspective maps).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-struct StripShadowRaw {
-    view_proj: [[[f32; 4]; 4]; MAX_STRIP_MAPS],
-    n: [u32; 4],
-    light: [[u32; 4]; MAX_STRIP_MAPS / 4],
-    texel: [f32; 4],
-    pcss: [[f32; 4]; MAX_STRIP_MAPS / 4],
-    bias: [[f32; 4]; MAX_STRIP_MAPS],
-}
-
-impl Default for StripShadowRaw {
-    fn default() -> Self {
-        bytemuck::Zeroable::zeroed()
-    }
 }
 
 /// An environment fitted by SRBFs, uploaded.
@@ -503,7 +479,7 @@ impl StripRenderer {
             return Ok(());
         };
         let (buffer, dirs) = env_buffer(gpu, "strips", fit, table)?;
-        let angle_deg = (1.0 / fit.lambda.sqrt()).atan().to_degrees().min(44.0);
+        let angle_deg = crate::passes::shadow::srbf_angle_deg(fit.lambda);
         self.env = Some(StripEnv { buffer, dirs, angle_deg });
         Ok(())
     }
@@ -595,36 +571,20 @@ impl StripRenderer {
         })
     }
 
-    fn shadow_views(&self, lights: &[FiberLight]) -> Result<(Vec<ShadowPassRaw>, StripShadowRaw)> {
+    fn shadow_views(&self, lights: &[FiberLight]) -> Result<(Vec<ShadowPassRaw>, ShadowViewsRaw)> {
         let size = self.settings.shadow_map;
-        let mut raw =
-            StripShadowRaw { texel: [1.0 / size as f32, 0.0, 0.0, 0.0], ..Default::default() };
         if !self.settings.shadows {
-            return Ok((Vec::new(), raw));
+            return Ok((Vec::new(), ShadowViewsRaw::empty(size)));
         }
-        let srbfs = self.env.as_ref().map_or(&[][..], |e| &e.dirs[..]);
-        let views = frame_views(lights, srbfs, self.origin, self.centre, self.radius, size)?;
-        let metres_per_texel = 2.0 * self.radius / size as f64;
-        for (m, v) in views.iter().enumerate() {
-            raw.view_proj[m] = v.pass.view_proj;
-            raw.light[m / 4][m % 4] = v.light;
-            raw.bias[m] = [v.bias[0], v.bias[1], 0.0, 0.0];
-            // PCSS on the orthographic maps: a directional light's angular radius or an
-            // SRBF's 1/√λ; a point light's perspective maps are hard (one tap).
-            let angle = match (v.light as usize).checked_sub(MAX_LIGHTS) {
-                Some(_) => self.env.as_ref().map_or(0.0, |e| e.angle_deg),
-                None => match lights[v.light as usize] {
-                    FiberLight::Directional { .. } => self.settings.light_angle_deg,
-                    FiberLight::Point { .. } => 0.0,
-                },
-            };
-            // Penumbra (texels) = depth gap / (depth per metre) · tan(angle) / (metres per texel).
-            let tan = angle.to_radians().tan();
-            raw.pcss[m / 4][m % 4] =
-                if tan > 0.0 { (tan / (v.depth_per_metre * metres_per_texel)) as f32 } else { 0.0 };
-        }
-        raw.n[0] = views.len() as u32;
-        Ok((views.into_iter().map(|v| v.pass).collect(), raw))
+        // PCSS: a directional light's angular radius, an SRBF's 1/√λ.
+        let (srbfs, angle) = match &self.env {
+            Some(e) => (&e.dirs[..], e.angle_deg),
+            None => (&[][..], 0.0),
+        };
+        let angles = (self.settings.light_angle_deg, angle);
+        let views =
+            frame_views(lights, srbfs, angles, self.origin, self.centre, self.radius, size)?;
+        Ok((views.iter().map(|v| v.pass).collect(), views_raw(&views, size)))
     }
 
     /// Records the shadow and strip passes of one frame into `enc`.

@@ -50,9 +50,10 @@ pub fn srbf_light(j: usize) -> u32 {
     (crate::view::MAX_LIGHTS + j) as u32
 }
 
-/// The shadow maps as the fiber shader reads them (uniform): per map its light (light `i`,
-/// or SRBF `j` as [`srbf_light`]) and its biases; the shader takes the first map of the
-/// light that sees the point.
+/// The shadow maps as the fiber and strip shaders read them (uniform, `ShadowViews` of
+/// `fiber_shading.wgsl`): per map its light (light `i`, or SRBF `j` as [`srbf_light`]), its
+/// PCSS scale and its biases; the shaders take the first map of the light that sees the
+/// point.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ShadowViewsRaw {
@@ -62,10 +63,13 @@ pub struct ShadowViewsRaw {
     pub n: [u32; 4],
     /// The light each map belongs to.
     pub light: [[u32; 4]; MAX_FIBER_MAPS / 4],
-    /// Per map: depth bias (clip depth), bias along the light ray (metres), unused ×2.
-    pub bias: [[f32; 4]; MAX_FIBER_MAPS],
     /// 1/size, unused ×3.
     pub texel: [f32; 4],
+    /// Per map: PCSS penumbra texels per unit of light-clip depth gap (0: hard).
+    pub pcss: [[f32; 4]; MAX_FIBER_MAPS / 4],
+    /// Per map: depth bias (clip depth), bias along the light ray (metres), the fiber
+    /// shader's PCF tap spacing (texels), unused.
+    pub bias: [[f32; 4]; MAX_FIBER_MAPS],
 }
 
 impl ShadowViewsRaw {
@@ -88,6 +92,16 @@ pub struct MapView {
     pub depth_per_metre: f64,
     /// Depth bias (clip depth) and bias along the light ray (metres).
     pub bias: [f32; 2],
+    /// PCSS penumbra texels per unit of light-clip depth gap (0: a hard map; the strips).
+    pub pcss: f32,
+    /// Spacing of the fiber shader's 3 × 3 PCF taps, texels (1: a delta light's).
+    pub spread: f32,
+}
+
+/// The PCSS angular radius of an SRBF lobe of sharpness `λ`: `atan(1/√λ)` (one standard
+/// deviation of the lobe, DESIGN §3.3 item 14), at most 44°, in degrees.
+pub fn srbf_angle_deg(lambda: f64) -> f64 {
+    (1.0 / lambda.sqrt()).atan().to_degrees().min(44.0)
 }
 
 /// The orthographic maps' depth bias (clip depth over the sphere's 2.1 radii).
@@ -296,16 +310,25 @@ pub fn point_views(
 
 /// The shadow maps of the first [`MAX_SHADOW_MAPS`] directional and point lights of
 /// `lights` and of every direction of `srbfs` (orthographic, [`srbf_light`]) for a scene
-/// within `radius` of `centre` (origin-relative).
+/// within `radius` of `centre` (origin-relative). PCSS on the orthographic maps with the
+/// angular radius `angles.0` (degrees) for directional lights and `angles.1` for the
+/// SRBFs (0: hard); a point light's perspective maps are hard.
 pub fn frame_views(
     lights: &[FiberLight],
     srbfs: &[[f64; 3]],
+    angles: (f64, f64),
     origin: [f64; 3],
     centre: [f64; 3],
     radius: f64,
     size: u32,
 ) -> Result<Vec<MapView>> {
     let world_bias = (ORTHO_BIAS as f64 * 1.05 * radius.max(1e-9)) as f32;
+    let metres_per_texel = 2.0 * radius / size as f64;
+    // Penumbra (texels) = depth gap / (depth per metre) · tan(angle) / (metres per texel).
+    let pcss = |angle: f64, dpm: f64| {
+        let tan = angle.to_radians().tan();
+        if tan > 0.0 { (tan / (dpm * metres_per_texel)) as f32 } else { 0.0 }
+    };
     let mut out = Vec::new();
     for (i, l) in lights.iter().take(MAX_SHADOW_MAPS).enumerate() {
         match *l {
@@ -316,6 +339,8 @@ pub fn frame_views(
                     light: i as u32,
                     depth_per_metre: dpm,
                     bias: [ORTHO_BIAS, 0.0],
+                    pcss: pcss(angles.0, dpm),
+                    spread: 1.0,
                 });
             }
             FiberLight::Point { position, .. } => {
@@ -326,6 +351,8 @@ pub fn frame_views(
                         light: i as u32,
                         depth_per_metre: f64::NAN,
                         bias: [0.0, world_bias],
+                        pcss: 0.0,
+                        spread: 1.0,
                     });
                 }
             }
@@ -339,6 +366,8 @@ pub fn frame_views(
             light: srbf_light(j),
             depth_per_metre: dpm,
             bias: [ORTHO_BIAS, 0.0],
+            pcss: pcss(angles.1, dpm),
+            spread: 1.0,
         });
     }
     if out.len() > MAX_FIBER_MAPS {
@@ -356,7 +385,8 @@ pub fn views_raw(views: &[MapView], size: u32) -> ShadowViewsRaw {
     for (m, v) in views.iter().enumerate() {
         raw.view_proj[m] = v.pass.view_proj;
         raw.light[m / 4][m % 4] = v.light;
-        raw.bias[m] = [v.bias[0], v.bias[1], 0.0, 0.0];
+        raw.bias[m] = [v.bias[0], v.bias[1], v.spread, 0.0];
+        raw.pcss[m / 4][m % 4] = v.pcss;
     }
     raw.n[0] = views.len() as u32;
     raw
@@ -426,7 +456,7 @@ mod tests {
             FiberLight::Directional { to_light: [0.0, 0.0, 1.0], irradiance: [1.0; 3] },
         ];
         let srbfs = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
-        let v = frame_views(&lights, &srbfs, [0.0; 3], [0.0; 3], 0.01, 64).unwrap();
+        let v = frame_views(&lights, &srbfs, (0.0, 10.0), [0.0; 3], [0.0; 3], 0.01, 64).unwrap();
         let lights_of: Vec<u32> = v.iter().map(|m| m.light).collect();
         let faces = lights_of.iter().filter(|&&l| l == 0).count();
         assert_eq!(faces, 6);
@@ -434,6 +464,9 @@ mod tests {
         // Perspective maps are biased along the ray; orthographic ones in depth.
         assert!(v[0].bias[0] == 0.0 && v[0].bias[1] > 0.0);
         assert!(v[faces].bias[0] > 0.0 && v[faces].bias[1] == 0.0);
+        // PCSS only where an angle is given: the SRBFs here, not the hard maps.
+        assert!(v[..=faces].iter().all(|m| m.pcss == 0.0));
+        assert!(v[faces + 1..].iter().all(|m| m.pcss > 0.0));
         let raw = views_raw(&v, 64);
         assert_eq!(raw.n[0] as usize, v.len());
         assert_eq!(raw.light[1][3], srbf_light(0));

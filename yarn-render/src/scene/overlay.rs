@@ -26,7 +26,7 @@
 //! by its SRBF lobes (above), each shadowed by the other yarns through its tube shadow map
 //! and by the yarn's own fibers through the self-shadow volume — [W19]'s constant ambient
 //! term ([W19 eq. 7–8] with AO, the uniform radiance of the same power) measured 2.1× the
-//! reference's mean radiance on a stockinette patch under a constant sky, the lobes 1.16×
+//! reference's mean radiance on a stockinette patch under a constant sky, the lobes 1.17×
 //! (`tests/gpu/lights.rs`). The lobes have no visibility of the meshes: yarns and meshes
 //! do not shadow each other (each casts shadows on itself only).
 

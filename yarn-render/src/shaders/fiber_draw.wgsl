@@ -34,21 +34,9 @@ struct Effects {
 
 @group(1) @binding(4) var<storage, read> effects: array<Effects>;
 @group(1) @binding(5) var<storage, read> effect_data: array<f32>;
-@group(1) @binding(6) var yarn_shadow_maps: texture_depth_2d_array;
+@group(1) @binding(6) var shadow_maps: texture_depth_2d_array;
 @group(1) @binding(7) var shadow_cmp: sampler_comparison;
 @group(1) @binding(8) var<uniform> shadow_views: ShadowViews;
-
-// World (origin-relative) → light clip per shadow map (passes/shadow.rs): count in n.x,
-// per map the light it belongs to (light i, or SRBF j as 8 + j) and its biases.
-struct ShadowViews {
-    view_proj: array<mat4x4<f32>, 56>,
-    n: vec4<u32>,
-    light: array<vec4<u32>, 14>,
-    // Depth bias (clip depth), bias along the light ray (metres), unused ×2.
-    bias: array<vec4<f32>, 56>,
-    // Texel size of the maps (1/size), unused ×3.
-    texel: vec4<f32>,
-}
 
 // The environment (renderer.rs set_environment): count, λ, unused ×2; per SRBF its
 // direction (xyz, 0) and weight (rgb, 0); then I_M on 16³ nodes (θ_j, θ_o, Δφ), RGB.
@@ -498,7 +486,10 @@ fn ambient_integral(e: Effects, theta_o: f32) -> vec3<f32> {
 // Visibility of light `li` (or SRBF j as 8 + j) past other yarns: the first tube shadow
 // map of that light that sees the point (a point light may have six cube faces), read at
 // the yarn centre moved towards the light by the tube radius (so a yarn never shadows
-// itself through its own tube; self-shadows are the volume's), 3 × 3 PCF.
+// itself through its own tube; self-shadows are the volume's), 3 × 3 PCF with taps
+// `bias.z` texels apart (1 for a delta light, wider for a soft SRBF lobe). Not the strips'
+// PCSS: on llvmpipe a blocker search anywhere in this shader made every lobe 3× dearer,
+// taken or not (`benches/lights.rs`).
 fn yarn_visibility(li: u32, centre: vec3<f32>, wi: vec3<f32>, radius: f32) -> f32 {
     for (var m = 0u; m < shadow_views.n.x; m++) {
         if shadow_views.light[m / 4u][m % 4u] != li {
@@ -516,12 +507,12 @@ fn yarn_visibility(li: u32, centre: vec3<f32>, wi: vec3<f32>, radius: f32) -> f3
             continue;
         }
         let depth = ndc.z - b.x;
+        let step = shadow_views.texel.x * b.z;
         var v = 0.0;
         for (var dy = -1; dy <= 1; dy++) {
             for (var dx = -1; dx <= 1; dx++) {
-                let o = vec2<f32>(f32(dx), f32(dy)) * shadow_views.texel.x;
-                v += textureSampleCompareLevel(yarn_shadow_maps, shadow_cmp, uv + o, i32(m),
-                    depth);
+                let o = vec2<f32>(f32(dx), f32(dy)) * step;
+                v += textureSampleCompareLevel(shadow_maps, shadow_cmp, uv + o, i32(m), depth);
             }
         }
         return v / 9.0;

@@ -1,8 +1,10 @@
 // Fiber shading shared by fiber_draw and strip_regular (both declare `view`, `lobes`,
-// `q_nodes` and the SRBF environment `env` in their own group 1): the lobe records of
-// bcsdf.rs, the fiber BCSDF of yarn::bcsdf evaluated as FiberBcsdf::eval does, the view
-// direction, the hashed sample masks of strips narrower than their coverage, and the
-// SRBF environment's I_M table [H25 eq. 16] with the fiber-frame angles it is read at.
+// `q_nodes`, the SRBF environment `env` and the tube shadow maps `shadow_maps`,
+// `shadow_cmp`, `shadow_views` in their own group 1): the lobe records of bcsdf.rs, the
+// fiber BCSDF of yarn::bcsdf evaluated as FiberBcsdf::eval does, the view direction, the
+// hashed sample masks of strips narrower than their coverage, the SRBF environment's I_M
+// table [H25 eq. 16] with the fiber-frame angles it is read at, and the layout of the tube
+// shadow maps' uniform.
 
 struct Lobe {
     // Colour A_p (linear RGB).
@@ -138,4 +140,21 @@ fn fiber_angles(w: vec3<f32>, t: vec3<f32>) -> vec4<f32> {
     let l = length(p);
     let q = select(vec3<f32>(0.0), p / l, l > 1e-6);
     return vec4<f32>(q, asin(s));
+}
+
+// The tube shadow maps of a frame (passes/shadow.rs ShadowViewsRaw): world (origin-
+// relative) → light clip per map, the count, per map the light it belongs to (light i, or
+// SRBF j as 8 + j), its PCSS scale and its biases.
+struct ShadowViews {
+    view_proj: array<mat4x4<f32>, 56>,
+    // Maps in use, unused ×3.
+    n: vec4<u32>,
+    light: array<vec4<u32>, 14>,
+    // 1/size, unused ×3.
+    texel: vec4<f32>,
+    // Per map: PCSS penumbra texels per unit of light-clip depth gap (0: hard).
+    pcss: array<vec4<f32>, 14>,
+    // Per map: depth bias (clip depth), bias along the light ray (metres), 3 × 3 PCF tap
+    // spacing in texels (fibers), unused.
+    bias: array<vec4<f32>, 56>,
 }

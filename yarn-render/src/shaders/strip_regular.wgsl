@@ -25,18 +25,6 @@ struct StripHeader {
 }
 
 // Maps: the directional lights' (light i) and one per SRBF (light 8 + j).
-struct ShadowViews {
-    view_proj: array<mat4x4<f32>, 56>,
-    // Maps in use, unused ×3.
-    n: vec4<u32>,
-    light: array<vec4<u32>, 14>,
-    // 1/size, unused ×3.
-    texel: vec4<f32>,
-    // Per map: PCSS penumbra texels per unit of light-clip depth gap (0: hard, one tap).
-    pcss: array<vec4<f32>, 14>,
-    // Per map: depth bias (clip depth), bias along the light ray (metres), unused ×2.
-    bias: array<vec4<f32>, 56>,
-}
 
 @group(1) @binding(0) var<uniform> view: View;
 @group(1) @binding(1) var<storage, read> headers: array<StripHeader>;
