@@ -337,8 +337,18 @@ pub fn lights_raw(lights: &[FiberLight], origin: [f64; 3]) -> Result<[LightRaw; 
         )));
     }
     let mut out = [LightRaw::default(); MAX_LIGHTS];
+    // Finite, non-negative and within f32 (no NaN or infinity reaches a pixel).
+    let value_ok =
+        |v: [f64; 3]| v.iter().all(|x| x.is_finite() && *x >= 0.0 && *x <= f32::MAX as f64);
     for (i, l) in lights.iter().enumerate() {
         let f = |v: [f64; 3]| v.map(|x| x as f32);
+        let (value, what) = match *l {
+            FiberLight::Directional { irradiance, .. } => (irradiance, "irradiance"),
+            FiberLight::Point { intensity, .. } => (intensity, "intensity"),
+        };
+        if !value_ok(value) {
+            return Err(Error::Invalid(format!("light {i}: {what} {value:?} (finite, ≥ 0)")));
+        }
         out[i] = match *l {
             FiberLight::Directional { to_light, irradiance } => {
                 let n = (to_light.iter().map(|x| x * x).sum::<f64>()).sqrt();
@@ -350,6 +360,9 @@ pub fn lights_raw(lights: &[FiberLight], origin: [f64; 3]) -> Result<[LightRaw; 
                 LightRaw { pos_dir: [d[0], d[1], d[2], 0.0], value: [e[0], e[1], e[2], 0.0] }
             }
             FiberLight::Point { position, intensity } => {
+                if !position.iter().all(|x| x.is_finite() && x.abs() <= 1e30) {
+                    return Err(Error::Invalid(format!("light {i}: position {position:?}")));
+                }
                 let p = f([0, 1, 2].map(|a| position[a] - origin[a]));
                 let e = f(intensity);
                 LightRaw { pos_dir: [p[0], p[1], p[2], 1.0], value: [e[0], e[1], e[2], 0.0] }
@@ -368,4 +381,36 @@ pub fn to_cols(m: &Matrix4<f64>) -> [[f32; 4]; 4] {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lights_with_non_finite_or_negative_values_are_refused_by_index() {
+        let ok = FiberLight::Directional { to_light: [0.0, 0.0, 1.0], irradiance: [1.0; 3] };
+        let bad = [
+            (
+                FiberLight::Directional {
+                    to_light: [0.0, 0.0, 1.0],
+                    irradiance: [f64::NAN, 1.0, 1.0],
+                },
+                "irradiance",
+            ),
+            (FiberLight::Point { position: [0.0; 3], intensity: [-1.0, 1.0, 1.0] }, "intensity"),
+            (FiberLight::Point { position: [0.0; 3], intensity: [1e300; 3] }, "intensity"),
+            (
+                FiberLight::Point { position: [f64::INFINITY, 0.0, 0.0], intensity: [1.0; 3] },
+                "position",
+            ),
+            (FiberLight::Directional { to_light: [0.0; 3], irradiance: [1.0; 3] }, "direction"),
+        ];
+        for (l, what) in bad {
+            let e = lights_raw(&[ok, l], [0.0; 3]).unwrap_err().to_string();
+            assert!(e.contains("light 1") && e.contains(what), "{e}");
+        }
+        let raw = lights_raw(&[ok], [0.0; 3]).unwrap();
+        assert_eq!(raw[0].value, [1.0, 1.0, 1.0, 0.0]);
+    }
 }

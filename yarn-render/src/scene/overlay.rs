@@ -120,6 +120,9 @@ pub struct YarnOverlay {
     /// The yarns' environment (fibers and strips): the map it was fitted to (path,
     /// revision), its SRBF fit and I_M table, refitted when the map changes.
     srbf: Option<(std::path::PathBuf, u64, yarn_precompute::SrbfFit, yarn_precompute::ImTable)>,
+    /// The environment state (revision, rotation and exposure bits) the renderers were last
+    /// given; `None` before the first frame. The lobes are uploaded only when it changes.
+    env_key: Option<Option<(u64, u64, u32)>>,
 }
 
 /// SRBFs of the yarns' environment fit in scenes ([H25 §6]: 16).
@@ -194,7 +197,7 @@ impl YarnOverlay {
                 )?))
             })
             .collect::<Result<_>>()?;
-        Ok(YarnOverlay { renderers, bcsdf, srbf: None })
+        Ok(YarnOverlay { renderers, bcsdf, srbf: None, env_key: None })
     }
 
     /// The yarns' SRBF environment for this frame: fitted once per map (path and
@@ -262,8 +265,13 @@ impl Overlay for YarnOverlay {
         let cam = fiber_camera(view.camera);
         let lights = fiber_lights(&view.scene.lights);
         let ambient = ambient(view.environment);
+        // The lobes (fitted once per map, rotated and exposed per change) go to the
+        // renderers only when the environment changed since the last frame.
+        let key =
+            view.environment.map(|e| (e.revision, e.rotation_deg.to_bits(), e.exposure.to_bits()));
         let lobed = self.renderers.iter().any(|r| !matches!(r, YarnDrawer::Lumislice(_)));
-        let env = if lobed { self.environment(view).map_err(to_render)? } else { None };
+        let fresh = lobed && self.env_key != Some(key);
+        let env = if fresh { self.environment(view).map_err(to_render)? } else { None };
         // The table stays where it was built (it changes only with the map).
         let table = self.srbf.as_ref().map(|s| &s.3);
         // Opaque drawers first, then the blended lumislices over them.
@@ -276,13 +284,21 @@ impl Overlay for YarnOverlay {
                 // term stays for when there is none.
                 YarnDrawer::Fibers(r) => {
                     r.set_ambient(ambient);
-                    r.set_environment(gpu, env.as_ref().zip(table))
-                        .and_then(|_| r.encode_into(gpu, encoder, t, targets.size, &cam, &lights))
+                    let set = if fresh {
+                        r.set_environment(gpu, env.as_ref().zip(table))
+                    } else {
+                        Ok(())
+                    };
+                    set.and_then(|_| r.encode_into(gpu, encoder, t, targets.size, &cam, &lights))
                 }
                 YarnDrawer::Strips(r) => {
                     // The environment through SRBFs ([H25 eq. 17]), not the ambient term.
-                    r.set_environment(gpu, env.as_ref().zip(table))
-                        .and_then(|_| r.encode_into(gpu, encoder, t, targets.size, &cam, &lights))
+                    let set = if fresh {
+                        r.set_environment(gpu, env.as_ref().zip(table))
+                    } else {
+                        Ok(())
+                    };
+                    set.and_then(|_| r.encode_into(gpu, encoder, t, targets.size, &cam, &lights))
                 }
                 // Point and directional lights only: [C03] has no environment light.
                 YarnDrawer::Lumislice(r) => {
@@ -290,6 +306,10 @@ impl Overlay for YarnOverlay {
                 }
             }
             .map_err(to_render)?;
+        }
+        // Kept only once every renderer took it (a failed upload is retried next frame).
+        if fresh {
+            self.env_key = Some(key);
         }
         Ok(())
     }
