@@ -73,7 +73,11 @@ impl YarnBuffers {
         make("curves", bytemuck::cast_slice(&packed.curves), 64)?;
         make("frame samples", bytemuck::cast_slice(&packed.samples), 48)?;
         make("fiber tables", bytemuck::cast_slice(&packed.fibers), 16)?;
-        make("yarn params", bytemuck::cast_slice(&packed.params), 64)?;
+        make(
+            "yarn params",
+            bytemuck::cast_slice(&packed.params),
+            size_of::<crate::pack::ParamsRaw>(),
+        )?;
         let layout = layout(dev);
         let entries: Vec<wgpu::BindGroupEntry> = buffers
             .iter()

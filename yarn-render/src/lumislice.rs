@@ -777,6 +777,7 @@ impl LumisliceRenderer {
             segments: self.data.segment_count,
             culled: 0,
             instances: n,
+            hairs: 0,
             overflow: 0,
             triangles: n as u64 * 12,
             yarn_bytes: self.data.bytes + self.table_bytes,

@@ -22,7 +22,10 @@
 //! ply (the order in which LoD drops fibers, [W19 §5]).
 //!
 //! Memory is `O(control points)`: 192 B a segment + 48 B a frame sample (4 per segment by
-//! default) + 16 B a table fiber per curve; [`PackedYarns::bytes`] reports it.
+//! default) + 16 B a table fiber per curve; [`PackedYarns::bytes`] reports it. Flyaways
+//! cost nothing more: loops and hairs are found by hashing a slot's keys on the GPU
+//! (`fiber_lod` scans the slots each segment spans for hairs, `fiber_gen.wgsl` draws their
+//! shapes), so hair polylines are never stored either.
 
 use crate::{Error, Result};
 use yarn::fiber::{EffectiveTwist, FiberTable};
@@ -74,7 +77,7 @@ pub struct SampleRaw {
     pub carry: [f32; 4],
 }
 
-/// One yarn description as the shaders read it (std430, 64 bytes).
+/// One yarn description as the shaders read it (std430, 112 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ParamsRaw {
@@ -86,6 +89,14 @@ pub struct ParamsRaw {
     pub c: [f32; 4],
     /// Plies, fibers per ply, core fibers per ply, bit 0: slots have random types.
     pub d: [u32; 4],
+    /// Hair `z_e` mean and sigma, `r_0` mean and sigma ([`FiberTable::period_kind`]).
+    pub e: [f32; 4],
+    /// Hair `r_e` mean and sigma, `p_e` mean and sigma.
+    pub f: [f32; 4],
+    /// Loop + hair chance (a slot's first draw below it and above the loop chance is a
+    /// hair), the hair curvature α, the smallest `r_e` (5 % of the ply reach), and
+    /// `max(e_N, e_B)/√(e_N e_B)` (a hair's reach from its normalised radius).
+    pub g: [f32; 4],
 }
 
 /// Options of [`PackedYarns::new`]; they must equal the CPU generator's
@@ -247,6 +258,25 @@ impl PackedYarns {
                     flyaway_reach(p) as f32,
                 ],
                 d: [p.ply_count, p.fibers_per_ply, core, random_slots as u32],
+                e: [
+                    p.hair_ze.mean as f32,
+                    p.hair_ze.sigma as f32,
+                    p.hair_r0.mean as f32,
+                    p.hair_r0.sigma as f32,
+                ],
+                f: [
+                    p.hair_re.mean as f32,
+                    p.hair_re.sigma as f32,
+                    p.hair_pe.mean as f32,
+                    p.hair_pe.sigma as f32,
+                ],
+                g: [
+                    (p.loop_chance() + p.hair_chance()) as f32,
+                    p.hair_curvature as f32,
+                    (0.05 * p.ply_reach()) as f32,
+                    (p.ply_ellipse_n.max(p.ply_ellipse_b)
+                        / (p.ply_ellipse_n * p.ply_ellipse_b).sqrt()) as f32,
+                ],
             });
             out.max_fibers_per_ply = out.max_fibers_per_ply.max(p.fibers_per_ply);
             out.max_plies = out.max_plies.max(p.ply_count);

@@ -45,6 +45,9 @@ pub struct FiberSettings {
     pub cull: bool,
     /// Loop flyaways.
     pub loops: bool,
+    /// Hair flyaways (`fiber_lod` finds them by hashing each listed fiber's slots; they
+    /// must match the CPU generator's `GenOptions::hairs` for the two to agree).
+    pub hairs: bool,
     /// Multiply the BCSDF by the yarn colour.
     pub tint: bool,
     /// MSAA samples (1 or 4).
@@ -80,6 +83,7 @@ impl Default for FiberSettings {
             lod_px: 1.0,
             cull: true,
             loops: true,
+            hairs: true,
             tint: true,
             msaa: 4,
             min_strip_px: 1.0,
@@ -99,8 +103,10 @@ pub struct FiberStats {
     pub segments: u32,
     /// Segments culled.
     pub culled: u32,
-    /// Fiber instances drawn.
+    /// Fiber instances drawn (hairs included).
     pub instances: u32,
+    /// Hair flyaways listed.
+    pub hairs: u32,
     /// Instances beyond the capacity (not drawn).
     pub overflow: u32,
     /// Triangles submitted (`instances · 2·n_sub`, degenerate ones included).
@@ -197,6 +203,14 @@ impl FiberRenderer {
         }
         if settings.shadow_map < 16 || settings.shadow_map > 8192 {
             return Err(Error::Invalid(format!("shadow_map {} (16..=8192)", settings.shadow_map)));
+        }
+        let hairy = packed.yarn_params.iter().any(|p| p.hair_chance() > 0.0);
+        if settings.hairs && hairy && packed.segments.len() >= 1 << 25 {
+            return Err(Error::Limit(format!(
+                "{} yarn segments with hair flyaways: a hair instance addresses at most 2^25 \
+                 segments; render fewer segments at once or turn hairs off",
+                packed.segments.len()
+            )));
         }
         let dev = &gpu.device;
         let data = YarnBuffers::new(gpu, packed)?;
@@ -349,7 +363,8 @@ impl FiberRenderer {
             | ao << 5
             | (s.effects.core as u32) << 7
             | (s.effects.shadow_hiding as u32) << 8
-            | (s.effects.helix_shadows as u32) << 9;
+            | (s.effects.helix_shadows as u32) << 9
+            | (s.hairs as u32) << 10;
         let f3 = |v: nalgebra::Vector3<f64>, w: f32| [v.x as f32, v.y as f32, v.z as f32, w];
         Ok(ViewRaw {
             view_proj: to_cols(&setup.view_proj),
@@ -635,6 +650,7 @@ impl FiberRenderer {
             segments: self.data.segment_count,
             culled: args.culled,
             instances: args.instance_count,
+            hairs: args.hairs,
             overflow: args.overflow,
             triangles: args.instance_count as u64 * 2 * self.settings.n_sub as u64,
             yarn_bytes: self.data.bytes,

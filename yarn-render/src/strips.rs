@@ -750,6 +750,7 @@ impl StripRenderer {
             segments: n,
             culled: 0,
             instances: n,
+            hairs: 0,
             overflow: 0,
             triangles: n as u64 * 2 * self.settings.n_sub as u64,
             yarn_bytes: self.data.bytes + self.texel_bytes,

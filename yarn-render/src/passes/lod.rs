@@ -6,6 +6,18 @@
 //! formula the paper omits). Instances are appended to a list and counted into an indirect
 //! draw's `instance_count` with `atomicAdd`; a list that would overflow its capacity is
 //! cut there and the overflow counted (never drawn half-written).
+//!
+//! **Hair flyaways** (ours; [W19 §3.1] converts part of a period into a hair but draws it
+//! only through the tessellated fiber): each segment hashes the slots all its fibers pass
+//! through with the keys of `yarn::fiber::FiberTable::period_kind` and lists the hairs
+//! whose crossing of `r_0` lies on it, as one more instance (bit 31 of the segment word,
+//! the slot in bits 25–30), with the segment's subdivisions. Every fiber's hairs are
+//! listed at any λ: a knit segment has a few (cotton: ~3) against `n_ply·n` regular
+//! fibers, and dropping them with their fibers would thin the fuzz with distance, which
+//! LoD is meant to leave unchanged (DESIGN §2.5). The segment test is one comparison the two
+//! segments of a boundary compute identically, so each hair is listed once; a hair spans
+//! more than its segment, so it is culled only when every segment it crosses, inflated by
+//! its own reach, is outside the frustum.
 
 use crate::gpu_data::YarnBuffers;
 use crate::{Error, Result};
@@ -41,7 +53,7 @@ pub fn counts(lambda: f64, n_max: u32, n_sub: u32) -> (u32, u32) {
     (n, s)
 }
 
-/// The indirect draw arguments and counters the pass writes (24 bytes).
+/// The indirect draw arguments and counters the pass writes (28 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct DrawArgsRaw {
@@ -57,6 +69,8 @@ pub struct DrawArgsRaw {
     pub overflow: u32,
     /// Segments culled.
     pub culled: u32,
+    /// Hair flyaways listed.
+    pub hairs: u32,
 }
 
 /// The compiled pass.

@@ -1,5 +1,7 @@
-// fiber_draw (render, vertex pulling): one instance per listed (segment, ply, fiber) — or,
-// for the plain-tube baseline (fiber index 0xffff), per segment with the yarn's width — a
+// fiber_draw (render, vertex pulling): one instance per listed (segment, ply, fiber) or
+// hair flyaway (instance_sample of the generator: a hair's points walk along the curve by
+// their length coordinate) — or, for the plain-tube baseline (fiber index 0xffff), per
+// segment with the yarn's width — a
 // triangle strip of 2·(n_sub_max + 1) vertices; vertex k of an instance with fewer
 // subdivisions collapses onto its last point. Each vertex evaluates the generator
 // (fiber_point, the function fiber_expand writes) and is pushed ± half the fiber width
@@ -177,7 +179,7 @@ fn vs_probe(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) ->
     let px = (f32(slot % w) + 0.5) / f32(w);
     let py = (f32(slot / w) + 0.5) / f32(h);
     let loops = (view.lod.z & 2u) != 0u;
-    let fs = fiber_sample(rec.x, (rec.y >> 16u) & 0xffu, rec.y & 0xffffu, strip_t(rec, vi), loops);
+    let fs = instance_sample(rec, strip_t(rec, vi), loops);
     var out: ProbeOut;
     out.clip = vec4<f32>(2.0 * px - 1.0, 1.0 - 2.0 * py, 0.5, 1.0);
     out.p = vec4<f32>(fs.pos, 1.0);
@@ -192,21 +194,22 @@ fn fs_probe(in: ProbeOut) -> @location(0) vec4<f32> {
 @vertex
 fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> VertexOut {
     let rec = instances[ii];
-    let seg = rec.x;
+    let hair = instance_is_hair(rec);
+    let seg = instance_segment(rec);
     let fib = rec.y & 0xffffu;
     let ply = (rec.y >> 16u) & 0xffu;
     let n_sub = max(rec.y >> 24u, 1u);
     let side = select(-1.0, 1.0, (vi & 1u) == 1u);
     let t = strip_t(rec, vi);
     let loops = (view.lod.z & 2u) != 0u;
-    let tube = fib == 0xffffu;
+    let tube = !hair && fib == 0xffffu;
     // Tangent from a neighbour a quarter subdivision away (backwards at the end).
     let h = 0.25 / f32(n_sub);
     let t2 = select(t + h, t - h, t + h > 1.0);
     var p: vec3<f32>;
     var q: vec3<f32>;
     var fsmp: FiberSample;
-    if fib == 0xfffeu {
+    if !hair && fib == 0xfffeu {
         return core_vertex(seg, ply, t, side, rec);
     }
     if tube {
@@ -214,15 +217,18 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
         p = yp.pos;
         q = yarn_point(seg, t2).pos;
         fsmp.centre = p;
+        fsmp.tangent = yp.t;
         fsmp.q = vec2<f32>(0.0);
         fsmp.n_slice = yp.n;
         fsmp.b_slice = yp.b;
+        fsmp.seg = seg;
+        fsmp.t = t;
     } else {
-        fsmp = fiber_sample(seg, ply, fib, t, loops);
+        fsmp = instance_sample(rec, t, loops);
         p = fsmp.pos;
-        q = fiber_point(seg, ply, fib, t2, loops);
+        q = instance_sample(rec, t2, loops).pos;
     }
-    var tan = normalize_or(q - p, yarn_point(seg, t).t);
+    var tan = normalize_or(q - p, fsmp.tangent);
     if t2 < t {
         tan = -tan;
     }
@@ -244,7 +250,9 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     out.clip = view.view_proj * vec4<f32>(p + across * (0.5 * w * side), 1.0);
     out.axis = p;
     out.tangent = tan;
-    out.color = select(s.color[0].rgb, s.color[1].rgb, t >= 0.5);
+    // The colour of the nearest control point (a hair's, where its point lies).
+    let sc = segments[fsmp.seg].color;
+    out.color = select(sc[0].rgb, sc[1].rgb, fsmp.t >= 0.5);
     out.misc = vec4<f32>(coverage, 0.0, 0.0, 0.0);
     out.centre = fsmp.centre;
     out.q = fsmp.q;
@@ -252,7 +260,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     out.b_slice = fsmp.b_slice;
     // The fiber's identity, not its place in the list: culling and LoD reorder the list,
     // and the sample mask must not change with it.
-    out.ids = vec4<u32>(pcg(seg) ^ (rec.y & 0xffffffu), c.ids.x, select(0u, 2u, tube), 0u);
+    out.ids = vec4<u32>(pcg(rec.x) ^ (rec.y & 0xffffffu), c.ids.x, select(0u, 2u, tube), 0u);
     return out;
 }
 

@@ -1,5 +1,5 @@
 // fiber_expand: every listed fiber instance evaluated at n_sub + 1 points of its segment
-// (u = k/n_sub), written to a storage buffer — the compute alternative to vertex pulling
+// (u = k/n_sub; a hair at its own parameter k/n_sub), written to a storage buffer — the compute alternative to vertex pulling
 // of DESIGN §2.4 item 4, and the read-back the CPU = GPU test compares with
 // yarn::fiber::FiberModel::fiber_point. One invocation per (instance, point).
 
@@ -38,7 +38,7 @@ fn expand(@builtin(global_invocation_id) gid: vec3<u32>,
             points[idx] = vec4<f32>(fs.radius, fs.psi, fs.ply_angle, 0.0);
         }
         default: {
-            points[idx] = vec4<f32>(fiber_point(inst.x, ply, fib, t, loops), 1.0);
+            points[idx] = vec4<f32>(instance_sample(inst, t, loops).pos, 1.0);
         }
     }
 }

@@ -2,7 +2,9 @@
 // (the CPU reference it is tested against to 1e-5 of the yarn radius) — Catmull–Rom centre
 // line, surface-anchored rotation-minimising frame (yarn::frame::CurveFrames::frame_at),
 // ply displacement [W19 §3.1], elliptical fiber displacement with migration [W19 eq. 1–2],
-// loops, and the keyed SplitMix64 hash that gives every (fiber, slot) its type.
+// loops, hair flyaways (the slot's shape drawn from its hash, placed along the curve by
+// its length coordinate), and the keyed SplitMix64 hash that gives every (fiber, slot) its
+// type.
 // Prepended to every fiber pass; group 0 is the packed yarn data (pack.rs).
 
 struct Segment {
@@ -31,6 +33,9 @@ struct Params {
     b: vec4<f32>,
     c: vec4<f32>,
     d: vec4<u32>,
+    e: vec4<f32>,
+    f: vec4<f32>,
+    g: vec4<f32>,
 }
 
 @group(0) @binding(0) var<storage, read> segments: array<Segment>;
@@ -283,11 +288,9 @@ struct FiberSlot {
     ply_angle: f32,
 }
 
-// The slot type of (curve, ply, fiber, slot): the loop peak (normalised), or −1.
-fn loop_peak(c: Curve, pr: Params, ply: u32, fib: u32, slot_in: i32, r_i: f32) -> f32 {
-    if pr.d.w == 0u || pr.b.z <= 0.0 {
-        return -1.0;
-    }
+// The KeyRng state of slot `slot_in` of (curve, ply, fiber): hash_keys of (seed, curve,
+// ply, fiber, slot reduced per wrap, STREAM_SLOT) — FiberTable::period_kind's generator.
+fn slot_state(c: Curve, ply: u32, fib: u32, slot_in: i32) -> vec2<u32> {
     var slot = slot_in;
     let m = c.keys.x;
     if m > 0u {
@@ -300,20 +303,195 @@ fn loop_peak(c: Curve, pr: Params, ply: u32, fib: u32, slot_in: i32, r_i: f32) -
     h = hash_step(h, vec2<u32>(fib, 0u), vec2<u32>(0xfd29f054u, 0x78dde6e5u));
     let slot_bits = vec2<u32>(bitcast<u32>(slot), select(0u, 0xffffffffu, slot < 0));
     h = hash_step(h, slot_bits, vec2<u32>(0x7c746c69u, 0x1715609fu));
-    h = hash_step(h, vec2<u32>(2u, 0u), vec2<u32>(0xfbbee87eu, 0xb54cda58u));
-    // KeyRng: state = h; next = mix64(state += GOLDEN).
-    var state = add64(h, GOLDEN);
-    let u = unit_of(mix64(state));
+    return hash_step(h, vec2<u32>(2u, 0u), vec2<u32>(0xfbbee87eu, 0xb54cda58u));
+}
+
+// Draw j (1-based) of a KeyRng whose state is h: mix64(h + j·GOLDEN), so any draw is read
+// without the ones before it.
+fn draw_bits(h: vec2<u32>, j: u32) -> vec2<u32> {
+    return mix64(add64(h, mul64(GOLDEN, vec2<u32>(j, 0u))));
+}
+
+// A uniform number as hi + lo from the top 48 of 64 bits (hi: unit_of's top 24).
+fn unit_pair(bits: vec2<u32>) -> vec2<f32> {
+    let hi = f32(bits.y >> 8u) * (1.0 / 16777216.0);
+    let lo = f32(((bits.y & 0xffu) << 16u) | (bits.x >> 16u)) * (1.0 / 281474976710656.0);
+    return vec2<f32>(hi, lo);
+}
+
+// KeyRng::normal from draws j and j + 1 (Box–Muller, cosine branch). The uniforms keep
+// 48 bits as hi + lo and enter to first order in lo: with 24 bits alone, cos(2πu₂) would
+// be off by up to 4e-7, and a hair's r_e, drawn as μ + 0.75σn and small where the draw
+// cancels the mean, would carry it ten-fold into the hair's length along the yarn.
+fn draw_normal(h: vec2<u32>, j: u32) -> f32 {
+    let a = unit_pair(draw_bits(h, j));
+    let b = unit_pair(draw_bits(h, j + 1u));
+    // 1 − u₁ = (1 − hi) − lo; 1 − hi is exact and at least 2^-24.
+    let c_hi = 1.0 - a.x;
+    let ln_u1 = log(c_hi) + max(-a.y / c_hi, -0.5);
+    let angle = TAU * b.x;
+    let cs = cos(angle) - sin(angle) * (TAU * b.y);
+    return sqrt(-2.0 * ln_u1) * cs;
+}
+
+// The slot type of (curve, ply, fiber, slot): the loop peak (normalised), or −1.
+fn loop_peak(c: Curve, pr: Params, ply: u32, fib: u32, slot_in: i32, r_i: f32) -> f32 {
+    if pr.d.w == 0u || pr.b.z <= 0.0 {
+        return -1.0;
+    }
+    let h = slot_state(c, ply, fib, slot_in);
+    let u = unit_of(draw_bits(h, 1u));
     if u >= pr.b.z {
         return -1.0;
     }
-    state = add64(state, GOLDEN);
-    let u1 = unit_complement(mix64(state));
-    state = add64(state, GOLDEN);
-    let u2 = unit_of(mix64(state));
-    let normal = sqrt(-2.0 * log(u1)) * cos(TAU * u2);
-    let r1 = pr.c.x + 0.5 * pr.c.y * normal;
+    let r1 = pr.c.x + 0.5 * pr.c.y * draw_normal(h, 2u);
     return max(r1 / pr.b.w, 1.05 * pr.b.x * r_i);
+}
+
+// ---- hair flyaways (FiberTable::period_kind's Hair, FiberModel::hair_offset) ----
+
+// Whether a slot whose generator state is h carries a hair: its first draw in
+// [loop chance, loop + hair chance).
+fn slot_is_hair(pr: Params, h: vec2<u32>) -> bool {
+    let u = unit_of(draw_bits(h, 1u));
+    return u >= pr.b.z && u < pr.g.x;
+}
+
+// A hair slot's crossing of r_0 inside its slot: draw 11 (after u, four normals and p_0).
+fn hair_slot_fraction(h: vec2<u32>) -> f32 {
+    return unit_of(draw_bits(h, 11u));
+}
+
+// The hair of one slot, relative to the segment whose slot base it was counted from.
+struct Hair {
+    // Length coordinate of the crossing of r_0, relative to that segment's z(P_1).
+    dz_cross: f32,
+    // z_e, r_0/r_e, r_0 + r_e (metres), p_0, p_e.
+    ze: f32,
+    k: f32,
+    reach: f32,
+    p0: f32,
+    pe: f32,
+}
+
+// The hair of slot `slot_rel` (relative to segment `seg`'s slot base) of (ply, fib): the
+// draws of FiberTable::period_kind — z_e, r_0, r_e, p_e ~ N(μ, 0.75σ) with r_0 ≥ 0 and r_e
+// at least 5 % of the ply reach, p_0 uniform, the crossing uniform in the slot — and the
+// crossing's length coordinate z_of_slot_coord.
+fn hair_of(seg: u32, ply: u32, fib: u32, slot_rel: i32) -> Hair {
+    let s = segments[seg];
+    let c = curves[s.ids.x];
+    let pr = yarn_params[c.ids.x];
+    let rec = fiber_table[c.ids.y + ply * pr.d.y + fib];
+    let h = slot_state(c, ply, fib, bitcast<i32>(s.ids.z) + slot_rel);
+    let ze = pr.e.x + 0.75 * pr.e.y * draw_normal(h, 2u);
+    let r0 = max(pr.e.z + 0.75 * pr.e.w * draw_normal(h, 4u), 0.0);
+    let re = max(pr.f.x + 0.75 * pr.f.y * draw_normal(h, 6u), pr.g.z);
+    let pe = pr.f.z + 0.75 * pr.f.w * draw_normal(h, 8u);
+    let p0 = TAU * unit_of(draw_bits(h, 10u));
+    // σ_0 − σ(z_1) = slot_rel + fraction − frac(s_r z_1/α') − (φ_i − π)/2π, in slots;
+    // α'/s_r metres per slot.
+    let x = hair_slot_fraction(h) - (rec.z - PI) / TAU;
+    let d_sigma = f32(slot_rel) + (x - s.phase.z);
+    var out: Hair;
+    out.dz_cross = d_sigma * c.pitch.y / c.pitch.w;
+    out.ze = ze;
+    out.k = r0 / re;
+    out.reach = r0 + re;
+    out.p0 = p0;
+    out.pe = pe;
+    return out;
+}
+
+// The length-coordinate span of a hair (relative, as dz_cross): t = 0 and t = 1.
+fn hair_dz(hr: Hair, t: f32) -> f32 {
+    return hr.dz_cross - hr.ze * hr.k + hr.ze * (1.0 + hr.k) * t;
+}
+
+struct Place {
+    seg: u32,
+    t: f32,
+    // The curve's shift times the wraps crossed (closed periodic curves).
+    shift: vec3<f32>,
+    // The segment walk ran off an open curve's end.
+    clamped: bool,
+}
+
+// The segment and local parameter at length coordinate z(P_1 of seg0) + dz0 (the
+// curve's length coordinates are those packed; closed curves wrap and add their shift,
+// open curves clamp at their ends): YarnCurve::param_at_length_coord, by bisection of the
+// Catmull–Rom length coordinate on the segment found.
+fn place_at(seg0: u32, dz0: f32) -> Place {
+    let s0 = segments[seg0];
+    let c = curves[s0.ids.x];
+    let n = c.keys.w;
+    let first = seg0 - s0.ids.y;
+    let closed = c.keys.x > 0u;
+    var i = s0.ids.y;
+    var dz = dz0;
+    var wraps = 0;
+    var clamped = false;
+    for (var it = 0u; it < 4096u; it++) {
+        let len = segments[first + i].p[2].w;
+        if dz >= len && len >= 0.0 {
+            if i + 1u < n {
+                i += 1u;
+            } else if closed {
+                i = 0u;
+                wraps += 1;
+            } else {
+                clamped = dz > len;
+                break;
+            }
+            dz -= len;
+            continue;
+        }
+        if dz < 0.0 {
+            if i > 0u {
+                i -= 1u;
+            } else if closed {
+                i = n - 1u;
+                wraps -= 1;
+            } else {
+                clamped = true;
+                break;
+            }
+            dz += segments[first + i].p[2].w;
+            continue;
+        }
+        break;
+    }
+    let s = segments[first + i];
+    let len = s.p[2].w;
+    var out: Place;
+    out.seg = first + i;
+    out.clamped = clamped;
+    out.shift = vec3<f32>(0.0);
+    if wraps != 0 {
+        out.shift = f32(wraps) * (segments[first + n - 1u].p[2].xyz - segments[first].p[1].xyz);
+    }
+    if dz <= 0.0 || len <= 0.0 {
+        out.t = 0.0;
+        return out;
+    }
+    if dz >= len {
+        out.t = 1.0;
+        return out;
+    }
+    var lo = 0.0;
+    var hi = 1.0;
+    for (var b = 0u; b < 24u; b++) {
+        let mid = 0.5 * (lo + hi);
+        let w = cr_basis(mid);
+        let z = w.x * s.p[0].w + w.z * s.p[2].w + w.w * s.p[3].w;
+        if z > dz {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    out.t = 0.5 * (lo + hi);
+    return out;
 }
 
 fn fiber_slot(seg: u32, ply: u32, fib: u32, dz: f32, loops: bool) -> FiberSlot {
@@ -383,6 +561,10 @@ struct FiberSample {
     q: vec2<f32>,
     n_slice: vec3<f32>,
     b_slice: vec3<f32>,
+    // The segment and local parameter of the yarn point (a hair's may be another segment
+    // than its instance's).
+    seg: u32,
+    t: f32,
 }
 
 fn fiber_sample(seg: u32, ply: u32, fib: u32, t: f32, loops: bool) -> FiberSample {
@@ -402,5 +584,63 @@ fn fiber_sample(seg: u32, ply: u32, fib: u32, t: f32, loops: bool) -> FiberSampl
     out.q = vec2<f32>(ab.x * c0 + ab.y * s0, -ab.x * s0 + ab.y * c0);
     out.n_slice = c0 * yp.n + s0 * yp.b;
     out.b_slice = -s0 * yp.n + c0 * yp.b;
+    out.seg = seg;
+    out.t = t;
     return out;
+}
+
+// A hair's point at its parameter t ∈ [0, 1] (FiberModel::hair_offset): from the ply
+// centre outwards, r(t) = (r_0 + r_e)(1 − (1 − t)^α), angle and z linear in t, through
+// the ply ellipse as the regular fibers; `seg` is the segment the hair was counted from.
+fn hair_sample(seg: u32, ply: u32, hr: Hair, t: f32) -> FiberSample {
+    let pl = place_at(seg, hair_dz(hr, t));
+    let yp = yarn_point(pl.seg, pl.t);
+    let s = segments[pl.seg];
+    let c = curves[s.ids.x];
+    let pr = yarn_params[c.ids.x];
+    let p = hr.p0 - hr.pe * hr.k + hr.pe * (1.0 + hr.k) * t;
+    let one_t = 1.0 - t;
+    let bend = select(pow(one_t, pr.g.y), 0.0, one_t <= 0.0);
+    let r = hr.reach * (1.0 - bend) / pr.b.w;
+    let phi0 = TAU * fract(s.phase.x + yp.dz / c.pitch.x);
+    let ab = ellipse_offset(pr, phi0 + TAU * f32(ply) / f32(pr.d.x), r, p);
+    let c0 = cos(phi0);
+    let s0 = sin(phi0);
+    var out: FiberSample;
+    out.centre = yp.pos + pl.shift;
+    out.pos = out.centre + ab.x * yp.n + ab.y * yp.b;
+    out.tangent = yp.t;
+    out.q = vec2<f32>(ab.x * c0 + ab.y * s0, -ab.x * s0 + ab.y * c0);
+    out.n_slice = c0 * yp.n + s0 * yp.b;
+    out.b_slice = -s0 * yp.n + c0 * yp.b;
+    out.seg = pl.seg;
+    out.t = pl.t;
+    return out;
+}
+
+// Instance records of the fiber passes (fiber_lod): x = segment, y = fiber | ply << 16 |
+// n_sub << 24 for a regular fiber; a hair sets bit 31 of x and keeps its slot, relative to
+// the segment's slot base + 32, in bits 25–30 (so hairs address 2^25 segments).
+const HAIR_BIT: u32 = 0x80000000u;
+
+fn instance_is_hair(rec: vec2<u32>) -> bool {
+    return (rec.x & HAIR_BIT) != 0u;
+}
+
+fn instance_segment(rec: vec2<u32>) -> u32 {
+    return select(rec.x, rec.x & 0x1ffffffu, instance_is_hair(rec));
+}
+
+fn instance_hair(rec: vec2<u32>) -> Hair {
+    let slot_rel = i32((rec.x >> 25u) & 63u) - 32;
+    return hair_of(rec.x & 0x1ffffffu, (rec.y >> 16u) & 0xffu, rec.y & 0xffffu, slot_rel);
+}
+
+// The point of a listed regular fiber or hair at strip parameter t.
+fn instance_sample(rec: vec2<u32>, t: f32, loops: bool) -> FiberSample {
+    let ply = (rec.y >> 16u) & 0xffu;
+    if instance_is_hair(rec) {
+        return hair_sample(rec.x & 0x1ffffffu, ply, instance_hair(rec), t);
+    }
+    return fiber_sample(rec.x, ply, rec.y & 0xffffu, t, loops);
 }

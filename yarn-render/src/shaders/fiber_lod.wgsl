@@ -7,6 +7,15 @@
 // subdivisions max(2, ceil(λ²·n_sub)) (DESIGN §2.3 item 7, the count formula eq. 4 lacks).
 // Instances are appended to a compact list and counted into the indirect draw's
 // instance_count.
+//
+// Hair flyaways (ours; [W19] generates no hairs on the GPU): each segment hashes the slots
+// every fiber of its plies passes through — FiberTable::period_kind's keys, on the GPU —
+// and lists the hairs whose crossing of r_0 lies on it, with the segment's n_sub, at any
+// λ (LoD thins the regular fibers, not the fuzz). "Lies on it" is decided by one comparison that
+// the two segments sharing a boundary evaluate identically, so every hair is listed once.
+// A hair reaches along the curve beyond its segment, so a culled segment still scans, and
+// a hair is culled only when every segment it spans, inflated by the hair's own reach, is
+// outside (culling on and off give the same image).
 
 struct DrawArgs {
     vertex_count: u32,
@@ -17,6 +26,8 @@ struct DrawArgs {
     overflow: atomic<u32>,
     // Segments culled.
     culled: atomic<u32>,
+    // Hairs listed.
+    hairs: atomic<u32>,
 }
 
 @group(1) @binding(0) var<uniform> view: View;
@@ -39,6 +50,143 @@ fn outside(p: vec3<f32>, plane: vec4<f32>, reach: f32) -> bool {
     return dot(plane.xyz, p) + plane.w < -reach;
 }
 
+// Whether the segment, moved by `shift`, lies outside a frustum plane even when inflated
+// by `reach`: its Bézier points bound the curve (DESIGN §2.3 item 8).
+fn segment_outside(s: Segment, shift: vec3<f32>, reach: f32) -> bool {
+    let b0 = s.p[1].xyz + shift;
+    let b1 = s.p[1].xyz + (s.p[2].xyz - s.p[0].xyz) / 6.0 + shift;
+    let b2 = s.p[2].xyz - (s.p[3].xyz - s.p[1].xyz) / 6.0 + shift;
+    let b3 = s.p[2].xyz + shift;
+    for (var i = 0u; i < 6u; i++) {
+        let pl = view.planes[i];
+        if outside(b0, pl, reach) && outside(b1, pl, reach) && outside(b2, pl, reach)
+            && outside(b3, pl, reach) {
+            return true;
+        }
+    }
+    return false;
+}
+
+// Whether a hair (counted from `seg`) lies outside the frustum: every segment its length
+// span crosses, inflated by its reach from the yarn centre — the ply-centre distance plus
+// its largest radius on the ply ellipse plus the fiber radius — and f32 slack.
+fn hair_outside(seg: u32, hr: Hair, pr: Params, scale: f32) -> bool {
+    let d0 = hair_dz(hr, 0.0);
+    let d1 = hair_dz(hr, 1.0);
+    let a = place_at(seg, min(d0, d1));
+    let b = place_at(seg, max(d0, d1));
+    let reach = (pr.a.x + hr.reach * pr.g.w + pr.b.y) * 1.001 + 1e-7 * scale;
+    let s0 = segments[a.seg];
+    let c = curves[s0.ids.x];
+    let n = c.keys.w;
+    let first = a.seg - s0.ids.y;
+    let wrap_shift = segments[first + n - 1u].p[2].xyz - segments[first].p[1].xyz;
+    var i = s0.ids.y;
+    var shift = a.shift;
+    for (var it = 0u; it < 64u; it++) {
+        if !segment_outside(segments[first + i], shift, reach) {
+            return false;
+        }
+        if first + i == b.seg && all(shift == b.shift) {
+            return true;
+        }
+        i += 1u;
+        if i >= n {
+            if c.keys.x == 0u {
+                return true;
+            }
+            i = 0u;
+            shift += wrap_shift;
+        }
+    }
+    // A hair across more than 64 segments: kept (conservative).
+    return false;
+}
+
+// Whether slot coordinate σ_0 = slot + (x + (φ_i − π)/2π) lies after (≥, or > when
+// `strict`) a segment start S = base + phase + (φ_i − π)/2π: (x − phase) against
+// base − slot, both exact as the two segments of a boundary compute them.
+fn after_start(base: i32, phase: f32, x: f32, slot: i32, strict: bool) -> bool {
+    let d = x - phase;
+    let m = f32(base - slot);
+    return select(d >= m, d > m, strict);
+}
+
+// The hairs of fiber `fib` of ply `ply` whose crossing lies on segment `seg`, listed.
+fn list_hairs(seg: u32, ply: u32, fib: u32, n_sub: u32, visible: bool) {
+    let s = segments[seg];
+    let c = curves[s.ids.x];
+    let pr = yarn_params[c.ids.x];
+    let rec = fiber_table[c.ids.y + ply * pr.d.y + fib];
+    let ft = (rec.z - PI) / TAU;
+    let base = bitcast<i32>(s.ids.z);
+    // The next segment's start (a closed curve's last segment: the first, one wrap on).
+    var has_next = true;
+    var next_base = 0;
+    var next_phase = 0.0;
+    if s.ids.y + 1u < c.keys.w {
+        let nx = segments[seg + 1u];
+        next_base = bitcast<i32>(nx.ids.z);
+        next_phase = nx.phase.z;
+    } else if c.keys.x > 0u {
+        let f0 = segments[seg - s.ids.y];
+        // σ runs backwards along z when α' < 0.
+        next_base = bitcast<i32>(f0.ids.z) + select(i32(c.keys.x), -i32(c.keys.x), c.pitch.y < 0.0);
+        next_phase = f0.phase.z;
+    } else {
+        has_next = false;
+    }
+    let len = s.p[2].w;
+    let a = s.phase.z + ft;
+    var b = a + c.pitch.w * len / c.pitch.y;
+    if has_next {
+        b = f32(next_base - base) + next_phase + ft;
+    }
+    let lo = max(i32(floor(min(a, b))) - 1, -32);
+    let hi = min(i32(floor(max(a, b))) + 1, 31);
+    let forward = c.pitch.y > 0.0;
+    for (var j = lo; j <= hi; j++) {
+        let slot = base + j;
+        let h = slot_state(c, ply, fib, slot);
+        if !slot_is_hair(pr, h) {
+            continue;
+        }
+        let x = hair_slot_fraction(h) - ft;
+        var inside: bool;
+        if forward {
+            inside = after_start(base, s.phase.z, x, slot, false);
+        } else {
+            inside = !after_start(base, s.phase.z, x, slot, true);
+        }
+        if inside {
+            if has_next {
+                if forward {
+                    inside = !after_start(next_base, next_phase, x, slot, false);
+                } else {
+                    inside = after_start(next_base, next_phase, x, slot, true);
+                }
+            } else {
+                let dz = (f32(j) + (x - s.phase.z)) * c.pitch.y / c.pitch.w;
+                inside = dz < len;
+            }
+        }
+        if !inside {
+            continue;
+        }
+        if !visible && hair_outside(seg, hair_of(seg, ply, fib, j), pr, c.frame.z) {
+            continue;
+        }
+        atomicAdd(&args.hairs, 1u);
+        let k = atomicAdd(&args.instance_count, 1u);
+        if k < view.lod.w {
+            out_instances[k] = vec2<u32>(seg | (u32(j + 32) << 25u) | HAIR_BIT,
+                fib | (ply << 16u) | (n_sub << 24u));
+        } else {
+            atomicAdd(&args.overflow, 1u);
+        }
+    }
+}
+
 @compute @workgroup_size(64)
 fn lod(@builtin(global_invocation_id) gid: vec3<u32>,
     @builtin(num_workgroups) nwg: vec3<u32>) {
@@ -49,21 +197,18 @@ fn lod(@builtin(global_invocation_id) gid: vec3<u32>,
     let s = segments[seg];
     let c = curves[s.ids.x];
     let pr = yarn_params[c.ids.x];
+    var visible = true;
     if (view.lod.z & 1u) != 0u {
-        // The segment's Bézier points; the curve lies in their convex hull.
-        let b0 = s.p[1].xyz;
-        let b1 = s.p[1].xyz + (s.p[2].xyz - s.p[0].xyz) / 6.0;
-        let b2 = s.p[2].xyz - (s.p[3].xyz - s.p[1].xyz) / 6.0;
-        let b3 = s.p[2].xyz;
         // Fiber reach (flyaways included) plus f32 slack.
         let reach = pr.c.w * 1.001 + 1e-7 * c.frame.z;
-        for (var i = 0u; i < 6u; i++) {
-            let pl = view.planes[i];
-            if outside(b0, pl, reach) && outside(b1, pl, reach) && outside(b2, pl, reach)
-                && outside(b3, pl, reach) {
-                atomicAdd(&args.culled, 1u);
-                return;
-            }
+        visible = !segment_outside(s, vec3<f32>(0.0), reach);
+    }
+    let hairs = (view.lod.z & 1024u) != 0u && pr.d.w != 0u && pr.g.x > pr.b.z
+        && seg < 0x2000000u && (view.lod.z & 8u) == 0u;
+    if !visible {
+        atomicAdd(&args.culled, 1u);
+        if !hairs {
+            return;
         }
     }
     if (view.lod.z & 8u) != 0u {
@@ -100,6 +245,18 @@ fn lod(@builtin(global_invocation_id) gid: vec3<u32>,
     // Reservations are contiguous from 0, so every slot below the capacity is written by
     // whoever reserved it; what lies beyond is counted and dropped, and `clamp_count`
     // (run after this pass) cuts instance_count back to the capacity.
+    if hairs {
+        // Every fiber's hairs, at any λ: a few per segment against n_ply·n fibers, and
+        // dropping them with their fibers would thin the fuzz with distance.
+        for (var ply = 0u; ply < n_ply; ply++) {
+            for (var f = 0u; f < n_fib; f++) {
+                list_hairs(seg, ply, f, n_sub, visible);
+            }
+        }
+    }
+    if !visible {
+        return;
+    }
     let cap = view.lod.w;
     let base = atomicAdd(&args.instance_count, total);
     if base + total > cap {

@@ -23,7 +23,7 @@ struct View {
     // Regular fibers per ply at λ = 1 (n_max), subdivisions at λ = 1, flags (bit 0 cull,
     // bit 1 loops, bit 2 tint by the yarn colour, bit 3 plain tubes, bit 4 self-shadows,
     // bits 5–6 AO mode: 0 off, 1 cubic, 2 texture, bit 7 core strips, bit 8 shadow
-    // hiding, bit 9 helix-marched self-shadows), instance capacity.
+    // hiding, bit 9 helix-marched self-shadows, bit 10 hair flyaways), instance capacity.
     lod: vec4<u32>,
     // Lights in use, lobes in use, unused, unused.
     counts: vec4<u32>,

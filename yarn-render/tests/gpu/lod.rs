@@ -106,7 +106,8 @@ fn gpu_fiber_counts_follow_the_lod_formula() {
                 2 * counts(l, p.fibers_per_ply, settings.n_sub).0 as u64
             };
         }
-        let got = img.stats.instances as u64;
+        // Hairs are listed at every λ (fiber_lod); the formula counts regular fibers.
+        let got = (img.stats.instances - img.stats.hairs) as u64;
         let mean_l = lambdas.iter().sum::<f64>() / lambdas.len() as f64;
         eprintln!(
             "core {core}, distance {dist} m, ω^LoD {lod_px} px: mean λ {mean_l:.3}, instances GPU {got}, \
