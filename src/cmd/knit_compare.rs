@@ -815,8 +815,13 @@ fn study(
         for (k, &lod) in lods.iter().chain([-1.0f32].iter()).enumerate() {
             let tubes = lod < 0.0;
             let t = Instant::now();
-            let settings =
-                FiberSettings { lod_px: lod.max(0.0), tubes, msaa: 4, ..FiberSettings::default() };
+            let settings = FiberSettings {
+                lod_px: lod.max(0.0),
+                tubes,
+                msaa: 4,
+                hairs: src.hairs,
+                ..FiberSettings::default()
+            };
             let r = FiberRenderer::new(gpu, &packed, &src.bcsdf, settings)?;
             let prep = t.elapsed().as_secs_f64();
             let img = r.render(gpu, &fcam, &fiber_lights, (w, h), [0.0; 4])?;

@@ -289,6 +289,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
         lod_px: a.lod_px,
         cull: !a.no_cull,
         msaa: a.msaa,
+        hairs: !a.patch.no_hairs,
         ..FiberSettings::default()
     };
     let gpu = btf_render::Gpu::new()?;

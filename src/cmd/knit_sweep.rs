@@ -2,9 +2,10 @@
 //! yarn strips of [H25] (`--strips`, issue #20: bake directions, texture size, tangents,
 //! ξ and Ψ on/off, PCSS, MSAA, the plain strips; DESIGN §3.5) (issue
 //! #19, DESIGN §2.5 "What accuracy costs in time", with the per-cell metrics of §4.2's
-//! headline study). One chart patch (hair flyaways off: DESIGN §2.5's R-approx, the fiber set
-//! the fiber renderer draws; with `--hairs` on, and the strips get [H25 §4.4]'s flyaway
-//! overlay, whose cost and error the `no-flyaways` strip variant shows) is path traced by `yarn-ref` once per camera and shading
+//! headline study). One chart patch (hair flyaways off: DESIGN §2.5's R-approx; with
+//! `--hairs` on in the reference and the GPU fibers, which draw the same hairs, and the
+//! strips get [H25 §4.4]'s flyaway overlay, whose cost and error the `no-flyaways` strip
+//! variant shows) is path traced by `yarn-ref` once per camera and shading
 //! model; then `yarn-render` draws it over the grid ω^LoD ([W19 eq. 4]) × shading ([W19
 //! eq. 5] simple, [W19 eq. 6] Khungurn) × n_max, plus the plain-tube baseline, all cells
 //! interleaved frame by frame in one run. Per cell: relative RMSE `√(Σ(g−r)²/Σr²)` over the
@@ -114,8 +115,8 @@ pub struct SweepArgs {
     /// `--env`). Bakes are cached in DIR/bake-cache.
     #[arg(long, value_delimiter = ',')]
     pub strips: Vec<String>,
-    /// Hair flyaways in the reference patch (the yarn as it is; default off: the fiber set
-    /// the GPU fibers draw, which have no hairs) and the flyaway overlay on the strips.
+    /// Hair flyaways (the yarn as it is; default off: DESIGN §2.5's R-approx) in the
+    /// reference patch and the GPU fibers, and the flyaway overlay on the strips.
     #[arg(long)]
     pub hairs: bool,
     /// Camera rays per texel of the strip bakes.
@@ -719,6 +720,7 @@ fn gpu_grid(
                         lod_px: lod.unwrap_or(0.0),
                         msaa: a.msaa,
                         tubes: lod.is_none(),
+                        hairs: a.hairs,
                         ..FiberSettings::default()
                     };
                     let mut r = FiberRenderer::new(gpu, &packed, b, settings)?;

@@ -144,7 +144,7 @@ pub(crate) fn markdown(
         a.view,
         tiles.join(", "),
         if a.hairs {
-            "Hair flyaways on in the reference (`--hairs`; the GPU fibers draw none, the strips their flyaway overlay)."
+            "Hair flyaways on (`--hairs`): in the reference, the GPU fibers (the same hairs) and the strips (their flyaway overlay)."
         } else {
             "Hair flyaways off in both (R-approx)."
         },

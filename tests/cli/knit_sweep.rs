@@ -207,7 +207,7 @@ fn knit_sweep_strips_cells_are_scored_and_timed_against_the_fibers() {
     hairy.pop();
     hairy.extend(["sw-hairs", "--hairs"]);
     let Some(out) = run_gpu(&d, &hairy) else { return };
-    assert!(out.contains("Hair flyaways on in the reference"), "{out}");
+    assert!(out.contains("Hair flyaways on (`--hairs`)"), "{out}");
     let csv = std::fs::read_to_string(d.path("sw-hairs/sweep.csv")).unwrap();
     let h = rows(&csv);
     let g = |m: &str, k: &str| -> f64 {

@@ -11,8 +11,9 @@
 //! Differences from the reference, by construction: the periodic wrap is the 3 × 3
 //! neighbourhood of copies (`PackOptions::tiles`), the footprint average is MSAA 4
 //! instead of jittered rays, the light transport is [W19]'s (self-shadow volume, tube
-//! shadow maps, no multiple scattering), no hair flyaways, and the black backing is the
-//! black clear colour.
+//! shadow maps, no multiple scattering), and the black backing is the black clear colour.
+//! Hair flyaways are drawn when the spec asks for them, as the reference generates them
+//! (the fibers from the same slots, the strips by their flyaway overlay).
 
 use crate::{
     FiberCamera, FiberLight, FiberRenderer, FiberSettings, PackOptions, PackedYarns, Result,
@@ -51,6 +52,7 @@ pub fn generate_fiber_btf(
 ) -> Result<FiberBtfReport> {
     let t0 = Instant::now();
     let (bcsdf, sampling, patch, packed) = prepare(spec, "fiber")?;
+    let settings = FiberSettings { hairs: settings.hairs && spec.hairs, ..settings };
     let renderer = FiberRenderer::new(gpu, &packed, &bcsdf, settings)?;
     let mut meta = BtfMeta::new(sampling.clone(), sampling.clone(), spec.size, spec.size);
     let s = &settings;
@@ -71,6 +73,7 @@ pub fn generate_fiber_btf(
         "settings": {
             "lod_px": s.lod_px, "n_sub": s.n_sub, "msaa": s.msaa, "core": s.effects.core,
             "self_shadow": s.effects.self_shadow, "yarn_shadows": s.effects.yarn_shadows,
+            "hairs": s.hairs,
         },
         "model": "procedural fibers generated on the GPU [W19] (vertex pulling, fiber BCSDF, \
                   self-shadow volume, tube shadow maps), oblique orthographic camera through texel \

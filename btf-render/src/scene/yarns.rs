@@ -92,6 +92,9 @@ pub struct YarnsDesc {
     /// Ambient occlusion inside the yarns.
     #[serde(default)]
     pub ao: YarnAo,
+    /// Hair flyaways: the yarn's hairs on the fibers, the flyaway overlay on the strips.
+    #[serde(default = "yes")]
+    pub hairs: bool,
 }
 
 fn default_yarn() -> String {

@@ -93,6 +93,7 @@ pub fn settings(scene: &Scene, d: &YarnsDesc) -> FiberSettings {
     FiberSettings {
         lod_px: d.lod_px,
         msaa: scene.effects.msaa,
+        hairs: d.hairs,
         effects,
         ..FiberSettings::default()
     }
@@ -182,8 +183,11 @@ impl YarnOverlay {
                         ..StripSettings::default()
                     };
                     let mut r = StripRenderer::new(gpu, &y.packed, &bakes, &bcsdf, s)?;
-                    let fly = crate::strips::flyaways_for(std::slice::from_ref(&y.params), d.seed)?;
-                    r.set_flyaways(gpu, &fly)?;
+                    if d.hairs {
+                        let fly =
+                            crate::strips::flyaways_for(std::slice::from_ref(&y.params), d.seed)?;
+                        r.set_flyaways(gpu, &fly)?;
+                    }
                     return Ok(YarnDrawer::Strips(r));
                 }
                 let bake = yarn_precompute::BakeSettings { seed: d.seed, ..Default::default() };

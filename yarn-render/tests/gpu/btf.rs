@@ -40,7 +40,8 @@ fn the_fiber_yarn_btf_follows_the_reference_btf() {
     for hiding in [false, true] {
         let fp = dir.path().join(format!("fibers-{hiding}.btf"));
         let effects = FiberEffects { shadow_hiding: hiding, ..FiberEffects::default() };
-        let settings = FiberSettings { lod_px: 0.0, effects, ..FiberSettings::default() };
+        let settings =
+            FiberSettings { lod_px: 0.0, hairs: false, effects, ..FiberSettings::default() };
         let r = yarn_render::btf::generate_fiber_btf(
             &gpu,
             &spec,

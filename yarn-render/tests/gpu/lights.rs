@@ -22,9 +22,9 @@ use yarn_render::{
 const SIZE: usize = 48;
 
 pub(crate) struct Setup {
-    patch: KnitPatch,
-    packed: PackedYarns,
-    bcsdf: FiberBcsdf,
+    pub(crate) patch: KnitPatch,
+    pub(crate) packed: PackedYarns,
+    pub(crate) bcsdf: FiberBcsdf,
     view: [f64; 3],
     /// The reference wraps the patch periodically (the GPU draws 3 × 3 copies); else both
     /// see the 4 × 4 stitches alone.
@@ -32,9 +32,14 @@ pub(crate) struct Setup {
 }
 
 pub(crate) fn setup(periodic: bool) -> Setup {
+    setup_with(periodic, false)
+}
+
+/// [`setup`] with or without the yarn's hair flyaways in the patch.
+pub(crate) fn setup_with(periodic: bool, hairs: bool) -> Setup {
     let chart = Chart::builtin("stockinette").unwrap();
     let params = crate::common::cotton();
-    let g = GenOptions { hairs: false, seed: 5, ..Default::default() };
+    let g = GenOptions { hairs, seed: 5, ..Default::default() };
     let stitches = if periodic { None } else { Some([4, 4]) };
     let opts = PatchOptions { generation: g, stitches, ..Default::default() };
     let patch = KnitPatch::new(&chart, &params, &opts).unwrap();
@@ -64,7 +69,7 @@ pub(crate) fn reference(s: &Setup, lights: &[Light], spp: u32) -> Vec<f32> {
 }
 
 pub(crate) fn renderer(gpu: &Gpu, s: &Setup, effects: FiberEffects) -> FiberRenderer {
-    let settings = FiberSettings { lod_px: 0.0, effects, ..Default::default() };
+    let settings = FiberSettings { lod_px: 0.0, hairs: false, effects, ..Default::default() };
     FiberRenderer::new(gpu, &s.packed, &s.bcsdf, settings).unwrap()
 }
 
@@ -197,7 +202,8 @@ fn srbf_environment_against_the_constant_ambient_and_the_reference() {
         srbf.set_environment(&gpu, Some((&rotated, &table))).unwrap();
         let g_rot = frame(&gpu, &s, &srbf, &[]);
         // The lobes' shadows hard (3 × 3 PCF, as a delta light's) instead of PCSS.
-        let hard_settings = FiberSettings { lod_px: 0.0, soft_lobes: false, ..Default::default() };
+        let hard_settings =
+            FiberSettings { lod_px: 0.0, soft_lobes: false, hairs: false, ..Default::default() };
         let mut hard = FiberRenderer::new(&gpu, &s.packed, &s.bcsdf, hard_settings).unwrap();
         hard.set_environment(&gpu, Some((&fit, &table))).unwrap();
         let g_hard = frame(&gpu, &s, &hard, &[]);

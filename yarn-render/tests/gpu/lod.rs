@@ -142,10 +142,17 @@ fn culling_changes_no_pixel() {
     }
     let (on, off) = (&images[0], &images[1]);
     eprintln!(
-        "culling: {} of {} segments culled, instances {} vs {}",
-        on.stats.culled, on.stats.segments, on.stats.instances, off.stats.instances
+        "culling: {} of {} segments culled, instances {} vs {}, hairs {} vs {}",
+        on.stats.culled,
+        on.stats.segments,
+        on.stats.instances,
+        off.stats.instances,
+        on.stats.hairs,
+        off.stats.hairs
     );
     assert!(on.stats.culled * 3 > on.stats.segments, "the view culls too little to test");
+    // Hair flyaways are drawn, from culled segments too where they reach into the view.
+    assert!(on.stats.hairs > 0 && on.stats.hairs < off.stats.hairs, "{:?}", on.stats);
     assert_eq!(off.stats.culled, 0);
     let lit = on.pixels.iter().filter(|p| p[3] > 0.0).count();
     assert!(lit > 400, "only {lit} pixels see yarn");

@@ -48,7 +48,7 @@ fn oblique_patch_coverage_matches_the_periodic_reference() {
     )
     .unwrap();
     let bcsdf = FiberBcsdf::simple(&SimpleParams::default()).unwrap();
-    let settings = FiberSettings { lod_px: 0.0, n_sub: 16, ..Default::default() };
+    let settings = FiberSettings { lod_px: 0.0, n_sub: 16, hairs: false, ..Default::default() };
     let r = FiberRenderer::new(&gpu, &packed, &bcsdf, settings).unwrap();
     let img = r
         .render(

@@ -165,7 +165,8 @@ fn a_fiber_shadowing_another_matches_the_reference_within_5_percent() {
     .unwrap();
     let renderer = |yarn_shadows| {
         let effects = FiberEffects { yarn_shadows, ..FiberEffects::none() };
-        let s = FiberSettings { lod_px: 0.0, n_sub: 48, effects, ..Default::default() };
+        let s =
+            FiberSettings { lod_px: 0.0, n_sub: 48, hairs: false, effects, ..Default::default() };
         FiberRenderer::new(&gpu, &packed, &bcsdf, s).unwrap()
     };
     let (on, off) = (renderer(true), renderer(false));
