@@ -380,7 +380,8 @@ pub fn run(a: RenderArgs) -> Result<()> {
             "image": image, "method": a.method.as_str(), "width": w, "height": h,
             "lod_px": a.lod_px, "n_sub": a.n_sub,
             "msaa": a.msaa, "segments": st.segments, "culled": st.culled,
-            "instances": st.instances, "overflow": st.overflow, "triangles": st.triangles,
+            "instances": st.instances, "hairs": st.hairs, "overflow": st.overflow,
+            "triangles": st.triangles,
             "yarn_bytes": st.yarn_bytes, "bytes_per_control_point":
                 st.yarn_bytes as f64 / packed.control_points().max(1) as f64,
             "pack_seconds": pack_s, "render_seconds": render_s, "coverage": coverage,

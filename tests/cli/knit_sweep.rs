@@ -1,5 +1,6 @@
 //! End-to-end tests of the GPU fiber commands (issue #19): `btf knit render` with its
-//! `--json` stats and `--compare` (a render against an identical render scores exactly 0),
+//! `--json` stats, its hairs (`--no-hairs` drops exactly them) and `--compare` (a render
+//! against an identical render scores exactly 0),
 //! and `btf knit sweep` on a tiny grid (32², ω^LoD ∈ {0, 2}, 4 spp): its CSV rows and
 //! numbers (finite errors, the tubes row at ratio 1, fewer instances at the coarser LoD,
 //! triangles = instances·2·n_sub), the Markdown, plot and reference images; and refusals
@@ -43,6 +44,12 @@ fn knit_render_stats_and_compare_against_itself_is_zero() {
     let js = run_gpu(&d, &[&RENDER[..], &["b.exr", "--compare", "a.exr"]].concat()).unwrap();
     let j: serde_json::Value = serde_json::from_str(&js).unwrap();
     assert_eq!(j["rel_rmse"].as_f64(), Some(0.0), "{j}");
+    // The yarn's hair flyaways are drawn unless --no-hairs; they are all the difference.
+    let hairs = j["hairs"].as_u64().unwrap();
+    let js = run_gpu(&d, &[&RENDER[..], &["c.exr", "--no-hairs"]].concat()).unwrap();
+    let bare: serde_json::Value = serde_json::from_str(&js).unwrap();
+    assert!(hairs > 0 && bare["hairs"].as_u64() == Some(0), "{j}\n{bare}");
+    assert_eq!(bare["instances"].as_u64().unwrap() + hairs, inst, "{bare}");
 }
 
 /// `btf knit render --env`: an environment map alone lights the fibers through its SRBF

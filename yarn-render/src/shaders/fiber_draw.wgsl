@@ -110,14 +110,8 @@ fn core_vertex(seg: u32, ply: u32, t: f32, side: f32, rec: vec2<u32>) -> VertexO
     let across_e = sqrt((en * eye.y) * (en * eye.y) + (eb * eye.x) * (eb * eye.x));
     let hw = ef.core_f.x * across_e / g;
     // λ at the segment midpoint, as fiber_lod computes it.
-    var l2 = 1.0;
-    if view.viewport.w > 0.0 {
-        let mid = combine(s, cr_basis(0.5));
-        let w_fiber = pixels_of(view, 2.0 * pr.b.y, mid);
-        let w_ply = pixels_of(view, 2.0 * max(pr.a.y, pr.a.z) * pr.b.x, mid);
-        let lam = lod_lambda_draw(w_fiber, w_ply, view.viewport.w);
-        l2 = lam * lam;
-    }
+    let lam = segment_lambda(view, seg);
+    let l2 = lam * lam;
     let hp = pr.b.x * across_e + pr.b.y;
     let half = l2 * hw + (1.0 - l2) * max(hp, hw);
     let across = normalize_or(cross(tp, e), any_perpendicular(tp));
@@ -139,17 +133,6 @@ fn core_vertex(seg: u32, ply: u32, t: f32, side: f32, rec: vec2<u32>) -> VertexO
     out.n_ply = n_ply;
     out.b_ply = b_ply;
     return out;
-}
-
-// fiber_lod's lod_lambda ([W19 eq. 4]).
-fn lod_lambda_draw(w_fiber: f32, w_ply: f32, w_lod: f32) -> f32 {
-    if w_lod <= 0.0 || w_lod <= w_fiber {
-        return 1.0;
-    }
-    if w_ply <= w_lod {
-        return 0.0;
-    }
-    return clamp((w_fiber / w_lod) * (w_ply - w_lod) / (w_ply - w_fiber), 0.0, 1.0);
 }
 
 // The segment parameter of strip vertex `vi` of instance record `rec`: vertex pair k at
@@ -245,6 +228,13 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     if px < min_px && px > 0.0 {
         w = width * min_px / px;
         coverage = px / min_px;
+        if hair {
+            // fiber_lod kept the hairs of hair_fibers() of n_fib fibers: the kept ones
+            // stand for the rest (their coverage divided by the fraction, at most 1).
+            let n_fib = pr.d.y;
+            let kept = f32(hair_fibers(view, seg, n_fib)) / f32(n_fib);
+            coverage = min(coverage / max(kept, 1e-6), 1.0);
+        }
     }
     var out: VertexOut;
     out.clip = view.view_proj * vec4<f32>(p + across * (0.5 * w * side), 1.0);

@@ -10,8 +10,8 @@
 //
 // Hair flyaways (ours; [W19] generates no hairs on the GPU): each segment hashes the slots
 // every fiber of its plies passes through — FiberTable::period_kind's keys, on the GPU —
-// and lists the hairs whose crossing of r_0 lies on it, with the segment's n_sub, at any
-// λ (LoD thins the regular fibers, not the fuzz). "Lies on it" is decided by one comparison that
+// and lists the hairs whose crossing of r_0 lies on it, with the segment's n_sub: those of
+// the outermost hair_fibers() fibers, their coverage raised to match. "Lies on it" is decided by one comparison that
 // the two segments sharing a boundary evaluate identically, so every hair is listed once.
 // A hair reaches along the curve beyond its segment, so a culled segment still scans, and
 // a hair is culled only when every segment it spans, inflated by the hair's own reach, is
@@ -33,18 +33,6 @@ struct DrawArgs {
 @group(1) @binding(0) var<uniform> view: View;
 @group(1) @binding(1) var<storage, read_write> out_instances: array<vec2<u32>>;
 @group(1) @binding(2) var<storage, read_write> args: DrawArgs;
-
-// [W19 eq. 4]: 1 when the fiber is at least ω^LoD wide, 0 when the ply is at most, and in
-// between (ω_f/ω_L)(ω_p − ω_L)/(ω_p − ω_f). Mirrored by lod::lambda.
-fn lod_lambda(w_fiber: f32, w_ply: f32, w_lod: f32) -> f32 {
-    if w_lod <= 0.0 || w_lod <= w_fiber {
-        return 1.0;
-    }
-    if w_ply <= w_lod {
-        return 0.0;
-    }
-    return clamp((w_fiber / w_lod) * (w_ply - w_lod) / (w_ply - w_fiber), 0.0, 1.0);
-}
 
 fn outside(p: vec3<f32>, plane: vec4<f32>, reach: f32) -> bool {
     return dot(plane.xyz, p) + plane.w < -reach;
@@ -222,11 +210,7 @@ fn lod(@builtin(global_invocation_id) gid: vec3<u32>,
         }
         return;
     }
-    let mid = combine(s, cr_basis(0.5));
-    let w_fiber = pixels_of(view, 2.0 * pr.b.y, mid);
-    let ply_radius = max(pr.a.y, pr.a.z) * pr.b.x;
-    let w_ply = pixels_of(view, 2.0 * ply_radius, mid);
-    let lambda = lod_lambda(w_fiber, w_ply, view.viewport.w);
+    let lambda = segment_lambda(view, seg);
     let l2 = lambda * lambda;
     let n_fib = pr.d.y;
     // Core mode [W19 §3.2]: one textured core strip per ply stands for the innermost
@@ -246,10 +230,11 @@ fn lod(@builtin(global_invocation_id) gid: vec3<u32>,
     // whoever reserved it; what lies beyond is counted and dropped, and `clamp_count`
     // (run after this pass) cuts instance_count back to the capacity.
     if hairs {
-        // Every fiber's hairs, at any λ: a few per segment against n_ply·n fibers, and
-        // dropping them with their fibers would thin the fuzz with distance.
+        // The hairs of the outermost hair_fibers() fibers: all at full detail; fiber_draw
+        // divides the coverage of the hairs kept by the fraction kept.
+        let n_hair_fibers = hair_fibers(view, seg, n_fib);
         for (var ply = 0u; ply < n_ply; ply++) {
-            for (var f = 0u; f < n_fib; f++) {
+            for (var f = n_fib - n_hair_fibers; f < n_fib; f++) {
                 list_hairs(seg, ply, f, n_sub, visible);
             }
         }

@@ -227,11 +227,13 @@ fn lod_with_core_strips_conserves_coverage_and_radiance() {
     let (n2, c2, r2) = rows[2];
     assert!(n2 * 10 < n0, "LoD must drop most fibers: {n0} → {n2}");
     for &(_, c, r) in &rows[1..] {
-        // DESIGN §2.5's bound for "LoD conserves appearance" holds for the radiance.
+        // DESIGN §2.5's bound for "LoD conserves appearance" holds for the radiance, hair
+        // flyaways included (thinned with their coverage raised: measured −2.4 / −3.3 %;
+        // thinned as the fibers, the 4 px frame lost 8 %).
         assert!((r / r0 - 1.0).abs() < 0.05, "mean radiance {r} against {r0}");
         // Coverage does not: the paper's compensation (the core widened towards the ply
-        // as λ² falls, DESIGN §2.3 item 7) loses 10 % of it here (measured 0.616 →
-        // 0.553 / 0.549), because the core texture's alpha is the core fibers' and the
+        // as λ² falls, DESIGN §2.3 item 7) loses 10 % of it here (measured 0.629 →
+        // 0.567 / 0.566 with the hairs; 0.616 → 0.553 / 0.549 before them), because the core texture's alpha is the core fibers' and the
         // ply's own gaps stay open. A known gap, bounded here so it cannot grow unseen.
         assert!(c <= c0 * 1.02 && c > 0.85 * c0, "coverage {c} against {c0}");
     }
