@@ -631,6 +631,8 @@ fn fiber_btf(
             // (f32 in the provenance: compared as f32, 0.1 is not 0.1f32 as f64)
             && p["settings"]["lod_px"].as_f64().map(|v| v as f32) == Some(lod_px)
             && p["stitches"] == serde_json::json!(src.stitches)
+            // Made before the fibers drew hairs: no key, no hairs.
+            && p["settings"]["hairs"].as_bool().unwrap_or(false) == src.hairs
             && p["chart"]["text"].as_str() == Some(src.chart.to_text().as_str())
             && store.meta().view_sampling == src.sampling;
         if !same {

@@ -4,7 +4,7 @@
 // segment with the yarn's width — a
 // triangle strip of 2·(n_sub_max + 1) vertices; vertex k of an instance with fewer
 // subdivisions collapses onto its last point. Each vertex evaluates the generator
-// (fiber_point, the function fiber_expand writes) and is pushed ± half the fiber width
+// (instance_sample, the function fiber_expand writes) and is pushed ± half the fiber width
 // along T × (eye − p): the camera-facing strip [W19 §5] made by the geometry shader there.
 // A strip narrower than `view.strip.x` pixels is widened to it and keeps only its coverage
 // fraction of the MSAA samples: a sample mask of round(coverage·samples + u) samples,

@@ -589,9 +589,10 @@ fn fiber_sample(seg: u32, ply: u32, fib: u32, t: f32, loops: bool) -> FiberSampl
     return out;
 }
 
-// A hair's point at its parameter t ∈ [0, 1] (FiberModel::hair_offset, [H25 eq. 12–13]): from the ply
-// centre outwards, r(t) = (r_0 + r_e)(1 − (1 − t)^α), angle and z linear in t, through
-// the ply ellipse as the regular fibers; `seg` is the segment the hair was counted from.
+// A hair's point at its parameter t ∈ [0, 1] (FiberModel::hair_offset, [H25 eq. 12–13]):
+// from the ply centre outwards, r(t) = (r_0 + r_e)(1 − (1 − t)^α), angle and z linear in
+// t, through the ply ellipse as the regular fibers; `seg` is the segment the hair was
+// counted from.
 fn hair_sample(seg: u32, ply: u32, hr: Hair, t: f32) -> FiberSample {
     let pl = place_at(seg, hair_dz(hr, t));
     let yp = yarn_point(pl.seg, pl.t);

@@ -9,10 +9,11 @@
 // instance_count.
 //
 // Hair flyaways (ours; [W19] generates no hairs on the GPU): each segment hashes the slots
-// every fiber of its plies passes through — FiberTable::period_kind's keys, on the GPU —
-// and lists the hairs whose crossing of r_0 lies on it, with the segment's n_sub: those of
-// the outermost hair_fibers() fibers, their coverage raised to match. "Lies on it" is decided by one comparison that
-// the two segments sharing a boundary evaluate identically, so every hair is listed once.
+// its outermost hair_fibers() fibers pass through — FiberTable::period_kind's keys, on the
+// GPU — and lists the hairs whose crossing of r_0 lies on it, with the segment's n_sub
+// (fiber_draw raises the coverage of the hairs kept to stand for the others). "Lies on
+// it" is decided by one comparison that the two segments sharing a boundary evaluate
+// identically, so every hair is listed once.
 // A hair reaches along the curve beyond its segment, so a culled segment still scans, and
 // a hair is culled only when every segment it spans, inflated by the hair's own reach, is
 // outside (culling on and off give the same image).
@@ -119,7 +120,8 @@ fn list_hairs(seg: u32, ply: u32, fib: u32, n_sub: u32, visible: bool) {
     } else if c.keys.x > 0u {
         let f0 = segments[seg - s.ids.y];
         // σ runs backwards along z when α' < 0.
-        next_base = bitcast<i32>(f0.ids.z) + select(i32(c.keys.x), -i32(c.keys.x), c.pitch.y < 0.0);
+        let wrap = select(i32(c.keys.x), -i32(c.keys.x), c.pitch.y < 0.0);
+        next_base = bitcast<i32>(f0.ids.z) + wrap;
         next_phase = f0.phase.z;
     } else {
         has_next = false;
@@ -226,9 +228,6 @@ fn lod(@builtin(global_invocation_id) gid: vec3<u32>,
     let n_ply = pr.d.x;
     let per_ply = n + select(0u, 1u, core > 0u);
     let total = per_ply * n_ply;
-    // Reservations are contiguous from 0, so every slot below the capacity is written by
-    // whoever reserved it; what lies beyond is counted and dropped, and `clamp_count`
-    // (run after this pass) cuts instance_count back to the capacity.
     if hairs {
         // The hairs of the outermost hair_fibers() fibers: all at full detail; fiber_draw
         // divides the coverage of the hairs kept by the fraction kept.
@@ -242,6 +241,9 @@ fn lod(@builtin(global_invocation_id) gid: vec3<u32>,
     if !visible {
         return;
     }
+    // Reservations are contiguous from 0, so every slot below the capacity is written by
+    // whoever reserved it; what lies beyond is counted and dropped, and `clamp_count`
+    // (run after this pass) cuts instance_count back to the capacity.
     let cap = view.lod.w;
     let base = atomicAdd(&args.instance_count, total);
     if base + total > cap {
