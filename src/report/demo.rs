@@ -308,7 +308,7 @@ pub fn write(
     if let Some(k) = knit_json(out) {
         page.push(Block::Heading("Knitwear, fiber by fiber".into()));
         page.push(Block::Para(format!(
-            "Next to the measured fabric, the toolkit draws knitwear from the yarn itself: {} stitches of a two-ply cotton, whose {} fiber strands are generated on the GPU every frame from {} curve points ({:.0} KB) and never stored; farther stitches get fewer fibers. On this machine's software GPU a frame took {:.0} ms, {:.1} times as long as drawing the yarns as plain tubes.",
+            "Next to the measured fabric, the toolkit draws knitwear from the yarn itself: {} stitches of a two-ply cotton, whose {} fiber strands, stray hairs among them, are generated on the GPU every frame from {} curve points ({:.0} KB) and never stored; farther stitches get fewer fibers. On this machine's software GPU a frame took {:.0} ms, {:.1} times as long as drawing the yarns as plain tubes.",
             k.stitches,
             k.instances,
             k.control_points,
@@ -318,7 +318,7 @@ pub fn write(
         )));
         page.push(Block::Figure {
             src: k.png.clone(),
-            caption: "A stockinette patch rendered with procedural fibers (Wu & Yuksel): self-shadows inside the yarn, shadows between yarns, level of detail with core fibers.".into(),
+            caption: "A stockinette patch rendered with procedural fibers (Wu & Yuksel): stray hairs, self-shadows inside the yarn, shadows between yarns, level of detail with core fibers.".into(),
         });
         if let Some((png, strain, faces, ms, clearance, plain)) = &k.stretch {
             let without = plain.map_or(String::new(), |p| {
