@@ -16,40 +16,16 @@
 //! shadow and draw passes, the 256² read-back). Without a GPU adapter it prints why and
 //! exits 0.
 
+mod common;
+
 use btf_render::Gpu;
-use criterion::{Criterion, SamplingMode};
-use std::cell::RefCell;
-use std::collections::BTreeMap;
-use std::rc::Rc;
-use std::time::{Duration, Instant};
-use yarn::YarnParams;
+use criterion::Criterion;
+use std::time::Instant;
 use yarn::bcsdf::{FiberBcsdf, KhungurnParams};
-use yarn::knit::crane::CraneKnit;
 use yarn_precompute::{ImTable, SrbfFit};
-use yarn_render::{
-    FiberCamera, FiberEffects, FiberLight, FiberRenderer, FiberSettings, PackOptions, PackedYarns,
-};
+use yarn_render::{FiberEffects, FiberLight, FiberRenderer, FiberSettings};
 
 const SIZE: (u32, u32) = (256, 256);
-
-/// Per-case frame times (ms), for the medians after criterion.
-#[derive(Clone, Default)]
-struct Samples(Rc<RefCell<BTreeMap<String, Vec<f64>>>>);
-
-impl Samples {
-    fn push(&self, key: &str, v: f64) {
-        self.0.borrow_mut().entry(key.to_string()).or_default().push(v);
-    }
-    fn median(&self, key: &str) -> f64 {
-        let mut v = self.0.borrow().get(key).cloned().unwrap_or_default();
-        v.sort_by(f64::total_cmp);
-        let n = v.len();
-        if n == 0 {
-            return f64::NAN;
-        }
-        if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
-    }
-}
 
 struct Case {
     name: &'static str,
@@ -63,23 +39,8 @@ fn main() {
         eprintln!("lights: no adapter, nothing measured");
         return;
     };
-    let p = YarnParams::preset("cotton-2ply").unwrap();
-    let k = CraneKnit::for_yarn_radius(p.yarn_radius());
-    let mut set = k.yarn_set(22, 22, 8).unwrap();
-    set.period = None;
-    let packed = PackedYarns::new(&set, std::slice::from_ref(&p), &PackOptions::default()).unwrap();
+    let (packed, _, cam, c, span) = common::crane_scene();
     let bcsdf = FiberBcsdf::khungurn(&KhungurnParams::default()).unwrap();
-    let (lo, hi) = packed.bounds;
-    let c = [0, 1, 2].map(|a| 0.5 * (lo[a] + hi[a]));
-    let span = (hi[0] - lo[0]).max(hi[1] - lo[1]);
-    let (s, co) = 35f64.to_radians().sin_cos();
-    let d = 2.0 * span;
-    let cam = FiberCamera::orthographic(
-        [c[0], c[1] - d * s, c[2] + d * co],
-        c,
-        [0.0, 1.0, 0.0],
-        1.1 * span,
-    );
     let dir = FiberLight::Directional { to_light: [0.3, -0.5, 1.0], irradiance: [2.0; 3] };
     let far = 3.0 * span;
     let afar = FiberLight::Point {
@@ -138,27 +99,9 @@ fn main() {
                 / img.pixels.len() as f64
         })
         .collect();
-    let samples = Samples::default();
     let mut cr = Criterion::default().configure_from_args();
-    let mut g = cr.benchmark_group("fiber-lights");
-    g.sampling_mode(SamplingMode::Flat);
-    // Frames take 0.5–6 s on lavapipe: 10 samples a case.
-    g.sample_size(10);
-    for c in &cases {
-        let smp = samples.clone();
-        g.bench_function(c.name, |b| {
-            b.iter_custom(|iters| {
-                let mut total = 0.0;
-                for _ in 0..iters {
-                    let (ms, _) = frame(c);
-                    smp.push(c.name, ms);
-                    total += ms;
-                }
-                Duration::from_secs_f64(total / 1e3)
-            })
-        });
-    }
-    g.finish();
+    let names: Vec<&'static str> = cases.iter().map(|c| c.name).collect();
+    let samples = common::time_cases(&mut cr, "fiber-lights", &names, |i| frame(&cases[i]).0);
     let tubes = samples.median("tubes");
     println!(
         "\n{} control points, 256², MSAA 4; SRBF fit: 16 lobes ({kept} of non-zero weight), \

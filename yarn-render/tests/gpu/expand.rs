@@ -76,6 +76,29 @@ fn every_wgsl_file_is_valid() {
     }
 }
 
+/// The instance list and the vertex stage's points of `packed` at `n_sub` subdivisions,
+/// every fiber and hair listed (LoD and culling off, no effects).
+fn pulled(gpu: &Gpu, packed: &PackedYarns, n_sub: u32) -> yarn_render::renderer::PulledPoints {
+    let settings = yarn_render::FiberSettings {
+        n_sub,
+        lod_px: 0.0,
+        cull: false,
+        msaa: 1,
+        effects: yarn_render::FiberEffects::none(),
+        ..Default::default()
+    };
+    let bcsdf = yarn::bcsdf::FiberBcsdf::khungurn(&Default::default()).unwrap();
+    let r = yarn_render::FiberRenderer::new(gpu, packed, &bcsdf, settings).unwrap();
+    let c = [0, 1, 2].map(|a| 0.5 * (packed.bounds.0[a] + packed.bounds.1[a]));
+    let cam = yarn_render::FiberCamera::perspective(
+        [c[0], c[1] - 0.03, c[2] + 0.03],
+        c,
+        [0.0, 0.0, 1.0],
+        40.0,
+    );
+    r.pulled_points(gpu, &cam, &[]).unwrap()
+}
+
 /// DESIGN §2.5 "pull = expand": the fiber points the vertex stage of `fiber_draw`
 /// evaluates (its decoding and generator call, rasterised as points into an f32 target by
 /// `FiberRenderer::pulled_points`) equal `fiber_expand`'s on the same instance list, bit
@@ -87,24 +110,7 @@ fn pulled_fiber_points_equal_the_expand_pass_bit_for_bit() {
     let opts = PackOptions { seed: 7, frame_samples_per_segment: 4, tiles: [1, 1] };
     let packed = PackedYarns::new(&crane_patch(2, 2), std::slice::from_ref(&p), &opts).unwrap();
     let n_sub = 6;
-    let settings = yarn_render::FiberSettings {
-        n_sub,
-        lod_px: 0.0,
-        cull: false,
-        msaa: 1,
-        effects: yarn_render::FiberEffects::none(),
-        ..Default::default()
-    };
-    let bcsdf = yarn::bcsdf::FiberBcsdf::khungurn(&Default::default()).unwrap();
-    let r = yarn_render::FiberRenderer::new(&gpu, &packed, &bcsdf, settings).unwrap();
-    let c = [0, 1, 2].map(|a| 0.5 * (packed.bounds.0[a] + packed.bounds.1[a]));
-    let cam = yarn_render::FiberCamera::perspective(
-        [c[0], c[1] - 0.03, c[2] + 0.03],
-        c,
-        [0.0, 0.0, 1.0],
-        40.0,
-    );
-    let (inst, pulled) = r.pulled_points(&gpu, &cam, &[]).unwrap();
+    let (inst, pulled) = pulled(&gpu, &packed, n_sub);
     let data = YarnBuffers::new(&gpu, &packed).unwrap();
     let expanded =
         ExpandPass::new(&gpu, &data).unwrap().read(&gpu, &data, &inst, n_sub, true).unwrap();
@@ -156,24 +162,7 @@ fn hair_errors(gpu: &Gpu, set: &YarnSet) -> HairErrors {
     )
     .unwrap();
     let n_sub = 11u32;
-    let settings = yarn_render::FiberSettings {
-        n_sub,
-        lod_px: 0.0,
-        cull: false,
-        msaa: 1,
-        effects: yarn_render::FiberEffects::none(),
-        ..Default::default()
-    };
-    let bcsdf = yarn::bcsdf::FiberBcsdf::khungurn(&Default::default()).unwrap();
-    let r = yarn_render::FiberRenderer::new(gpu, &packed, &bcsdf, settings).unwrap();
-    let c = [0, 1, 2].map(|a| 0.5 * (packed.bounds.0[a] + packed.bounds.1[a]));
-    let cam = yarn_render::FiberCamera::perspective(
-        [c[0], c[1] - 0.03, c[2] + 0.03],
-        c,
-        [0.0, 0.0, 1.0],
-        40.0,
-    );
-    let (inst, pts) = r.pulled_points(gpu, &cam, &[]).unwrap();
+    let (inst, pts) = pulled(gpu, &packed, n_sub);
     let genopts = yarn::GenOptions {
         seed,
         hair_samples: 12,

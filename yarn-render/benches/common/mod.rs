@@ -1,0 +1,87 @@
+//! What the `lights` and `hairs` benches share: per-case frame times with their medians,
+//! and the scene (Crane's 22 × 22-stitch plain knit in cotton-2ply, not periodic, 3 872
+//! control points, seen whole by the orthographic camera of the `fibers` bench).
+
+use criterion::{Criterion, SamplingMode};
+use std::cell::RefCell;
+use std::collections::BTreeMap;
+use std::rc::Rc;
+use std::time::Duration;
+use yarn::YarnParams;
+use yarn::knit::crane::CraneKnit;
+use yarn_render::{FiberCamera, PackOptions, PackedYarns};
+
+/// Per-case frame times (ms), for the medians after criterion.
+#[derive(Clone, Default)]
+pub struct Samples(Rc<RefCell<BTreeMap<String, Vec<f64>>>>);
+
+impl Samples {
+    /// Records one frame of `key`.
+    pub fn push(&self, key: &str, v: f64) {
+        self.0.borrow_mut().entry(key.to_string()).or_default().push(v);
+    }
+
+    /// The median of `key`'s frames (NaN without any).
+    pub fn median(&self, key: &str) -> f64 {
+        let mut v = self.0.borrow().get(key).cloned().unwrap_or_default();
+        v.sort_by(f64::total_cmp);
+        let n = v.len();
+        if n == 0 {
+            return f64::NAN;
+        }
+        if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
+    }
+}
+
+/// The patch, its yarn and the whole-patch camera: (packed, params, camera, centre, span).
+pub fn crane_scene() -> (PackedYarns, YarnParams, FiberCamera, [f64; 3], f64) {
+    let p = YarnParams::preset("cotton-2ply").unwrap();
+    let k = CraneKnit::for_yarn_radius(p.yarn_radius());
+    let mut set = k.yarn_set(22, 22, 8).unwrap();
+    set.period = None;
+    let packed = PackedYarns::new(&set, std::slice::from_ref(&p), &PackOptions::default()).unwrap();
+    let (lo, hi) = packed.bounds;
+    let c = [0, 1, 2].map(|a| 0.5 * (lo[a] + hi[a]));
+    let span = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+    let (s, co) = 35f64.to_radians().sin_cos();
+    let d = 2.0 * span;
+    let cam = FiberCamera::orthographic(
+        [c[0], c[1] - d * s, c[2] + d * co],
+        c,
+        [0.0, 1.0, 0.0],
+        1.1 * span,
+    );
+    (packed, p, cam, c, span)
+}
+
+/// Times each case `i` (`frame(i)`: one frame, its wall-clock ms) in criterion group
+/// `group`, 10 samples a case (frames take 0.2–7 s on lavapipe), recording every frame
+/// under `names[i]`.
+pub fn time_cases(
+    cr: &mut Criterion,
+    group: &str,
+    names: &[&'static str],
+    frame: impl Fn(usize) -> f64,
+) -> Samples {
+    let samples = Samples::default();
+    let mut g = cr.benchmark_group(group);
+    g.sampling_mode(SamplingMode::Flat);
+    g.sample_size(10);
+    for (i, name) in names.iter().enumerate() {
+        let smp = samples.clone();
+        let frame = &frame;
+        g.bench_function(*name, |b| {
+            b.iter_custom(|iters| {
+                let mut total = 0.0;
+                for _ in 0..iters {
+                    let ms = frame(i);
+                    smp.push(name, ms);
+                    total += ms;
+                }
+                Duration::from_secs_f64(total / 1e3)
+            })
+        });
+    }
+    g.finish();
+    samples
+}
