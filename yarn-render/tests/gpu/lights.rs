@@ -249,3 +249,44 @@ fn srbf_environment_against_the_constant_ambient_and_the_reference() {
         }
     }
 }
+
+/// What the per-pixel error on a knit patch is made of (the 5 % bound of DESIGN §2.5 holds
+/// where the shadow model is exact, `reference.rs`, not here): at 48² the fibers are
+/// sub-pixel and each covers 0 to 4 of a pixel's MSAA samples, where the reference averages
+/// 64 rays. Rendering at 2× and averaging 2 × 2 (16 samples a pixel) removes about
+/// half of the error; what stays is the model — [W19]'s statistical self-shadow volume and
+/// the strips' coverage — not noise.
+#[test]
+fn half_the_knit_patch_error_is_sample_mask_noise() {
+    let Some(gpu) = Gpu::for_tests("half_the_knit_patch_error_is_sample_mask_noise") else {
+        return;
+    };
+    let s = setup(true);
+    let to_light = btf_core::Direction::new(30.0, 200.0).to_vector();
+    let reference_frame =
+        reference(&s, &[Light::Directional { to_light, irradiance: [3.0; 3] }], 64);
+    let lights = [FiberLight::Directional { to_light, irradiance: [3.0; 3] }];
+    let r = renderer(&gpu, &s, FiberEffects::default());
+    let direct = frame(&gpu, &s, &r, &lights);
+    let p = s.patch.period;
+    let cam = FiberCamera::oblique(s.view, s.patch.z_ref, p.origin, p.size);
+    let n = 2 * SIZE;
+    let img = r.render(&gpu, &cam, &lights, (n as u32, n as u32), [0.0; 4]).unwrap();
+    let mut averaged = vec![0.0f32; SIZE * SIZE * 3];
+    for y in 0..n {
+        for x in 0..n {
+            for c in 0..3 {
+                averaged[((y / 2) * SIZE + x / 2) * 3 + c] += 0.25 * img.pixels[y * n + x][c];
+            }
+        }
+    }
+    let (e1, e2) = (rel_rmse(&direct, &reference_frame), rel_rmse(&averaged, &reference_frame));
+    eprintln!(
+        "stockinette 48², 64 spp reference: rel. RMSE {e1:.4} at 4 samples a pixel, {e2:.4} \
+         at 16 (2× and averaged); mean / reference {:.4} / {:.4}",
+        mean(&direct) / mean(&reference_frame),
+        mean(&averaged) / mean(&reference_frame)
+    );
+    // Measured 0.616 → 0.374 (and 0.324 at 4×, 64 samples).
+    assert!(e2 < 0.7 * e1, "{e1} → {e2}");
+}
