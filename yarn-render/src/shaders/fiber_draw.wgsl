@@ -206,10 +206,16 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
         fsmp.b_slice = yp.b;
         fsmp.seg = seg;
         fsmp.t = t;
-    } else {
-        fsmp = instance_sample(rec, t, loops);
+    } else if hair {
+        // The slot's shape drawn once for both points.
+        let hr = instance_hair(rec);
+        fsmp = hair_sample(seg, ply, hr, t);
         p = fsmp.pos;
-        q = instance_sample(rec, t2, loops).pos;
+        q = hair_sample(seg, ply, hr, t2).pos;
+    } else {
+        fsmp = fiber_sample(seg, ply, fib, t, loops);
+        p = fsmp.pos;
+        q = fiber_point(seg, ply, fib, t2, loops);
     }
     var tan = normalize_or(q - p, fsmp.tangent);
     if t2 < t {
