@@ -50,8 +50,9 @@ pub struct FiberSettings {
     pub cull: bool,
     /// Loop flyaways.
     pub loops: bool,
-    /// Hair flyaways (`fiber_lod` finds them by hashing each listed fiber's slots; they
-    /// must match the CPU generator's `GenOptions::hairs` for the two to agree).
+    /// Hair flyaways (`fiber_lod` finds them by hashing the fibers' slots and thins them
+    /// with LoD, `crate::passes::lod`; must match the CPU generator's `GenOptions::hairs`
+    /// for the two to agree).
     pub hairs: bool,
     /// Multiply the BCSDF by the yarn colour.
     pub tint: bool,
