@@ -17,11 +17,12 @@
 //! without core strips — and `fiber_draw` divides a kept hair's coverage `ω_f/ω_min` by the
 //! fraction kept, which `φ ≥ ω_f/ω_min` keeps within one pixel's samples (stochastic
 //! simplification: the expected fuzz stays). Thinned as the regular fibers (λ², and none
-//! once the ply is below ω^LoD and λ = 0) the fuzz would fade with distance: measured, the
-//! 4-px-LoD patch of `tests/gpu/lod.rs` lost 8 % of its radiance. Keeping every hair at every λ was measured first: a
+//! once the ply is below ω^LoD and λ = 0) the fuzz would fade with distance: that variant,
+//! measured once and not kept, made the 4-px-LoD patch of `tests/gpu/lod.rs` lose 8 % of
+//! its radiance. Keeping every hair at every λ (commit d43a08d) was measured first: a
 //! cotton segment has ~10 hairs against 2 listed fibers in a far view, and the whole
-//! 22 × 22-stitch patch took 3.4× the frame time without hairs (`benches/hairs.rs`). The
-//! segment test is one comparison the two
+//! 22 × 22-stitch patch took 3.4× the frame time without hairs (`benches/hairs.rs` at that
+//! commit). The segment test is one comparison the two
 //! segments of a boundary compute identically, so each hair is listed once; a hair spans
 //! more than its segment, so it is culled only when every segment it crosses, inflated by
 //! its own reach, is outside the frustum.

@@ -73,3 +73,15 @@ fn bad_entries_are_refused_naming_the_key() {
         }
     }
 }
+
+/// `hairs` of a `[[yarns]]` entry (default on) reaches the fiber renderer's settings.
+#[test]
+fn the_hairs_key_turns_the_fibers_hairs_on_and_off() {
+    let d = folder();
+    let path = d.path().join("scene.toml");
+    for (extra, want) in [("", true), ("hairs = false\n", false), ("hairs = true\n", true)] {
+        let scene = Scene::from_toml(&format!("{SCENE}{extra}"), &path).unwrap();
+        let s = crate::scene::overlay::settings(&scene, &scene.yarns[0]);
+        assert_eq!(s.hairs, want, "{extra:?}");
+    }
+}

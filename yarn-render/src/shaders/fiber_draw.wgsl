@@ -238,7 +238,9 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
             // fiber_lod kept the hairs of hair_fibers() of n_fib fibers: the kept ones
             // stand for the rest (their coverage divided by the fraction, at most 1).
             let n_fib = pr.d.y;
-            let kept = f32(hair_fibers(view, seg, n_fib)) / f32(n_fib);
+            let sw = segment_widths(view, seg);
+            let lam = lod_lambda(sw.x, sw.y, view.viewport.w);
+            let kept = f32(hair_fibers(view, lam, sw.x, n_fib)) / f32(n_fib);
             coverage = min(coverage / max(kept, 1e-6), 1.0);
         }
     }

@@ -212,7 +212,8 @@ fn lod(@builtin(global_invocation_id) gid: vec3<u32>,
         }
         return;
     }
-    let lambda = segment_lambda(view, seg);
+    let widths = segment_widths(view, seg);
+    let lambda = lod_lambda(widths.x, widths.y, view.viewport.w);
     let l2 = lambda * lambda;
     let n_fib = pr.d.y;
     // Core mode [W19 §3.2]: one textured core strip per ply stands for the innermost
@@ -231,7 +232,7 @@ fn lod(@builtin(global_invocation_id) gid: vec3<u32>,
     if hairs {
         // The hairs of the outermost hair_fibers() fibers: all at full detail; fiber_draw
         // divides the coverage of the hairs kept by the fraction kept.
-        let n_hair_fibers = hair_fibers(view, seg, n_fib);
+        let n_hair_fibers = hair_fibers(view, lambda, widths.x, n_fib);
         for (var ply = 0u; ply < n_ply; ply++) {
             for (var f = n_fib - n_hair_fibers; f < n_fib; f++) {
                 list_hairs(seg, ply, f, n_sub, visible);

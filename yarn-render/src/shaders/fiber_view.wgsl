@@ -70,10 +70,9 @@ fn segment_lambda(v: View, seg: u32) -> f32 {
 // fuzz is kept). A sub-pixel hair is ω_f wide and drawn ω_min wide with coverage ω_f/ω_min,
 // so dividing by φ ≥ ω_f/ω_min keeps it within one pixel's samples; thinning as the regular
 // fibers (by λ², or by λ alone once the ply falls below ω^LoD and λ = 0) would not.
-fn hair_fibers(v: View, seg: u32, n_fib: u32) -> u32 {
-    let w = segment_widths(v, seg);
-    let lambda = lod_lambda(w.x, w.y, v.viewport.w);
-    let phi = clamp(max(lambda, w.x / max(v.strip.x, 1e-6)), 0.0, 1.0);
+// `lambda` and `w_fiber` are the segment's (segment_widths, lod_lambda).
+fn hair_fibers(v: View, lambda: f32, w_fiber: f32, n_fib: u32) -> u32 {
+    let phi = clamp(max(lambda, w_fiber / max(v.strip.x, 1e-6)), 0.0, 1.0);
     return min(u32(ceil(phi * f32(n_fib))), n_fib);
 }
 

@@ -229,7 +229,8 @@ fn lod_with_core_strips_conserves_coverage_and_radiance() {
     for &(_, c, r) in &rows[1..] {
         // DESIGN §2.5's bound for "LoD conserves appearance" holds for the radiance, hair
         // flyaways included (thinned with their coverage raised: measured −2.4 / −3.3 %;
-        // thinned as the fibers, the 4 px frame lost 8 %).
+        // a variant listing the hairs of the outermost round(λ²·n_fib) fibers without
+        // raising their coverage, not kept, lost 8 % in the 4 px frame).
         assert!((r / r0 - 1.0).abs() < 0.05, "mean radiance {r} against {r0}");
         // Coverage does not: the paper's compensation (the core widened towards the ply
         // as λ² falls, DESIGN §2.3 item 7) loses 10 % of it here (measured 0.629 →
