@@ -85,6 +85,13 @@ pub struct FiberEffects {
     pub ao: AoMode,
     /// Shadows of other yarns (tube shadow maps, directional lights).
     pub yarn_shadows: bool,
+    /// Shadows of every fiber (ours, `crate::passes::fiber_shadow`): with `yarn_shadows`,
+    /// the delta lights' maps are drawn from the fibers themselves (hairs and core strips
+    /// included), fitted to what the camera sees, and replace both the tube maps and the
+    /// self-shadow volume for those lights (the environment's lobes keep them). One more
+    /// fiber pass per light; the map must resolve the fibers
+    /// ([`crate::FiberSettings::shadow_map`] texels across the seen part of the yarns).
+    pub fiber_shadows: bool,
     /// Constant environment radiance (linear RGB); zero turns the ambient term off.
     pub ambient: [f32; 3],
 }
@@ -99,6 +106,7 @@ impl FiberEffects {
             shadow_hiding: false,
             ao: AoMode::Off,
             yarn_shadows: false,
+            fiber_shadows: false,
             ambient: [0.0; 3],
         }
     }
@@ -118,6 +126,7 @@ impl Default for FiberEffects {
             shadow_hiding: true,
             ao: AoMode::Cubic,
             yarn_shadows: true,
+            fiber_shadows: false,
             ambient: [0.0; 3],
         }
     }

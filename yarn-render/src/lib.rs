@@ -12,6 +12,7 @@
 //! | [`passes::lod`] | `fiber_lod`: conservative culling, λ, instance list, indirect arguments | [W19 eq. 4], DESIGN §2.3 items 7–8 |
 //! | [`passes::draw`] | `fiber_draw`: vertex-pulled camera-facing strips, fiber BCSDF, MSAA | [W19 §5, eq. 5–6], [H25 eq. 7] |
 //! | [`passes::shadow`] | `yarn_tube_shadow`: shadow maps of the yarns as tubes | [W19 §4.1] |
+//! | [`passes::fiber_shadow`] | fiber shadow maps fitted to the seen part of the yarns | [W19 §4.1] (ours: every fiber casts) |
 //! | [`effects`] | self-shadow volume, AO, ambient term: precomputed data packed | [W19 §4, eq. 7–8] |
 //! | [`bcsdf`] | `yarn::bcsdf::FiberBcsdf` lobes packed for the shader | [W19 eq. 5–6] |
 //! | [`view`] | camera, lights, frustum planes in f64 about the origin | — |

@@ -778,6 +778,7 @@ impl LumisliceRenderer {
             culled: 0,
             instances: n,
             hairs: 0,
+            shadow_instances: 0,
             overflow: 0,
             triangles: n as u64 * 12,
             yarn_bytes: self.data.bytes + self.table_bytes,

@@ -666,7 +666,7 @@ impl StripRenderer {
             fraw.lod[2] |= 16;
             group("strip_flyaway", &fraw)
         });
-        self.shadow.encode(gpu, enc, &self.data, &maps, &passes);
+        self.shadow.encode(gpu, enc, &self.data, &maps, (0, &passes));
         let load = |c: Option<[f64; 4]>| match c {
             Some(c) => wgpu::LoadOp::Clear(wgpu::Color { r: c[0], g: c[1], b: c[2], a: c[3] }),
             None => wgpu::LoadOp::Load,
@@ -751,6 +751,7 @@ impl StripRenderer {
             culled: 0,
             instances: n,
             hairs: 0,
+            shadow_instances: 0,
             overflow: 0,
             triangles: n as u64 * 2 * self.settings.n_sub as u64,
             yarn_bytes: self.data.bytes + self.texel_bytes,

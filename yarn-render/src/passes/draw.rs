@@ -21,6 +21,8 @@ pub fn color_format(samples: u32) -> wgpu::TextureFormat {
 }
 /// The depth format.
 pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// The fiber shadow maps' fiber keys.
+pub const SHADOW_IDS: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 
 /// The pass's WGSL (generator and view in front).
 pub fn source() -> String {
@@ -30,6 +32,9 @@ pub fn source() -> String {
 /// The compiled pass.
 pub struct DrawPass {
     pipeline: wgpu::RenderPipeline,
+    /// The fiber shadow maps' pipeline (`vs_main` with the light's view, `fs_shadow`, depth
+    /// only, one sample), compiled only when a renderer draws them.
+    shadow: Option<wgpu::RenderPipeline>,
     /// Layout of group 1 (view, instances, lobes, q nodes, effect headers and data, tube
     /// shadow maps, their comparison sampler and views).
     pub layout: wgpu::BindGroupLayout,
@@ -38,8 +43,9 @@ pub struct DrawPass {
 }
 
 impl DrawPass {
-    /// Compiles the pass at `samples` per pixel (1 or 4).
-    pub fn new(gpu: &Gpu, data: &YarnBuffers, samples: u32) -> Result<Self> {
+    /// Compiles the pass at `samples` per pixel (1 or 4), with the fiber shadow maps'
+    /// pipeline when `shadows`.
+    pub fn new(gpu: &Gpu, data: &YarnBuffers, samples: u32, shadows: bool) -> Result<Self> {
         if samples != 1 && samples != 4 {
             return Err(Error::Invalid(format!("fiber_draw: MSAA {samples} (1 or 4)")));
         }
@@ -80,10 +86,20 @@ impl DrawPass {
                 },
                 buf(8, fs, wgpu::BufferBindingType::Uniform),
                 buf(9, fs, ro),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 10,
+                    visibility: fs,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Uint,
+                        view_dimension: wgpu::TextureViewDimension::D2Array,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
             ],
         });
         let src = source();
-        let pipeline = gpu
+        let (pipeline, shadow) = gpu
             .scoped("fiber_draw pipeline", || {
                 let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
                     label: Some("fiber_draw.wgsl"),
@@ -94,7 +110,46 @@ impl DrawPass {
                     bind_group_layouts: &[Some(&data.layout), Some(&layout)],
                     immediate_size: 0,
                 });
-                dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                let strip = wgpu::PrimitiveState {
+                    topology: wgpu::PrimitiveTopology::TriangleStrip,
+                    cull_mode: None,
+                    ..Default::default()
+                };
+                let depth = wgpu::DepthStencilState {
+                    format: DEPTH,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                };
+                let shadow = shadows.then(|| {
+                    dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                        label: Some("fiber_draw shadow"),
+                        layout: Some(&pl),
+                        vertex: wgpu::VertexState {
+                            module: &module,
+                            entry_point: Some("vs_main"),
+                            compilation_options: Default::default(),
+                            buffers: &[],
+                        },
+                        primitive: strip,
+                        depth_stencil: Some(depth.clone()),
+                        multisample: Default::default(),
+                        fragment: Some(wgpu::FragmentState {
+                            module: &module,
+                            entry_point: Some("fs_shadow"),
+                            compilation_options: Default::default(),
+                            targets: &[Some(wgpu::ColorTargetState {
+                                format: SHADOW_IDS,
+                                blend: None,
+                                write_mask: wgpu::ColorWrites::ALL,
+                            })],
+                        }),
+                        multiview_mask: None,
+                        cache: None,
+                    })
+                });
+                let main = dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                     label: Some("fiber_draw"),
                     layout: Some(&pl),
                     vertex: wgpu::VertexState {
@@ -103,18 +158,8 @@ impl DrawPass {
                         compilation_options: Default::default(),
                         buffers: &[],
                     },
-                    primitive: wgpu::PrimitiveState {
-                        topology: wgpu::PrimitiveTopology::TriangleStrip,
-                        cull_mode: None,
-                        ..Default::default()
-                    },
-                    depth_stencil: Some(wgpu::DepthStencilState {
-                        format: DEPTH,
-                        depth_write_enabled: Some(true),
-                        depth_compare: Some(wgpu::CompareFunction::Less),
-                        stencil: Default::default(),
-                        bias: Default::default(),
-                    }),
+                    primitive: strip,
+                    depth_stencil: Some(depth),
                     multisample: wgpu::MultisampleState {
                         count: samples,
                         mask: !0,
@@ -132,10 +177,11 @@ impl DrawPass {
                     }),
                     multiview_mask: None,
                     cache: None,
-                })
+                });
+                (main, shadow)
             })
             .map_err(|e| Error::Gpu(e.to_string()))?;
-        Ok(DrawPass { pipeline, layout, samples })
+        Ok(DrawPass { pipeline, shadow, layout, samples })
     }
 
     /// The pull = expand probe (tests, DESIGN §2.5): `vs_probe`/`fs_probe` of the same
@@ -224,6 +270,50 @@ impl DrawPass {
             multiview_mask: None,
         });
         pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &data.bind_group, &[]);
+        pass.set_bind_group(1, group1, &[]);
+        pass.draw_indirect(args, 0);
+    }
+}
+
+impl DrawPass {
+    /// Records one fiber shadow map into `map` (a depth view) and `ids` (its fiber keys),
+    /// both cleared: the instances `fiber_lod` listed for the light's view in `group1`,
+    /// their count in `args`. Nothing when the pass was compiled without the shadow
+    /// pipeline.
+    pub fn encode_shadow(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        data: &YarnBuffers,
+        group1: &wgpu::BindGroup,
+        args: &wgpu::Buffer,
+        (map, ids): (&wgpu::TextureView, &wgpu::TextureView),
+    ) {
+        let Some(pipeline) = &self.shadow else { return };
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("fiber_draw shadow"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: ids,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: map,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &data.bind_group, &[]);
         pass.set_bind_group(1, group1, &[]);
         pass.draw_indirect(args, 0);

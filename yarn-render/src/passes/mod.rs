@@ -3,10 +3,13 @@
 //! - [`expand`]: `fiber_expand`, fiber points of an instance list into a storage buffer;
 //! - [`lod`]: `fiber_lod`, culling and level of detail into an indirect draw;
 //! - [`draw`]: `fiber_draw`, the strips and their shading;
-//! - [`shadow`]: `yarn_tube_shadow`, the tube shadow maps.
+//! - [`shadow`]: `yarn_tube_shadow`, the tube shadow maps;
+//! - [`fiber_shadow`]: the fiber shadow maps' light views (drawn by [`draw`]'s
+//!   `fs_shadow` pipeline).
 
 pub mod draw;
 pub mod expand;
+pub mod fiber_shadow;
 pub mod lod;
 pub mod shadow;
 

@@ -162,16 +162,16 @@ impl ShadowPass {
         Ok(ShadowPass { pipeline, layout })
     }
 
-    /// Records one map per entry of `passes` into the layers of `maps` (a depth 2-D array
-    /// with at least that many layers); with no passes, layer 0 is cleared (a bound map
-    /// must have been written).
+    /// Records one map per entry of `passes` into the layers of `maps` from `first_layer`
+    /// on (a depth 2-D array with that many layers); with no passes, layer `first_layer`
+    /// is cleared (a bound map must have been written).
     pub fn encode(
         &self,
         gpu: &Gpu,
         enc: &mut wgpu::CommandEncoder,
         data: &YarnBuffers,
         maps: &wgpu::Texture,
-        passes: &[ShadowPassRaw],
+        (first_layer, passes): (u32, &[ShadowPassRaw]),
     ) {
         let dev = &gpu.device;
         let begin = |enc: &mut wgpu::CommandEncoder, layer: u32| {
@@ -199,7 +199,7 @@ impl ShadowPass {
             .forget_lifetime()
         };
         if passes.is_empty() {
-            drop(begin(enc, 0));
+            drop(begin(enc, first_layer));
             return;
         }
         for (layer, raw) in passes.iter().enumerate() {
@@ -213,7 +213,7 @@ impl ShadowPass {
                 layout: &self.layout,
                 entries: &[wgpu::BindGroupEntry { binding: 0, resource: ubuf.as_entire_binding() }],
             });
-            let mut pass = begin(enc, layer as u32);
+            let mut pass = begin(enc, first_layer + layer as u32);
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &data.bind_group, &[]);
             pass.set_bind_group(1, &bg, &[]);
@@ -269,6 +269,24 @@ pub fn point_views(
     radius: f64,
     size: u32,
 ) -> Result<Vec<ShadowPassRaw>> {
+    let to_light = [position[0] as f32, position[1] as f32, position[2] as f32, 1.0];
+    point_cameras(position, origin, centre, radius)?
+        .iter()
+        .map(|cam| {
+            let setup = ViewSetup::new(cam, origin, centre, radius, (size, size))?;
+            Ok(ShadowPassRaw { view_proj: to_cols(&setup.view_proj), to_light, n: [8, 0, 0, 0] })
+        })
+        .collect()
+}
+
+/// The cameras of [`point_views`]: one perspective camera from the light, or the cube
+/// faces that see the sphere.
+pub fn point_cameras(
+    position: [f64; 3],
+    origin: [f64; 3],
+    centre: [f64; 3],
+    radius: f64,
+) -> Result<Vec<FiberCamera>> {
     if !position.iter().all(|x| x.is_finite()) {
         return Err(Error::Invalid(format!("shadow view: point light at {position:?}")));
     }
@@ -276,17 +294,11 @@ pub fn point_views(
     let d: [f64; 3] = [0, 1, 2].map(|a| centre[a] - position[a]);
     let dist = d.iter().map(|x| x * x).sum::<f64>().sqrt();
     let world = |p: [f64; 3]| [0, 1, 2].map(|a| p[a] + origin[a]);
-    let to_light = [position[0] as f32, position[1] as f32, position[2] as f32, 1.0];
-    let pass = |cam: FiberCamera| -> Result<ShadowPassRaw> {
-        let setup = ViewSetup::new(&cam, origin, centre, radius, (size, size))?;
-        Ok(ShadowPassRaw { view_proj: to_cols(&setup.view_proj), to_light, n: [8, 0, 0, 0] })
-    };
     // One map while the sphere subtends at most 120° (half-angle 60°).
     if r < dist * 60f64.to_radians().sin() {
         let half = (r / dist).asin().to_degrees() * 1.02;
         let up = if (d[2] / dist).abs() < 0.9 { [0.0, 0.0, 1.0] } else { [1.0, 0.0, 0.0] };
-        let cam = FiberCamera::perspective(world(position), world(centre), up, 2.0 * half);
-        return Ok(vec![pass(cam)?]);
+        return Ok(vec![FiberCamera::perspective(world(position), world(centre), up, 2.0 * half)]);
     }
     // Cube faces, 92° so that neighbours overlap; faces that miss the sphere are left out.
     let mut out = Vec::new();
@@ -303,7 +315,7 @@ pub fn point_views(
             continue;
         }
         let target = [0, 1, 2].map(|a| position[a] + axis[a]);
-        out.push(pass(FiberCamera::perspective(world(position), world(target), up, 92.0))?);
+        out.push(FiberCamera::perspective(world(position), world(target), up, 92.0));
     }
     Ok(out)
 }

@@ -43,6 +43,8 @@ struct Effects {
 // The environment (renderer.rs set_environment): count, λ, unused ×2; per SRBF its
 // direction (xyz, 0) and weight (rgb, 0); then I_M on 16³ nodes (θ_j, θ_o, Δφ), RGB.
 @group(1) @binding(9) var<storage, read> env: array<f32>;
+// The fiber shadow maps' fiber keys (fs_shadow), layer by layer as shadow_maps; 0: none.
+@group(1) @binding(10) var shadow_ids: texture_2d_array<u32>;
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
@@ -50,10 +52,12 @@ struct VertexOut {
     @location(0) axis: vec3<f32>,
     @location(1) tangent: vec3<f32>,
     @location(2) color: vec3<f32>,
-    // Coverage of a widened strip (1 when the fiber is at least the minimum width), the
-    // core strip's v across, unused ×2.
+    // Coverage of a widened strip (1 when the fiber is at least the minimum width); the
+    // core strip's v across and its stretch, or a fiber's side (−1…1) and the clip depth
+    // one fiber radius behind it (fs_shadow); unused.
     @location(3) misc: vec4<f32>,
-    // The fiber's identity hash (sample masks), params id, kind (0 fiber, 1 core, 2 tube).
+    // The fiber's identity hash (sample masks), params id, kind (0 fiber, 1 core, 2 tube),
+    // and the key of the whole fiber (fiber_key) the fiber shadow maps store.
     @location(4) @interpolate(flat) ids: vec4<u32>,
     // The yarn centre and the cross-section point in the frame that turns with the plies.
     @location(5) centre: vec3<f32>,
@@ -123,7 +127,7 @@ fn core_vertex(seg: u32, ply: u32, t: f32, side: f32, rec: vec2<u32>) -> VertexO
     // A widened strip stretches the texture across its whole width ([W19 §3.3]: λ² scales
     // the core's thickness); misc.z is the stretch, for the surface point.
     out.misc = vec4<f32>(1.0, 0.5 + 0.5 * side, half / max(hw, 1e-12), 0.0);
-    out.ids = vec4<u32>(pcg(seg) ^ (rec.y & 0xffffffu), c.ids.x, 1u, 0u);
+    out.ids = vec4<u32>(pcg(seg) ^ (rec.y & 0xffffffu), c.ids.x, 1u, fiber_key(s.ids.x, rec));
     out.centre = ya.pos;
     out.q = vec2<f32>(0.0);
     let phi0 = phi - TAU * f32(ply) / f32(pr.d.x);
@@ -133,6 +137,12 @@ fn core_vertex(seg: u32, ply: u32, t: f32, side: f32, rec: vec2<u32>) -> VertexO
     out.n_ply = n_ply;
     out.b_ply = b_ply;
     return out;
+}
+
+// The key of a whole fiber — curve, ply and fiber (or core strip, 0xfffe; or tube, 0xffff)
+// — the same on every segment of its curve (a hair is one instance: its own hash); never 0.
+fn fiber_key(curve: u32, rec: vec2<u32>) -> u32 {
+    return pcg(pcg(curve) ^ (rec.y & 0xffffffu)) | 1u;
 }
 
 // The segment parameter of strip vertex `vi` of instance record `rec`: vertex pair k at
@@ -245,20 +255,26 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
         }
     }
     var out: VertexOut;
-    out.clip = view.view_proj * vec4<f32>(p + across * (0.5 * w * side), 1.0);
+    let q_strip = p + across * (0.5 * w * side);
+    out.clip = view.view_proj * vec4<f32>(q_strip, 1.0);
+    // For the fiber shadow maps (fs_shadow): the clip depth a fiber radius further from
+    // the eye (the light there), and the strip's side.
+    let back = view.view_proj * vec4<f32>(q_strip - e * (0.5 * width), 1.0);
+    let dz = back.z / back.w - out.clip.z / out.clip.w;
     out.axis = p;
     out.tangent = tan;
     // The colour of the nearest control point (a hair's, where its point lies).
     let sc = segments[fsmp.seg].color;
     out.color = select(sc[0].rgb, sc[1].rgb, fsmp.t >= 0.5);
-    out.misc = vec4<f32>(coverage, 0.0, 0.0, 0.0);
+    out.misc = vec4<f32>(coverage, side, dz, 0.0);
     out.centre = fsmp.centre;
     out.q = fsmp.q;
     out.n_slice = fsmp.n_slice;
     out.b_slice = fsmp.b_slice;
     // The fiber's identity, not its place in the list: culling and LoD reorder the list,
     // and the sample mask must not change with it.
-    out.ids = vec4<u32>(pcg(rec.x) ^ (rec.y & 0xffffffu), c.ids.x, select(0u, 2u, tube), 0u);
+    let key = select(fiber_key(s.ids.x, rec), pcg(rec.x) | 1u, hair);
+    out.ids = vec4<u32>(pcg(rec.x) ^ (rec.y & 0xffffffu), c.ids.x, select(0u, 2u, tube), key);
     return out;
 }
 
@@ -489,20 +505,20 @@ fn ambient_integral(e: Effects, theta_o: f32) -> vec3<f32> {
     return mix(v0, v1, f);
 }
 
-// Visibility of light `li` (or SRBF j as 8 + j) past other yarns: the first tube shadow
-// map of that light that sees the point (a point light may have six cube faces), read at
-// the yarn centre moved towards the light by the tube radius (so a yarn never shadows
-// itself through its own tube; self-shadows are the volume's), 3 × 3 PCF with taps
-// `bias.z` texels apart (1 for a delta light, wider for a soft SRBF lobe). Not the strips'
-// PCSS: on llvmpipe a blocker search anywhere in this shader made every lobe 3× dearer,
-// taken or not (`benches/lights.rs`).
-fn yarn_visibility(li: u32, centre: vec3<f32>, wi: vec3<f32>, radius: f32) -> f32 {
+// Visibility of light `li` (or SRBF j as 8 + j) past other yarns, through its tube maps:
+// the first map of that light that sees the point (a point light may have six cube faces),
+// read at `point` (the yarn centre) moved `offset` (1.05 tube radii, so a yarn never
+// shadows itself through its own tube; self-shadows are the volume's) plus the map's bias
+// towards the light, 3 × 3 PCF with taps `bias.z` texels apart (1 for a delta light, wider
+// for a soft SRBF lobe). Not the strips' PCSS: on llvmpipe a blocker search anywhere in
+// this shader made every lobe 3× dearer, taken or not (`benches/lights.rs`).
+fn yarn_visibility(li: u32, point: vec3<f32>, wi: vec3<f32>, offset: f32) -> f32 {
     for (var m = 0u; m < shadow_views.n.x; m++) {
         if shadow_views.light[m / 4u][m % 4u] != li {
             continue;
         }
         let b = shadow_views.bias[m];
-        let p = centre + wi * (radius * 1.05 + b.y);
+        let p = point + wi * (offset + b.y);
         let c = shadow_views.view_proj[m] * vec4<f32>(p, 1.0);
         if c.w <= 0.0 {
             continue;
@@ -558,6 +574,8 @@ fn core_texel(ef: Effects, u: f32, v: f32) -> array<f32, 8> {
 
 struct CoreHit {
     alpha: f32,
+    // The surface point (origin-relative).
+    point: vec3<f32>,
     // World fiber direction (the BCSDF's tangent).
     direction: vec3<f32>,
     // The cross-section point in the slice frame (for self-shadows and AO).
@@ -587,9 +605,81 @@ fn core_hit(ef: Effects, in: VertexOut) -> CoreHit {
     let c = (2.0 * clamp(v, 0.0, 1.0) - 1.0) * hh * w1 + t[1] * hh * e1;
     let off = vec2<f32>(c.x * a.x, c.y * a.y) * in.misc.z;
     let pt = in.axis + off.x * in.n_ply + off.y * in.b_ply;
+    hit.point = pt;
     let rel = pt - in.centre;
     hit.q = vec2<f32>(dot(rel, normalize(in.n_slice)), dot(rel, normalize(in.b_slice)));
     return hit;
+}
+
+// ---- fiber shadow maps (passes/fiber_shadow.rs): vs_main with the light as the camera,
+// so every strip faces the light. A fiber stores the depth of its cylinder's far side,
+// where a shadow ray from behind it enters it (at side x of the strip, sqrt(1 − x²) radii
+// behind the axis), so that a point is shadowed exactly when a ray from it towards the
+// light enters another fiber (the reference's test); and its key (fiber_key), which the
+// fiber's own points skip. A core strip keeps a texel where its texture's coverage
+// exceeds a uniform hashed from the strip and the texel (stochastic transparency: the
+// expected occlusion is the coverage), at the strip's depth. ----
+
+struct ShadowOut {
+    @location(0) key: u32,
+    @builtin(frag_depth) depth: f32,
+}
+
+@fragment
+fn fs_shadow(in: VertexOut) -> ShadowOut {
+    var out: ShadowOut;
+    out.key = in.ids.w;
+    out.depth = in.clip.z;
+    if in.ids.z == 1u {
+        let hit = core_hit(effects[in.ids.y], in);
+        let px = vec2<u32>(in.clip.xy);
+        let u = f32(pcg(in.ids.x ^ pcg(px.x + 0x10000u * px.y)) >> 8u) / 16777216.0;
+        if hit.alpha <= u {
+            discard;
+        }
+    } else {
+        let x = clamp(in.misc.y, -1.0, 1.0);
+        out.depth = clamp(in.clip.z + in.misc.z * sqrt(1.0 - x * x), 0.0, 1.0);
+    }
+    return out;
+}
+
+// Visibility of delta light `li` from `point` (a fiber's axis) on the fiber of key `key`
+// through its fiber maps (the first map of the light that sees the point): 3 × 3 taps
+// `bias.z` texels apart, each lit when the fiber nearest the light there is the point's own
+// (the reference's shadow ray skips it) or its far side lies beyond the point (the
+// reference's ray, from the axis, enters no other fiber).
+fn fiber_visibility(li: u32, point: vec3<f32>, wi: vec3<f32>, key: u32) -> f32 {
+    let size = textureDimensions(shadow_ids);
+    for (var m = 0u; m < shadow_views.n.x; m++) {
+        if shadow_views.light[m / 4u][m % 4u] != li {
+            continue;
+        }
+        let b = shadow_views.bias[m];
+        let c = shadow_views.view_proj[m] * vec4<f32>(point, 1.0);
+        if c.w <= 0.0 {
+            continue;
+        }
+        let ndc = c.xyz / c.w;
+        let uv = vec2<f32>(0.5 * ndc.x + 0.5, 0.5 - 0.5 * ndc.y);
+        if any(uv < vec2<f32>(0.0)) || any(uv > vec2<f32>(1.0)) {
+            continue;
+        }
+        let n = vec2<f32>(size.xy);
+        var v = 0.0;
+        for (var dy = -1; dy <= 1; dy++) {
+            for (var dx = -1; dx <= 1; dx++) {
+                let t = clamp(uv * n + vec2<f32>(f32(dx), f32(dy)) * b.z, vec2<f32>(0.0),
+                    n - 1.0);
+                let texel = vec2<i32>(t);
+                let id = textureLoad(shadow_ids, texel, i32(m), 0).x;
+                let d = textureLoad(shadow_maps, texel, i32(m), 0);
+                v += select(0.0, 1.0, id == key || ndc.z <= d);
+            }
+        }
+        return v / 9.0;
+    }
+    return 1.0;
 }
 
 @fragment
@@ -597,16 +687,20 @@ fn fs_main(in_raw: VertexOut) -> FragmentOut {
     var in = in_raw;
     var coverage = in.misc.x;
     let ef = effects[in.ids.y];
+    // Where the fiber maps are read from: the fiber's axis, or the core texel's fiber.
+    var point = in.axis;
     if in.ids.z == 1u {
         let hit = core_hit(ef, in);
         coverage = hit.alpha;
         in.tangent = hit.direction;
         in.q = hit.q;
+        point = hit.point;
     }
     let tan = normalize_or(in.tangent, vec3<f32>(1.0, 0.0, 0.0));
     let wo = view_dir(in.axis);
     var l = vec3<f32>(0.0);
     let radius = yarn_params[in.ids.y].c.z;
+    let fiber_maps = (view.lod.z & 2048u) != 0u;
     for (var i = 0u; i < view.counts.x; i++) {
         let light = view.lights[i];
         var wi = light.pos_dir.xyz;
@@ -617,7 +711,14 @@ fn fs_main(in_raw: VertexOut) -> FragmentOut {
             wi = d / sqrt(d2);
             e = e / d2;
         }
-        let vis = self_transmittance(ef, in, wi, wo) * yarn_visibility(i, in.centre, wi, radius);
+        var vis: f32;
+        if fiber_maps {
+            // Every fiber casts: the map replaces the tubes and the self-shadow volume.
+            vis = fiber_visibility(i, point, wi, in.ids.w);
+        } else {
+            vis = self_transmittance(ef, in, wi, wo)
+                * yarn_visibility(i, in.centre, wi, radius * 1.05);
+        }
         l += bcsdf_cos(wi, wo, tan) * e * vis;
     }
     let n_env = u32(env[0]);
@@ -633,7 +734,7 @@ fn fs_main(in_raw: VertexOut) -> FragmentOut {
             let aj = fiber_angles(wj, tan);
             let im = im_at(first_im, aj.w, ao_.w, acos(clamp(dot(aj.xyz, ao_.xyz), -1.0, 1.0)));
             let vis = self_transmittance(ef, in, wj, wo)
-                * yarn_visibility(8u + j, in.centre, wj, radius);
+                * yarn_visibility(8u + j, in.centre, wj, radius * 1.05);
             l += weight * im * vis;
         }
     } else if any(view.ambient.rgb > vec3<f32>(0.0)) {

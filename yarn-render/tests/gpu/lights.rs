@@ -25,7 +25,7 @@ pub(crate) struct Setup {
     pub(crate) patch: KnitPatch,
     pub(crate) packed: PackedYarns,
     pub(crate) bcsdf: FiberBcsdf,
-    view: [f64; 3],
+    pub(crate) view: [f64; 3],
     /// The reference wraps the patch periodically (the GPU draws 3 × 3 copies); else both
     /// see the 4 × 4 stitches alone.
     periodic: bool,
@@ -37,9 +37,14 @@ pub(crate) fn setup(periodic: bool) -> Setup {
 
 /// [`setup`] with or without the yarn's hair flyaways in the patch.
 pub(crate) fn setup_with(periodic: bool, hairs: bool) -> Setup {
+    setup_fine(periodic, hairs, GenOptions::default().samples_per_turn)
+}
+
+/// [`setup_with`] with the reference's fibers sampled `samples_per_turn` points a turn.
+pub(crate) fn setup_fine(periodic: bool, hairs: bool, samples_per_turn: u32) -> Setup {
     let chart = Chart::builtin("stockinette").unwrap();
     let params = crate::common::cotton();
-    let g = GenOptions { hairs, seed: 5, ..Default::default() };
+    let g = GenOptions { hairs, seed: 5, samples_per_turn, ..Default::default() };
     let stitches = if periodic { None } else { Some([4, 4]) };
     let opts = PatchOptions { generation: g, stitches, ..Default::default() };
     let patch = KnitPatch::new(&chart, &params, &opts).unwrap();

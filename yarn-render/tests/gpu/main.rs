@@ -6,6 +6,7 @@ mod coherence;
 mod common;
 mod effects;
 mod expand;
+mod fiber_shadows;
 mod hairs;
 mod knot;
 mod lights;
