@@ -72,6 +72,18 @@ pub struct RenderArgs {
     /// No shadows of other yarns (tube shadow maps of directional lights).
     #[arg(long)]
     pub no_yarn_shadows: bool,
+    /// Shadows of every fiber: each delta light's map drawn from the fibers themselves,
+    /// fitted to the seen part of the yarns, instead of tubes and the self-shadow volume
+    /// (one more fiber pass per light; `--shadow-map` texels across what the camera sees).
+    #[arg(long, conflicts_with = "no_yarn_shadows")]
+    pub fiber_shadows: bool,
+    /// Side of the shadow maps in texels (16..=8192).
+    #[arg(long, default_value_t = 1024)]
+    pub shadow_map: u32,
+    /// Strips narrower than this many pixels are widened to it and keep their coverage as
+    /// a hashed sample mask (0: every strip at its true width, sampled exactly).
+    #[arg(long, default_value_t = 1.0)]
+    pub min_strip_px: f32,
     /// Ambient occlusion inside the yarns [W19 §4.2].
     #[arg(long, default_value = "cubic")]
     pub ao: AoChoice,
@@ -275,6 +287,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
         helix_shadows: a.helix_shadows,
         self_shadow: !a.no_self_shadow,
         yarn_shadows: !a.no_yarn_shadows,
+        fiber_shadows: a.fiber_shadows,
         ao: match a.ao {
             AoChoice::Off => AoMode::Off,
             AoChoice::Cubic => AoMode::Cubic,
@@ -282,6 +295,12 @@ pub fn run(a: RenderArgs) -> Result<()> {
         },
         ambient,
     };
+    if !(16..=8192).contains(&a.shadow_map) {
+        bail!("--shadow-map {}: the maps' side must be 16..=8192 texels", a.shadow_map);
+    }
+    if !(a.min_strip_px.is_finite() && a.min_strip_px >= 0.0) {
+        bail!("--min-strip-px {}: a width ≥ 0 pixels", a.min_strip_px);
+    }
     let settings = FiberSettings {
         effects,
         n_max: a.n_max.unwrap_or(u32::MAX),
@@ -290,6 +309,8 @@ pub fn run(a: RenderArgs) -> Result<()> {
         cull: !a.no_cull,
         msaa: a.msaa,
         hairs: !a.patch.no_hairs,
+        shadow_map: a.shadow_map,
+        min_strip_px: a.min_strip_px,
         ..FiberSettings::default()
     };
     let gpu = btf_render::Gpu::new()?;
@@ -381,6 +402,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
             "lod_px": a.lod_px, "n_sub": a.n_sub,
             "msaa": a.msaa, "segments": st.segments, "culled": st.culled,
             "instances": st.instances, "hairs": st.hairs, "overflow": st.overflow,
+            "shadow_instances": st.shadow_instances, "fiber_shadows": a.fiber_shadows,
             "triangles": st.triangles,
             "yarn_bytes": st.yarn_bytes, "bytes_per_control_point":
                 st.yarn_bytes as f64 / packed.control_points().max(1) as f64,

@@ -52,6 +52,32 @@ fn knit_render_stats_and_compare_against_itself_is_zero() {
     assert_eq!(bare["instances"].as_u64().unwrap() + hairs, inst, "{bare}");
 }
 
+/// `btf knit render --fiber-shadows`: every fiber drawn into each light's map (the JSON
+/// counts them), which shadows the patch more than the tube maps and the self-shadow
+/// volume do at this scale (measured against the reference in `yarn-render`'s
+/// `tests/gpu/fiber_shadows.rs`); a map side out of range is refused naming the flag.
+#[test]
+fn knit_render_fiber_shadows_draw_every_fiber_into_the_map() {
+    let d = Dir::new();
+    let Some(js) = run_gpu(&d, &[&RENDER[..], &["tubes.exr", "--no-hairs"]].concat()) else {
+        return;
+    };
+    let tubes: serde_json::Value = serde_json::from_str(&js).unwrap();
+    let args = ["fibers.exr", "--no-hairs", "--fiber-shadows", "--shadow-map", "512"];
+    let js = run_gpu(&d, &[&RENDER[..], &args].concat()).unwrap();
+    let fibers: serde_json::Value = serde_json::from_str(&js).unwrap();
+    assert_eq!(tubes["shadow_instances"].as_u64(), Some(0), "{tubes}");
+    assert_eq!(fibers["fiber_shadows"].as_bool(), Some(true), "{fibers}");
+    // The light sees the patch's fibers (and its neighbours' that shadow it).
+    let (cast, drawn) =
+        (fibers["shadow_instances"].as_u64().unwrap(), fibers["instances"].as_u64().unwrap());
+    assert!(cast >= drawn / 2, "{cast} fibers cast shadows, {drawn} drawn");
+    let mean = |j: &serde_json::Value| j["mean_radiance"].as_f64().unwrap();
+    assert!(mean(&fibers) > 0.0 && mean(&fibers) != mean(&tubes), "{fibers}\n{tubes}");
+    let e = d.fails(&[&RENDER[..], &["x.exr", "--fiber-shadows", "--shadow-map", "8"]].concat());
+    assert!(e.contains("--shadow-map"), "{e}");
+}
+
 /// `btf knit render --env`: an environment map alone lights the fibers through its SRBF
 /// lobes, whose tube shadow maps darken the patch (against `--no-yarn-shadows`); the
 /// lumislices and an SRBF count out of range are refused naming the flag.

@@ -95,6 +95,11 @@ pub struct YarnsDesc {
     /// Hair flyaways: the yarn's hairs on the fibers, the flyaway overlay on the strips.
     #[serde(default = "yes")]
     pub hairs: bool,
+    /// Shadows of every fiber (`method = "fibers"` with `shadows`): each light's map drawn
+    /// from the fibers instead of tubes and the self-shadow volume (one more fiber pass
+    /// per light).
+    #[serde(default)]
+    pub fiber_shadows: bool,
 }
 
 fn default_yarn() -> String {
@@ -176,6 +181,12 @@ impl YarnsDesc {
         }
         if self.yarn.trim().is_empty() {
             return bad("yarn", "must name a yarn preset or file".into());
+        }
+        if self.fiber_shadows && self.method != YarnMethod::Fibers {
+            return bad("fiber_shadows", "shadows of every fiber need method = \"fibers\"".into());
+        }
+        if self.fiber_shadows && !self.shadows {
+            return bad("fiber_shadows", "needs shadows = true".into());
         }
         Ok(())
     }

@@ -83,6 +83,7 @@ pub fn settings(scene: &Scene, d: &YarnsDesc) -> FiberSettings {
     let effects = FiberEffects {
         self_shadow: d.shadows,
         yarn_shadows: d.shadows,
+        fiber_shadows: d.fiber_shadows,
         ao: match d.ao {
             YarnAo::Off => AoMode::Off,
             YarnAo::Cubic => AoMode::Cubic,

@@ -85,3 +85,22 @@ fn the_hairs_key_turns_the_fibers_hairs_on_and_off() {
         assert_eq!(s.hairs, want, "{extra:?}");
     }
 }
+
+/// `fiber_shadows` of a `[[yarns]]` entry (default off) reaches the fiber renderer's
+/// effects; with strips or without shadows it is refused naming the key.
+#[test]
+fn the_fiber_shadows_key_reaches_the_effects_or_is_refused() {
+    let d = folder();
+    let path = d.path().join("scene.toml");
+    for (extra, want) in [("", false), ("fiber_shadows = true\n", true)] {
+        let scene = Scene::from_toml(&format!("{SCENE}{extra}"), &path).unwrap();
+        let s = crate::scene::overlay::settings(&scene, &scene.yarns[0]);
+        assert_eq!(s.effects.fiber_shadows, want, "{extra:?}");
+    }
+    for extra in
+        ["fiber_shadows = true\nmethod = \"strips\"\n", "fiber_shadows = true\nshadows = false\n"]
+    {
+        let e = Scene::from_toml(&format!("{SCENE}{extra}"), &path).unwrap_err().to_string();
+        assert!(e.contains("yarns[0].fiber_shadows"), "{extra:?}: {e}");
+    }
+}
