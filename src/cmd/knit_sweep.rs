@@ -119,6 +119,13 @@ pub struct SweepArgs {
     /// reference patch and the GPU fibers, and the flyaway overlay on the strips.
     #[arg(long)]
     pub hairs: bool,
+    /// Shadows of every fiber in the fiber cells (each light's map drawn from the fibers,
+    /// fitted to the seen part of the yarns) instead of tubes and the self-shadow volume.
+    #[arg(long)]
+    pub fiber_shadows: bool,
+    /// Side of the fiber and tube shadow maps in texels (16..=8192).
+    #[arg(long, default_value_t = 1024)]
+    pub shadow_map: u32,
     /// Camera rays per texel of the strip bakes.
     #[arg(long, default_value_t = 16)]
     pub bake_spp: u32,
@@ -252,6 +259,9 @@ pub struct Cell {
 fn validate(a: &SweepArgs) -> Result<()> {
     if a.msaa != 1 && a.msaa != 4 {
         bail!("--msaa {}: 1 or 4", a.msaa);
+    }
+    if !(16..=8192).contains(&a.shadow_map) {
+        bail!("--shadow-map {}: the maps' side must be 16..=8192 texels", a.shadow_map);
     }
     if a.n_sub == 0 || a.n_sub > 255 {
         bail!("--n-sub {}: 1..=255", a.n_sub);
@@ -721,6 +731,11 @@ fn gpu_grid(
                         msaa: a.msaa,
                         tubes: lod.is_none(),
                         hairs: a.hairs,
+                        shadow_map: a.shadow_map,
+                        effects: yarn_render::FiberEffects {
+                            fiber_shadows: a.fiber_shadows,
+                            ..Default::default()
+                        },
                         ..FiberSettings::default()
                     };
                     let mut r = FiberRenderer::new(gpu, &packed, b, settings)?;

@@ -89,8 +89,9 @@ pub struct FiberEffects {
     /// the delta lights' maps are drawn from the fibers themselves (hairs and core strips
     /// included), fitted to what the camera sees, and replace both the tube maps and the
     /// self-shadow volume for those lights (the environment's lobes keep them). One more
-    /// fiber pass per light; the map must resolve the fibers
-    /// ([`crate::FiberSettings::shadow_map`] texels across the seen part of the yarns).
+    /// fiber pass per light, at full detail whatever the frame's LoD; the map must resolve
+    /// the fibers ([`crate::FiberSettings::shadow_map`] texels across the seen part of the
+    /// yarns).
     pub fiber_shadows: bool,
     /// Constant environment radiance (linear RGB); zero turns the ambient term off.
     pub ambient: [f32; 3],

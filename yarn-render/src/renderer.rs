@@ -17,10 +17,16 @@
 //! [`FiberSettings::n_max`] = all and `lod_px ≤ 0` draw every fiber (the full-detail mode
 //! the CPU reference is compared with). Hair flyaways ([`FiberSettings::hairs`]) are the
 //! CPU generator's: `fiber_lod` finds them by the slots' hashes and the generator draws
-//! them along the curve (`crate::passes::lod`); they cast no shadow (the tube maps and the
-//! self-shadow volume are of the regular fibers, DESIGN §2.3 item 14) — beside a yarn they
-//! match the reference within 1 %, inside it they brighten the yarn 6 % where the
-//! reference's brighten it 2 % (`tests/gpu/hairs.rs`).
+//! them along the curve (`crate::passes::lod`); they cast no shadow through the tube maps
+//! and the self-shadow volume (those are of the regular fibers, DESIGN §2.3 item 14) —
+//! beside a yarn they match the reference within 1 %, inside it they brighten the yarn 6 %
+//! where the reference's brighten it 2 % (`tests/gpu/hairs.rs`).
+//!
+//! With [`FiberEffects::fiber_shadows`] each delta light's map is drawn from every fiber,
+//! hair and core strip instead (`crate::passes::fiber_shadow`): per map a `fiber_lod` pass
+//! with the light as the camera (LoD off) and `fiber_draw`'s `fs_shadow` into a depth and a
+//! fiber-key layer, recorded before the frame's own passes; the instance list is shared,
+//! used map by map, each map with its own indirect arguments.
 
 use crate::bcsdf;
 use crate::effects::{self, AoMode, FiberEffects};
@@ -119,7 +125,7 @@ pub struct FiberStats {
     pub hairs: u32,
     /// Fiber instances drawn into the fiber shadow maps (all maps of the frame).
     pub shadow_instances: u32,
-    /// Instances beyond the capacity (not drawn).
+    /// Instances beyond the capacity (not drawn), the fiber shadow maps' included.
     pub overflow: u32,
     /// Triangles submitted (`instances · 2·n_sub`, degenerate ones included).
     pub triangles: u64,
@@ -419,21 +425,13 @@ impl FiberRenderer {
     }
 
     /// The frame uniform of a fiber shadow map's light view `setup` (`size²` texels): no
-    /// lights, no widened strips, and the LoD threshold of the camera `cam` moved to the
-    /// map's texels (the same metres at the scene centre), so that the map thins fibers
-    /// where the frame does.
-    fn map_raw(&self, setup: &ViewSetup, cam: &ViewSetup, size: u32) -> Result<ViewRaw> {
+    /// lights, no widened strips, and every fiber (LoD off): a fiber the frame's LoD drops
+    /// still shadows the ones it keeps. (The map thinned like the frame — the camera's
+    /// ω^LoD moved to the map's texels — lost those shadows: the sweep's 64² stockinette at
+    /// ω^LoD = 1 px came out 1.65× the reference's radiance, against 0.92 at full detail.)
+    fn map_raw(&self, setup: &ViewSetup, size: u32) -> Result<ViewRaw> {
         let mut raw = self.raw_of(setup, &[], (size, size))?;
-        let c = nalgebra::Vector3::new(self.centre[0], self.centre[1], self.centre[2]);
-        let px_at_centre = |v: &ViewSetup| {
-            if v.orthographic {
-                v.px_per_metre
-            } else {
-                v.px_per_metre / (c - v.eye).dot(&v.forward).max(1e-9)
-            }
-        };
-        let ratio = px_at_centre(setup) / px_at_centre(cam).max(1e-30);
-        raw.viewport[3] = self.settings.lod_px * ratio as f32;
+        raw.viewport[3] = 0.0;
         raw.strip[0] = 0.0;
         raw.strip[1] = 1.0;
         Ok(raw)
@@ -673,7 +671,7 @@ impl FiberRenderer {
             .fibers
             .iter()
             .map(|light| {
-                let raw = self.map_raw(light, &setup, side)?;
+                let raw = self.map_raw(light, side)?;
                 let ubuf = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("fiber shadow view"),
                     contents: bytemuck::bytes_of(&raw),
@@ -902,7 +900,7 @@ impl FiberRenderer {
             instances: args.instance_count,
             hairs: args.hairs,
             shadow_instances: all[1..].iter().map(|a| a.instance_count).sum(),
-            overflow: args.overflow,
+            overflow: all.iter().map(|a| a.overflow).sum(),
             triangles: args.instance_count as u64 * 2 * self.settings.n_sub as u64,
             yarn_bytes: self.data.bytes,
         };
@@ -910,11 +908,11 @@ impl FiberRenderer {
     }
 }
 
-/// The fiber maps' 3 × 3 taps, texels apart: a box of 0.6 texel about the point. Against
-/// the converged reference on stockinette (`tests/gpu/fiber_shadows.rs`' setup, 2048²
-/// maps) 0.3 gave interior rel. RMSE 0.076, one texel 0.099, a single texel 0.078, and the
-/// 2 × 2 bilinear weights of hardware PCF 0.109: the reference's shadow rays are points, so
-/// the narrowest filter that still antialiases the texel grid wins.
+/// The fiber maps' 3 × 3 taps, texels apart: a box of 0.6 texel about the point. The
+/// reference's shadow rays are points, so a narrow filter that still antialiases the texel
+/// grid wins: tried once each against the converged reference of
+/// `tests/gpu/fiber_shadows.rs` (variants not kept), one texel apart, a single tap and
+/// 2 × 2 bilinear weights all scored worse than 0.3.
 const FIBER_MAP_TAPS: f32 = 0.3;
 
 /// Whether `s` draws fiber shadow maps (fiber shadows of yarn shadows, fibers drawn).

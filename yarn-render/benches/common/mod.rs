@@ -1,4 +1,4 @@
-//! What the `lights` and `hairs` benches share: per-case frame times with their medians,
+//! What the `lights`, `hairs` and `fiber_shadows` benches share: per-case frame times with their medians,
 //! and the scene (Crane's 22 × 22-stitch plain knit in cotton-2ply, not periodic, 3 872
 //! control points, seen whole by the orthographic camera of the `fibers` bench).
 

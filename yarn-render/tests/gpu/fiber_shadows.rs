@@ -133,38 +133,54 @@ fn fiber_shadow_maps_bring_the_knit_patch_interior_to_the_reference() {
     assert!(m_tube < 0.95, "the tube model is this much too dark: {m_tube}");
 }
 
-/// The series BENCHMARKS.md quotes: interior error against map size and subdivisions
-/// (2–3 minutes; `cargo test -p yarn-render --test gpu fiber_shadow_series -- --ignored
-/// --nocapture`).
+/// The series BENCHMARKS.md quotes: interior error against map size, subdivisions,
+/// samples and the strips' widening, and the reference's own sampling (3–4 minutes;
+/// `cargo test -p yarn-render --test gpu fiber_shadow_series -- --ignored --nocapture`).
 #[test]
-#[ignore = "a series for BENCHMARKS.md, 2–3 minutes"]
+#[ignore = "a series for BENCHMARKS.md, 3–4 minutes"]
 fn fiber_shadow_series() {
     let Some(gpu) = Gpu::for_tests("fiber_shadow_series") else { return };
     let s = setup_fine(true, false, 48);
     let (rl, gl) = light();
     let (rf, rcov) = reference(&s, &rl, 1024);
     let (rf4, _) = reference(&s, &rl, 4096);
-    eprintln!(
-        "reference 1024 against 4096 spp: interior {:?}",
-        interior((&rf, &rcov), (&rf4, &rcov))
-    );
-    for (fiber_shadows, n_sub, map) in [
-        (false, 32, 4096),
-        (true, 8, 4096),
-        (true, 32, 1024),
-        (true, 32, 2048),
-        (true, 32, 4096),
-        (true, 32, 8192),
-        (true, 64, 8192),
+    let (e, n) = interior((&rf, &rcov), (&rf4, &rcov));
+    eprintln!("reference 1024 against 4096 paths: interior ({n} px) rel. RMSE {e:.4}");
+    // (fiber maps, subdivisions, map side, supersampling k, min_strip_px)
+    for (fiber_shadows, n_sub, map, k, min_px) in [
+        (false, 32, 4096, 8, 0.0),
+        (true, 8, 4096, 8, 0.0),
+        (true, 32, 1024, 8, 0.0),
+        (true, 32, 2048, 8, 0.0),
+        (true, 32, 4096, 8, 0.0),
+        (true, 32, 4096, 12, 0.0),
+        (true, 32, 8192, 8, 0.0),
+        (true, 64, 8192, 8, 0.0),
+        (true, 32, 4096, 1, 1.0),
+        (true, 32, 4096, 8, 1.0),
     ] {
-        let r = FiberRenderer::new(&gpu, &s.packed, &s.bcsdf, settings(fiber_shadows, n_sub, map))
-            .unwrap();
-        let (g, ga) = supersampled(&gpu, &s, &r, &gl, 8);
+        let settings =
+            FiberSettings { min_strip_px: min_px, ..settings(fiber_shadows, n_sub, map) };
+        let r = FiberRenderer::new(&gpu, &s.packed, &s.bcsdf, settings).unwrap();
+        let (g, ga) = supersampled(&gpu, &s, &r, &gl, k);
         let (e, n) = interior((&g, &ga), (&rf4, &rcov));
         eprintln!(
-            "fiber maps {fiber_shadows}, n_sub {n_sub}, map {map}²: interior ({n} px) rel. RMSE \
-             {e:.4}, mean / reference {:.4}",
+            "fiber maps {fiber_shadows}, n_sub {n_sub}, map {map}², {} samples, min_strip_px \
+             {min_px}: interior ({n} px) rel. RMSE {e:.4}, mean / reference {:.4}",
+            4 * k * k,
             mean(&g) / mean(&rf4)
         );
     }
+    // The reference's fibers at its default 12 points a turn, against the same GPU frame
+    // (the GPU's fibers do not depend on it).
+    let coarse = setup_fine(true, false, 12);
+    let (rc, ccov) = reference(&coarse, &rl, 4096);
+    let r = FiberRenderer::new(&gpu, &s.packed, &s.bcsdf, settings(true, 32, 4096)).unwrap();
+    let (g, ga) = supersampled(&gpu, &s, &r, &gl, 8);
+    let (e, n) = interior((&g, &ga), (&rc, &ccov));
+    eprintln!(
+        "reference at 12 points a turn: interior ({n} px) rel. RMSE {e:.4}, mean / reference \
+         {:.4}",
+        mean(&g) / mean(&rc)
+    );
 }

@@ -1,0 +1,96 @@
+//! What shadows of every fiber cost the GPU fiber renderer (issue #19, BENCHMARKS.md "Fiber
+//! shadow maps"): frame time with the tube maps and the self-shadow volume of [W19 §4.1]
+//! (the default) and with fiber shadow maps (`FiberEffects::fiber_shadows`) of 1024² to
+//! 4096² texels, as a ratio to the plain tubes of the same camera measured in the same run
+//! — with the whole patch in view and from close up (LoD at 1 px in both), plus the fiber
+//! instances the camera and the light's map drew.
+//!
+//! Scene: the `hairs` bench's — Crane's plain-knit patch, 22 × 22 stitches (3 872 control
+//! points, not periodic), cotton-2ply with its hairs, one directional light, 256², MSAA 4,
+//! default effects; the whole-patch orthographic camera (35° off the normal) and a
+//! perspective close-up of a fifth of the patch.
+//!
+//! `cargo bench -p yarn-render --bench fiber_shadows --profile dev -- --quick` (the timed
+//! work is lavapipe's). Group `fiber-shadows`, one case per setup, each iteration one frame
+//! (shadow, LoD and draw passes, the 256² read-back). Without a GPU adapter it prints why
+//! and exits 0.
+
+mod common;
+
+use btf_render::Gpu;
+use criterion::Criterion;
+use std::time::Instant;
+use yarn::bcsdf::{FiberBcsdf, KhungurnParams};
+use yarn_render::{
+    FiberCamera, FiberEffects, FiberLight, FiberRenderer, FiberSettings, FiberStats,
+};
+
+const SIZE: (u32, u32) = (256, 256);
+
+struct Case {
+    name: &'static str,
+    /// The plain-tube case of the same camera.
+    baseline: &'static str,
+    renderer: FiberRenderer,
+    camera: usize,
+}
+
+fn main() {
+    let Ok(gpu) = Gpu::new() else {
+        eprintln!("fiber_shadows: no adapter, nothing measured");
+        return;
+    };
+    let (packed, _, whole, c, span) = common::crane_scene();
+    let bcsdf = FiberBcsdf::khungurn(&KhungurnParams::default()).unwrap();
+    let (s, co) = 35f64.to_radians().sin_cos();
+    let e = 0.35 * span;
+    let close =
+        FiberCamera::perspective([c[0], c[1] - e * s, c[2] + e * co], c, [0.0, 0.0, 1.0], 30.0);
+    let cams = [whole, close];
+    let light = [FiberLight::Directional { to_light: [0.3, -0.5, 1.0], irradiance: [2.0; 3] }];
+    // `map` 0: tube maps and the volume; else fiber maps of that side.
+    let make = |tubes: bool, map: u32| {
+        let effects = FiberEffects { fiber_shadows: map > 0, ..Default::default() };
+        let shadow_map = if map > 0 { map } else { 1024 };
+        let settings = FiberSettings { tubes, effects, shadow_map, ..Default::default() };
+        FiberRenderer::new(&gpu, &packed, &bcsdf, settings).unwrap()
+    };
+    let case = |name, baseline, renderer, camera| Case { name, baseline, renderer, camera };
+    let cases = [
+        case("whole/tubes", "whole/tubes", make(true, 0), 0),
+        case("whole/tube-maps", "whole/tubes", make(false, 0), 0),
+        case("whole/fiber-maps-1024", "whole/tubes", make(false, 1024), 0),
+        case("whole/fiber-maps-2048", "whole/tubes", make(false, 2048), 0),
+        case("whole/fiber-maps-4096", "whole/tubes", make(false, 4096), 0),
+        case("close/tubes", "close/tubes", make(true, 0), 1),
+        case("close/tube-maps", "close/tubes", make(false, 0), 1),
+        case("close/fiber-maps-1024", "close/tubes", make(false, 1024), 1),
+        case("close/fiber-maps-2048", "close/tubes", make(false, 2048), 1),
+        case("close/fiber-maps-4096", "close/tubes", make(false, 4096), 1),
+    ];
+    let frame = |c: &Case| {
+        let t = Instant::now();
+        let img = c.renderer.render(&gpu, &cams[c.camera], &light, SIZE, [0.0; 4]).unwrap();
+        std::hint::black_box(img.pixels.len());
+        (t.elapsed().as_secs_f64() * 1e3, img.stats)
+    };
+    // One warm-up frame each (pipelines, bakes); the counts for the table.
+    let stats: Vec<FiberStats> = cases.iter().map(|c| frame(c).1).collect();
+    let mut cr = Criterion::default().configure_from_args();
+    let names: Vec<&'static str> = cases.iter().map(|c| c.name).collect();
+    let samples = common::time_cases(&mut cr, "fiber-shadows", &names, |i| frame(&cases[i]).0);
+    println!("\n{} control points, 256², MSAA 4", packed.control_points());
+    println!("| case | instances | in the light's map | frame ms (median) | × tubes |");
+    println!("|---|---:|---:|---:|---:|");
+    for (c, st) in cases.iter().zip(&stats) {
+        let ms = samples.median(c.name);
+        println!(
+            "| {} | {} | {} | {ms:.1} | {:.2} |",
+            c.name,
+            st.instances,
+            st.shadow_instances,
+            ms / samples.median(c.baseline)
+        );
+    }
+    cr.final_summary();
+}
