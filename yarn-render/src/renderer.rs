@@ -427,8 +427,9 @@ impl FiberRenderer {
     /// The frame uniform of a fiber shadow map's light view `setup` (`size²` texels): no
     /// lights, no widened strips, and every fiber (LoD off): a fiber the frame's LoD drops
     /// still shadows the ones it keeps. (The map thinned like the frame — the camera's
-    /// ω^LoD moved to the map's texels — lost those shadows: the sweep's 64² stockinette at
-    /// ω^LoD = 1 px came out 1.65× the reference's radiance, against 0.92 at full detail.)
+    /// ω^LoD moved to the map's texels, commit 776328b — lost those shadows: the sweep's
+    /// 64² stockinette at ω^LoD = 1 px came out 1.65× the reference's radiance, against
+    /// 0.92 at full detail; BENCHMARKS.md, "Fiber shadow maps".)
     fn map_raw(&self, setup: &ViewSetup, size: u32) -> Result<ViewRaw> {
         let mut raw = self.raw_of(setup, &[], (size, size))?;
         raw.viewport[3] = 0.0;
