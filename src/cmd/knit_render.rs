@@ -75,7 +75,7 @@ pub struct RenderArgs {
     /// Shadows of every fiber: each delta light's map drawn from the fibers themselves,
     /// fitted to the seen part of the yarns, instead of tubes and the self-shadow volume
     /// (one more fiber pass per light; `--shadow-map` texels across what the camera sees).
-    #[arg(long, conflicts_with = "no_yarn_shadows")]
+    #[arg(long)]
     pub fiber_shadows: bool,
     /// Side of the shadow maps in texels (16..=8192).
     #[arg(long, default_value_t = 1024)]
@@ -297,6 +297,11 @@ pub fn run(a: RenderArgs) -> Result<()> {
     };
     if !(16..=8192).contains(&a.shadow_map) {
         bail!("--shadow-map {}: the maps' side must be 16..=8192 texels", a.shadow_map);
+    }
+    if a.fiber_shadows && a.no_yarn_shadows {
+        bail!(
+            "--fiber-shadows draws the yarn shadows from every fiber; --no-yarn-shadows turns them off"
+        );
     }
     if !(a.min_strip_px.is_finite() && a.min_strip_px >= 0.0) {
         bail!("--min-strip-px {}: a width ≥ 0 pixels", a.min_strip_px);

@@ -76,6 +76,8 @@ fn knit_render_fiber_shadows_draw_every_fiber_into_the_map() {
     assert!(mean(&fibers) > 0.0 && mean(&fibers) != mean(&tubes), "{fibers}\n{tubes}");
     let e = d.fails(&[&RENDER[..], &["x.exr", "--fiber-shadows", "--shadow-map", "8"]].concat());
     assert!(e.contains("--shadow-map"), "{e}");
+    let e = d.fails(&[&RENDER[..], &["x.exr", "--fiber-shadows", "--no-yarn-shadows"]].concat());
+    assert!(e.contains("--fiber-shadows") && e.contains("--no-yarn-shadows"), "{e}");
 }
 
 /// `btf knit render --env`: an environment map alone lights the fibers through its SRBF

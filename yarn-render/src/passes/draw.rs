@@ -3,7 +3,9 @@
 //! tessellation + geometry shaders, DESIGN §2.4 item 2), shaded with the fiber BCSDF of
 //! `yarn::bcsdf` under point and directional lights, into a linear `Rgba32Float` target
 //! (`Rgba16Float` under MSAA) with MSAA; strips narrower than the minimum width keep their coverage fraction of the
-//! samples through a hashed sample mask (see the WGSL).
+//! samples through a hashed sample mask (see the WGSL). With fiber shadows a second
+//! pipeline of the same module draws the fiber shadow maps (`vs_main` with the light as
+//! the camera, `fs_shadow`: far-side depth and fiber key, `crate::passes::fiber_shadow`).
 
 use crate::gpu_data::YarnBuffers;
 use crate::{Error, Result};
