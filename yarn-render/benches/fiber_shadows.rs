@@ -21,9 +21,7 @@ use btf_render::Gpu;
 use criterion::Criterion;
 use std::time::Instant;
 use yarn::bcsdf::{FiberBcsdf, KhungurnParams};
-use yarn_render::{
-    FiberCamera, FiberEffects, FiberLight, FiberRenderer, FiberSettings, FiberStats,
-};
+use yarn_render::{FiberEffects, FiberLight, FiberRenderer, FiberSettings, FiberStats};
 
 const SIZE: (u32, u32) = (256, 256);
 
@@ -42,10 +40,7 @@ fn main() {
     };
     let (packed, _, whole, c, span) = common::crane_scene();
     let bcsdf = FiberBcsdf::khungurn(&KhungurnParams::default()).unwrap();
-    let (s, co) = 35f64.to_radians().sin_cos();
-    let e = 0.35 * span;
-    let close =
-        FiberCamera::perspective([c[0], c[1] - e * s, c[2] + e * co], c, [0.0, 0.0, 1.0], 30.0);
+    let close = common::close_camera(c, span);
     let cams = [whole, close];
     let light = [FiberLight::Directional { to_light: [0.3, -0.5, 1.0], irradiance: [2.0; 3] }];
     // `map` 0: tube maps and the volume; else fiber maps of that side.

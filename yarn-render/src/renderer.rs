@@ -212,22 +212,50 @@ pub struct FiberRenderer {
     no_maps: Box<(wgpu::TextureView, wgpu::TextureView)>,
 }
 
-/// A 1 × 1 × 1 texture array of `format`, bound where a pass must not read what it writes.
-fn placeholder(dev: &wgpu::Device, label: &str, format: wgpu::TextureFormat) -> wgpu::TextureView {
+/// An indirect-draw argument buffer `fiber_lod` writes ([`DrawArgsRaw`]).
+fn args_buffer(dev: &wgpu::Device, label: &str) -> wgpu::Buffer {
+    dev.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size_of::<DrawArgsRaw>() as u64,
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::INDIRECT
+            | wgpu::BufferUsages::COPY_DST
+            | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    })
+}
+
+/// A 2-D array of `layers` square `side²` textures of `format`.
+fn texture_array(
+    dev: &wgpu::Device,
+    label: &str,
+    (side, layers): (u32, u32),
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
     dev.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
-        size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+        size: wgpu::Extent3d { width: side, height: side, depth_or_array_layers: layers },
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
         format,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING,
+        usage,
         view_formats: &[],
     })
-    .create_view(&wgpu::TextureViewDescriptor {
+}
+
+/// The whole of `t` as a 2-D array view.
+fn array_view(t: &wgpu::Texture) -> wgpu::TextureView {
+    t.create_view(&wgpu::TextureViewDescriptor {
         dimension: Some(wgpu::TextureViewDimension::D2Array),
         ..Default::default()
     })
+}
+
+/// A 1 × 1 × 1 texture array of `format`, bound where a pass must not read what it writes.
+fn placeholder(dev: &wgpu::Device, label: &str, format: wgpu::TextureFormat) -> wgpu::TextureView {
+    array_view(&texture_array(dev, label, (1, 1), format, wgpu::TextureUsages::TEXTURE_BINDING))
 }
 
 fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
@@ -347,15 +375,7 @@ impl FiberRenderer {
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             }),
-            args: dev.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("fiber draw args"),
-                size: size_of::<DrawArgsRaw>() as u64,
-                usage: wgpu::BufferUsages::STORAGE
-                    | wgpu::BufferUsages::INDIRECT
-                    | wgpu::BufferUsages::COPY_DST
-                    | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            }),
+            args: args_buffer(dev, "fiber draw args"),
             lobe_count: lobes.len() as u32,
             data,
             lod,
@@ -565,6 +585,28 @@ impl FiberRenderer {
         Ok(FrameShadows { tubes, fibers, raw: views_raw(&views, size) })
     }
 
+    /// The view uniform `raw` in a buffer, and the LoD pass's bind group listing into the
+    /// instance list with the indirect arguments `args`.
+    fn lod_group(
+        &self,
+        dev: &wgpu::Device,
+        label: &str,
+        raw: &ViewRaw,
+        args: &wgpu::Buffer,
+    ) -> (wgpu::Buffer, wgpu::BindGroup) {
+        let ubuf = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: bytemuck::bytes_of(raw),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let group = dev.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("fiber_lod"),
+            layout: &self.lod.layout,
+            entries: &[entry(0, &ubuf), entry(1, &self.instances), entry(2, args)],
+        });
+        (ubuf, group)
+    }
+
     /// The frame uniform, shadow maps and bind groups of one frame.
     fn bindings(
         &self,
@@ -576,60 +618,21 @@ impl FiberRenderer {
         let dev = &gpu.device;
         let setup = ViewSetup::new(cam, self.origin, self.centre, self.radius, size)?;
         let raw = self.raw_of(&setup, lights, size)?;
-        let ubuf = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("fiber view"),
-            contents: bytemuck::bytes_of(&raw),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let g_lod = dev.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("fiber_lod"),
-            layout: &self.lod.layout,
-            entries: &[entry(0, &ubuf), entry(1, &self.instances), entry(2, &self.args)],
-        });
+        let (ubuf, g_lod) = self.lod_group(dev, "fiber view", &raw, &self.args);
         let shadows = self.shadow_views(&setup, lights)?;
         let side = self.settings.shadow_map;
         let layers = shadows.fibers.len() + shadows.tubes.len();
-        let maps = dev.create_texture(&wgpu::TextureDescriptor {
-            label: Some("yarn shadow maps"),
-            size: wgpu::Extent3d {
-                width: side,
-                height: side,
-                depth_or_array_layers: layers.max(1) as u32,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: DEPTH,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
-        let maps_view = maps.create_view(&wgpu::TextureViewDescriptor {
-            dimension: Some(wgpu::TextureViewDimension::D2Array),
-            ..Default::default()
-        });
+        let targets = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+        let maps =
+            texture_array(dev, "yarn shadow maps", (side, layers.max(1) as u32), DEPTH, targets);
+        let maps_view = array_view(&maps);
         // The fiber maps' keys (one layer per fiber map; a texel when there is none).
-        let ids = dev.create_texture(&wgpu::TextureDescriptor {
-            label: Some("fiber shadow keys"),
-            size: if shadows.fibers.is_empty() {
-                wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 }
-            } else {
-                wgpu::Extent3d {
-                    width: side,
-                    height: side,
-                    depth_or_array_layers: shadows.fibers.len() as u32,
-                }
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: SHADOW_IDS,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
-        let ids_view = ids.create_view(&wgpu::TextureViewDescriptor {
-            dimension: Some(wgpu::TextureViewDimension::D2Array),
-            ..Default::default()
-        });
+        let keys = match shadows.fibers.len() as u32 {
+            0 => (1, 1),
+            n => (side, n),
+        };
+        let ids = texture_array(dev, "fiber shadow keys", keys, SHADOW_IDS, targets);
+        let ids_view = array_view(&ids);
         let draw_group = |view: &wgpu::Buffer,
                           (maps, ids): (&wgpu::TextureView, &wgpu::TextureView),
                           views: &wgpu::Buffer,
@@ -673,25 +676,8 @@ impl FiberRenderer {
             .iter()
             .map(|light| {
                 let raw = self.map_raw(light, side)?;
-                let ubuf = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("fiber shadow view"),
-                    contents: bytemuck::bytes_of(&raw),
-                    usage: wgpu::BufferUsages::UNIFORM,
-                });
-                let args = dev.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("fiber shadow args"),
-                    size: size_of::<DrawArgsRaw>() as u64,
-                    usage: wgpu::BufferUsages::STORAGE
-                        | wgpu::BufferUsages::INDIRECT
-                        | wgpu::BufferUsages::COPY_DST
-                        | wgpu::BufferUsages::COPY_SRC,
-                    mapped_at_creation: false,
-                });
-                let g_lod = dev.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("fiber_lod (shadow)"),
-                    layout: &self.lod.layout,
-                    entries: &[entry(0, &ubuf), entry(1, &self.instances), entry(2, &args)],
-                });
+                let args = args_buffer(dev, "fiber shadow args");
+                let (ubuf, g_lod) = self.lod_group(dev, "fiber shadow view", &raw, &args);
                 let none = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("no shadow views"),
                     contents: bytemuck::bytes_of(&ShadowViewsRaw::empty(side)),

@@ -54,6 +54,15 @@ pub fn crane_scene() -> (PackedYarns, YarnParams, FiberCamera, [f64; 3], f64) {
     (packed, p, cam, c, span)
 }
 
+/// The perspective close-up of the `hairs` and `fiber_shadows` benches: a fifth of the
+/// patch across (centre `c`, span `span`), from 0.35 patch widths away, 35° off the normal.
+#[allow(dead_code)] // the lights bench has no close-up
+pub fn close_camera(c: [f64; 3], span: f64) -> FiberCamera {
+    let (s, co) = 35f64.to_radians().sin_cos();
+    let e = 0.35 * span;
+    FiberCamera::perspective([c[0], c[1] - e * s, c[2] + e * co], c, [0.0, 0.0, 1.0], 30.0)
+}
+
 /// Times each case `i` (`frame(i)`: one frame, its wall-clock ms) in criterion group
 /// `group`, 10 samples a case (frames take 0.2–7 s on lavapipe), recording every frame
 /// under `names[i]`.

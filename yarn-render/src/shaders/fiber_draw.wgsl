@@ -513,33 +513,19 @@ fn ambient_integral(e: Effects, theta_o: f32) -> vec3<f32> {
 // for a soft SRBF lobe). Not the strips' PCSS: on llvmpipe a blocker search anywhere in
 // this shader made every lobe 3× dearer, taken or not (`benches/lights.rs`).
 fn yarn_visibility(li: u32, point: vec3<f32>, wi: vec3<f32>, offset: f32) -> f32 {
-    for (var m = 0u; m < shadow_views.n.x; m++) {
-        if shadow_views.light[m / 4u][m % 4u] != li {
-            continue;
-        }
-        let b = shadow_views.bias[m];
-        let p = point + wi * (offset + b.y);
-        let c = shadow_views.view_proj[m] * vec4<f32>(p, 1.0);
-        if c.w <= 0.0 {
-            continue;
-        }
-        let ndc = c.xyz / c.w;
-        let uv = vec2<f32>(0.5 * ndc.x + 0.5, 0.5 - 0.5 * ndc.y);
-        if any(uv < vec2<f32>(0.0)) || any(uv > vec2<f32>(1.0)) {
-            continue;
-        }
-        let depth = ndc.z - b.x;
-        let step = shadow_views.texel.x * b.z;
-        var v = 0.0;
-        for (var dy = -1; dy <= 1; dy++) {
-            for (var dx = -1; dx <= 1; dx++) {
-                let o = vec2<f32>(f32(dx), f32(dy)) * step;
-                v += textureSampleCompareLevel(shadow_maps, shadow_cmp, uv + o, i32(m), depth);
-            }
-        }
-        return v / 9.0;
+    let h = first_map(li, point, wi, offset);
+    if h.m < 0 {
+        return 1.0;
     }
-    return 1.0;
+    let step = shadow_views.texel.x * shadow_views.bias[h.m].z;
+    var v = 0.0;
+    for (var dy = -1; dy <= 1; dy++) {
+        for (var dx = -1; dx <= 1; dx++) {
+            let o = vec2<f32>(f32(dx), f32(dy)) * step;
+            v += textureSampleCompareLevel(shadow_maps, shadow_cmp, h.uv + o, h.m, h.depth);
+        }
+    }
+    return v / 9.0;
 }
 
 // Bilinear core texel (CoreTexture::sample): 8 channels, u repeats, v clamps.
@@ -650,36 +636,24 @@ fn fs_shadow(in: VertexOut) -> ShadowOut {
 // (the reference's shadow ray skips it) or its far side lies beyond the point (the
 // reference's ray, from the axis, enters no other fiber).
 fn fiber_visibility(li: u32, point: vec3<f32>, wi: vec3<f32>, key: u32) -> f32 {
-    let size = textureDimensions(shadow_ids);
-    for (var m = 0u; m < shadow_views.n.x; m++) {
-        if shadow_views.light[m / 4u][m % 4u] != li {
-            continue;
-        }
-        let b = shadow_views.bias[m];
-        let c = shadow_views.view_proj[m] * vec4<f32>(point, 1.0);
-        if c.w <= 0.0 {
-            continue;
-        }
-        let ndc = c.xyz / c.w;
-        let uv = vec2<f32>(0.5 * ndc.x + 0.5, 0.5 - 0.5 * ndc.y);
-        if any(uv < vec2<f32>(0.0)) || any(uv > vec2<f32>(1.0)) {
-            continue;
-        }
-        let n = vec2<f32>(size.xy);
-        var v = 0.0;
-        for (var dy = -1; dy <= 1; dy++) {
-            for (var dx = -1; dx <= 1; dx++) {
-                let t = clamp(uv * n + vec2<f32>(f32(dx), f32(dy)) * b.z, vec2<f32>(0.0),
-                    n - 1.0);
-                let texel = vec2<i32>(t);
-                let id = textureLoad(shadow_ids, texel, i32(m), 0).x;
-                let d = textureLoad(shadow_maps, texel, i32(m), 0);
-                v += select(0.0, 1.0, id == key || ndc.z <= d);
-            }
-        }
-        return v / 9.0;
+    let h = first_map(li, point, wi, 0.0);
+    if h.m < 0 {
+        return 1.0;
     }
-    return 1.0;
+    let n = vec2<f32>(textureDimensions(shadow_ids).xy);
+    let spread = shadow_views.bias[h.m].z;
+    var v = 0.0;
+    for (var dy = -1; dy <= 1; dy++) {
+        for (var dx = -1; dx <= 1; dx++) {
+            let t = clamp(h.uv * n + vec2<f32>(f32(dx), f32(dy)) * spread, vec2<f32>(0.0),
+                n - 1.0);
+            let texel = vec2<i32>(t);
+            let id = textureLoad(shadow_ids, texel, h.m, 0).x;
+            let d = textureLoad(shadow_maps, texel, h.m, 0);
+            v += select(0.0, 1.0, id == key || h.depth <= d);
+        }
+    }
+    return v / 9.0;
 }
 
 @fragment

@@ -158,3 +158,40 @@ struct ShadowViews {
     // spacing in texels (fibers), unused.
     bias: array<vec4<f32>, 56>,
 }
+
+// Where a point lands in the first shadow map of a light.
+struct MapHit {
+    uv: vec2<f32>,
+    // Light-clip depth, the map's depth bias subtracted.
+    depth: f32,
+    // The map (a layer of the shaders' shadow_maps), −1 when none of the light sees it.
+    m: i32,
+}
+
+// The first shadow map of light `li` (or SRBF j as 8 + j; a point light may have six cube
+// faces) that sees `point` moved along `wi` (towards the light) by `offset` plus the map's
+// bias along the ray, with the shaders' `shadow_views`.
+fn first_map(li: u32, point: vec3<f32>, wi: vec3<f32>, offset: f32) -> MapHit {
+    var hit: MapHit;
+    hit.m = -1;
+    for (var m = 0u; m < shadow_views.n.x; m++) {
+        if shadow_views.light[m / 4u][m % 4u] != li {
+            continue;
+        }
+        let b = shadow_views.bias[m];
+        let c = shadow_views.view_proj[m] * vec4<f32>(point + wi * (offset + b.y), 1.0);
+        if c.w <= 0.0 {
+            continue;
+        }
+        let ndc = c.xyz / c.w;
+        let uv = vec2<f32>(0.5 * ndc.x + 0.5, 0.5 - 0.5 * ndc.y);
+        if any(uv < vec2<f32>(0.0)) || any(uv > vec2<f32>(1.0)) {
+            continue;
+        }
+        hit.uv = uv;
+        hit.depth = ndc.z - b.x;
+        hit.m = i32(m);
+        return hit;
+    }
+    return hit;
+}

@@ -147,22 +147,11 @@ fn factor3(h: StripHeader, t: u32, first: u32, b: Bins) -> vec3<f32> {
 // comparison PCF over the penumbra the mean blocker depth gives; pcss = 0 is the hard
 // shadow map with one comparison tap (DESIGN §3.5's PCSS limit).
 fn strip_visibility(li: u32, centre: vec3<f32>, wi: vec3<f32>, radius: f32) -> f32 {
-    for (var m = 0u; m < shadow_views.n.x; m++) {
-        if shadow_views.light[m / 4u][m % 4u] != li {
-            continue;
-        }
-        let b = shadow_views.bias[m];
-        let p = centre + wi * (radius * 1.05 + b.y);
-        let c = shadow_views.view_proj[m] * vec4<f32>(p, 1.0);
-        if c.w <= 0.0 {
-            continue;
-        }
-        let ndc = c.xyz / c.w;
-        let uv = vec2<f32>(0.5 * ndc.x + 0.5, 0.5 - 0.5 * ndc.y);
-        if any(uv < vec2<f32>(0.0)) || any(uv > vec2<f32>(1.0)) {
-            continue;
-        }
-        let depth = ndc.z - b.x;
+    let h = first_map(li, centre, wi, radius * 1.05);
+    if h.m >= 0 {
+        let m = u32(h.m);
+        let uv = h.uv;
+        let depth = h.depth;
         let k = shadow_views.pcss[m / 4u][m % 4u];
         let texel = shadow_views.texel.x;
         if k <= 0.0 {

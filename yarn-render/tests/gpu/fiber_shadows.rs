@@ -11,28 +11,16 @@
 //! The tube maps and the self-shadow volume of [W19 §4.1] leave interior rel. RMSE 0.19 and
 //! a frame 9 % too dark; shadows of every fiber bring them to 0.062 and 0.2 %. The series over map size and subdivisions is the ignored test (BENCHMARKS).
 
-use crate::lights::{Setup, mean, rel_rmse, setup_fine};
+use crate::lights::{Setup, mean, reference_image, rel_rmse, setup_fine};
 use btf_render::Gpu;
-use yarn_ref::{
-    Background, Camera, FiberScene, Light, PathSettings, RenderSettings, Scene, SceneOptions,
-    Shading, render,
-};
+use yarn_ref::Light;
 use yarn_render::{AoMode, FiberCamera, FiberEffects, FiberLight, FiberRenderer, FiberSettings};
 
 const SIZE: usize = 48;
 
 /// The reference's RGB rows and coverage at `spp` paths a pixel.
 fn reference(s: &Setup, lights: &[Light], spp: u32) -> (Vec<f32>, Vec<f32>) {
-    let period = Some(s.patch.period);
-    let scene =
-        FiberScene::new(&s.patch.fibers, &SceneOptions { period, backing_z: None }).unwrap();
-    let shading = Shading::Fiber { bcsdf: std::sync::Arc::new(s.bcsdf.clone()), tint: true };
-    let sc = Scene { fibers: &scene, lights, shading: &shading };
-    let p = s.patch.period;
-    let cam = Camera::oblique(s.view, s.patch.z_ref, p.origin, p.size).unwrap();
-    let mut rs = RenderSettings::new(SIZE, SIZE, spp);
-    rs.path = PathSettings { max_bounces: 1, rr_start: 100, background: Background::Black };
-    let img = render(&sc, &cam, &rs).unwrap().0;
+    let img = reference_image(s, lights, spp);
     (img.rgb, img.coverage)
 }
 

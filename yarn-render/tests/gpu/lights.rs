@@ -61,6 +61,11 @@ pub(crate) fn setup_fine(periodic: bool, hairs: bool, samples_per_turn: u32) -> 
 }
 
 pub(crate) fn reference(s: &Setup, lights: &[Light], spp: u32) -> Vec<f32> {
+    reference_image(s, lights, spp).rgb
+}
+
+/// The reference frame of [`reference`], with its coverage.
+pub(crate) fn reference_image(s: &Setup, lights: &[Light], spp: u32) -> yarn_ref::Image {
     let period = s.periodic.then_some(s.patch.period);
     let scene =
         FiberScene::new(&s.patch.fibers, &SceneOptions { period, backing_z: None }).unwrap();
@@ -70,7 +75,7 @@ pub(crate) fn reference(s: &Setup, lights: &[Light], spp: u32) -> Vec<f32> {
     let cam = Camera::oblique(s.view, s.patch.z_ref, p.origin, p.size).unwrap();
     let mut rs = RenderSettings::new(SIZE, SIZE, spp);
     rs.path = PathSettings { max_bounces: 1, rr_start: 100, background: Background::Black };
-    render(&sc, &cam, &rs).unwrap().0.rgb
+    render(&sc, &cam, &rs).unwrap().0
 }
 
 pub(crate) fn renderer(gpu: &Gpu, s: &Setup, effects: FiberEffects) -> FiberRenderer {
