@@ -6,8 +6,9 @@
 //! then the rest patch by the fibers and by [H25]'s yarn strips (`yarn_render::strips`,
 //! textures baked once into `knit/bake-cache`) and by [C03]'s lumislices
 //! (`yarn_render::lumislice`, the table computed once into the same cache), each timed. Writes `knit/knit.png`,
-//! `knit/knit-stretch.png`, `knit/knit-strips.png` and `knit/knit.json` (what the report
-//! shows); no equation lives here.
+//! `knit/knit-stretch.png`, `knit/knit-strips.png`, `knit/knit-shadows.png` (the close-up
+//! with [W19]'s tube maps and self-shadow volume beside shadows of every fiber) and
+//! `knit/knit.json` (what the report shows); no equation lives here.
 
 use anyhow::Result;
 use std::path::Path;
@@ -71,6 +72,30 @@ pub fn run(out: &Path, width: u32) -> Result<()> {
         size.1 as usize,
         &rgb,
         1.0,
+    )?;
+    // The same close-up with shadows of every fiber (`fiber_shadows`: each light's map drawn
+    // from the fibers, fitted to the view) beside [W19]'s tube maps and volume, timed.
+    let fx = yarn_render::FiberEffects { fiber_shadows: true, ..effects };
+    let cast = FiberRenderer::new(
+        &gpu,
+        &packed,
+        &bcsdf,
+        FiberSettings { effects: fx, shadow_map: 2048, ..settings },
+    )?;
+    let cimg = cast.render(&gpu, &cam, &lights, size, [0.02, 0.02, 0.025, 1.0])?;
+    let t = Instant::now();
+    cast.render(&gpu, &cam, &lights, size, [0.0; 4])?;
+    let tc = t.elapsed().as_secs_f64();
+    let srgb = |im: &yarn_render::FiberImage| {
+        let rgb: Vec<f32> = im.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+        btf_image::write::to_srgb_image(size.0 as usize, size.1 as usize, &rgb, 1.0)
+    };
+    let (a, b) = (srgb(&img), srgb(&cimg));
+    let la = format!("tubes + density, {:.0} ms", tf * 1e3);
+    let lb = format!("every fiber casts, {:.0} ms", tc * 1e3);
+    btf_image::write::write_png(
+        &dir.join("knit-shadows.png"),
+        &btf_image::compose::captioned_strip(&[(&a, la.as_str()), (&b, lb.as_str())], 6),
     )?;
     // The knot solver: the same patch at rest and stretched along its wales.
     let stretch = 0.3;
@@ -156,10 +181,7 @@ pub fn run(out: &Path, width: u32) -> Result<()> {
         strips.render(&gpu, &cam, &lights, size, [0.0; 4])?;
         ts = ts.min(t.elapsed().as_secs_f64());
     }
-    let to_img = |im: &yarn_render::FiberImage| {
-        let rgb: Vec<f32> = im.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
-        btf_image::write::to_srgb_image(size.0 as usize, size.1 as usize, &rgb, 1.0)
-    };
+    let to_img = srgb;
     // And by [C03]'s lumislices (the table computed once into the same cache).
     let t = Instant::now();
     let slice = yarn_precompute::Lumislice::for_params(
@@ -216,6 +238,9 @@ pub fn run(out: &Path, width: u32) -> Result<()> {
         "triangles": st.triangles,
         "fibers_ms": tf * 1e3,
         "tubes_ms": tt * 1e3,
+        "shadows_png": "knit/knit-shadows.png",
+        "fiber_shadows_ms": tc * 1e3,
+        "fiber_shadow_instances": cimg.stats.shadow_instances,
     });
     btf_image::write::write_text(&dir.join("knit.json"), &serde_json::to_string_pretty(&j)?)?;
     Ok(())
