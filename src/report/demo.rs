@@ -331,7 +331,7 @@ pub fn write(
         });
         if let Some((png, ms, cast)) = &k.shadows {
             page.push(Block::Para(format!(
-                "Shadows two ways: the paper's (Wu & Yuksel) — other yarns as solid tubes, and inside a yarn an average fiber density — or every fiber casting its own shadow: the lamp's view of all {cast} fiber strands drawn first, fitted to what the camera sees. Against a slow exact rendering of a knit patch the second's error is a third of the first's, and its brightness right where the first's is 9 % dark (`yarn-render`'s tests); here a frame took {:.0} ms against {:.0} ms.",
+                "Shadows two ways: the paper's (Wu & Yuksel) — other yarns as solid tubes, and inside a yarn an average fiber density — or every fiber casting its own shadow: each lamp's view of the fibers drawn first at full detail ({cast} fiber pieces into the two lamps' maps), fitted to what the camera sees. Against a slow exact rendering of a knit patch the second's error is a third of the first's, and its brightness right where the first's is 9 % dark (`yarn-render`'s tests); here a frame took {:.0} ms against {:.0} ms.",
                 ms, k.fibers_ms
             )));
             page.push(Block::Figure {

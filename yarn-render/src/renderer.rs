@@ -452,6 +452,8 @@ impl FiberRenderer {
     /// 0.92 at full detail; BENCHMARKS.md, "Fiber shadow maps".)
     fn map_raw(&self, setup: &ViewSetup, size: u32) -> Result<ViewRaw> {
         let mut raw = self.raw_of(setup, &[], (size, size))?;
+        // A fiber map's view: the vertex stage computes the far-side depth (fs_shadow).
+        raw.lod[2] |= MAP_VIEW;
         raw.viewport[3] = 0.0;
         raw.strip[0] = 0.0;
         raw.strip[1] = 1.0;
@@ -518,7 +520,8 @@ impl FiberRenderer {
         };
         let mut fibers = Vec::new();
         let mut views = Vec::new();
-        let delta = if fiber_maps(&self.settings) {
+        // (An empty set casts nothing: no fiber maps.)
+        let delta = if fiber_maps(&self.settings) && self.data.segment_count > 0 {
             for (i, l) in lights.iter().take(MAX_SHADOW_MAPS).enumerate() {
                 let maps: Vec<ViewSetup> = match *l {
                     FiberLight::Directional { to_light, .. } => {
@@ -671,6 +674,11 @@ impl FiberRenderer {
         });
         let env = self.env.as_ref().map_or(&self.no_env, |e| &e.0);
         let g_draw = draw_group(&ubuf, (&maps_view, &ids_view), &vbuf, env);
+        let none = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("no shadow views"),
+            contents: bytemuck::bytes_of(&ShadowViewsRaw::empty(side)),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
         let fiber_maps = shadows
             .fibers
             .iter()
@@ -678,11 +686,6 @@ impl FiberRenderer {
                 let raw = self.map_raw(light, side)?;
                 let args = args_buffer(dev, "fiber shadow args");
                 let (ubuf, g_lod) = self.lod_group(dev, "fiber shadow view", &raw, &args);
-                let none = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("no shadow views"),
-                    contents: bytemuck::bytes_of(&ShadowViewsRaw::empty(side)),
-                    usage: wgpu::BufferUsages::UNIFORM,
-                });
                 let g_draw =
                     draw_group(&ubuf, (&self.no_maps.0, &self.no_maps.1), &none, &self.no_env);
                 Ok(FiberMapBindings { g_lod, g_draw, args })
@@ -901,6 +904,9 @@ impl FiberRenderer {
 /// `tests/gpu/fiber_shadows.rs` (variants not kept), one texel apart, a single tap and
 /// 2 × 2 bilinear weights all scored worse than 0.3.
 const FIBER_MAP_TAPS: f32 = 0.3;
+
+/// The view flag (`lod.z` bit 12) of a fiber shadow map's light view.
+const MAP_VIEW: u32 = 1 << 12;
 
 /// Whether `s` draws fiber shadow maps (fiber shadows of yarn shadows, fibers drawn).
 fn fiber_maps(s: &FiberSettings) -> bool {

@@ -257,10 +257,13 @@ fn vs_main(@builtin(vertex_index) vi: u32, @builtin(instance_index) ii: u32) -> 
     var out: VertexOut;
     let q_strip = p + across * (0.5 * w * side);
     out.clip = view.view_proj * vec4<f32>(q_strip, 1.0);
-    // For the fiber shadow maps (fs_shadow): the clip depth a fiber radius further from
-    // the eye (the light there), and the strip's side.
-    let back = view.view_proj * vec4<f32>(q_strip - e * (0.5 * width), 1.0);
-    let dz = back.z / back.w - out.clip.z / out.clip.w;
+    // In a fiber shadow map's view (flag 4096, fs_shadow): the clip depth a fiber radius
+    // further from the eye (the light there); the frame's own passes skip it.
+    var dz = 0.0;
+    if (view.lod.z & 4096u) != 0u {
+        let back = view.view_proj * vec4<f32>(q_strip - e * (0.5 * width), 1.0);
+        dz = back.z / back.w - out.clip.z / out.clip.w;
+    }
     out.axis = p;
     out.tangent = tan;
     // The colour of the nearest control point (a hair's, where its point lies).

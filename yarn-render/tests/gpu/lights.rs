@@ -104,7 +104,7 @@ pub(crate) fn mean(a: &[f32]) -> f64 {
 }
 
 /// The patch centre (x, y at the period's middle, z halfway between top and bottom).
-fn centre(s: &Setup) -> [f64; 3] {
+pub(crate) fn centre(s: &Setup) -> [f64; 3] {
     let p = s.patch.period;
     [
         p.origin[0] + 0.5 * p.size[0],
