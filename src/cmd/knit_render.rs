@@ -84,6 +84,11 @@ pub struct RenderArgs {
     /// a hashed sample mask (0: every strip at its true width, sampled exactly).
     #[arg(long, default_value_t = 1.0)]
     pub min_strip_px: f32,
+    /// Frames per pixel side (1..=16): the fibers drawn K × K times larger and
+    /// box-filtered, K²·MSAA samples a pixel (--lod-px and --min-strip-px stay in output
+    /// pixels).
+    #[arg(long, default_value_t = 1)]
+    pub supersample: u32,
     /// Ambient occlusion inside the yarns [W19 §4.2].
     #[arg(long, default_value = "cubic")]
     pub ao: AoChoice,
@@ -219,6 +224,9 @@ pub fn run(a: RenderArgs) -> Result<()> {
             "--env: the lumislices take point and directional lights only ([C03] has no environment)"
         );
     }
+    if a.supersample != 1 && a.method == RenderMethod::Lumislice {
+        bail!("--supersample {}: the fibers' option (--method fibers)", a.supersample);
+    }
     if !(1..=yarn_render::strips::MAX_SRBFS).contains(&a.srbfs) {
         bail!("--srbfs {}: 1..={}", a.srbfs, yarn_render::strips::MAX_SRBFS);
     }
@@ -306,6 +314,13 @@ pub fn run(a: RenderArgs) -> Result<()> {
     if !(a.min_strip_px.is_finite() && a.min_strip_px >= 0.0) {
         bail!("--min-strip-px {}: a width ≥ 0 pixels", a.min_strip_px);
     }
+    if !(1..=yarn_render::MAX_SUPERSAMPLE).contains(&a.supersample) {
+        bail!(
+            "--supersample {}: 1..={} frames a pixel side",
+            a.supersample,
+            yarn_render::MAX_SUPERSAMPLE
+        );
+    }
     let settings = FiberSettings {
         effects,
         n_max: a.n_max.unwrap_or(u32::MAX),
@@ -316,6 +331,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
         hairs: !a.patch.no_hairs,
         shadow_map: a.shadow_map,
         min_strip_px: a.min_strip_px,
+        supersample: a.supersample,
         ..FiberSettings::default()
     };
     let gpu = btf_render::Gpu::new()?;
@@ -404,7 +420,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
     if a.json {
         let j = serde_json::json!({
             "image": image, "method": a.method.as_str(), "width": w, "height": h,
-            "lod_px": a.lod_px, "n_sub": a.n_sub,
+            "lod_px": a.lod_px, "n_sub": a.n_sub, "supersample": a.supersample,
             "msaa": a.msaa, "segments": st.segments, "culled": st.culled,
             "instances": st.instances, "hairs": st.hairs, "overflow": st.overflow,
             "shadow_instances": st.shadow_instances, "fiber_shadows": a.fiber_shadows,

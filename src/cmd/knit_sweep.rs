@@ -54,6 +54,10 @@ pub struct SweepArgs {
     /// Seed of the fibers.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// The reference's fiber polyline points per helix turn (the GPU evaluates the fibers
+    /// at `--n-sub` points a segment instead; 48 for a converged comparison).
+    #[arg(long, default_value_t = 12)]
+    pub samples_per_turn: u32,
     /// Image size W,H.
     #[arg(long, default_value = "96,96")]
     pub size: String,
@@ -97,6 +101,17 @@ pub struct SweepArgs {
     /// MSAA samples (1 or 4).
     #[arg(long, default_value_t = 4)]
     pub msaa: u32,
+    /// Fiber strips narrower than this many pixels are widened to it and keep their
+    /// coverage as a hashed sample mask (0: every strip at its true width, sampled
+    /// exactly, as the reference's rays hit them).
+    #[arg(long, default_value_t = 1.0)]
+    pub min_strip_px: f32,
+    /// Frames per pixel side of the fiber and tube cells (1..=16): drawn K × K times
+    /// larger and box-filtered, K²·MSAA samples a pixel (--lod-px and --min-strip-px stay
+    /// in output pixels). MSAA alone aliases fiber-scale detail; the converged comparison
+    /// needs ~16 (yarn-render README).
+    #[arg(long, default_value_t = 1)]
+    pub supersample: u32,
     /// Reference samples per pixel.
     #[arg(long, default_value_t = 16)]
     pub spp: u32,
@@ -265,6 +280,26 @@ fn validate(a: &SweepArgs) -> Result<()> {
     }
     if a.n_sub == 0 || a.n_sub > 255 {
         bail!("--n-sub {}: 1..=255", a.n_sub);
+    }
+    if !(a.min_strip_px.is_finite() && a.min_strip_px >= 0.0) {
+        bail!("--min-strip-px {}: a width ≥ 0 pixels", a.min_strip_px);
+    }
+    if a.samples_per_turn == 0 {
+        bail!("--samples-per-turn 0: at least one point a helix turn");
+    }
+    if !(1..=yarn_render::MAX_SUPERSAMPLE).contains(&a.supersample) {
+        bail!(
+            "--supersample {}: 1..={} frames a pixel side",
+            a.supersample,
+            yarn_render::MAX_SUPERSAMPLE
+        );
+    }
+    if a.supersample != 1 && !a.strips.is_empty() {
+        bail!(
+            "--supersample {}: the fiber and tube cells' option; the strips (--strips) draw \
+             one frame a pixel",
+            a.supersample
+        );
     }
     if let Some(l) = a.lod_px.iter().find(|l| !(l.is_finite() && **l >= 0.0)) {
         bail!("--lod-px {l}: thresholds must be finite and ≥ 0");
@@ -529,7 +564,12 @@ pub fn run(a: SweepArgs) -> Result<()> {
     let (stitches, patch_tiles) = grow_period(base, &params, view, &dists, (w, h), &a.view)?;
     let popts = PatchOptions {
         stitches: Some(stitches),
-        generation: GenOptions { seed: a.seed, hairs: a.hairs, ..GenOptions::default() },
+        generation: GenOptions {
+            seed: a.seed,
+            hairs: a.hairs,
+            samples_per_turn: a.samples_per_turn,
+            ..GenOptions::default()
+        },
         ..PatchOptions::default()
     };
     let t0 = Instant::now();
@@ -729,6 +769,8 @@ fn gpu_grid(
                         n_sub: a.n_sub,
                         lod_px: lod.unwrap_or(0.0),
                         msaa: a.msaa,
+                        min_strip_px: a.min_strip_px,
+                        supersample: a.supersample,
                         tubes: lod.is_none(),
                         hairs: a.hairs,
                         shadow_map: a.shadow_map,

@@ -80,6 +80,57 @@ fn knit_render_fiber_shadows_draw_every_fiber_into_the_map() {
     assert!(e.contains("--fiber-shadows") && e.contains("--no-yarn-shadows"), "{e}");
 }
 
+/// `btf knit render --supersample 2` is the frame drawn at twice the side with its
+/// thresholds in output pixels, box-filtered: the 64² render at `--lod-px 2 --min-strip-px 2`
+/// averaged over 2 × 2 blocks (the same fibers, sample masks and maps: equal to the EXR's
+/// rounding), and not the 32² frame at one frame a pixel. Out-of-range counts and the
+/// lumislices are refused naming the flag.
+#[test]
+fn knit_render_supersample_is_the_larger_frame_box_filtered() {
+    let d = Dir::new();
+    let base = ["knit", "render", "--light", "dir:30,45", "--no-hairs", "--json"];
+    let small = ["--size", "32,32", "--lod-px", "1", "--min-strip-px", "1"];
+    let Some(js) =
+        run_gpu(&d, &[&base[..], &small, &["--supersample", "2", "-o", "ss.exr"]].concat())
+    else {
+        return;
+    };
+    let j: serde_json::Value = serde_json::from_str(&js).unwrap();
+    assert_eq!(j["supersample"].as_u64(), Some(2), "{j}");
+    assert_eq!((j["width"].as_u64(), j["height"].as_u64()), (Some(32), Some(32)), "{j}");
+    run_gpu(&d, &[&base[..], &small, &["-o", "one.exr"]].concat()).unwrap();
+    let big = ["--size", "64,64", "--lod-px", "2", "--min-strip-px", "2", "-o", "big.exr"];
+    run_gpu(&d, &[&base[..], &big].concat()).unwrap();
+    let read = |f: &str| crate::common::read_exr(&d.path(f)).2;
+    let (ss, one, big) = (read("ss.exr"), read("one.exr"), read("big.exr"));
+    let mut filtered = vec![0.0f64; 32 * 32 * 3];
+    for y in 0..64 {
+        for x in 0..64 {
+            for c in 0..3 {
+                filtered[((y / 2) * 32 + x / 2) * 3 + c] += 0.25 * big[(y * 64 + x) * 3 + c] as f64;
+            }
+        }
+    }
+    let rel = |a: &[f32], b: &[f64]| {
+        let num: f64 = a.iter().zip(b).map(|(x, y)| (*x as f64 - y).powi(2)).sum();
+        let den: f64 = b.iter().map(|y| y * y).sum();
+        (num / den).sqrt()
+    };
+    let one64: Vec<f64> = one.iter().map(|x| *x as f64).collect();
+    let (e, e_one) = (rel(&ss, &filtered), rel(&ss, &one64));
+    eprintln!("--supersample 2 against the 64² frame filtered: {e:.2e}; against 32²: {e_one:.4}");
+    // The EXR's half floats (2^-11 relative), averaged before and after rounding.
+    assert!(e < 2e-3, "{e}");
+    assert!(e_one > 10.0 * e, "the samples changed nothing: {e_one} against {e}");
+    for k in ["0", "17"] {
+        let err = d.fails(&[&base[..], &small, &["--supersample", k, "-o", "x.exr"]].concat());
+        assert!(err.contains(&format!("--supersample {k}")), "{err}");
+    }
+    let ls = ["--method", "lumislice", "--supersample", "2", "-o", "x.exr"];
+    let err = d.fails(&[&base[..], &small, &ls].concat());
+    assert!(err.contains("--supersample 2"), "{err}");
+}
+
 /// `btf knit render --env`: an environment map alone lights the fibers through its SRBF
 /// lobes, whose tube shadow maps darken the patch (against `--no-yarn-shadows`); the
 /// lumislices and an SRBF count out of range are refused naming the flag.
@@ -382,6 +433,12 @@ fn knit_gpu_refusals_name_the_flag() {
     assert!(e.contains("--strips shiny"), "{e}");
     let e = d.fails(&["knit", "sweep", "--distances", "0", "-o", "o"]);
     assert!(e.contains("--distances 0"), "{e}");
+    let e = d.fails(&["knit", "sweep", "--supersample", "2", "--strips", "full", "-o", "o"]);
+    assert!(e.contains("--supersample 2") && e.contains("--strips"), "{e}");
+    let e = d.fails(&["knit", "sweep", "--supersample", "17", "-o", "o"]);
+    assert!(e.contains("--supersample 17"), "{e}");
+    let e = d.fails(&["knit", "sweep", "--min-strip-px=-1", "-o", "o"]);
+    assert!(e.contains("--min-strip-px -1"), "{e}");
     std::fs::write(d.path("c.chart"), "name: c\nkp\n").unwrap();
     let e = d.fails(&["knit", "sweep", "--chart", "c.chart", "-o", "c.chart"]);
     assert!(e.contains("c.chart"), "{e}");

@@ -48,7 +48,7 @@ pub use error::{Error, Result};
 pub use gpu_data::YarnBuffers;
 pub use lumislice::{LumisliceRenderSettings, LumisliceRenderer};
 pub use pack::{PackOptions, PackedYarns};
-pub use renderer::{FiberImage, FiberRenderer, FiberSettings, FiberStats};
+pub use renderer::{FiberImage, FiberRenderer, FiberSettings, FiberStats, MAX_SUPERSAMPLE};
 pub use strips::{StripRenderer, StripSettings};
 pub use view::{FiberCamera, FiberLight};
 
