@@ -134,6 +134,10 @@ pub struct SweepArgs {
     /// reference patch and the GPU fibers, and the flyaway overlay on the strips.
     #[arg(long)]
     pub hairs: bool,
+    /// No core strips in the fiber cells: every fiber explicit, as the reference draws
+    /// them (LoD then drops the innermost fibers).
+    #[arg(long)]
+    pub no_core: bool,
     /// Shadows of every fiber in the fiber cells (each light's map drawn from the fibers,
     /// fitted to the seen part of the yarns) instead of tubes and the self-shadow volume.
     #[arg(long)]
@@ -775,6 +779,7 @@ fn gpu_grid(
                         hairs: a.hairs,
                         shadow_map: a.shadow_map,
                         effects: yarn_render::FiberEffects {
+                            core: !a.no_core,
                             fiber_shadows: a.fiber_shadows,
                             ..Default::default()
                         },

@@ -140,7 +140,7 @@ pub(crate) fn markdown(
         cams.iter().map(|c| format!("{} ({}×{} periods)", c.name, c.tiles, c.tiles)).collect();
     let _ = writeln!(
         s,
-        "Cameras (viewing direction θ,φ = {}° for all): {}. {} Shadows of the fibers: {} ({}² maps). Fiber strips widened to {} px; {} × {} frames a pixel at MSAA {} ({} samples); the reference's fibers at {} points a helix turn, the GPU's at {} subdivisions a segment. Frame ms: median of {} interleaved frames; × tubes: against the plain tubes of the same camera and shading in this run.\n",
+        "Cameras (viewing direction θ,φ = {}° for all): {}. {} Shadows of the fibers: {} ({}² maps). Core strips: {}. Fiber strips widened to {} px; {} × {} frames a pixel at MSAA {} ({} samples); the reference's fibers at {} points a helix turn, the GPU's at {} subdivisions a segment. Frame ms: median of {} interleaved frames; × tubes: against the plain tubes of the same camera and shading in this run.\n",
         a.view,
         tiles.join(", "),
         if a.hairs {
@@ -154,6 +154,7 @@ pub(crate) fn markdown(
             "tube maps and the self-shadow volume [W19 §4.1]"
         },
         a.shadow_map,
+        if a.no_core { "off (`--no-core`: every fiber explicit)" } else { "on [W19 §3.2]" },
         a.min_strip_px,
         a.supersample,
         a.supersample,
