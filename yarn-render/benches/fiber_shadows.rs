@@ -3,7 +3,8 @@
 //! (the default) and with fiber shadow maps (`FiberEffects::fiber_shadows`) of 1024² to
 //! 4096² texels, as a ratio to the plain tubes of the same camera measured in the same run
 //! — with the whole patch in view and from close up (LoD at 1 px in both), plus the fiber
-//! instances the camera and the light's map drew.
+//! instances the camera and the light's map drew; and the close-up at 2 × 2 and 4 × 4
+//! frames a pixel (`FiberSettings::supersample`, what a converged frame costs).
 //!
 //! Scene: the `hairs` bench's — Crane's plain-knit patch, 22 × 22 stitches (3 872 control
 //! points, not periodic), cotton-2ply with its hairs, one directional light, 256², MSAA 4,
@@ -43,13 +44,16 @@ fn main() {
     let close = common::close_camera(c, span);
     let cams = [whole, close];
     let light = [FiberLight::Directional { to_light: [0.3, -0.5, 1.0], irradiance: [2.0; 3] }];
-    // `map` 0: tube maps and the volume; else fiber maps of that side.
-    let make = |tubes: bool, map: u32| {
+    // `map` 0: tube maps and the volume; else fiber maps of that side; `k × k` frames a
+    // pixel.
+    let make_k = |tubes: bool, map: u32, supersample: u32| {
         let effects = FiberEffects { fiber_shadows: map > 0, ..Default::default() };
         let shadow_map = if map > 0 { map } else { 1024 };
-        let settings = FiberSettings { tubes, effects, shadow_map, ..Default::default() };
+        let settings =
+            FiberSettings { tubes, effects, shadow_map, supersample, ..Default::default() };
         FiberRenderer::new(&gpu, &packed, &bcsdf, settings).unwrap()
     };
+    let make = |tubes: bool, map: u32| make_k(tubes, map, 1);
     let case = |name, baseline, renderer, camera| Case { name, baseline, renderer, camera };
     let cases = [
         case("whole/tubes", "whole/tubes", make(true, 0), 0),
@@ -62,6 +66,8 @@ fn main() {
         case("close/fiber-maps-1024", "close/tubes", make(false, 1024), 1),
         case("close/fiber-maps-2048", "close/tubes", make(false, 2048), 1),
         case("close/fiber-maps-4096", "close/tubes", make(false, 4096), 1),
+        case("close/fiber-maps-2048-ss2", "close/tubes", make_k(false, 2048, 2), 1),
+        case("close/fiber-maps-2048-ss4", "close/tubes", make_k(false, 2048, 4), 1),
     ];
     let frame = |c: &Case| {
         let t = Instant::now();

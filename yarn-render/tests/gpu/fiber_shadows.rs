@@ -111,10 +111,10 @@ fn fiber_shadow_maps_bring_the_knit_patch_interior_within_5_percent_of_the_refer
 }
 
 /// The series BENCHMARKS.md quotes: interior error against map size, subdivisions,
-/// frames a pixel and the strips' widening, and the reference's own sampling (~12 minutes;
+/// frames a pixel and the strips' widening, and the reference's own sampling (~16 minutes;
 /// `cargo test -p yarn-render --test gpu fiber_shadow_series -- --ignored --nocapture`).
 #[test]
-#[ignore = "a series for BENCHMARKS.md, ~12 minutes"]
+#[ignore = "a series for BENCHMARKS.md, ~16 minutes"]
 fn fiber_shadow_series() {
     let Some(gpu) = Gpu::for_tests("fiber_shadow_series") else { return };
     let s = setup_fine(true, false, 48);
