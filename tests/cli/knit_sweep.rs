@@ -129,6 +129,12 @@ fn knit_render_supersample_is_the_larger_frame_box_filtered() {
     let ls = ["--method", "lumislice", "--supersample", "2", "-o", "x.exr"];
     let err = d.fails(&[&base[..], &small, &ls].concat());
     assert!(err.contains("--supersample 2"), "{err}");
+    // A frame drawn beyond the adapter's or the renderer's limits is refused before
+    // anything is allocated, and nothing is written.
+    let huge = ["--size", "2048,2048", "--supersample", "16", "-o", "huge.exr"];
+    let err = d.fails(&[&base[..], &huge].concat());
+    assert!(err.contains("supersample 16") && err.contains("32768 × 32768"), "{err}");
+    assert!(!d.path("huge.exr").exists());
 }
 
 /// `btf knit render --env`: an environment map alone lights the fibers through its SRBF

@@ -33,7 +33,7 @@ use crate::effects::{self, AoMode, FiberEffects};
 use crate::gpu_data::YarnBuffers;
 use crate::pack::PackedYarns;
 use crate::passes::draw::{DEPTH, DrawPass, FrameTargets, SHADOW_IDS};
-use crate::passes::fiber_shadow::fitted_view;
+use crate::passes::fiber_shadow::{fitted_point_view, fitted_view};
 use crate::passes::lod::{DrawArgsRaw, LodPass};
 use crate::passes::shadow::{
     MAX_SHADOW_MAPS, MapView, ShadowPass, ShadowPassRaw, ShadowViewsRaw, frame_views,
@@ -547,18 +547,23 @@ impl FiberRenderer {
                     }
                     FiberLight::Point { position, .. } => {
                         let p = [0, 1, 2].map(|a| position[a] - self.origin[a]);
-                        point_cameras(p, self.origin, self.centre, self.radius)?
-                            .iter()
-                            .map(|c| {
-                                ViewSetup::new(
-                                    c,
-                                    self.origin,
-                                    self.centre,
-                                    self.radius,
-                                    (size, size),
-                                )
-                            })
-                            .collect::<Result<_>>()?
+                        let (lo, hi) = self.bounds;
+                        match fitted_point_view(p, cam, lo, hi, size)? {
+                            Some(v) => vec![v],
+                            // Among the yarns: the whole sphere's map or cube faces.
+                            None => point_cameras(p, self.origin, self.centre, self.radius)?
+                                .iter()
+                                .map(|c| {
+                                    ViewSetup::new(
+                                        c,
+                                        self.origin,
+                                        self.centre,
+                                        self.radius,
+                                        (size, size),
+                                    )
+                                })
+                                .collect::<Result<_>>()?,
+                        }
                     }
                 };
                 for v in maps {
@@ -886,18 +891,17 @@ impl FiberRenderer {
         clear: [f64; 4],
     ) -> Result<FiberImage> {
         let k = self.settings.supersample;
-        let max = gpu.device.limits().max_texture_dimension_2d;
-        let drawn = match (width.checked_mul(k), height.checked_mul(k)) {
-            (Some(w), Some(h)) if w <= max && h <= max => (w, h),
-            _ => {
-                return Err(Error::Limit(format!(
-                    "a {width} × {height} frame at supersample {k} is drawn {} × {} pixels; \
-                     this device's largest target side is {max}",
-                    width as u64 * k as u64,
-                    height as u64 * k as u64
-                )));
-            }
-        };
+        let drawn = (width.saturating_mul(k), height.saturating_mul(k));
+        // The adapter's and the renderer's frame limits, on the frame as drawn.
+        if let Err(e) = gpu.check_frame(drawn.0, drawn.1, self.settings.msaa) {
+            return Err(match k {
+                1 => e.into(),
+                _ => Error::Limit(format!(
+                    "a {width} × {height} frame at supersample {k} is drawn {} × {}: {e}",
+                    drawn.0, drawn.1
+                )),
+            });
+        }
         let t = FrameTargets::new(gpu, "fiber", drawn, self.settings.msaa)?;
         let dev = &gpu.device;
         let b = self.bindings(gpu, cam, lights, drawn)?;

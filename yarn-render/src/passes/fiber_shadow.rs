@@ -11,8 +11,11 @@
 //! light's orthographic map spans, across the light, only the part of the yarns' bounding
 //! box inside the camera's frustum ([`fitted_view`]; every caster of a seen point lies on
 //! the light ray through it, so casters outside that rectangle shadow nothing seen), and in
-//! depth the whole box (every caster). A point light keeps [`super::shadow::point_cameras`]
-//! over the whole bounding sphere.
+//! depth the whole box (every caster). A point light outside the yarns gets the
+//! perspective counterpart ([`fitted_point_view`]: the square cone from the light about the
+//! seen part, in depth the box), so a far point light's map is as fine as the directional
+//! light's; among the yarns (inside the box, or so near that the seen part spans more than
+//! 120° from it) it keeps [`super::shadow::point_cameras`] over the whole bounding sphere.
 
 use crate::view::ViewSetup;
 use crate::{Error, Result};
@@ -177,6 +180,94 @@ pub fn fitted_view(
     Ok((setup, side / size as f64))
 }
 
+/// The perspective map of the point light at `light` (origin-relative) for what `cam` sees
+/// of the yarns inside `lo..hi`, `size²` texels: the square cone from the light about the
+/// seen part's centre that holds every point of [`visible_part`] (the whole box when the
+/// camera sees none of it) with two texels of margin, and in depth the box from its corner
+/// nearest the light to its farthest (every caster between a seen point and the light lies
+/// in the box, on the ray to that point, so inside the cone). `None` when the light is
+/// among the yarns — a box corner at or behind it along the cone's axis, or a seen point
+/// more than 60° off that axis — where one map cannot hold what it must.
+pub fn fitted_point_view(
+    light: [f64; 3],
+    cam: &ViewSetup,
+    lo: [f64; 3],
+    hi: [f64; 3],
+    size: u32,
+) -> Result<Option<ViewSetup>> {
+    let l = Vector3::new(light[0], light[1], light[2]);
+    if !l.iter().all(|x| x.is_finite()) || size <= 4 {
+        return Err(Error::Invalid(format!("fiber shadow map: point light at {light:?}")));
+    }
+    let corners: Vec<Vector3<f64>> = (0..8)
+        .map(|i| {
+            Vector3::new(
+                if i & 1 == 0 { lo[0] } else { hi[0] },
+                if i & 2 == 0 { lo[1] } else { hi[1] },
+                if i & 4 == 0 { lo[2] } else { hi[2] },
+            )
+        })
+        .collect();
+    let mut seen = visible_part(cam, lo, hi);
+    if seen.is_empty() {
+        seen = corners.clone();
+    }
+    let centre = seen.iter().fold(Vector3::zeros(), |a, p| a + p) / seen.len() as f64;
+    let Some(f) = (centre - l).try_normalize(1e-300) else { return Ok(None) };
+    let up = if f.z.abs() < 0.9 { Vector3::z() } else { Vector3::x() };
+    let s = f.cross(&up).normalize();
+    let u = s.cross(&f);
+    // Tangent-plane coordinates of the seen points from the light.
+    let max_tan = 60f64.to_radians().tan();
+    let (mut x0, mut x1, mut y0, mut y1) =
+        (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+    for p in &seen {
+        let v = p - l;
+        let d = v.dot(&f);
+        if d <= 0.0 {
+            return Ok(None);
+        }
+        let (tx, ty) = (v.dot(&s) / d, v.dot(&u) / d);
+        if tx.abs() > max_tan || ty.abs() > max_tan {
+            return Ok(None);
+        }
+        (x0, x1, y0, y1) = (x0.min(tx), x1.max(tx), y0.min(ty), y1.max(ty));
+    }
+    let (near, far) = corners
+        .iter()
+        .map(|c| (c - l).dot(&f))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), d| (a.min(d), b.max(d)));
+    if near <= 1e-3 * far {
+        return Ok(None);
+    }
+    let (near, far) = (0.99 * near, 1.01 * far);
+    // Two texels of margin on each side; square texels.
+    let half = 0.5 * (x1 - x0).max(y1 - y0).max(1e-9) * size as f64 / (size as f64 - 4.0);
+    let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+    let k = 1.0 / half;
+    let rx = (s - f * cx) * k;
+    let ry = (u - f * cy) * k;
+    let (a, b) = (far / (far - near), -far * near / (far - near));
+    let rz = f * a;
+    #[rustfmt::skip]
+    let view_proj = Matrix4::new(
+        rx.x, rx.y, rx.z, -rx.dot(&l),
+        ry.x, ry.y, ry.z, -ry.dot(&l),
+        rz.x, rz.y, rz.z, -rz.dot(&l) + b,
+        f.x, f.y, f.z, -f.dot(&l),
+    );
+    if !view_proj.iter().all(|x| x.is_finite()) {
+        return Err(Error::Invalid("fiber shadow map: degenerate point-light bounds".into()));
+    }
+    Ok(Some(ViewSetup {
+        view_proj,
+        eye: l,
+        forward: f,
+        px_per_metre: size as f64 / (2.0 * half),
+        orthographic: false,
+    }))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -231,6 +322,60 @@ mod tests {
         let side = texel * 1024.0;
         assert!(side < 0.02, "map side {side} m");
         assert!(side > 0.01, "map side {side} m");
+    }
+
+    #[test]
+    fn a_fitted_point_map_holds_every_seen_point_and_its_casters() {
+        let (lo, hi) = ([-0.02, -0.02, -0.0015], [0.02, 0.02, 0.0015]);
+        let view = btf_core::Direction::new(45.0, 30.0).to_vector();
+        let cam = FiberCamera::oblique(view, 0.0015, [-0.005, -0.005], [0.01, 0.01]);
+        let setup = ViewSetup::new(&cam, [0.0; 3], [0.0; 3], 0.029, (48, 48)).unwrap();
+        let to_light = btf_core::Direction::new(30.0, 200.0).to_vector();
+        let inv = setup.view_proj.try_inverse().unwrap();
+        for dist in [0.05, 3.0] {
+            let light = to_light.map(|x| x * dist);
+            let l = Vector3::new(light[0], light[1], light[2]);
+            let map = fitted_point_view(light, &setup, lo, hi, 1024).unwrap().unwrap();
+            for j in 0..=16 {
+                for i in 0..=16 {
+                    for k in 0..=8 {
+                        let ndc = Vector4::new(
+                            -1.0 + i as f64 / 8.0,
+                            -1.0 + j as f64 / 8.0,
+                            k as f64 / 8.0,
+                            1.0,
+                        );
+                        let p = inv * ndc;
+                        let p = Vector3::new(p.x, p.y, p.z) / p.w;
+                        if (0..3).any(|a| p[a] < lo[a] - 1e-12 || p[a] > hi[a] + 1e-12) {
+                            continue;
+                        }
+                        let x = project(&map.view_proj, &p);
+                        assert!(x.iter().all(|v| (0.0..=1.0).contains(v)), "{p:?} → {x:?}");
+                        // Every caster between it and the light, inside the box, too.
+                        for t in [0.1, 0.3, 0.6, 0.9] {
+                            let q = p + (l - p) * t;
+                            if (0..3).all(|a| q[a] >= lo[a] && q[a] <= hi[a]) {
+                                let y = project(&map.view_proj, &q);
+                                assert!(
+                                    y.iter().all(|v| (0.0..=1.0).contains(v)),
+                                    "caster {q:?} → {y:?}"
+                                );
+                            }
+                        }
+                    }
+                }
+            }
+            // From 3 m the map spans about what the directional light's does: the seen
+            // prism's ~14 mm at that distance, not the 57-mm diagonal of the box.
+            if dist > 1.0 {
+                let span = 3.0 * 1024.0 / map.px_per_metre;
+                assert!(span > 0.01 && span < 0.02, "map span {span} m at 3 m");
+            }
+        }
+        // Among the yarns: no single map.
+        assert!(fitted_point_view([0.0, 0.0, 0.0], &setup, lo, hi, 1024).unwrap().is_none());
+        assert!(fitted_point_view([0.0, 0.0, 0.002], &setup, lo, hi, 1024).unwrap().is_none());
     }
 
     #[test]
