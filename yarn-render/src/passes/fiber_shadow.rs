@@ -82,13 +82,7 @@ pub fn visible_part(cam: &ViewSetup, lo: [f64; 3], hi: [f64; 3]) -> Vec<Vector3<
         Vector3::new(p.x / p.w, p.y / p.w, p.z / p.w)
     };
     let frustum: [Vector3<f64>; 8] = std::array::from_fn(corner);
-    let cube: [Vector3<f64>; 8] = std::array::from_fn(|i| {
-        Vector3::new(
-            if i & 1 == 0 { lo[0] } else { hi[0] },
-            if i & 2 == 0 { lo[1] } else { hi[1] },
-            if i & 4 == 0 { lo[2] } else { hi[2] },
-        )
-    });
+    let cube = box_corners(lo, hi);
     let box_planes: Vec<Plane> = (0..3)
         .flat_map(|a| {
             let mut n = [0.0; 3];
@@ -112,6 +106,23 @@ pub fn visible_part(cam: &ViewSetup, lo: [f64; 3], hi: [f64; 3]) -> Vec<Vector3<
     out
 }
 
+/// The eight corners of the box `lo..hi` (bit `a` of the index: `hi` on axis `a`).
+fn box_corners(lo: [f64; 3], hi: [f64; 3]) -> [Vector3<f64>; 8] {
+    std::array::from_fn(|i| {
+        Vector3::new(
+            if i & 1 == 0 { lo[0] } else { hi[0] },
+            if i & 2 == 0 { lo[1] } else { hi[1] },
+            if i & 4 == 0 { lo[2] } else { hi[2] },
+        )
+    })
+}
+
+/// [`visible_part`], or the whole box's corners when the camera sees none of it.
+fn seen_or_box(cam: &ViewSetup, lo: [f64; 3], hi: [f64; 3]) -> Vec<Vector3<f64>> {
+    let seen = visible_part(cam, lo, hi);
+    if seen.is_empty() { box_corners(lo, hi).to_vec() } else { seen }
+}
+
 /// The orthographic map of the directional light `to_light` (unit, towards the light) for
 /// what `cam` sees of the yarns inside `lo..hi` (origin-relative, reach included), `size²`
 /// texels: across the light the bounding square of [`visible_part`] (the whole box when
@@ -133,19 +144,8 @@ pub fn fitted_view(
     let f = -d;
     let s = f.cross(&up).normalize();
     let u = s.cross(&f);
-    let corners: Vec<Vector3<f64>> = (0..8)
-        .map(|i| {
-            Vector3::new(
-                if i & 1 == 0 { lo[0] } else { hi[0] },
-                if i & 2 == 0 { lo[1] } else { hi[1] },
-                if i & 4 == 0 { lo[2] } else { hi[2] },
-            )
-        })
-        .collect();
-    let mut seen = visible_part(cam, lo, hi);
-    if seen.is_empty() {
-        seen = corners.clone();
-    }
+    let corners = box_corners(lo, hi);
+    let seen = seen_or_box(cam, lo, hi);
     let range = |pts: &[Vector3<f64>], axis: &Vector3<f64>| {
         pts.iter()
             .map(|p| p.dot(axis))
@@ -199,19 +199,8 @@ pub fn fitted_point_view(
     if !l.iter().all(|x| x.is_finite()) || size <= 4 {
         return Err(Error::Invalid(format!("fiber shadow map: point light at {light:?}")));
     }
-    let corners: Vec<Vector3<f64>> = (0..8)
-        .map(|i| {
-            Vector3::new(
-                if i & 1 == 0 { lo[0] } else { hi[0] },
-                if i & 2 == 0 { lo[1] } else { hi[1] },
-                if i & 4 == 0 { lo[2] } else { hi[2] },
-            )
-        })
-        .collect();
-    let mut seen = visible_part(cam, lo, hi);
-    if seen.is_empty() {
-        seen = corners.clone();
-    }
+    let corners = box_corners(lo, hi);
+    let seen = seen_or_box(cam, lo, hi);
     let centre = seen.iter().fold(Vector3::zeros(), |a, p| a + p) / seen.len() as f64;
     let Some(f) = (centre - l).try_normalize(1e-300) else { return Ok(None) };
     let up = if f.z.abs() < 0.9 { Vector3::z() } else { Vector3::x() };
@@ -273,6 +262,32 @@ mod tests {
     use super::*;
     use crate::view::FiberCamera;
 
+    /// Seen points: the camera's rays through a 17 × 17 grid over the frame, at 9 depths,
+    /// those inside the box.
+    fn seen_points(setup: &ViewSetup, lo: [f64; 3], hi: [f64; 3]) -> Vec<Vector3<f64>> {
+        let inv = setup.view_proj.try_inverse().unwrap();
+        let mut out = Vec::new();
+        for j in 0..=16 {
+            for i in 0..=16 {
+                for k in 0..=8 {
+                    let ndc = Vector4::new(
+                        -1.0 + i as f64 / 8.0,
+                        -1.0 + j as f64 / 8.0,
+                        k as f64 / 8.0,
+                        1.0,
+                    );
+                    let p = inv * ndc;
+                    let p = Vector3::new(p.x, p.y, p.z) / p.w;
+                    if (0..3).all(|a| p[a] >= lo[a] - 1e-12 && p[a] <= hi[a] + 1e-12) {
+                        out.push(p);
+                    }
+                }
+            }
+        }
+        assert!(out.len() > 100, "{} seen points", out.len());
+        out
+    }
+
     fn project(m: &Matrix4<f64>, p: &Vector3<f64>) -> [f64; 3] {
         let c = m * Vector4::new(p.x, p.y, p.z, 1.0);
         [0.5 * c.x / c.w + 0.5, 0.5 - 0.5 * c.y / c.w, c.z / c.w]
@@ -288,32 +303,15 @@ mod tests {
         let setup = ViewSetup::new(&cam, [0.0; 3], [0.0; 3], 0.029, (48, 48)).unwrap();
         let to_light = btf_core::Direction::new(30.0, 200.0).to_vector();
         let (map, texel) = fitted_view(to_light, &setup, lo, hi, 1024).unwrap();
-        // Seen points: the camera's rays through the pixel grid, every height of the box.
-        let inv = setup.view_proj.try_inverse().unwrap();
-        for j in 0..=16 {
-            for i in 0..=16 {
-                for k in 0..=8 {
-                    let ndc = Vector4::new(
-                        -1.0 + i as f64 / 8.0,
-                        -1.0 + j as f64 / 8.0,
-                        k as f64 / 8.0,
-                        1.0,
-                    );
-                    let p = inv * ndc;
-                    let p = Vector3::new(p.x, p.y, p.z) / p.w;
-                    if (0..3).any(|a| p[a] < lo[a] - 1e-12 || p[a] > hi[a] + 1e-12) {
-                        continue;
-                    }
-                    let x = project(&map.view_proj, &p);
-                    assert!(x.iter().all(|v| (0.0..=1.0).contains(v)), "{p:?} → {x:?}");
-                    // Every caster above it on the light ray is in depth range too.
-                    for t in [0.0, 0.01, 0.05] {
-                        let q = p + Vector3::new(to_light[0], to_light[1], to_light[2]) * t;
-                        if (0..3).all(|a| q[a] >= lo[a] && q[a] <= hi[a]) {
-                            let y = project(&map.view_proj, &q);
-                            assert!((0.0..=1.0).contains(&y[2]), "caster {q:?} depth {}", y[2]);
-                        }
-                    }
+        for p in seen_points(&setup, lo, hi) {
+            let x = project(&map.view_proj, &p);
+            assert!(x.iter().all(|v| (0.0..=1.0).contains(v)), "{p:?} → {x:?}");
+            // Every caster above it on the light ray is in depth range too.
+            for t in [0.0, 0.01, 0.05] {
+                let q = p + Vector3::new(to_light[0], to_light[1], to_light[2]) * t;
+                if (0..3).all(|a| q[a] >= lo[a] && q[a] <= hi[a]) {
+                    let y = project(&map.view_proj, &q);
+                    assert!((0.0..=1.0).contains(&y[2]), "caster {q:?} depth {}", y[2]);
                 }
             }
         }
@@ -331,38 +329,19 @@ mod tests {
         let cam = FiberCamera::oblique(view, 0.0015, [-0.005, -0.005], [0.01, 0.01]);
         let setup = ViewSetup::new(&cam, [0.0; 3], [0.0; 3], 0.029, (48, 48)).unwrap();
         let to_light = btf_core::Direction::new(30.0, 200.0).to_vector();
-        let inv = setup.view_proj.try_inverse().unwrap();
         for dist in [0.05, 3.0] {
             let light = to_light.map(|x| x * dist);
             let l = Vector3::new(light[0], light[1], light[2]);
             let map = fitted_point_view(light, &setup, lo, hi, 1024).unwrap().unwrap();
-            for j in 0..=16 {
-                for i in 0..=16 {
-                    for k in 0..=8 {
-                        let ndc = Vector4::new(
-                            -1.0 + i as f64 / 8.0,
-                            -1.0 + j as f64 / 8.0,
-                            k as f64 / 8.0,
-                            1.0,
-                        );
-                        let p = inv * ndc;
-                        let p = Vector3::new(p.x, p.y, p.z) / p.w;
-                        if (0..3).any(|a| p[a] < lo[a] - 1e-12 || p[a] > hi[a] + 1e-12) {
-                            continue;
-                        }
-                        let x = project(&map.view_proj, &p);
-                        assert!(x.iter().all(|v| (0.0..=1.0).contains(v)), "{p:?} → {x:?}");
-                        // Every caster between it and the light, inside the box, too.
-                        for t in [0.1, 0.3, 0.6, 0.9] {
-                            let q = p + (l - p) * t;
-                            if (0..3).all(|a| q[a] >= lo[a] && q[a] <= hi[a]) {
-                                let y = project(&map.view_proj, &q);
-                                assert!(
-                                    y.iter().all(|v| (0.0..=1.0).contains(v)),
-                                    "caster {q:?} → {y:?}"
-                                );
-                            }
-                        }
+            for p in seen_points(&setup, lo, hi) {
+                let x = project(&map.view_proj, &p);
+                assert!(x.iter().all(|v| (0.0..=1.0).contains(v)), "{p:?} → {x:?}");
+                // Every caster between it and the light, inside the box, too.
+                for t in [0.1, 0.3, 0.6, 0.9] {
+                    let q = p + (l - p) * t;
+                    if (0..3).all(|a| q[a] >= lo[a] && q[a] <= hi[a]) {
+                        let y = project(&map.view_proj, &q);
+                        assert!(y.iter().all(|v| (0.0..=1.0).contains(v)), "caster {q:?} → {y:?}");
                     }
                 }
             }
