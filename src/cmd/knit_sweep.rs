@@ -15,7 +15,9 @@
 //! `sweep.csv`, `sweep.md`, `sweep.png` (error against time ratio) and the references
 //! `ref-*.exr`, and prints the LoD crossover (defined in
 //! [`super::knit_sweep_report::crossover`]); the tables and the plot are
-//! `knit_sweep_report`.
+//! `knit_sweep_report`. The defaults are set for speed; `--samples-per-turn 48 --n-sub 64
+//! --min-strip-px 0 --supersample 16 --no-core --fiber-shadows --shadow-map 8192` converge
+//! both renderers (#19's 5 % comparison, yarn-render README).
 
 use super::knit::{ShadingChoice, chart_inputs_of, load_chart, load_yarn};
 use super::knit_render::{bcsdf as fiber_bcsdf, fiber_light};

@@ -447,7 +447,8 @@ impl FiberRenderer {
         self.env.as_ref().map_or(0, |e| e.1.len())
     }
 
-    /// The frame uniform for `cam` and `lights` at `size`.
+    /// The frame uniform for `cam` and `lights` at `size`, the frame as drawn (`supersample`
+    /// times the output's side; the thresholds are scaled to it).
     pub fn view_raw(
         &self,
         cam: &FiberCamera,
