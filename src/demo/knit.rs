@@ -7,7 +7,8 @@
 //! textures baked once into `knit/bake-cache`) and by [C03]'s lumislices
 //! (`yarn_render::lumislice`, the table computed once into the same cache), each timed. Writes `knit/knit.png`,
 //! `knit/knit-stretch.png`, `knit/knit-strips.png`, `knit/knit-shadows.png` (the close-up
-//! with [W19]'s tube maps and self-shadow volume beside shadows of every fiber) and
+//! with [W19]'s tube maps and self-shadow volume beside shadows of every fiber, and those
+//! at 4 × 4 frames a pixel) and
 //! `knit/knit.json` (what the report shows); no equation lives here.
 
 use anyhow::Result;
@@ -86,16 +87,32 @@ pub fn run(out: &Path, width: u32) -> Result<()> {
     let t = Instant::now();
     cast.render(&gpu, &cam, &lights, size, [0.0; 4])?;
     let tc = t.elapsed().as_secs_f64();
+    // And at 4 × 4 frames a pixel (`supersample`): the fibers antialiased, as the converged
+    // comparisons draw them.
+    let fine = FiberRenderer::new(
+        &gpu,
+        &packed,
+        &bcsdf,
+        FiberSettings { effects: fx, shadow_map: 2048, supersample: 4, ..settings },
+    )?;
+    let simg = fine.render(&gpu, &cam, &lights, size, [0.02, 0.02, 0.025, 1.0])?;
+    let t = Instant::now();
+    fine.render(&gpu, &cam, &lights, size, [0.0; 4])?;
+    let t_fine = t.elapsed().as_secs_f64();
     let srgb = |im: &yarn_render::FiberImage| {
         let rgb: Vec<f32> = im.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
         btf_image::write::to_srgb_image(size.0 as usize, size.1 as usize, &rgb, 1.0)
     };
-    let (a, b) = (srgb(&img), srgb(&cimg));
+    let (a, b, c) = (srgb(&img), srgb(&cimg), srgb(&simg));
     let la = format!("tubes + density, {:.0} ms", tf * 1e3);
     let lb = format!("every fiber casts, {:.0} ms", tc * 1e3);
+    let lc = format!("4 x 4 frames/px, {:.0} ms", t_fine * 1e3);
     btf_image::write::write_png(
         &dir.join("knit-shadows.png"),
-        &btf_image::compose::captioned_strip(&[(&a, la.as_str()), (&b, lb.as_str())], 6),
+        &btf_image::compose::captioned_strip(
+            &[(&a, la.as_str()), (&b, lb.as_str()), (&c, lc.as_str())],
+            6,
+        ),
     )?;
     // The knot solver: the same patch at rest and stretched along its wales.
     let stretch = 0.3;
@@ -240,6 +257,7 @@ pub fn run(out: &Path, width: u32) -> Result<()> {
         "tubes_ms": tt * 1e3,
         "shadows_png": "knit/knit-shadows.png",
         "fiber_shadows_ms": tc * 1e3,
+        "fiber_shadows_supersampled_ms": t_fine * 1e3,
         "fiber_shadow_instances": cimg.stats.shadow_instances,
     });
     btf_image::write::write_text(&dir.join("knit.json"), &serde_json::to_string_pretty(&j)?)?;

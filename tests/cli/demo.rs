@@ -82,6 +82,13 @@ fn demo_runs_end_to_end_and_resumes() {
         k["lumislice_ms"].as_f64().unwrap() > 0.0 && k["lumislice_table_s"].as_f64().unwrap() > 0.0
     );
     assert!(out.join("knit/knit-strips.png").is_file() && report.contains("knit/knit-strips.png"));
+    // The shadows panel: the tube model, every fiber, and that at 4 × 4 frames a pixel.
+    let ms = |key: &str| k[key].as_f64().unwrap();
+    assert!(ms("fiber_shadows_ms") > 0.0 && ms("fiber_shadows_supersampled_ms") > 0.0);
+    let width = |f: &str| image::image_dimensions(out.join(f)).unwrap().0;
+    let (one, three) = (width("knit/knit.png"), width("knit/knit-shadows.png"));
+    assert!(three >= 3 * one, "{three} px for three panels of {one}");
+    assert!(report.contains("4 × 4 times a pixel"), "{report}");
     let details = std::fs::read_to_string(out.join("details.md")).unwrap();
     assert!(report.contains("(details.html)") && details.contains("| synthesise material |"));
     let gpu_required = std::env::var("BTF_REQUIRE_GPU").is_ok_and(|v| v == "1");
