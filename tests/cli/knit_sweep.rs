@@ -238,6 +238,52 @@ fn knit_sweep_writes_the_grid_with_tubes_at_ratio_one() {
     for f in ["ref-btf-simple.exr", "ref-persp-12px-simple.exr"] {
         assert!(d.path("sw").join(f).is_file(), "{f}");
     }
+    // The converged comparison's knobs reach both renderers (the same patch and cameras):
+    // every fiber explicit (more instances than with core strips), the reference's fibers
+    // at 24 points a turn (another reference image; the reference is seeded), 2 × 2 frames
+    // a pixel at the true strip width (another GPU image), all stated in sweep.md.
+    let conv = [
+        "knit",
+        "sweep",
+        "--size",
+        "32,32",
+        "--spp",
+        "4",
+        "--lod-px",
+        "0",
+        "--distances",
+        "12",
+        "--shading",
+        "simple",
+        "--repeat",
+        "1",
+        "--no-core",
+        "--min-strip-px",
+        "0",
+        "--supersample",
+        "2",
+        "--samples-per-turn",
+        "24",
+        "-o",
+        "conv",
+    ];
+    run_gpu(&d, &conv).unwrap();
+    let c = rows(&std::fs::read_to_string(d.path("conv/sweep.csv")).unwrap());
+    let full = |rows: &[std::collections::HashMap<String, String>]| {
+        let x = rows
+            .iter()
+            .find(|x| x["camera"] == "btf" && x["method"] == "fibers" && x["lod_px"] == "0")
+            .unwrap();
+        f(x, "instances")
+    };
+    assert!(full(&c) > full(&r), "no core strips: {} instances against {}", full(&c), full(&r));
+    let read = |f: &str| crate::common::read_exr(&d.path(f)).2;
+    assert_ne!(read("conv/ref-btf-simple.exr"), read("sw/ref-btf-simple.exr"));
+    assert_ne!(read("conv/gpu-btf-simple-lod0.exr"), read("sw/gpu-btf-simple-lod0.exr"));
+    let md = std::fs::read_to_string(d.path("conv/sweep.md")).unwrap();
+    for s in ["Core strips: off", "widened to 0 px", "2 × 2 frames a pixel", "24 points a helix"] {
+        assert!(md.contains(s), "{s}: {md}");
+    }
 }
 
 #[test]

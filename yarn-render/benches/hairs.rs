@@ -19,19 +19,10 @@ mod common;
 
 use btf_render::Gpu;
 use criterion::Criterion;
-use std::time::Instant;
 use yarn::bcsdf::{FiberBcsdf, KhungurnParams};
-use yarn_render::{FiberLight, FiberRenderer, FiberSettings, FiberStats};
+use yarn_render::{FiberLight, FiberRenderer, FiberSettings};
 
 const SIZE: (u32, u32) = (256, 256);
-
-struct Case {
-    name: &'static str,
-    /// The plain-tube case of the same camera.
-    baseline: &'static str,
-    renderer: FiberRenderer,
-    camera: usize,
-}
 
 fn main() {
     let Ok(gpu) = Gpu::new() else {
@@ -47,7 +38,7 @@ fn main() {
         let settings = FiberSettings { tubes, hairs, lod_px, ..Default::default() };
         FiberRenderer::new(&gpu, &packed, &bcsdf, settings).unwrap()
     };
-    let case = |name, baseline, renderer, camera| Case { name, baseline, renderer, camera };
+    let case = |name, baseline, renderer, camera| common::Case { name, baseline, renderer, camera };
     let cases = [
         case("whole/tubes", "whole/tubes", make(true, false, 1.0), 0),
         case("whole/no-hairs", "whole/tubes", make(false, false, 1.0), 0),
@@ -58,17 +49,9 @@ fn main() {
         case("close/full-no-hairs", "close/tubes", make(false, false, 0.0), 1),
         case("close/full-hairs", "close/tubes", make(false, true, 0.0), 1),
     ];
-    let frame = |c: &Case| {
-        let t = Instant::now();
-        let img = c.renderer.render(&gpu, &cams[c.camera], &light, SIZE, [0.0; 4]).unwrap();
-        std::hint::black_box(img.pixels.len());
-        (t.elapsed().as_secs_f64() * 1e3, img.stats)
-    };
-    // One warm-up frame each (pipelines, bakes); the counts for the table.
-    let stats: Vec<FiberStats> = cases.iter().map(|c| frame(c).1).collect();
     let mut cr = Criterion::default().configure_from_args();
-    let names: Vec<&'static str> = cases.iter().map(|c| c.name).collect();
-    let samples = common::time_cases(&mut cr, "fiber-hairs", &names, |i| frame(&cases[i]).0);
+    let (stats, samples) =
+        common::run_cases(&mut cr, &gpu, "fiber-hairs", &cases, &cams, &light, SIZE);
     println!("\n{} control points, 256², MSAA 4", packed.control_points());
     println!("| case | segments culled | hairs | instances | frame ms (median) | × tubes |");
     println!("|---|---:|---:|---:|---:|---:|");

@@ -7,9 +7,10 @@ use std::cell::RefCell;
 use std::collections::BTreeMap;
 use std::rc::Rc;
 use std::time::Duration;
+use std::time::Instant;
 use yarn::YarnParams;
 use yarn::knit::crane::CraneKnit;
-use yarn_render::{FiberCamera, PackOptions, PackedYarns};
+use yarn_render::{FiberCamera, FiberLight, FiberRenderer, FiberStats, PackOptions, PackedYarns};
 
 /// Per-case frame times (ms), for the medians after criterion.
 #[derive(Clone, Default)]
@@ -61,6 +62,43 @@ pub fn close_camera(c: [f64; 3], span: f64) -> FiberCamera {
     let (s, co) = 35f64.to_radians().sin_cos();
     let e = 0.35 * span;
     FiberCamera::perspective([c[0], c[1] - e * s, c[2] + e * co], c, [0.0, 0.0, 1.0], 30.0)
+}
+
+/// One case of the `hairs` and `fiber_shadows` benches: a renderer, the camera it draws
+/// from (an index into the bench's cameras) and the case its frame time is a ratio to.
+#[allow(dead_code)] // the `lights` bench varies lights, not cameras: its own cases
+pub struct Case {
+    /// Criterion id and table row.
+    pub name: &'static str,
+    /// The plain-tube case of the same camera.
+    pub baseline: &'static str,
+    /// What draws the frame.
+    pub renderer: FiberRenderer,
+    /// Index into the cameras.
+    pub camera: usize,
+}
+
+/// One warm-up frame of every case (pipelines, bakes; its stats are the table's counts),
+/// then each timed in criterion group `group` ([`time_cases`]) at `size` under `light`.
+#[allow(dead_code)] // the `lights` bench varies lights, not cameras: its own cases
+pub fn run_cases(
+    cr: &mut Criterion,
+    gpu: &btf_render::Gpu,
+    group: &str,
+    cases: &[Case],
+    cams: &[FiberCamera],
+    light: &[FiberLight],
+    size: (u32, u32),
+) -> (Vec<FiberStats>, Samples) {
+    let frame = |c: &Case| {
+        let t = Instant::now();
+        let img = c.renderer.render(gpu, &cams[c.camera], light, size, [0.0; 4]).unwrap();
+        std::hint::black_box(img.pixels.len());
+        (t.elapsed().as_secs_f64() * 1e3, img.stats)
+    };
+    let stats = cases.iter().map(|c| frame(c).1).collect();
+    let names: Vec<&'static str> = cases.iter().map(|c| c.name).collect();
+    (stats, time_cases(cr, group, &names, |i| frame(&cases[i]).0))
 }
 
 /// Times each case `i` (`frame(i)`: one frame, its wall-clock ms) in criterion group

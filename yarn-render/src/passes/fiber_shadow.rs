@@ -197,7 +197,9 @@ pub fn fitted_point_view(
 ) -> Result<Option<ViewSetup>> {
     let l = Vector3::new(light[0], light[1], light[2]);
     if !l.iter().all(|x| x.is_finite()) || size <= 4 {
-        return Err(Error::Invalid(format!("fiber shadow map: point light at {light:?}")));
+        return Err(Error::Invalid(format!(
+            "fiber shadow map: point light at {light:?}, {size}² texels"
+        )));
     }
     let corners = box_corners(lo, hi);
     let seen = seen_or_box(cam, lo, hi);
