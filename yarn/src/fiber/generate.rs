@@ -183,7 +183,7 @@ pub fn generate_fibers(set: &YarnSet, params: &[YarnParams], opts: &GenOptions) 
         .par_iter()
         .enumerate()
         .map(|(i, c)| prepare(i, c, &params[ids[i] as usize], ids[i], &palette, opts))
-        .collect();
+        .collect::<Result<_>>()?;
     let regular_points: usize = prepared
         .iter()
         .map(|p| p.samples.len() * (p.params.ply_count * p.params.fibers_per_ply) as usize)
@@ -259,7 +259,7 @@ fn prepare<'a>(
     params_id: u32,
     palette: &[[f32; 3]],
     opts: &GenOptions,
-) -> Prepared<'a> {
+) -> Result<Prepared<'a>> {
     let table = FiberTable::new(params, opts.seed, index as u64);
     let twist = EffectiveTwist::for_curve(params, curve);
     let frames = CurveFrames::new(curve, opts.frame_samples_per_segment);
@@ -269,10 +269,26 @@ fn prepare<'a>(
         step = step.min(m);
     }
     let segs = curve.segment_count();
-    let mut us = Vec::new();
-    for i in 0..segs {
+    let per_segment = |i: usize| {
         let dz = (curve.length_coord_at(i as isize + 1) - curve.length_coord_at(i as isize)).abs();
-        let c = ((dz / step).ceil() as usize).max(1);
+        ((dz / step).ceil().min(usize::MAX as f64 / 4.0) as usize).max(1)
+    };
+    // The limit before anything is allocated: a huge samples_per_turn (or a tiny step)
+    // would otherwise allocate the samples first (the total is checked again over all
+    // curves by the caller).
+    let fibers = (params.ply_count * params.fibers_per_ply).max(1) as usize;
+    let count = (0..segs).fold(1usize, |n, i| n.saturating_add(per_segment(i)));
+    let limit = opts.max_points.min(u32::MAX as usize / 2);
+    if count.saturating_mul(fibers) > limit {
+        return Err(Error::Limit(format!(
+            "curve {index}: its fibers would have {} points (limit {limit}); lower \
+             samples_per_turn or raise GenOptions::max_points",
+            count.saturating_mul(fibers)
+        )));
+    }
+    let mut us = Vec::with_capacity(count);
+    for i in 0..segs {
+        let c = per_segment(i);
         us.extend((0..c).map(|j| i as f64 + j as f64 / c as f64));
     }
     us.push(segs as f64);
@@ -284,7 +300,18 @@ fn prepare<'a>(
         .collect();
     let colors = us.iter().map(|&u| cp_colors[nearest_cp(curve, u)]).collect();
     let z_range = (curve.length_coord(0.0), curve.length_coord(segs as f64));
-    Prepared { curve, params, params_id, table, twist, frames, samples, colors, cp_colors, z_range }
+    Ok(Prepared {
+        curve,
+        params,
+        params_id,
+        table,
+        twist,
+        frames,
+        samples,
+        colors,
+        cp_colors,
+        z_range,
+    })
 }
 
 /// The control point nearest to parameter `u` (wrapped on closed curves).

@@ -217,4 +217,9 @@ fn vanishing_fibers_and_tiny_loops_stay_finite() {
     let big = GenOptions { max_points: 10_000, ..GenOptions::default() };
     let e = generate_fibers(&set, &[bad], &big).unwrap_err().to_string();
     assert!(e.contains("limit"), "{e}");
+    // A huge samples_per_turn is refused before its samples are allocated (it was an
+    // out-of-memory kill: ~10^10 yarn samples a curve).
+    let dense = GenOptions { samples_per_turn: u32::MAX, ..GenOptions::default() };
+    let e = generate_fibers(&set, std::slice::from_ref(&p), &dense).unwrap_err().to_string();
+    assert!(e.contains("curve 0") && e.contains("samples_per_turn"), "{e}");
 }
