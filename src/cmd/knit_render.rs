@@ -18,6 +18,21 @@ use yarn_render::{
     PackedYarns,
 };
 
+/// `--min-strip-px` and `--supersample` of `knit render` and `knit sweep`, refused naming
+/// the flag.
+pub(crate) fn check_sampling(min_strip_px: f32, supersample: u32) -> Result<()> {
+    if !(min_strip_px.is_finite() && min_strip_px >= 0.0) {
+        bail!("--min-strip-px {min_strip_px}: a width ≥ 0 pixels");
+    }
+    if !(1..=yarn_render::MAX_SUPERSAMPLE).contains(&supersample) {
+        bail!(
+            "--supersample {supersample}: 1..={} frames a pixel side",
+            yarn_render::MAX_SUPERSAMPLE
+        );
+    }
+    Ok(())
+}
+
 /// `btf knit render`.
 #[derive(Args)]
 pub struct RenderArgs {
@@ -311,16 +326,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
             "--fiber-shadows draws the yarn shadows from every fiber; --no-yarn-shadows turns them off"
         );
     }
-    if !(a.min_strip_px.is_finite() && a.min_strip_px >= 0.0) {
-        bail!("--min-strip-px {}: a width ≥ 0 pixels", a.min_strip_px);
-    }
-    if !(1..=yarn_render::MAX_SUPERSAMPLE).contains(&a.supersample) {
-        bail!(
-            "--supersample {}: 1..={} frames a pixel side",
-            a.supersample,
-            yarn_render::MAX_SUPERSAMPLE
-        );
-    }
+    check_sampling(a.min_strip_px, a.supersample)?;
     let settings = FiberSettings {
         effects,
         n_max: a.n_max.unwrap_or(u32::MAX),

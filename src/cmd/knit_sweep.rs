@@ -287,18 +287,9 @@ fn validate(a: &SweepArgs) -> Result<()> {
     if a.n_sub == 0 || a.n_sub > 255 {
         bail!("--n-sub {}: 1..=255", a.n_sub);
     }
-    if !(a.min_strip_px.is_finite() && a.min_strip_px >= 0.0) {
-        bail!("--min-strip-px {}: a width ≥ 0 pixels", a.min_strip_px);
-    }
+    super::knit_render::check_sampling(a.min_strip_px, a.supersample)?;
     if a.samples_per_turn == 0 {
         bail!("--samples-per-turn 0: at least one point a helix turn");
-    }
-    if !(1..=yarn_render::MAX_SUPERSAMPLE).contains(&a.supersample) {
-        bail!(
-            "--supersample {}: 1..={} frames a pixel side",
-            a.supersample,
-            yarn_render::MAX_SUPERSAMPLE
-        );
     }
     if a.supersample != 1 && !a.strips.is_empty() {
         bail!(
