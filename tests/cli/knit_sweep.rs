@@ -242,31 +242,9 @@ fn knit_sweep_writes_the_grid_with_tubes_at_ratio_one() {
     // every fiber explicit (more instances than with core strips), the reference's fibers
     // at 24 points a turn (another reference image; the reference is seeded), 2 × 2 frames
     // a pixel at the true strip width (another GPU image), all stated in sweep.md.
-    let conv = [
-        "knit",
-        "sweep",
-        "--size",
-        "32,32",
-        "--spp",
-        "4",
-        "--lod-px",
-        "0",
-        "--distances",
-        "12",
-        "--shading",
-        "simple",
-        "--repeat",
-        "1",
-        "--no-core",
-        "--min-strip-px",
-        "0",
-        "--supersample",
-        "2",
-        "--samples-per-turn",
-        "24",
-        "-o",
-        "conv",
-    ];
+    let knobs = ["--no-core", "--min-strip-px", "0", "--supersample", "2"];
+    let more = ["--samples-per-turn", "24", "-o", "conv"];
+    let conv = [&args[..args.len() - 2], &knobs[..], &more[..]].concat();
     run_gpu(&d, &conv).unwrap();
     let c = rows(&std::fs::read_to_string(d.path("conv/sweep.csv")).unwrap());
     let full = |rows: &[std::collections::HashMap<String, String>]| {
