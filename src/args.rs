@@ -75,6 +75,29 @@ impl Quantization {
 }
 
 choices! {
+    /// Arithmetic of the compressor's Gram matrices (`btf compress --gram`).
+    Gram {
+        /// f32 lanes for f16 stores, f64 for f32 ones.
+        Auto = "auto",
+        /// f64 throughout.
+        F64 = "f64",
+        /// f32 lanes within blocks of columns, f64 across them.
+        F32 = "f32",
+    }
+}
+
+impl Gram {
+    /// The compressor's setting.
+    pub fn precision(self) -> btf_core::pca::GramPrecision {
+        match self {
+            Gram::Auto => btf_core::pca::GramPrecision::Auto,
+            Gram::F64 => btf_core::pca::GramPrecision::F64,
+            Gram::F32 => btf_core::pca::GramPrecision::F32,
+        }
+    }
+}
+
+choices! {
     /// Blending of the nearest sampled directions (`--blend`, `--light-interp`).
     Blend {
         /// The four nearest directions, weighted ([S03 eq. 3, 5]).

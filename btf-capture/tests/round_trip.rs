@@ -67,7 +67,12 @@ fn eigen_store_to_pvf_and_back() {
     let dir = tempfile::tempdir().unwrap();
     let store = write_store(&dir.path().join("m.zarr"));
     let eig_path = dir.path().join("m.eigen");
-    let params = CompressParams { components: 4, quantization: Quantization::F16, resume: false };
+    let params = CompressParams {
+        components: 4,
+        quantization: Quantization::F16,
+        resume: false,
+        ..Default::default()
+    };
     compress(&store, &eig_path, params, &|| {}).unwrap();
     let eig = EigenStore::open(&eig_path).unwrap();
     let pvf = dir.path().join("m.pvf.btf");

@@ -70,6 +70,7 @@ fn bench_store(c: &mut Criterion) {
                 components: 16,
                 quantization: Quantization::F16,
                 resume: false,
+                ..Default::default()
             };
             let r = btf_core::compress::compress(&store, &out, params, &|| {}).unwrap();
             black_box(r.rel_rmse)
@@ -80,6 +81,7 @@ fn bench_store(c: &mut Criterion) {
         components: 16,
         quantization: Quantization::F16,
         resume: false,
+        ..Default::default()
     };
     let r = btf_core::compress::compress(&store, &out, params, &|| {}).unwrap();
     eprintln!(

@@ -4,7 +4,7 @@
 
 use crate::eigen::{EigenMeta, EigenWriter, Quantization, QuantizedSlot};
 use crate::metrics::{psnr_db, rel_rmse_from};
-use crate::pca::{PcaScratch, SlotRows, max_components, pca_rows_in, pca_slot_in};
+use crate::pca::{GramPrecision, PcaScratch, SlotRows, max_components, pca_rows_in, pca_slot_in};
 use crate::shard::Shard;
 use crate::store::{BtfStore, ShardedStatus, SlotData};
 use crate::zarr::DType;
@@ -27,11 +27,18 @@ pub struct CompressParams {
     pub quantization: Quantization,
     /// Keep slots already written by an interrupted run.
     pub resume: bool,
+    /// The Gram matrix's arithmetic (by default `f32` lanes for `f16` stores, `f64` else).
+    pub gram: GramPrecision,
 }
 
 impl Default for CompressParams {
     fn default() -> Self {
-        CompressParams { components: 16, quantization: Quantization::F16, resume: false }
+        CompressParams {
+            components: 16,
+            quantization: Quantization::F16,
+            resume: false,
+            gram: GramPrecision::Auto,
+        }
     }
 }
 
@@ -76,6 +83,8 @@ pub struct CompressReport {
     pub seconds: f64,
     /// The kernel path the PCA ran on (`BTF_SIMD`, or the best the CPU has).
     pub simd: &'static str,
+    /// The Gram matrix's arithmetic: `"f64"` or `"f32"` ([`GramPrecision`]).
+    pub gram: &'static str,
     /// Bytes of the input store's chunks.
     pub input_bytes: u64,
     /// Bytes of the output store's chunks.
@@ -109,7 +118,13 @@ pub fn compress(
     let mut r = report_of(input.meta(), params, slots, &mut warnings, out.bytes());
     r.seconds = start.elapsed().as_secs_f64();
     (r.simd, r.input_bytes, r.warnings) = (isa.name(), input.bytes(), warnings);
+    r.gram = gram_of(input, params.gram);
     Ok(r)
+}
+
+/// The arithmetic `gram` means for `input`'s values (`f16` ones are read as such).
+fn gram_of(input: &BtfStore, gram: GramPrecision) -> &'static str {
+    gram.resolve(input.dtype() == DType::F16).name()
 }
 
 /// The eigen store's metadata for `params` (components clamped to what the lights allow,
@@ -184,6 +199,7 @@ pub fn compress_shard(
             .collect::<Result<Vec<_>>>()?;
         let mut r = report_of(input.meta(), params, slots, &mut warnings, out.bytes());
         (r.simd, r.input_bytes, r.warnings) = (isa.name(), input.bytes(), warnings);
+        r.gram = gram_of(input, params.gram);
         return Ok(r);
     }
     let writer = EigenWriter::join_for_job(output, emeta, job)?;
@@ -191,6 +207,7 @@ pub fn compress_shard(
     let mut r = report_of(input.meta(), params, slots, &mut warnings, 0);
     r.seconds = start.elapsed().as_secs_f64();
     (r.simd, r.input_bytes, r.warnings) = (isa.name(), input.bytes(), warnings);
+    r.gram = gram_of(input, params.gram);
     Ok(r)
 }
 
@@ -253,8 +270,12 @@ pub fn finalize(output: &Path) -> Result<(CompressReport, bool)> {
             })
         })
         .collect::<Result<Vec<_>>>()?;
-    let params =
-        CompressParams { components: m.components, quantization: m.quantization, resume: true };
+    let params = CompressParams {
+        components: m.components,
+        quantization: m.quantization,
+        resume: true,
+        ..Default::default()
+    };
     let mut warnings = Vec::new();
     let mut r = report_of(&m.btf, params, slots, &mut warnings, out.bytes());
     r.seconds = r.slots.iter().map(|s| s.seconds).sum();
@@ -293,6 +314,7 @@ fn report_of(
         rel_rmse_exact: rel_rmse_from(sse_exact, energy),
         seconds: 0.0,
         simd: "",
+        gram: params.gram.name(),
         input_bytes: 0,
         output_bytes,
         resumed_slots,
@@ -396,7 +418,8 @@ fn compress_views(
     let spent = Mutex::new(Vec::<Vec<u8>>::new());
     let work = |to_writer: &mpsc::SyncSender<_>| -> Result<Vec<(SlotReport, bool)>> {
         let mut slot = SlotData { view: 0, n_lights: 0, texel_values: 0, data: Vec::new() };
-        let (mut halves, mut raw, mut scratch) = (Vec::new(), Vec::new(), PcaScratch::for_isa(isa));
+        let (mut halves, mut raw, mut scratch) =
+            (Vec::new(), Vec::new(), PcaScratch::for_isa(isa).with_gram(params.gram));
         let mut done = Vec::new();
         loop {
             let v = next.fetch_add(1, Ordering::Relaxed);

@@ -89,6 +89,69 @@ impl Block {
     }
 }
 
+/// A value type of the blocks the loads fill: `f64` (exact differences) or `f32` (the
+/// differences rounded to nearest, for the single-precision Gram matrix of `f16` data).
+pub trait Lane: Copy + Default + Send + Sync + 'static {
+    /// True for `f64`.
+    const WIDE: bool;
+    /// `y` as a lane value (exact for `f64`, rounded to nearest for `f32`).
+    fn of(y: f64) -> Self;
+}
+
+impl Lane for f64 {
+    const WIDE: bool = true;
+    #[inline(always)]
+    fn of(y: f64) -> Self {
+        y
+    }
+}
+
+impl Lane for f32 {
+    const WIDE: bool = false;
+    #[inline(always)]
+    fn of(y: f64) -> Self {
+        y as f32
+    }
+}
+
+/// A block the loads fill ([`Block`] in `f64`, [`Block32`] in `f32`).
+pub trait LoadTarget {
+    /// Its value type.
+    type V: Lane;
+    /// Rows in use.
+    fn rows(&self) -> usize;
+    /// Reshapes to `rows × width` (see [`Block::shape`]).
+    fn shape(&mut self, rows: usize, width: usize);
+    /// Row `i` (all its columns).
+    fn row_mut(&mut self, i: usize) -> &mut [Self::V];
+}
+
+impl LoadTarget for Block {
+    type V = f64;
+    fn rows(&self) -> usize {
+        self.rows
+    }
+    fn shape(&mut self, rows: usize, width: usize) {
+        Block::shape(self, rows, width)
+    }
+    fn row_mut(&mut self, i: usize) -> &mut [f64] {
+        Block::row_mut(self, i)
+    }
+}
+
+impl LoadTarget for Block32 {
+    type V = f32;
+    fn rows(&self) -> usize {
+        self.rows
+    }
+    fn shape(&mut self, rows: usize, width: usize) {
+        Block32::shape(self, rows, width)
+    }
+    fn row_mut(&mut self, i: usize) -> &mut [f32] {
+        Block32::row_mut(self, i)
+    }
+}
+
 /// A row pitch of `stride` values, one vector (`lanes` values, 64 bytes) longer when
 /// `stride` spans a whole number of 4 KB: rows exactly 4 KB apart all fall into the same
 /// L1 cache sets, so the tiles' ten (the lift's 81) row streams would evict each other.
@@ -208,28 +271,29 @@ pub struct LoadStats {
     pub finite: bool,
 }
 
-/// Loads columns `c0..c0 + w` of the rows `x[i]` into `blk` as `y_i = x_i − s` in `f64`
-/// (`s = shift[c0..c0 + w]`, or zero), exactly: the difference of two `f32` values is an
-/// `f64`. With `colsum` (`w` values), adds `Σ_i y_i` per column into it and returns the
-/// input's statistics.
-pub fn load_shifted<T: Texel>(
+/// Loads columns `c0..c0 + w` of the rows `x[i]` into `blk` as `y_i = x_i − s`
+/// (`s = shift[c0..c0 + w]`, or zero): exactly into a [`Block`] (the difference of two `f32`
+/// values is an `f64`), rounded to nearest into a [`Block32`]. With `colsum` (`w` values),
+/// adds the exact `Σ_i y_i` per column into it (in `f64`, whatever the block holds) and
+/// returns the input's statistics; both are the same bits for either block.
+pub fn load_shifted<T: Texel, B: LoadTarget>(
     x: &[&[T]],
     c0: usize,
     w: usize,
     shift: Option<&[T]>,
-    blk: &mut Block,
+    blk: &mut B,
     colsum: Option<&mut [f64]>,
 ) -> Option<LoadStats> {
     load_shifted_with(x, c0, w, shift, blk, colsum, Isa::active())
 }
 
 /// [`load_shifted`] on the path `isa`.
-pub(crate) fn load_shifted_with<T: Texel>(
+pub(crate) fn load_shifted_with<T: Texel, B: LoadTarget>(
     x: &[&[T]],
     c0: usize,
     w: usize,
     shift: Option<&[T]>,
-    blk: &mut Block,
+    blk: &mut B,
     colsum: Option<&mut [f64]>,
     isa: Isa,
 ) -> Option<LoadStats> {
@@ -271,12 +335,12 @@ fn as_f32<'a, T: Texel>(src: &'a [T], buf: &'a mut [f32]) -> &'a [f32] {
 /// computes the same statistics bit for bit (the squares of `f32` values are exact in
 /// `f64`, fused or not).
 #[inline(always)]
-fn load_shifted_body<T: Texel>(
+fn load_shifted_body<T: Texel, B: LoadTarget>(
     x: &[&[T]],
     c0: usize,
     w: usize,
     shift: Option<&[T]>,
-    blk: &mut Block,
+    blk: &mut B,
     mut colsum: Option<&mut [f64]>,
 ) -> Option<LoadStats> {
     let body = w - w % 16;
@@ -285,7 +349,7 @@ fn load_shifted_body<T: Texel>(
     let mut p = [f32::MIN; LANES];
     let mut bad = [0f32; LANES];
     let stats = colsum.is_some() && shift.is_some();
-    for i in 0..blk.rows {
+    for i in 0..blk.rows() {
         let dst = &mut blk.row_mut(i)[..w];
         let upto = if stats { body } else { w };
         for p0 in (0..upto).step_by(PIECE) {
@@ -305,7 +369,7 @@ fn load_shifted_body<T: Texel>(
                         for l in 0..16 {
                             let v = s16[l];
                             let y = v as f64 - h16[l] as f64;
-                            d16[l] = y;
+                            d16[l] = B::V::of(y);
                             c16[l] += y;
                             e[l % 8] += (v as f64) * (v as f64);
                             p[l % 8] = p[l % 8].max(v);
@@ -316,12 +380,12 @@ fn load_shifted_body<T: Texel>(
                 (_, Some(s)) => {
                     let sh = as_f32(&s[c0 + p0..c0 + p1], &mut hb);
                     for ((d, &v), &h) in d.iter_mut().zip(src).zip(sh) {
-                        *d = v as f64 - h as f64;
+                        *d = B::V::of(v as f64 - h as f64);
                     }
                 }
                 (_, None) => {
                     for (d, &v) in d.iter_mut().zip(src) {
-                        *d = v as f64;
+                        *d = B::V::of(v as f64);
                     }
                 }
             }
@@ -333,12 +397,12 @@ fn load_shifted_body<T: Texel>(
         peak: p.iter().copied().fold(f32::MIN, f32::max),
         finite: bad.iter().all(|b| *b == 0.0),
     };
-    for i in 0..blk.rows {
+    for i in 0..blk.rows() {
         let dst = blk.row_mut(i);
         for t in body..w {
             let v = x[i][c0 + t].widen();
             let y = v as f64 - sh[c0 + t].widen() as f64;
-            dst[t] = y;
+            dst[t] = B::V::of(y);
             cs[t] += y;
             st.energy += (v as f64) * (v as f64);
             st.peak = st.peak.max(v);
@@ -359,7 +423,7 @@ mod single;
 pub use dot::DotAcc;
 pub use f16_round::round_to_f16;
 pub(crate) use f16_round::round_to_f16_with;
-pub use single::{Block32, CrossAcc32, LANES32};
+pub use single::{Block32, CrossAcc32, GramAcc32, LANES32};
 
 #[cfg(test)]
 mod tests;

@@ -2,7 +2,8 @@
 //!
 //! The `n` light images of slot `j` are the rows of `X` (`n × 3hw`). With so few rows the
 //! snapshot method is the efficient one: accumulate the small Gram matrix `G = X̃X̃ᵀ` of the
-//! images centred on their mean `μ` in `f64`, eigen-solve it in `f64`, and lift each
+//! images centred on their mean `μ` (in `f64`, or for `f16` data in `f32` lanes, see
+//! [`GramPrecision`]), eigen-solve it in `f64`, and lift each
 //! eigenvector `v_k` to an eigentexture `B_k = X̃ᵀv_k / √λ_k` of unit norm. The data is never
 //! centred in memory: `G = C·YYᵀ·C` and `B = (C·V)ᵀY` for `Y = X − 1x_0ᵀ` (shifted by the
 //! first image, exactly, in `f64`) and `C = I − 11ᵀ/n`. Three streaming passes read the
@@ -17,8 +18,8 @@
 use crate::eigen::{Quantization, QuantizedSlot, dequantize, quantize};
 use crate::gemm::{Mat, dgemm};
 use crate::kernels::{
-    Block, Block32, DotAcc, LANES, LIFT_COMPONENTS, Texel, lift_rows32_with, load_shifted_with,
-    prefetch_rows,
+    Block, Block32, DotAcc, GramAcc32, LANES, LIFT_COMPONENTS, LoadTarget, Texel, lift_rows32_with,
+    load_shifted_with, prefetch_rows,
 };
 use crate::simd::Isa;
 use crate::store::SlotData;
@@ -33,6 +34,53 @@ const BLOCK: usize = 1024;
 /// Bytes of each row checksummed at a time in the first pass (a multiple of a block's
 /// piece of a row for `f32` and `f16`).
 const CRC_SPAN_BYTES: usize = 8192;
+
+/// The arithmetic of the first pass's Gram matrix `YYᵀ` (`Y = X − 1x₀ᵀ`).
+///
+/// - `F64`: `Y` exact in `f64` and every product and sum in `f64` ([`DotAcc`]): the
+///   eigenvalues to `f64` rounding (within `10⁻⁹` of the largest in the tests).
+/// - `F32`: `Y` rounded to `f32` and each block's products summed in sixteen `f32` lanes
+///   per entry, the blocks' sums in `f64` ([`GramAcc32`]), at twice the lanes a register
+///   and half the bytes a block. Every entry is then within `ε·Σ_t |y_it||y_jt|` of the
+///   exact one with `ε = (BLOCK/16 + 2)·2⁻²⁴ ≈ 3.9·10⁻⁶` (64 rounded additions a lane, the
+///   two roundings of `y`), so by Weyl's inequality every eigenvalue of the centred matrix
+///   within `ε·tr(YYᵀ)`: for `f16` data, whose values carry 11 significant bits (a relative
+///   precision of `2⁻¹¹ ≈ 4.9·10⁻⁴`), an error 125 times below the data's own. Components
+///   whose eigenvalue is below that bound are not counted as effective.
+/// - `Auto` (the default): `F32` for `f16` data, `F64` for `f32` data.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum GramPrecision {
+    /// `F32` for `f16` data, `F64` for `f32` data.
+    #[default]
+    Auto,
+    /// In `f64`.
+    F64,
+    /// In `f32` lanes within a block, `f64` across blocks.
+    F32,
+}
+
+impl GramPrecision {
+    /// What `self` means for data of `f16` (`half`) or `f32` values: `F64` or `F32`.
+    pub fn resolve(self, half: bool) -> GramPrecision {
+        match self {
+            GramPrecision::Auto if half => GramPrecision::F32,
+            GramPrecision::Auto => GramPrecision::F64,
+            g => g,
+        }
+    }
+
+    /// `"auto"`, `"f64"` or `"f32"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            GramPrecision::Auto => "auto",
+            GramPrecision::F64 => "f64",
+            GramPrecision::F32 => "f32",
+        }
+    }
+}
+
+/// The `ε` of [`GramPrecision::F32`]: a bound on each entry's relative error.
+pub const GRAM32_EPS: f64 = (BLOCK / crate::kernels::LANES32 + 2) as f64 / (1u64 << 24) as f64;
 
 /// Result of the PCA of one slot.
 #[derive(Debug, Clone)]
@@ -77,6 +125,8 @@ pub struct PcaScratch {
     blocks: fused::Blocks,
     /// The kernel path; `None`: the one `BTF_SIMD` asks for ([`Isa::from_env`]).
     isa: Option<Isa>,
+    /// The Gram matrix's arithmetic.
+    gram: GramPrecision,
 }
 
 impl PcaScratch {
@@ -84,6 +134,11 @@ impl PcaScratch {
     /// whatever `BTF_SIMD` says: how tests and benchmarks compare the paths in one process.
     pub fn for_isa(isa: Isa) -> Self {
         PcaScratch { isa: Some(isa), ..PcaScratch::default() }
+    }
+
+    /// The same, with the Gram matrix in `gram`'s arithmetic.
+    pub fn with_gram(self, gram: GramPrecision) -> Self {
+        PcaScratch { gram, ..self }
     }
 
     /// Hands back the eigentexture bytes of a slot already written, so that the next slot
@@ -169,7 +224,12 @@ pub fn pca_rows_in<T: Texel>(
         None => Isa::from_env()?,
     };
     // Pass 1: the centred Gram matrix, mean, energy and peak (and the checksums).
-    let first = first_pass(slot, checksums.is_some(), &mut scratch.blocks.y, isa)?;
+    let single = scratch.gram.resolve(T::HALF) == GramPrecision::F32;
+    let first = if single {
+        first_pass(slot, checksums.is_some(), &mut scratch.blocks.y32, isa)?
+    } else {
+        first_pass(slot, checksums.is_some(), &mut scratch.blocks.y, isa)?
+    };
     if let Some(check) = checksums {
         check(&first.crcs)?;
     }
@@ -179,7 +239,8 @@ pub fn pca_rows_in<T: Texel>(
     order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
     let eigenvalues: Vec<f64> = order.iter().map(|&k| eig.eigenvalues[k].max(0.0)).collect();
     let trace: f64 = (0..n).map(|i| gram[i * n + i]).sum();
-    let tol = eigenvalues[0].max(0.0) * 1e-12 * n as f64;
+    // Eigenvalues below the Gram matrix's rounding are not components.
+    let tol = (eigenvalues[0].max(0.0) * 1e-12 * n as f64).max(first.error_bound);
     let effective = eigenvalues[..c].iter().filter(|&&l| l > tol && l > 0.0).count();
     // Lifting matrix: column k = v_k / √λ_k (zero for rank-deficient components).
     let mut lift = vec![0f64; n * c];
@@ -263,22 +324,64 @@ struct FirstPass {
     peak: f32,
     /// CRC32C of every row's bytes, when asked for.
     crcs: Vec<u32>,
+    /// A bound on the error of every eigenvalue of `gram` from the rounding of its entries
+    /// beyond `f64`'s ([`GramPrecision::F32`]; zero in `f64`).
+    error_bound: f64,
+}
+
+/// The Gram matrix accumulators of the first pass, over its block type.
+trait FirstGram: LoadTarget {
+    /// The accumulator for `n` rows.
+    type Acc;
+    fn acc(n: usize) -> Self::Acc;
+    fn add(acc: &mut Self::Acc, blk: &Self, isa: Isa);
+    /// `out[i·n + j] = Σ y_i·y_j` for `j ≥ i`, and the bound on its eigenvalues' error.
+    fn finish(acc: &Self::Acc, out: &mut [f64], n: usize) -> f64;
+}
+
+impl FirstGram for Block {
+    type Acc = DotAcc;
+    fn acc(n: usize) -> DotAcc {
+        DotAcc::new(n, n, true)
+    }
+    fn add(acc: &mut DotAcc, blk: &Block, isa: Isa) {
+        acc.add_with(blk, blk, isa);
+    }
+    fn finish(acc: &DotAcc, out: &mut [f64], n: usize) -> f64 {
+        acc.finish(out, n);
+        0.0
+    }
+}
+
+impl FirstGram for Block32 {
+    type Acc = GramAcc32;
+    fn acc(n: usize) -> GramAcc32 {
+        GramAcc32::new(n)
+    }
+    fn add(acc: &mut GramAcc32, blk: &Block32, isa: Isa) {
+        acc.add_with(blk, isa);
+    }
+    fn finish(acc: &GramAcc32, out: &mut [f64], n: usize) -> f64 {
+        acc.finish(out, n);
+        // ‖δG‖₂ ≤ ε·‖|Y||Y|ᵀ‖₂ ≤ ε·tr(YYᵀ); the centring C·δG·C is no larger.
+        GRAM32_EPS * (0..n).map(|i| out[i * n + i]).sum::<f64>()
+    }
 }
 
 /// The Gram matrix of the centred images, without centring them: any shift `s` gives
 /// `X̃ = C·(X − 1sᵀ)` with `C = I − 11ᵀ/n`, so `X̃X̃ᵀ = C·YYᵀ·C` for `Y = X − 1sᵀ`. With
 /// `s = x_0` (the first light image) `Y` is exact in `f64` and of the data's spread, not its
 /// mean, so no precision is lost to a large mean.
-fn first_pass<T: Texel>(
+fn first_pass<T: Texel, B: FirstGram>(
     slot: &SlotRows<'_, T>,
     with_crc: bool,
-    blk: &mut Block,
+    blk: &mut B,
     isa: Isa,
 ) -> Result<FirstPass> {
     let (n, m, x) = (slot.rows.len(), slot.texel_values, &slot.rows[..]);
     let shift = x[0];
     let mut crcs = vec![0u32; if with_crc { n } else { 0 }];
-    let mut gram = DotAcc::new(n, n, true);
+    let mut gram = B::acc(n);
     let mut mean = vec![0f32; m];
     let (mut energy, mut peak) = (0f64, f32::MIN);
     let mut colsum = vec![0f64; BLOCK];
@@ -306,13 +409,13 @@ fn first_pass<T: Texel>(
         energy += st.energy;
         peak = peak.max(st.peak);
         prefetch_rows(x, c0 + w, BLOCK);
-        gram.add_with(blk, blk, isa);
+        B::add(&mut gram, blk, isa);
         for t in 0..w {
             mean[c0 + t] = (shift[c0 + t].widen() as f64 + colsum[t] / n as f64) as f32;
         }
     }
     let mut g = vec![0f64; n * n];
-    gram.finish(&mut g, n);
+    let error_bound = B::finish(&gram, &mut g, n);
     for i in 0..n {
         for j in 0..i {
             g[i * n + j] = g[j * n + i];
@@ -326,7 +429,7 @@ fn first_pass<T: Texel>(
             g[i * n + j] += all_mean - row_mean[i] - row_mean[j];
         }
     }
-    Ok(FirstPass { gram: g, mean, energy, peak, crcs })
+    Ok(FirstPass { gram: g, mean, energy, peak, crcs, error_bound })
 }
 
 /// Eigentextures in `f64`, `cp` rows (a multiple of the lift tile) of `mp` columns (a

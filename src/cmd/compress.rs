@@ -24,6 +24,11 @@ pub struct CompressArgs {
     /// Storage of the eigentextures.
     #[arg(long, alias = "quantize", default_value = "f16")]
     quantization: crate::args::Quantization,
+    /// Arithmetic of each slot's Gram matrix: f64, or f32 lanes within blocks of 1024
+    /// columns (for f16 data, 125 times below its precision; twice the lanes); auto: f32
+    /// for f16 stores, f64 for f32 ones.
+    #[arg(long, default_value = "auto")]
+    gram: crate::args::Gram,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
@@ -56,7 +61,12 @@ pub fn run(a: CompressArgs) -> Result<()> {
     }
     let Some(output) = a.output else { bail!("give -o OUT.eig (or --sweep LIST --report DIR)") };
     guard::refuse_overlap(&[("-o", &output)], &[("input", &a.input)])?;
-    let params = CompressParams { components: a.components, quantization, resume: a.resume };
+    let params = CompressParams {
+        components: a.components,
+        quantization,
+        resume: a.resume,
+        gram: a.gram.precision(),
+    };
     if let Some(shard) = a.shard.shard()? {
         return run_shard(&input, &output, params, shard, a.json);
     }

@@ -79,6 +79,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
             components: a.components,
             quantization: Quantization::F16,
             resume: true,
+            ..Default::default()
         };
         compress_with_progress(&btf, &eig_path, params)?;
         Ok(())

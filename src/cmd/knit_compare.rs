@@ -509,8 +509,12 @@ pub fn run(a: CompareArgs) -> Result<()> {
     comps.dedup();
     for &c in &comps {
         let out = a.output.join(format!("btf-c{c}.eig"));
-        let params =
-            CompressParams { components: c, quantization: Quantization::F16, resume: false };
+        let params = CompressParams {
+            components: c,
+            quantization: Quantization::F16,
+            resume: false,
+            ..Default::default()
+        };
         let r = btf_core::compress::compress(&store, &out, params, &|| ())
             .with_context(|| format!("compressing --btf to {c} components"))?;
         eprintln!("  BTF c = {c}: rel. RMSE {:.3} in {:.2} s", r.rel_rmse, r.seconds);
@@ -525,8 +529,12 @@ pub fn run(a: CompareArgs) -> Result<()> {
         let made = fiber_btf(&gpu, &src, a.btf_fibers_lod, &path)?;
         let c = *comps.last().expect("--components is not empty");
         let out = a.output.join(format!("btf-fibers-c{c}.eig"));
-        let params =
-            CompressParams { components: c, quantization: Quantization::F16, resume: false };
+        let params = CompressParams {
+            components: c,
+            quantization: Quantization::F16,
+            resume: false,
+            ..Default::default()
+        };
         let store = BtfStore::open(&path)?;
         let r = btf_core::compress::compress(&store, &out, params, &|| ())
             .with_context(|| format!("compressing {} to {c} components", path.display()))?;

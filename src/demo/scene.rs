@@ -446,6 +446,7 @@ fn plain_material(out: &Path, eig: &Path, components: usize) -> Result<()> {
         components: components.min(64),
         quantization: btf_core::eigen::Quantization::F16,
         resume: true,
+        ..Default::default()
     };
     crate::progress::compress_with_progress(&btf, eig, params)?;
     Ok(())

@@ -166,6 +166,7 @@ fn make_inputs(a: &DemoArgs) -> Result<f64> {
             components: a.components,
             quantization: Quantization::F16,
             resume: true,
+            ..Default::default()
         };
         compress_with_progress(&BtfStore::open(&btf_path)?, &eig_path, params)?;
         // 81 × 81 chunk files, only needed to compress.

@@ -78,7 +78,7 @@ pub fn write_report(input: &BtfStore, cs: &[usize], q: Quantization, dir: &Path)
         let r = compress_with_progress(
             input,
             &out,
-            CompressParams { components: c, quantization: q, resume: false },
+            CompressParams { components: c, quantization: q, resume: false, ..Default::default() },
         )?;
         let store = EigenStore::open(&out)?;
         let t0 = Instant::now();
@@ -125,7 +125,12 @@ pub fn write_report(input: &BtfStore, cs: &[usize], q: Quantization, dir: &Path)
     let r_other = compress_with_progress(
         input,
         &out,
-        CompressParams { components: c_max, quantization: other, resume: false },
+        CompressParams {
+            components: c_max,
+            quantization: other,
+            resume: false,
+            ..Default::default()
+        },
     )?;
     std::fs::remove_dir_all(&work).ok();
     let last = rows.iter().find(|r| r.components == c_max).unwrap();

@@ -1,11 +1,14 @@
-//! The AVX2 path: the portable kernels (`lanes.rs` with fused multiply-adds, the loads and
-//! the `f16` rounding of `kernels.rs`) compiled with AVX2, FMA and F16C enabled, so that the
+//! The AVX2 path: the portable kernels (`lanes.rs` with fused multiply-adds, the `f16`
+//! rounding of `kernels.rs`) compiled with AVX2, FMA and F16C enabled, so that the
 //! compiler turns four `f64` (eight `f32`) lanes into one 256-bit register and each
-//! `mul_add` into one `vfmadd`. No intrinsics: the arithmetic is the lane model's, which is
-//! the AVX-512 kernels', bit for bit. Callers check the features at run time
-//! ([`crate::simd::Isa::supported`]).
+//! `mul_add` into one `vfmadd`: the arithmetic is the lane model's, which is the AVX-512
+//! kernels', bit for bit. The block loads and widenings are written with intrinsics (the
+//! vectoriser leaves the portable load's `f16` conversion, NaN-aware maximum and energy
+//! lanes scalar, five times slower), in the lanes of the portable load, so they give its
+//! bits. Callers check the features at run time ([`crate::simd::Isa::supported`]).
 
-use super::{Block, LoadStats, Texel, lanes};
+use super::{Lane, LoadStats, LoadTarget, Texel, lanes};
+use std::arch::x86_64::*;
 
 #[target_feature(enable = "avx2,fma,f16c")]
 pub(super) fn lift(
@@ -38,16 +41,144 @@ pub(super) fn tile32(s_count: usize, e: &[f32], y: &[f32], w: usize, out: &mut [
     lanes::tile32::<true>(s_count, e, y, w, out, ldo)
 }
 
+/// Eight stored values from `p` as `f32` (`vcvtph2ps` for `f16`, exact). Safety: AVX2 and
+/// F16C present, `p` valid for 8 reads.
 #[target_feature(enable = "avx2,fma,f16c")]
-pub(super) fn load_shifted<T: Texel>(
+#[inline]
+unsafe fn load8<T: Texel>(p: *const T) -> __m256 {
+    // SAFETY: forwarded from the caller; 8 values of T are 16 or 32 bytes.
+    unsafe {
+        if T::HALF { _mm256_cvtph_ps(_mm_loadu_si128(p.cast())) } else { _mm256_loadu_ps(p.cast()) }
+    }
+}
+
+/// The eight `f32` lanes of `v` as two registers of `f64` (exact).
+#[target_feature(enable = "avx2,fma,f16c")]
+#[inline]
+fn widen8(v: __m256) -> (__m256d, __m256d) {
+    (_mm256_cvtps_pd(_mm256_castps256_ps128(v)), _mm256_cvtps_pd(_mm256_extractf128_ps(v, 1)))
+}
+
+/// Stores the four values `y` at `p`, as they are or rounded to nearest `f32`
+/// ([`Lane::of`]). Safety: AVX present, `p` valid for 4 writes.
+#[target_feature(enable = "avx2,fma,f16c")]
+#[inline]
+unsafe fn store4<V: Lane>(p: *mut V, y: __m256d) {
+    // SAFETY: forwarded from the caller; V is f64 when WIDE, else f32.
+    unsafe {
+        if V::WIDE {
+            _mm256_storeu_pd(p.cast(), y)
+        } else {
+            _mm_storeu_ps(p.cast(), _mm256_cvtpd_ps(y))
+        }
+    }
+}
+
+/// `load_shifted_with` on AVX2: whole 16-value groups by hand, in the portable load's lanes
+/// (the energy of column `t` of a group in lane `t mod 8`: registers `e0` and `e1` hold
+/// lanes 0–3 and 4–7), the last `w mod 16` columns by the portable code's rule.
+#[target_feature(enable = "avx2,fma,f16c")]
+pub(super) fn load_shifted<T: Texel, B: LoadTarget>(
     x: &[&[T]],
     c0: usize,
     w: usize,
     shift: Option<&[T]>,
-    blk: &mut Block,
+    blk: &mut B,
     colsum: Option<&mut [f64]>,
 ) -> Option<LoadStats> {
-    super::load_shifted_body(x, c0, w, shift, blk, colsum)
+    let (Some(cs), Some(sh)) = (colsum, shift) else {
+        load_plain(x, c0, w, shift.map(|s| &s[c0..c0 + w]), blk);
+        return None;
+    };
+    let (sh, cs) = (&sh[c0..c0 + w], &mut cs[..w]);
+    let body = w - w % 16;
+    let (mut e0, mut e1) = (_mm256_setzero_pd(), _mm256_setzero_pd());
+    let mut p = _mm256_set1_ps(f32::MIN);
+    let mut bad = _mm256_setzero_ps();
+    let zero = _mm256_setzero_ps();
+    for i in 0..blk.rows() {
+        let src = &x[i][c0..c0 + w];
+        let dst = &mut blk.row_mut(i)[..w];
+        for t in (0..body).step_by(16) {
+            // SAFETY: t + 16 ≤ body ≤ w, the length of src, sh, dst and cs.
+            unsafe {
+                for half in [0, 8] {
+                    let v = load8(src.as_ptr().add(t + half));
+                    p = _mm256_max_ps(p, v);
+                    bad = _mm256_fmadd_ps(v, zero, bad); // NaN for NaN or ±∞
+                    let (vlo, vhi) = widen8(v);
+                    let (hlo, hhi) = widen8(load8(sh.as_ptr().add(t + half)));
+                    e0 = _mm256_fmadd_pd(vlo, vlo, e0);
+                    e1 = _mm256_fmadd_pd(vhi, vhi, e1);
+                    for (q, y) in [(0, _mm256_sub_pd(vlo, hlo)), (4, _mm256_sub_pd(vhi, hhi))] {
+                        let at = t + half + q;
+                        store4(dst.as_mut_ptr().add(at), y);
+                        let c = cs.as_mut_ptr().add(at);
+                        _mm256_storeu_pd(c, _mm256_add_pd(_mm256_loadu_pd(c), y));
+                    }
+                }
+            }
+        }
+    }
+    let mut e = [0f64; 8];
+    let (mut peaks, mut bads) = ([0f32; 8], [0f32; 8]);
+    // SAFETY: the arrays hold 4 + 4 and 8 values.
+    unsafe {
+        _mm256_storeu_pd(e.as_mut_ptr(), e0);
+        _mm256_storeu_pd(e.as_mut_ptr().add(4), e1);
+        _mm256_storeu_ps(peaks.as_mut_ptr(), p);
+        _mm256_storeu_ps(bads.as_mut_ptr(), bad);
+    }
+    let mut st = LoadStats {
+        energy: lanes::reduce8(e),
+        peak: peaks.iter().copied().fold(f32::MIN, f32::max),
+        finite: bads.iter().all(|b| *b == 0.0),
+    };
+    for i in 0..blk.rows() {
+        let src = &x[i][c0..c0 + w];
+        let dst = blk.row_mut(i);
+        for t in body..w {
+            let v = src[t].widen();
+            let y = v as f64 - sh[t].widen() as f64;
+            dst[t] = B::V::of(y);
+            cs[t] += y;
+            st.energy += (v as f64) * (v as f64);
+            st.peak = st.peak.max(v);
+            st.finite &= v.is_finite();
+        }
+    }
+    Some(st)
+}
+
+/// `y_i = x_i − s` (or `x_i`) for the columns `c0..c0 + w` of every row (`sh` is `s` there).
+#[target_feature(enable = "avx2,fma,f16c")]
+fn load_plain<T: Texel, B: LoadTarget>(
+    x: &[&[T]],
+    c0: usize,
+    w: usize,
+    sh: Option<&[T]>,
+    blk: &mut B,
+) {
+    let body = w - w % 8;
+    for i in 0..blk.rows() {
+        let src = &x[i][c0..c0 + w];
+        let dst = &mut blk.row_mut(i)[..w];
+        for t in (0..body).step_by(8) {
+            // SAFETY: t + 8 ≤ body ≤ w, the length of src, sh and dst.
+            unsafe {
+                let (mut lo, mut hi) = widen8(load8(src.as_ptr().add(t)));
+                if let Some(sh) = sh {
+                    let (hlo, hhi) = widen8(load8(sh.as_ptr().add(t)));
+                    (lo, hi) = (_mm256_sub_pd(lo, hlo), _mm256_sub_pd(hi, hhi));
+                }
+                store4(dst.as_mut_ptr().add(t), lo);
+                store4(dst.as_mut_ptr().add(t + 4), hi);
+            }
+        }
+        for t in body..w {
+            dst[t] = B::V::of(src[t].widen() as f64 - sh.map_or(0.0, |s| s[t].widen() as f64));
+        }
+    }
 }
 
 #[target_feature(enable = "avx2,fma,f16c")]
@@ -62,7 +193,16 @@ pub(super) fn round_to_f16(
     super::f16_round::round_portable(b, halves, stored, err, hi_lo, narrow)
 }
 
+/// `to[t] = from[t]` widened to `f32` (exact), eight at a time.
 #[target_feature(enable = "avx2,fma,f16c")]
 pub(super) fn widen_to_f32<T: Texel>(from: &[T], to: &mut [f32]) {
-    super::widen_portable(from, to)
+    let n = from.len().min(to.len());
+    let body = n - n % 8;
+    for t in (0..body).step_by(8) {
+        // SAFETY: t + 8 ≤ body ≤ the length of both slices.
+        unsafe { _mm256_storeu_ps(to.as_mut_ptr().add(t), load8(from.as_ptr().add(t))) };
+    }
+    for t in body..n {
+        to[t] = from[t].widen();
+    }
 }

@@ -2,7 +2,7 @@
 //! register, fused multiply-adds: the lane model of `lanes.rs`, bit for bit); callers
 //! check the CPU feature at run time.
 
-use super::{LANES, TB, Texel};
+use super::{LANES, Lane, LoadTarget, TB, Texel};
 use std::arch::x86_64::*;
 
 /// The eight lanes summed in the order every path uses ([`super::lanes::reduce8`]).
@@ -39,16 +39,33 @@ fn widen16(v: __m512) -> (__m512d, __m512d) {
     (lo, hi)
 }
 
+/// Stores the 16 values `lo` (first eight) and `hi` at `p`: as they are, or rounded to
+/// nearest `f32` ([`Lane::of`]). Safety: AVX-512F present, `p` valid for 16 writes.
+#[target_feature(enable = "avx512f")]
+#[inline]
+unsafe fn store16<V: Lane>(p: *mut V, lo: __m512d, hi: __m512d) {
+    // SAFETY: forwarded from the caller; V is f64 when WIDE, else f32.
+    unsafe {
+        if V::WIDE {
+            _mm512_storeu_pd(p.cast(), lo);
+            _mm512_storeu_pd(p.cast::<f64>().add(8), hi);
+        } else {
+            _mm256_storeu_ps(p.cast(), _mm512_cvtpd_ps(lo));
+            _mm256_storeu_ps(p.cast::<f32>().add(8), _mm512_cvtpd_ps(hi));
+        }
+    }
+}
+
 /// `load_shifted_with` under AVX-512 (callers check the feature): whole 16-value groups
 /// by hand (the vectoriser leaves the NaN-aware maximum, the energy sum and the `f16`
 /// conversion scalar), the last `w mod 16` columns one by one.
 #[target_feature(enable = "avx512f")]
-pub(super) fn load_shifted<T: Texel>(
+pub(super) fn load_shifted<T: Texel, B: LoadTarget>(
     x: &[&[T]],
     c0: usize,
     w: usize,
     shift: Option<&[T]>,
-    blk: &mut super::Block,
+    blk: &mut B,
     colsum: Option<&mut [f64]>,
 ) -> Option<super::LoadStats> {
     let sh = shift.map(|s| &s[c0..c0 + w]);
@@ -63,9 +80,15 @@ pub(super) fn load_shifted<T: Texel>(
 
 /// `y_i = x_i − s` (or `x_i`) for the columns `c0..c0 + w` of every row.
 #[target_feature(enable = "avx512f")]
-fn load_plain<T: Texel>(x: &[&[T]], c0: usize, w: usize, sh: Option<&[T]>, blk: &mut super::Block) {
+fn load_plain<T: Texel, B: LoadTarget>(
+    x: &[&[T]],
+    c0: usize,
+    w: usize,
+    sh: Option<&[T]>,
+    blk: &mut B,
+) {
     let body = w - w % 16;
-    for i in 0..blk.rows {
+    for i in 0..blk.rows() {
         let src = &x[i][c0..c0 + w];
         let dst = &mut blk.row_mut(i)[..w];
         for t in (0..body).step_by(16) {
@@ -76,24 +99,23 @@ fn load_plain<T: Texel>(x: &[&[T]], c0: usize, w: usize, sh: Option<&[T]>, blk: 
                     let (hlo, hhi) = widen16(load16(sh.as_ptr().add(t)));
                     (lo, hi) = (_mm512_sub_pd(lo, hlo), _mm512_sub_pd(hi, hhi));
                 }
-                _mm512_storeu_pd(dst.as_mut_ptr().add(t), lo);
-                _mm512_storeu_pd(dst.as_mut_ptr().add(t + 8), hi);
+                store16(dst.as_mut_ptr().add(t), lo, hi);
             }
         }
         for t in body..w {
-            dst[t] = src[t].widen() as f64 - sh.map_or(0.0, |s| s[t].widen() as f64);
+            dst[t] = B::V::of(src[t].widen() as f64 - sh.map_or(0.0, |s| s[t].widen() as f64));
         }
     }
 }
 
 /// `y_i = x_i − s` with the column sums of `y`, and the energy, peak and finiteness of `x`.
 #[target_feature(enable = "avx512f")]
-fn load_with_stats<T: Texel>(
+fn load_with_stats<T: Texel, B: LoadTarget>(
     x: &[&[T]],
     c0: usize,
     w: usize,
     sh: &[T],
-    blk: &mut super::Block,
+    blk: &mut B,
     cs: &mut [f64],
 ) -> super::LoadStats {
     let body = w - w % 16;
@@ -101,7 +123,7 @@ fn load_with_stats<T: Texel>(
     let mut p = _mm512_set1_ps(f32::MIN);
     let mut bad = _mm512_setzero_ps();
     let zero = _mm512_setzero_ps();
-    for i in 0..blk.rows {
+    for i in 0..blk.rows() {
         let src = &x[i][c0..c0 + w];
         let dst = &mut blk.row_mut(i)[..w];
         for t in (0..body).step_by(16) {
@@ -115,8 +137,7 @@ fn load_with_stats<T: Texel>(
                 e = _mm512_fmadd_pd(vlo, vlo, e);
                 e = _mm512_fmadd_pd(vhi, vhi, e);
                 let (ylo, yhi) = (_mm512_sub_pd(vlo, hlo), _mm512_sub_pd(vhi, hhi));
-                _mm512_storeu_pd(dst.as_mut_ptr().add(t), ylo);
-                _mm512_storeu_pd(dst.as_mut_ptr().add(t + 8), yhi);
+                store16(dst.as_mut_ptr().add(t), ylo, yhi);
                 let c = cs.as_mut_ptr().add(t);
                 _mm512_storeu_pd(c, _mm512_add_pd(_mm512_loadu_pd(c), ylo));
                 _mm512_storeu_pd(c.add(8), _mm512_add_pd(_mm512_loadu_pd(c.add(8)), yhi));
@@ -128,13 +149,13 @@ fn load_with_stats<T: Texel>(
         peak: _mm512_reduce_max_ps(p),
         finite: _mm512_reduce_add_ps(bad) == 0.0,
     };
-    for i in 0..blk.rows {
+    for i in 0..blk.rows() {
         let src = &x[i][c0..c0 + w];
         let dst = blk.row_mut(i);
         for t in body..w {
             let v = src[t].widen();
             let y = v as f64 - sh[t].widen() as f64;
-            dst[t] = y;
+            dst[t] = B::V::of(y);
             cs[t] += y;
             rest.energy += (v as f64) * (v as f64);
             rest.peak = rest.peak.max(v);

@@ -1,6 +1,6 @@
-//! Single-precision products for a correction term of the per-slot PCA (Sattler et al.
-//! 2003, [S03 eq. 1]): `E·Yᵀ`, the projections of the images on the rounding error `E = S − B`
-//! of the stored (`f16`) eigentextures. `E` is at most `2⁻¹¹` of an entry of `B`, so its
+//! Single-precision products of the per-slot PCA ([S03 eq. 1]): the Gram matrix `YYᵀ` of
+//! `f16` data ([`GramAcc32`]), and `E·Yᵀ`, the projections of the images on the rounding
+//! error `E = S − B` of the stored (`f16`) eigentextures. `E` is at most `2⁻¹¹` of an entry of `B`, so its
 //! products need a relative precision of about `2⁻¹¹` less than the rest: in `f32`, with
 //! 16 lanes per register, they cost half the instructions of `f64`. Within one block of
 //! columns (at most 1024) every output sums in `f32` lanes; across blocks, in `f64`.
@@ -156,6 +156,72 @@ impl CrossAcc32 {
         for i in 0..self.e_rows {
             out[i * ldo..i * ldo + self.y_rows]
                 .copy_from_slice(&self.sums[i * self.y_rows..(i + 1) * self.y_rows]);
+        }
+    }
+}
+
+/// Accumulates the upper triangle of the Gram matrix `Y·Yᵀ` of the rows of one block after
+/// another, as [`CrossAcc32`] does `E·Yᵀ` (the same tiles and lanes: `f32` sums of at most
+/// `w/16` products per lane within a block, `f64` across blocks): each block's sum is within
+/// `(w/16)·2⁻²⁴` of the sum of its products' magnitudes — for `f16` data, whose values
+/// carry 11 significant bits, far below the data's own precision — at twice the lanes of
+/// `f64` ([`crate::pca::GramPrecision`]). Every 4 rows are multiplied with
+/// the rows from their first on (3444 products a column for 81 rows; 3321 are needed).
+#[derive(Debug, Clone)]
+pub struct GramAcc32 {
+    rows: usize,
+    sums: Vec<f64>,
+}
+
+impl GramAcc32 {
+    /// For the Gram matrix of `rows` rows.
+    pub fn new(rows: usize) -> Self {
+        GramAcc32 { rows, sums: vec![0.0; rows.div_ceil(TE) * TE * rows] }
+    }
+
+    /// Adds the products of one block of columns (with at least `rows` rounded up to 4
+    /// rows, zero past `rows`).
+    pub fn add(&mut self, y: &Block32) {
+        self.add_with(y, Isa::active());
+    }
+
+    /// [`GramAcc32::add`] on the path `isa`.
+    pub(crate) fn add_with(&mut self, y: &Block32, isa: Isa) {
+        assert_eq!(y.rows, self.rows, "a block of other rows");
+        let (w, n) = (y.stride, self.rows);
+        assert!(y.data.len() >= n.div_ceil(TE) * TE * w, "block lacks padding rows");
+        let isa = runnable(isa);
+        for i0 in (0..n).step_by(TE) {
+            let re = &y.data[i0 * w..(i0 + TE) * w];
+            let out = &mut self.sums[i0 * n..(i0 + TE) * n];
+            let mut j0 = i0;
+            while j0 < n {
+                let s = TY.min(n - j0);
+                let ry = &y.data[j0 * w..(j0 + s) * w];
+                let o = &mut out[j0..];
+                match isa {
+                    #[cfg(target_arch = "x86_64")]
+                    Isa::Avx512 => tile_avx512(s, re, ry, w, o, n),
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: AVX2, FMA and F16C checked (`runnable`); the kernel is safe code.
+                    Isa::Avx2 => unsafe { super::avx2::tile32(s, re, ry, w, o, n) },
+                    Isa::Scalar => lanes::tile32::<false>(s, re, ry, w, o, n),
+                    _ => lanes::tile32::<true>(s, re, ry, w, o, n),
+                }
+                j0 += s;
+            }
+        }
+    }
+
+    /// `out[i·ldo + j] += Σ_t y_i[t]·y_j[t]` over every block added, for `j ≥ i` (the
+    /// other entries are left alone).
+    pub fn finish(&self, out: &mut [f64], ldo: usize) {
+        let n = self.rows;
+        assert!(ldo >= n && (n == 0 || out.len() >= (n - 1) * ldo + n));
+        for i in 0..n {
+            for j in i..n {
+                out[i * ldo + j] += self.sums[i * n + j];
+            }
         }
     }
 }

@@ -36,8 +36,9 @@ pub(super) struct Blocks {
     pub y: Block,
     /// `S` in `f64`.
     s: Block,
-    /// `X` widened and `E` rounded to `f32`.
-    y32: Block32,
+    /// `X` widened and `E` rounded to `f32` (`y32` is also the first pass's block for a
+    /// Gram matrix in `f32`).
+    pub y32: Block32,
     e32: Block32,
     /// The block of `B` (`cp × BLOCK`).
     lifted: Vec<f64>,
