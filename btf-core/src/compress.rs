@@ -593,13 +593,25 @@ mod tests {
         }
         w.finish().unwrap();
         let f = BtfStore::open(&p32).unwrap();
-        // Both are read in place: f16 widened to f64 by the same loads as f32.
+        // Both are read in place: with the Gram matrix in f64, f16 widened by the same
+        // loads as f32, to the same bits; by default (f32 lanes for f16) within the bound.
         assert!(f.map_slot(0).unwrap().is_some() && h.map_slot(0).unwrap().is_some());
         let params = CompressParams { components: 3, ..Default::default() };
-        let a = compress(&h, &dir.path().join("h.eig"), params, &|| {}).unwrap();
+        let in_f64 = CompressParams { gram: GramPrecision::F64, ..params };
+        let a = compress(&h, &dir.path().join("h.eig"), in_f64, &|| {}).unwrap();
         let b = compress(&f, &dir.path().join("f.eig"), params, &|| {}).unwrap();
+        assert_eq!((a.gram, b.gram), ("f64", "f64"));
         for (x, y) in a.slots.iter().zip(&b.slots) {
             assert_eq!((x.sse_stored, x.sse, x.energy), (y.sse_stored, y.sse, y.energy));
+        }
+        let d = compress(&h, &dir.path().join("d.eig"), params, &|| {}).unwrap();
+        assert_eq!(d.gram, "f32");
+        for (x, y) in d.slots.iter().zip(&b.slots) {
+            // The 5 − 3 discarded eigenvalues each within ε·tr(YYᵀ), and tr(YYᵀ) =
+            // Σ‖x_i − x₀‖² ≤ 2·energy + 2·5‖x₀‖² ≤ 12·energy.
+            let slack = 2.0 * crate::pca::GRAM32_EPS * 12.0 * y.energy;
+            assert!((x.sse - y.sse).abs() <= slack, "slot {}: {} vs {}", x.view, x.sse, y.sse);
+            assert_eq!(x.energy, y.energy);
         }
         let (ea, eb) = (
             crate::eigen::EigenStore::open(&dir.path().join("h.eig")).unwrap(),

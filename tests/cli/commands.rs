@@ -48,6 +48,35 @@ fn compress_json_satisfies_eckart_young_per_slot() {
 }
 
 #[test]
+fn f16_stores_get_the_f32_gram_by_default_within_its_bound() {
+    // 32² (3072 values a row: three blocks of columns); the same values in f16 and f32.
+    let d = Dir::new();
+    write_test_btf_as(&d.path("h.btf"), 32, btf_core::zarr::DType::F16);
+    let run = |store: &str, out: &str, gram: &str| -> Value {
+        let args = ["compress", store, "-c", "3", "-o", out, "--json", "--gram", gram];
+        serde_json::from_str(&d.ok(&args)).unwrap()
+    };
+    let auto = run("h.btf", "a.eig", "auto");
+    let f64_ = run("h.btf", "b.eig", "f64");
+    assert_eq!((auto["gram"].as_str(), f64_["gram"].as_str()), (Some("f32"), Some("f64")));
+    let (sa, sb) = (auto["slots"].as_array().unwrap(), f64_["slots"].as_array().unwrap());
+    let mut differs = false;
+    for (a, b) in sa.iter().zip(sb) {
+        let f = |s: &Value, k: &str| s[k].as_f64().unwrap();
+        // 4 discarded eigenvalues of 7 images, each within ε·tr(YYᵀ) ≤ ε·16·energy
+        // (‖x_i − x₀‖² ≤ 2‖x_i‖² + 2‖x₀‖²).
+        let slack = 4.0 * btf_core::pca::GRAM32_EPS * 16.0 * f(b, "energy");
+        let (x, y) = (f(a, "discarded_eigen_sum"), f(b, "discarded_eigen_sum"));
+        assert!((x - y).abs() <= slack, "slot {}: {x} vs {y} (slack {slack})", a["view"]);
+        assert_eq!(f(a, "energy"), f(b, "energy"));
+        differs |= x != y;
+    }
+    assert!(differs, "the f32 lanes rounded nowhere: the bound was not tested");
+    let err = d.fails(&["compress", "h.btf", "-o", "x.eig", "--gram", "f128"]);
+    assert!(err.contains("invalid value 'f128'") && err.contains("f64"), "{err}");
+}
+
+#[test]
 fn too_many_components_are_clamped_with_a_warning() {
     let d = Dir::new();
     write_test_btf(&d.path("m.btf"), 4);

@@ -72,9 +72,14 @@ pub fn value(view: usize, light: usize, t: usize) -> f32 {
 
 /// Writes the test BTF (`size × size` texels) to `path`.
 pub fn write_test_btf(path: &Path, size: usize) {
+    write_test_btf_as(path, size, DType::F32)
+}
+
+/// [`write_test_btf`] with values stored as `dtype`.
+pub fn write_test_btf_as(path: &Path, size: usize, dtype: DType) {
     let s = small_sampling();
     let meta = BtfMeta::new(s.clone(), s, size, size);
-    let w = BtfWriter::create(path, meta, DType::F32, false).unwrap();
+    let w = BtfWriter::create(path, meta, dtype, false).unwrap();
     let n = size * size * 3;
     for v in 0..7 {
         for l in 0..7 {

@@ -261,6 +261,73 @@ mod tests {
     }
 
     #[test]
+    fn gram_matches_f64_sums_within_its_bound_on_every_path_and_the_simd_paths_agree_bitwise() {
+        // 13 rows (4-row tiles 0, 4, 8 and a padded 12; 5-row spans from each), two blocks
+        // of 1024 and 200 columns of values of mixed sign and magnitude.
+        let n = 13;
+        let val = |i: usize, t: usize| {
+            let v = ((i * 7919 + t * 104_729) % 1009) as f64 / 1009.0 - 0.45;
+            (v * (1.0 + (t % 5) as f64)) as f32
+        };
+        let mut first: Option<Vec<f64>> = None;
+        for isa in paths() {
+            let mut acc = GramAcc32::new(n);
+            let (mut want, mut abs) = (vec![0f64; n * n], vec![0f64; n * n]);
+            let mut longest = 0;
+            for (c0, w) in [(0, 1024), (1024, 200)] {
+                let mut y = Block32::default();
+                y.shape(n, w);
+                for i in 0..n {
+                    for t in 0..w {
+                        y.row_mut(i)[t] = val(i, c0 + t);
+                    }
+                }
+                for i in 0..n {
+                    for j in 0..n {
+                        for t in 0..w {
+                            let p = val(i, c0 + t) as f64 * val(j, c0 + t) as f64;
+                            want[i * n + j] += p;
+                            abs[i * n + j] += p.abs();
+                        }
+                    }
+                }
+                acc.add_with(&y, isa);
+                longest = longest.max(w.div_ceil(LANES32));
+            }
+            let mut out = vec![f64::NAN; n * n];
+            for i in 0..n {
+                for j in i..n {
+                    out[i * n + j] = 0.0;
+                }
+            }
+            acc.finish(&mut out, n);
+            for i in 0..n {
+                for j in 0..n {
+                    let o = out[i * n + j];
+                    if j < i {
+                        assert!(o.is_nan(), "{isa}: lower entry ({i}, {j}) written");
+                        continue;
+                    }
+                    // At most `longest` rounded f32 additions a lane (the first product
+                    // of a lane is exact only when unfused), then f64 sums.
+                    let tol = (longest + 2) as f64 * f32::EPSILON as f64 / 2.0 * abs[i * n + j];
+                    let e = (o - want[i * n + j]).abs();
+                    assert!(e <= tol, "{isa} ({i}, {j}): {o} vs {} (tol {tol})", want[i * n + j]);
+                }
+            }
+            if isa != Isa::Scalar {
+                match &first {
+                    None => first = Some(out),
+                    Some(f) => {
+                        let same = f.iter().zip(&out).all(|(a, b)| a.to_bits() == b.to_bits());
+                        assert!(same, "{isa} differs from the other SIMD paths")
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
     fn cross_products_match_f64_sums_on_every_path_and_the_simd_paths_agree_bitwise() {
         // 6 E rows (padded to 8), 12 Y rows (5 + 5 + 2), two blocks of 48 and 40 columns.
         let (ne, ny) = (6, 12);

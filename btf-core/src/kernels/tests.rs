@@ -187,6 +187,54 @@ fn load_shifted_is_exact_and_gives_the_same_statistics_on_every_path() {
 }
 
 #[test]
+fn f32_blocks_get_the_rounded_differences_and_the_same_sums_and_statistics_on_every_path() {
+    // The single-precision Gram matrix's load: the f64 load's values rounded to nearest,
+    // its column sums and statistics bit for bit (both exact, from the unrounded
+    // differences); f32 and f16 rows, 37 columns (two groups of 16, a tail of 5).
+    let (n, m, c0, w) = (4, 50, 4, 37);
+    let mut x = values(n * m, 21);
+    x[m + 9] = 1e5; // its difference from the shift rounds in f32, not in f64
+    let halves: Vec<half::f16> = x.iter().map(|&v| half::f16::from_f32(v)).collect();
+    let x16: Vec<f32> = halves.iter().map(|h| h.to_f32()).collect();
+    let rows_h: Vec<&[half::f16]> = halves.chunks_exact(m).collect();
+    for isa in paths() {
+        for (label, wide) in [("f32", &x), ("f16", &x16)] {
+            let rows = rows_of(wide, n, m);
+            let shift = Some(rows[2]);
+            let (mut b64, mut b32) = (Block::default(), Block32::default());
+            let (mut c64, mut c32) = (vec![0.25; w], vec![0.25; w]);
+            let s64 = load_shifted_with(&rows, c0, w, shift, &mut b64, Some(&mut c64), isa);
+            let s32 = if label == "f16" {
+                load_shifted_with(&rows_h, c0, w, Some(rows_h[2]), &mut b32, Some(&mut c32), isa)
+            } else {
+                load_shifted_with(&rows, c0, w, shift, &mut b32, Some(&mut c32), isa)
+            };
+            let key = |s: Option<LoadStats>| s.map(|s| (s.energy.to_bits(), s.peak, s.finite));
+            assert_eq!(key(s32), key(s64), "{isa} {label}: statistics");
+            assert_eq!(c32, c64, "{isa} {label}: column sums");
+            for i in 0..n {
+                for t in 0..b32.stride {
+                    let want = if t < w { b64.data[i * b64.stride + t] as f32 } else { 0.0 };
+                    assert_eq!(b32.data[i * b32.stride + t], want, "{isa} {label} ({i}, {t})");
+                }
+            }
+            assert!(b32.data[n * b32.stride..].iter().all(|&v| v == 0.0), "padding rows");
+            // Without statistics: shifted or not, the same rounding.
+            for shift in [None, shift] {
+                load_shifted_with(&rows, c0, w, shift, &mut b64, None, isa);
+                load_shifted_with(&rows, c0, w, shift, &mut b32, None, isa);
+                for i in 0..n {
+                    for t in 0..w {
+                        let want = b64.data[i * b64.stride + t] as f32;
+                        assert_eq!(b32.data[i * b32.stride + t], want, "{isa} {label} plain");
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
 fn f16_rows_load_as_their_f32_values_on_every_path() {
     // 37 columns from 4: two groups of 16 and a tail of 5; values of every f16 magnitude
     // (subnormals, ±65504) load exactly as the same values stored as f32.

@@ -268,3 +268,87 @@ fn f16_basis_is_the_rounded_exact_basis_at_a_power_of_two_scale() {
         }
     }
 }
+
+#[test]
+fn f16_data_gets_an_f32_gram_within_its_bound_and_every_path_agrees() {
+    // Two blocks of columns (1024 + 416) of f16 values; the f32-lane Gram matrix (the
+    // default for f16 rows) against an f64 SVD of the same values: every eigenvalue within
+    // ε·tr(YYᵀ) (Y = X − 1x₀ᵀ, [`GRAM32_EPS`]), Eckart–Young to the same bound, the
+    // stored error equal to a brute-force reconstruction's.
+    let (n, m) = (20, 3 * 24 * 20);
+    let input = slot_data(n, m, 7);
+    let halves: Vec<half::f16> = input.data.iter().map(|&v| half::f16::from_f32(v)).collect();
+    let wide = SlotData { data: halves.iter().map(|h| h.to_f32()).collect(), ..input.clone() };
+    let mut x = DMatrix::<f64>::from_fn(n, m, |i, t| wide.data[i * m + t] as f64);
+    let tr_y: f64 =
+        (0..n).map(|i| (0..m).map(|t| (x[(i, t)] - x[(0, t)]).powi(2)).sum::<f64>()).sum();
+    let mean = x.row_mean();
+    for i in 0..n {
+        for t in 0..m {
+            x[(i, t)] -= mean[t];
+        }
+    }
+    let mut sv: Vec<f64> = x.svd(false, false).singular_values.iter().map(|s| s * s).collect();
+    sv.sort_by(|a, b| b.total_cmp(a));
+    let bound = GRAM32_EPS * tr_y;
+    let rows =
+        SlotRows::<half::f16> { view: 3, rows: halves.chunks_exact(m).collect(), texel_values: m };
+    let c = 6;
+    let mut simd: Option<SlotPca> = None;
+    for isa in Isa::supported_all() {
+        let mut scratch = PcaScratch::for_isa(isa);
+        let r = pca_rows_in(&rows, c, Quantization::F16, &mut scratch, None).unwrap();
+        for k in 0..n - 1 {
+            let e = (r.stored.eigenvalues[k] - sv[k]).abs();
+            assert!(
+                e <= bound,
+                "{isa} λ{k}: {} vs {} (bound {bound})",
+                r.stored.eigenvalues[k],
+                sv[k]
+            );
+        }
+        let discarded: f64 = sv[c..].iter().sum();
+        let slack = (n - c) as f64 * bound;
+        assert!((r.discarded_eigen_sum - discarded).abs() <= slack, "{isa}");
+        assert!((r.sse - r.discarded_eigen_sum).abs() <= slack, "{isa}");
+        let es = as_slot(&r, c, Quantization::F16);
+        let brute: f64 =
+            (0..n).map(|i| crate::metrics::sse(wide.row(i), &reconstruct_sample(&es, i, c))).sum();
+        assert!((brute - r.sse_stored).abs() <= 1e-3 * r.sse_stored + slack, "{isa}: {brute}");
+        match (&simd, isa) {
+            (_, Isa::Scalar) => {}
+            (None, _) => simd = Some(r),
+            (Some(f), _) => {
+                assert_eq!(f.stored.eigenvalues, r.stored.eigenvalues, "{isa}");
+                assert_eq!(f.stored.eigentextures, r.stored.eigentextures, "{isa}");
+                assert_eq!(f.stored.weights, r.stored.weights, "{isa}");
+            }
+        }
+    }
+    // In f64 the f16 rows give the f32 rows' result bit for bit, and the f32 lanes really
+    // rounded elsewhere (else the bounds above were tested on the f64 arithmetic).
+    let mut scratch = PcaScratch::default().with_gram(GramPrecision::F64);
+    let r64 = pca_rows_in(&rows, c, Quantization::F16, &mut scratch, None).unwrap();
+    let r32 = pca_slot(&wide, c, Quantization::F16).unwrap();
+    assert_eq!(r64.stored.eigenvalues, r32.stored.eigenvalues);
+    assert_eq!(r64.stored.weights, r32.stored.weights);
+    assert_ne!(r64.stored.eigenvalues, simd.unwrap().stored.eigenvalues);
+}
+
+#[test]
+fn f16_duplicates_stay_rank_deficient_with_an_f32_gram() {
+    // 8 f16 images, copies of 2: identical rows give identical f32 sums, so the centred
+    // matrix has rank 1 up to f64 rounding and the bound keeps the rest out.
+    let base = slot_data(2, 1100, 3);
+    let halves: Vec<half::f16> =
+        (0..8).flat_map(|i| base.row(i % 2).iter().map(|&v| half::f16::from_f32(v))).collect();
+    let rows = SlotRows::<half::f16> {
+        view: 0,
+        rows: halves.chunks_exact(1100).collect(),
+        texel_values: 1100,
+    };
+    let r = pca_rows_in(&rows, 5, Quantization::F16, &mut PcaScratch::default(), None).unwrap();
+    assert_eq!(r.effective_components, 1);
+    assert!(r.sse <= GRAM32_EPS * r.energy, "{}", r.sse);
+    assert!(r.stored.weights.iter().all(|w| w.is_finite()));
+}
