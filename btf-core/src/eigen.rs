@@ -12,7 +12,7 @@
 use crate::sampling::Sampling;
 pub use crate::store::SlotState;
 use crate::store::{BtfMeta, StoreTxn, read_meta_of_kind};
-use crate::zarr::{self, ArrayMeta, DType, Limits, ZarrArray};
+use crate::zarr::{self, ArrayMeta, Compression, DType, Limits, ZarrArray};
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 use serde_json::json;
@@ -132,12 +132,15 @@ fn array_metas(m: &EigenMeta) -> [(&'static str, ArrayMeta); 5] {
     [
         (
             "mean",
-            ArrayMeta::new(
-                vec![v, h, w, 3],
-                vec![1, h, w, 3],
-                DType::F32,
-                &["view", "y", "x", "channel"],
-            ),
+            ArrayMeta {
+                compression: Compression::FAST_ZSTD,
+                ..ArrayMeta::new(
+                    vec![v, h, w, 3],
+                    vec![1, h, w, 3],
+                    DType::F32,
+                    &["view", "y", "x", "channel"],
+                )
+            },
         ),
         (
             "eigentextures",
@@ -145,6 +148,7 @@ fn array_metas(m: &EigenMeta) -> [(&'static str, ArrayMeta); 5] {
                 attributes: json!({
                     "description": "unit-norm eigentextures B_kj, quantised: value = stored * scale_offset[view, component, 0] + scale_offset[view, component, 1]",
                 }),
+                compression: Compression::FAST_ZSTD,
                 ..ArrayMeta::new(
                     vec![v, c, h, w, 3],
                     vec![1, c, h, w, 3],
