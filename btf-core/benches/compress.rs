@@ -8,7 +8,7 @@
 #![allow(missing_docs)] // criterion_group! generates undocumented items
 
 use btf_core::eigen::Quantization;
-use btf_core::pca::pca_slot;
+use btf_core::pca::{GramPrecision, PcaScratch, SlotRows, pca_rows_in, pca_slot};
 use btf_core::store::SlotData;
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
@@ -49,6 +49,20 @@ fn bench_pca_slot(c: &mut Criterion) {
     g.bench_function("c16_f16", |b| {
         b.iter(|| black_box(pca_slot(&slot, 16, Quantization::F16).unwrap()))
     });
+    // The slot as an f16 store holds it: the Gram matrix in f32 lanes (the default for f16
+    // data) and, as the baseline, in f64.
+    let halves: Vec<half::f16> = slot.data.iter().map(|&v| half::f16::from_f32(v)).collect();
+    let m = slot.texel_values;
+    let rows =
+        SlotRows::<half::f16> { view: 0, rows: halves.chunks_exact(m).collect(), texel_values: m };
+    for gram in [GramPrecision::F32, GramPrecision::F64] {
+        let mut scratch = PcaScratch::default().with_gram(gram);
+        g.bench_function(format!("c16_f16_rows_gram_{}", gram.name()), |b| {
+            b.iter(|| {
+                black_box(pca_rows_in(&rows, 16, Quantization::F16, &mut scratch, None).unwrap())
+            })
+        });
+    }
     g.finish();
 }
 

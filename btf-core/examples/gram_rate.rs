@@ -1,81 +1,107 @@
-//! The Gram kernel's throughput against the core's peak (BENCHMARKS.md #2): `DotAcc::add`
-//! of one `rows × columns` `f64` block with itself (upper triangle, the block in the cache),
-//! and twelve independent chains of register-only AVX-512 FMAs, both in 8-lane FMAs per second,
-//! best of five, on one thread: `gram_rate [ROWS [COLUMNS]]` (default 81 × 1024).
-#![allow(unsafe_code)] // the peak loop uses AVX-512 intrinsics directly
+//! The Gram kernels' throughput against the core's peak (BENCHMARKS.md #2 and "Instruction
+//! sets"), on the path `BTF_SIMD` chooses: `DotAcc::add` of one `rows × columns` block with
+//! itself in `f64` and `GramAcc32::add` of it in `f32` lanes (upper triangle, the block in
+//! the cache), against independent chains of register-only FMAs of the path's width (twelve
+//! 512-bit chains under `avx512`, ten 256-bit ones under `avx2`), all in multiply-adds per
+//! second, best of five, on one thread: `gram_rate [ROWS [COLUMNS]]` (default 81 × 1024).
+#![allow(unsafe_code)] // the peak loops use intrinsics directly
 
-use btf_core::kernels::{Block, DotAcc};
+use btf_core::kernels::{Block, Block32, DotAcc, GramAcc32};
+use btf_core::simd::Isa;
 use std::time::Instant;
 
-fn gram_rate(n: usize, w: usize) -> f64 {
-    let mut blk = Block::default();
-    blk.shape(n, w);
-    for i in 0..n {
-        for (t, v) in blk.row_mut(i)[..w].iter_mut().enumerate() {
-            *v = ((i * 31 + t * 17) % 97) as f64 * 1e-2;
-        }
-    }
-    let products = (n * (n + 1) / 2) as f64;
-    let reps = (4e9 / (products * w as f64)) as usize + 1;
+/// Multiply-adds per second of `add` (one block's upper triangle), best of five.
+fn rate(n: usize, w: usize, mut add: impl FnMut()) -> f64 {
+    let products = (n * (n + 1) / 2 * w) as f64;
+    let reps = (4e9 / products) as usize + 1;
     let mut best = 0f64;
     for _ in 0..5 {
-        let mut acc = DotAcc::new(n, n, true);
         let t = Instant::now();
         for _ in 0..reps {
-            acc.add(&blk, &blk);
+            add();
         }
-        best = best.max(reps as f64 * products * w as f64 / 8.0 / t.elapsed().as_secs_f64());
-        let mut g = vec![0f64; n * n];
-        acc.finish(&mut g, n);
-        std::hint::black_box(g);
+        best = best.max(reps as f64 * products / t.elapsed().as_secs_f64());
     }
     best
 }
 
+fn value(i: usize, t: usize) -> f64 {
+    ((i * 31 + t * 17) % 97) as f64 * 1e-2
+}
+
+/// The register-only peak in `f32` multiply-adds per second (an `f64` one is half of it).
 #[cfg(target_arch = "x86_64")]
-fn peak_rate() -> Option<f64> {
+fn peak_f32(isa: Isa) -> Option<f64> {
     use std::arch::x86_64::*;
-    /// Twelve independent chains of FMAs in registers (named, so that nothing spills).
+    /// Twelve independent chains of 16-lane FMAs in registers (named: nothing spills).
     #[target_feature(enable = "avx512f")]
-    fn chains(iters: usize) -> f64 {
-        let (a, b) = (_mm512_set1_pd(1.000_000_1), _mm512_set1_pd(0.999_999_9));
-        let one = _mm512_set1_pd(1.0);
+    fn chains512(iters: usize) -> f32 {
+        let (a, b) = (_mm512_set1_ps(1.000_000_1), _mm512_set1_ps(0.999_999_9));
+        let one = _mm512_set1_ps(1.0);
         let (mut v0, mut v1, mut v2, mut v3, mut v4, mut v5) = (one, one, one, one, one, one);
         let (mut v6, mut v7, mut v8, mut v9, mut v10, mut v11) = (one, one, one, one, one, one);
         for _ in 0..iters {
-            v0 = _mm512_fmadd_pd(v0, a, b);
-            v1 = _mm512_fmadd_pd(v1, a, b);
-            v2 = _mm512_fmadd_pd(v2, a, b);
-            v3 = _mm512_fmadd_pd(v3, a, b);
-            v4 = _mm512_fmadd_pd(v4, a, b);
-            v5 = _mm512_fmadd_pd(v5, a, b);
-            v6 = _mm512_fmadd_pd(v6, a, b);
-            v7 = _mm512_fmadd_pd(v7, a, b);
-            v8 = _mm512_fmadd_pd(v8, a, b);
-            v9 = _mm512_fmadd_pd(v9, a, b);
-            v10 = _mm512_fmadd_pd(v10, a, b);
-            v11 = _mm512_fmadd_pd(v11, a, b);
+            v0 = _mm512_fmadd_ps(v0, a, b);
+            v1 = _mm512_fmadd_ps(v1, a, b);
+            v2 = _mm512_fmadd_ps(v2, a, b);
+            v3 = _mm512_fmadd_ps(v3, a, b);
+            v4 = _mm512_fmadd_ps(v4, a, b);
+            v5 = _mm512_fmadd_ps(v5, a, b);
+            v6 = _mm512_fmadd_ps(v6, a, b);
+            v7 = _mm512_fmadd_ps(v7, a, b);
+            v8 = _mm512_fmadd_ps(v8, a, b);
+            v9 = _mm512_fmadd_ps(v9, a, b);
+            v10 = _mm512_fmadd_ps(v10, a, b);
+            v11 = _mm512_fmadd_ps(v11, a, b);
         }
         [v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11]
             .iter()
-            .fold(0.0, |s, x| s + _mm512_reduce_add_pd(*x))
+            .fold(0.0, |s, x| s + _mm512_reduce_add_ps(*x))
     }
-    if !std::arch::is_x86_feature_detected!("avx512f") {
-        return None;
+    /// Ten independent chains of 8-lane FMAs (ten of sixteen registers).
+    #[target_feature(enable = "avx2,fma")]
+    fn chains256(iters: usize) -> f32 {
+        let (a, b) = (_mm256_set1_ps(1.000_000_1), _mm256_set1_ps(0.999_999_9));
+        let one = _mm256_set1_ps(1.0);
+        let (mut v0, mut v1, mut v2, mut v3, mut v4) = (one, one, one, one, one);
+        let (mut v5, mut v6, mut v7, mut v8, mut v9) = (one, one, one, one, one);
+        for _ in 0..iters {
+            v0 = _mm256_fmadd_ps(v0, a, b);
+            v1 = _mm256_fmadd_ps(v1, a, b);
+            v2 = _mm256_fmadd_ps(v2, a, b);
+            v3 = _mm256_fmadd_ps(v3, a, b);
+            v4 = _mm256_fmadd_ps(v4, a, b);
+            v5 = _mm256_fmadd_ps(v5, a, b);
+            v6 = _mm256_fmadd_ps(v6, a, b);
+            v7 = _mm256_fmadd_ps(v7, a, b);
+            v8 = _mm256_fmadd_ps(v8, a, b);
+            v9 = _mm256_fmadd_ps(v9, a, b);
+        }
+        let mut s = [0f32; 8];
+        let sum = [v1, v2, v3, v4, v5, v6, v7, v8, v9].iter().fold(v0, |s, x| _mm256_add_ps(s, *x));
+        // SAFETY: `s` holds eight values.
+        unsafe { _mm256_storeu_ps(s.as_mut_ptr(), sum) };
+        s.iter().sum()
     }
+    let (chains, lanes): (usize, usize) = match isa {
+        Isa::Avx512 => (12, 16),
+        Isa::Avx2 => (10, 8),
+        _ => return None,
+    };
     let iters = 20_000_000;
     let mut best = 0f64;
     for _ in 0..5 {
         let t = Instant::now();
-        // SAFETY: AVX-512F detected just above; the function is safe code otherwise.
-        std::hint::black_box(unsafe { chains(iters) });
-        best = best.max(iters as f64 * 12.0 / t.elapsed().as_secs_f64());
+        // SAFETY: the path is one this CPU runs (`Isa::active` checked its features).
+        let v = unsafe { if isa == Isa::Avx512 { chains512(iters) } else { chains256(iters) } };
+        std::hint::black_box(v);
+        best = best.max((iters * chains * lanes) as f64 / t.elapsed().as_secs_f64());
     }
     Some(best)
 }
 
 #[cfg(not(target_arch = "x86_64"))]
-fn peak_rate() -> Option<f64> {
+fn peak_f32(_: Isa) -> Option<f64> {
     None
 }
 
@@ -83,14 +109,37 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let n: usize = args.get(1).map_or(81, |a| a.parse().expect("ROWS: a number"));
     let w: usize = args.get(2).map_or(1024, |a| a.parse().expect("COLUMNS: a number"));
-    let g = gram_rate(n, w);
-    println!("Gram kernel, {n} × {w}: {:.2} G 8-lane FMAs/s (needed products)", g / 1e9);
-    match peak_rate() {
-        Some(p) => println!(
-            "register-only FMA loop: {:.2} G/s; the kernel reaches {:.0} %",
-            p / 1e9,
-            100.0 * g / p
-        ),
-        None => println!("no AVX-512: no peak loop"),
+    let isa = Isa::active();
+    let (mut b64, mut b32) = (Block::default(), Block32::default());
+    b64.shape(n, w);
+    b32.shape(n, w);
+    for i in 0..n {
+        for t in 0..w {
+            b64.row_mut(i)[t] = value(i, t);
+            b32.row_mut(i)[t] = value(i, t) as f32;
+        }
+    }
+    let mut acc64 = DotAcc::new(n, n, true);
+    let g64 = rate(n, w, || acc64.add(&b64, &b64));
+    let mut acc32 = GramAcc32::new(n);
+    let g32 = rate(n, w, || acc32.add(&b32));
+    let mut out = vec![0f64; n * n];
+    acc64.finish(&mut out, n);
+    acc32.finish(&mut out, n);
+    std::hint::black_box(out);
+    println!("path {isa}, Gram matrix of {n} × {w} (needed products only):");
+    let peak = peak_f32(isa);
+    for (name, g, per_peak) in [("f64 (DotAcc)", g64, 0.5), ("f32 lanes (GramAcc32)", g32, 1.0)] {
+        match peak {
+            Some(p) => println!(
+                "  {name}: {:.2} G multiply-adds/s, {:.0} % of the register-only FMA peak in its precision ({:.2} G/s)",
+                g / 1e9,
+                100.0 * g / (p * per_peak),
+                p * per_peak / 1e9
+            ),
+            None => {
+                println!("  {name}: {:.2} G multiply-adds/s (no peak loop on this path)", g / 1e9)
+            }
+        }
     }
 }
