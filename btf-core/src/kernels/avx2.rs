@@ -181,16 +181,59 @@ fn load_plain<T: Texel, B: LoadTarget>(
     }
 }
 
+/// See `f16_round::round_to_f16_with`, eight values at a time (all slices of `b.len()`;
+/// `narrow` is unused here): every step a correctly rounded conversion or exact, so the
+/// portable path's bits.
 #[target_feature(enable = "avx2,fma,f16c")]
 pub(super) fn round_to_f16(
     b: &[f64],
     halves: &mut [half::f16],
     stored: &mut [f64],
     err: &mut [f32],
-    hi_lo: (&mut f64, &mut f64),
-    narrow: &mut [f32],
+    (hi, lo): (&mut f64, &mut f64),
+    _narrow: &mut [f32],
 ) {
-    super::f16_round::round_portable(b, halves, stored, err, hi_lo, narrow)
+    let w = b.len();
+    assert!(halves.len() == w && stored.len() == w && err.len() == w);
+    let body = w - w % 8;
+    let (mut vhi, mut vlo) = (_mm256_set1_pd(*hi), _mm256_set1_pd(*lo));
+    for t in (0..body).step_by(8) {
+        // SAFETY: t + 8 ≤ body ≤ w, the length of every slice.
+        unsafe {
+            let (v0, v1) =
+                (_mm256_loadu_pd(b.as_ptr().add(t)), _mm256_loadu_pd(b.as_ptr().add(t + 4)));
+            // The second operand wins ties of ±0 and NaN, as in `if v > hi { v } else { hi }`.
+            vhi = _mm256_max_pd(v1, _mm256_max_pd(v0, vhi));
+            vlo = _mm256_min_pd(v1, _mm256_min_pd(v0, vlo));
+            let narrow = _mm256_set_m128(_mm256_cvtpd_ps(v1), _mm256_cvtpd_ps(v0));
+            let h = _mm256_cvtps_ph::<_MM_FROUND_TO_NEAREST_INT>(narrow);
+            _mm_storeu_si128(halves.as_mut_ptr().add(t).cast(), h);
+            let (s0, s1) = widen8(_mm256_cvtph_ps(h));
+            _mm256_storeu_pd(stored.as_mut_ptr().add(t), s0);
+            _mm256_storeu_pd(stored.as_mut_ptr().add(t + 4), s1);
+            let e = _mm256_set_m128(
+                _mm256_cvtpd_ps(_mm256_sub_pd(s1, v1)),
+                _mm256_cvtpd_ps(_mm256_sub_pd(s0, v0)),
+            );
+            _mm256_storeu_ps(err.as_mut_ptr().add(t), e);
+        }
+    }
+    let (mut h4, mut l4) = ([0f64; 4], [0f64; 4]);
+    // SAFETY: the arrays hold four values each.
+    unsafe {
+        _mm256_storeu_pd(h4.as_mut_ptr(), vhi);
+        _mm256_storeu_pd(l4.as_mut_ptr(), vlo);
+    }
+    *hi = h4.iter().copied().fold(*hi, f64::max);
+    *lo = l4.iter().copied().fold(*lo, f64::min);
+    for t in body..w {
+        let v = b[t];
+        halves[t] = half::f16::from_f32(v as f32);
+        stored[t] = halves[t].to_f64();
+        err[t] = (stored[t] - v) as f32;
+        *hi = if v > *hi { v } else { *hi };
+        *lo = if v < *lo { v } else { *lo };
+    }
 }
 
 /// `to[t] = from[t]` widened to `f32` (exact), eight at a time.
