@@ -392,16 +392,31 @@ fn load_shifted_body<T: Texel, B: LoadTarget>(
         }
     }
     let (Some(cs), Some(sh)) = (colsum, shift) else { return None };
-    let mut st = LoadStats {
+    let st = LoadStats {
         energy: lanes::reduce8(e),
         peak: p.iter().copied().fold(f32::MIN, f32::max),
         finite: bad.iter().all(|b| *b == 0.0),
     };
+    Some(load_tail(x, c0, (body, w), &sh[c0..c0 + w], blk, cs, st))
+}
+
+/// The last columns `body..w` of a load with statistics, one by one after the lanes are
+/// reduced into `st` (every path's rule): `sh` and `cs` start at column `c0`.
+#[inline(always)]
+fn load_tail<T: Texel, B: LoadTarget>(
+    x: &[&[T]],
+    c0: usize,
+    (body, w): (usize, usize),
+    sh: &[T],
+    blk: &mut B,
+    cs: &mut [f64],
+    mut st: LoadStats,
+) -> LoadStats {
     for i in 0..blk.rows() {
         let dst = blk.row_mut(i);
         for t in body..w {
             let v = x[i][c0 + t].widen();
-            let y = v as f64 - sh[c0 + t].widen() as f64;
+            let y = v as f64 - sh[t].widen() as f64;
             dst[t] = B::V::of(y);
             cs[t] += y;
             st.energy += (v as f64) * (v as f64);
@@ -409,7 +424,7 @@ fn load_shifted_body<T: Texel, B: LoadTarget>(
             st.finite &= v.is_finite();
         }
     }
-    Some(st)
+    st
 }
 
 #[cfg(target_arch = "x86_64")]

@@ -129,25 +129,12 @@ pub(super) fn load_shifted<T: Texel, B: LoadTarget>(
         _mm256_storeu_ps(peaks.as_mut_ptr(), p);
         _mm256_storeu_ps(bads.as_mut_ptr(), bad);
     }
-    let mut st = LoadStats {
+    let st = LoadStats {
         energy: lanes::reduce8(e),
         peak: peaks.iter().copied().fold(f32::MIN, f32::max),
         finite: bads.iter().all(|b| *b == 0.0),
     };
-    for i in 0..blk.rows() {
-        let src = &x[i][c0..c0 + w];
-        let dst = blk.row_mut(i);
-        for t in body..w {
-            let v = src[t].widen();
-            let y = v as f64 - sh[t].widen() as f64;
-            dst[t] = B::V::of(y);
-            cs[t] += y;
-            st.energy += (v as f64) * (v as f64);
-            st.peak = st.peak.max(v);
-            st.finite &= v.is_finite();
-        }
-    }
-    Some(st)
+    Some(super::load_tail(x, c0, (body, w), sh, blk, cs, st))
 }
 
 /// `y_i = x_i − s` (or `x_i`) for the columns `c0..c0 + w` of every row (`sh` is `s` there).

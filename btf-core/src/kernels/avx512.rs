@@ -144,25 +144,12 @@ fn load_with_stats<T: Texel, B: LoadTarget>(
             }
         }
     }
-    let mut rest = super::LoadStats {
+    let st = super::LoadStats {
         energy: reduce8(e),
         peak: _mm512_reduce_max_ps(p),
         finite: _mm512_reduce_add_ps(bad) == 0.0,
     };
-    for i in 0..blk.rows() {
-        let src = &x[i][c0..c0 + w];
-        let dst = blk.row_mut(i);
-        for t in body..w {
-            let v = src[t].widen();
-            let y = v as f64 - sh[t].widen() as f64;
-            dst[t] = B::V::of(y);
-            cs[t] += y;
-            rest.energy += (v as f64) * (v as f64);
-            rest.peak = rest.peak.max(v);
-            rest.finite &= v.is_finite();
-        }
-    }
-    rest
+    super::load_tail(x, c0, (body, w), sh, blk, cs, st)
 }
 
 /// See `tile_portable` (`R` rows of `a`, the first `S` of `b`). Safety: AVX-512F present,

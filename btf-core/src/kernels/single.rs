@@ -132,22 +132,7 @@ impl CrossAcc32 {
         for i0 in (0..self.e_rows).step_by(TE) {
             let re = &e.data[i0 * w..(i0 + TE) * w];
             let out = &mut self.sums[i0 * n..(i0 + TE) * n];
-            let mut j0 = 0;
-            while j0 < n {
-                let s = TY.min(n - j0);
-                let ry = &y.data[j0 * w..(j0 + s) * w];
-                let o = &mut out[j0..];
-                match isa {
-                    #[cfg(target_arch = "x86_64")]
-                    Isa::Avx512 => tile_avx512(s, re, ry, w, o, n),
-                    #[cfg(target_arch = "x86_64")]
-                    // SAFETY: AVX2, FMA and F16C checked (`runnable`); the kernel is safe code.
-                    Isa::Avx2 => unsafe { super::avx2::tile32(s, re, ry, w, o, n) },
-                    Isa::Scalar => lanes::tile32::<false>(s, re, ry, w, o, n),
-                    _ => lanes::tile32::<true>(s, re, ry, w, o, n),
-                }
-                j0 += s;
-            }
+            tile_rows(re, &y.data, (0, n), w, out, isa);
         }
     }
 
@@ -194,22 +179,7 @@ impl GramAcc32 {
         for i0 in (0..n).step_by(TE) {
             let re = &y.data[i0 * w..(i0 + TE) * w];
             let out = &mut self.sums[i0 * n..(i0 + TE) * n];
-            let mut j0 = i0;
-            while j0 < n {
-                let s = TY.min(n - j0);
-                let ry = &y.data[j0 * w..(j0 + s) * w];
-                let o = &mut out[j0..];
-                match isa {
-                    #[cfg(target_arch = "x86_64")]
-                    Isa::Avx512 => tile_avx512(s, re, ry, w, o, n),
-                    #[cfg(target_arch = "x86_64")]
-                    // SAFETY: AVX2, FMA and F16C checked (`runnable`); the kernel is safe code.
-                    Isa::Avx2 => unsafe { super::avx2::tile32(s, re, ry, w, o, n) },
-                    Isa::Scalar => lanes::tile32::<false>(s, re, ry, w, o, n),
-                    _ => lanes::tile32::<true>(s, re, ry, w, o, n),
-                }
-                j0 += s;
-            }
+            tile_rows(re, &y.data, (i0, n), w, out, isa);
         }
     }
 
@@ -223,6 +193,26 @@ impl GramAcc32 {
                 out[i * ldo + j] += self.sums[i * n + j];
             }
         }
+    }
+}
+
+/// `out[r·n + j] += Σ_t e_r[t]·y_j[t]` for the 4 rows of `e` and the rows `j0..n` of `y`
+/// (`w` values apart), in tiles of 4 × 5 (narrower at the end) on the path `isa`.
+fn tile_rows(e: &[f32], y: &[f32], (j0, n): (usize, usize), w: usize, out: &mut [f64], isa: Isa) {
+    let mut j = j0;
+    while j < n {
+        let s = TY.min(n - j);
+        let (ry, o) = (&y[j * w..(j + s) * w], &mut out[j..]);
+        match isa {
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx512 => tile_avx512(s, e, ry, w, o, n),
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: AVX2, FMA and F16C checked (`runnable`); the kernel is safe code.
+            Isa::Avx2 => unsafe { super::avx2::tile32(s, e, ry, w, o, n) },
+            Isa::Scalar => lanes::tile32::<false>(s, e, ry, w, o, n),
+            _ => lanes::tile32::<true>(s, e, ry, w, o, n),
+        }
+        j += s;
     }
 }
 
