@@ -1,19 +1,21 @@
-//! Dense `f64` kernels of the per-slot PCA ([S03 eq. 1], by the snapshot
-//! method): the row-by-row dot products `A·Bᵀ` behind the Gram matrix `YYᵀ` and the cross
-//! products `E·Yᵀ`, and the lift `Lᵀ·Y` that forms eigentextures, each on one block of
-//! columns held in `f64` ([`Block`]).
+//! Dense kernels of the per-slot PCA ([S03 eq. 1], by the snapshot method): the
+//! row-by-row dot products `A·Bᵀ` behind the Gram matrix `YYᵀ` and the cross products
+//! `E·Yᵀ`, and the lift `Lᵀ·Y` that forms eigentextures, each on one block of columns held
+//! in `f64` ([`Block`]) or `f32` ([`Block32`]), and the loads that fill those blocks.
 //!
-//! Every product is of `f32` data widened to `f64`, so each single product is exact and only
-//! the sums round. Each kernel has a path per instruction set ([`Isa`], chosen at run time
-//! or forced by `BTF_SIMD`): AVX-512 intrinsics (`avx512.rs`); the portable lane model
-//! (`lanes.rs`) with fused multiply-adds, compiled for AVX2 + FMA + F16C (`avx2.rs`) or
-//! for NEON; and the same lane model without fusing, the scalar reference. The SIMD paths
-//! agree bit for bit, the scalar one within the rounding of its unfused products; the
-//! tests check both. `f16` rows are widened by the `half` crate's slice conversions
-//! (F16C or the ARM half-precision instructions, detected at run time) except on the
-//! AVX-512 path, which widens them in its loads. This and `gemm.rs` are the only modules
-//! allowed `unsafe`: the raw-pointer loads of `std::arch`, and calls of functions compiled
-//! for a CPU feature, behind bounds and the feature checked once per call.
+//! In `f64`, every product is of `f32` data widened exactly, so each single product is
+//! exact and only the sums round; in `f32` (the Gram matrix of `f16` data, the `f16`
+//! correction: `single.rs`) sixteen lanes sum within a block and `f64` across blocks. Each
+//! kernel has a path per instruction set ([`Isa`], chosen at run time or forced by
+//! `BTF_SIMD`): AVX-512 intrinsics (`avx512.rs`); the portable lane model (`lanes.rs`) with
+//! fused multiply-adds, compiled for AVX2 + FMA + F16C (`avx2.rs`, whose loads, widening
+//! and rounding are intrinsics in the same lanes) or for NEON; and the same lane model
+//! without fusing, the scalar reference. The SIMD paths agree bit for bit, the scalar one
+//! within the rounding of its unfused products; the tests check both. `f16` rows are
+//! widened in the AVX-512 and AVX2 loads (`vcvtph2ps`), elsewhere by the `half` crate's
+//! slice conversions. This and `gemm.rs` are the only modules allowed `unsafe`: the
+//! raw-pointer loads of `std::arch`, and calls of functions compiled for a CPU feature,
+//! behind bounds and the feature checked once per call.
 #![allow(unsafe_code)]
 
 use crate::simd::Isa;
