@@ -149,7 +149,8 @@ fn eigen_meta(input: &BtfStore, params: CompressParams) -> Result<(EigenMeta, Ve
 /// Shard `shard` of a compression into one eigen store that every shard fills
 /// (issue #23): only the view slots [`Shard::range`] gives it are computed, into the
 /// shared partial store (`OUTPUT.partial`), whose job — the eigen metadata (components,
-/// quantisation, samplings), the input store's content fingerprint and the shard count —
+/// quantisation, samplings), the input store's content fingerprint, the shard count and
+/// the Gram matrix's arithmetic —
 /// is recorded by the first shard and checked by every other before it writes anything.
 /// Slots already done (by an earlier, interrupted run of this shard: every chunk there with
 /// a valid checksum) are kept, corrupt ones computed again. Nothing is
@@ -170,7 +171,7 @@ pub fn compress_shard(
         "{}.partial",
         output.file_name().map(|n| n.to_string_lossy()).unwrap_or_default()
     ));
-    let job = shard_job(input, shard.count)?;
+    let job = shard_job(input, shard.count, gram_of(input, params.gram))?;
     if !partial.exists() && crate::store::read_meta(output).is_ok() {
         // Finalised already (a retried shard after the finaliser ran): nothing to compute
         // if the store is this job's.
@@ -212,14 +213,16 @@ pub fn compress_shard(
 }
 
 /// The job every shard of a compression records and checks: the input's content (not its
-/// path, which differs between machines) and the shard count.
-fn shard_job(input: &BtfStore, shards: usize) -> Result<serde_json::Value> {
+/// path, which differs between machines), the shard count and the Gram matrix's
+/// arithmetic (so that every slot of one store has the same).
+fn shard_job(input: &BtfStore, shards: usize, gram: &str) -> Result<serde_json::Value> {
     Ok(serde_json::json!({
         "input": {
             "fingerprint": crate::shard::fingerprint(input.path())?,
             "bytes": input.bytes(),
         },
         "shards": shards,
+        "gram": gram,
     }))
 }
 

@@ -201,6 +201,9 @@ fn compress_in_four_shards_with_one_killed_matches_one_process() {
     assert!(err.contains("job.input.fingerprint: was"), "{err}");
     let err = d.fails(&["compress", "m.btf", "-c", "4", "-o", "sh.eig", "--shard", "1/2"]);
     assert!(err.contains("job.shards: was 4, now 2"), "{err}");
+    let args = ["compress", "m.btf", "-c", "4", "-o", "sh.eig", "--shard", "2/4", "--gram", "f32"];
+    let err = d.fails(&args);
+    assert!(err.contains("job.gram: was \"f64\", now \"f32\""), "{err}");
     assert!(tree_with_partial(&d, "sh.eig") == before, "a refused writer changed the output");
     // The restarted shard keeps what it finished and computes the rest; this time its
     // index comes from the variable a Kubernetes Indexed Job sets.
