@@ -6,7 +6,7 @@
 //! [`GramPrecision`]), eigen-solve it in `f64`, and lift each
 //! eigenvector `v_k` to an eigentexture `B_k = X̃ᵀv_k / √λ_k` of unit norm. The data is never
 //! centred in memory: `G = C·YYᵀ·C` and `B = (C·V)ᵀY` for `Y = X − 1x_0ᵀ` (shifted by the
-//! first image, exactly, in `f64`) and `C = I − 11ᵀ/n`. Three streaming passes read the
+//! first image: exactly in `f64`, rounded to nearest in `f32` lanes) and `C = I − 11ᵀ/n`. Three streaming passes read the
 //! slot, block by block of columns: the Gram matrix (with mean, energy and peak), the
 //! eigentextures, and the correction terms of the stored basis. Signs are fixed so that
 //! the largest-magnitude entry of every `B_k` is positive. The eigentextures are then
