@@ -91,8 +91,8 @@ impl Compression {
     /// What new stores use: zstd level 3 (BENCHMARKS.md, "Stores on disk").
     pub const DEFAULT_ZSTD: Compression = Compression::Zstd { level: 3 };
     /// What the compressor writes its means and eigentextures with: zstd level 1, twice
-    /// level 3's speed on their noisy low mantissa bits for 7 % more bytes (BENCHMARKS.md,
-    /// "Instruction sets"); all-zero (rank-deficient) components still vanish.
+    /// level 3's speed on their noisy low mantissa bits for 5 % more bytes (BENCHMARKS.md,
+    /// "Instruction sets", session 26); all-zero (rank-deficient) components still vanish.
     pub const FAST_ZSTD: Compression = Compression::Zstd { level: 1 };
 }
 

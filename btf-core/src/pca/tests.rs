@@ -40,6 +40,21 @@ fn as_slot(r: &SlotPca, c: usize, q: Quantization) -> crate::eigen::EigenSlot {
     }
 }
 
+/// The eigenvalues of the centred Gram matrix of `n` rows of `m` values (centred on their
+/// mean in `f64`), from an SVD, largest first.
+fn centred_spectrum(data: &[f32], n: usize, m: usize) -> Vec<f64> {
+    let mut x = DMatrix::<f64>::from_fn(n, m, |i, t| data[i * m + t] as f64);
+    let mean = x.row_mean();
+    for i in 0..n {
+        for t in 0..m {
+            x[(i, t)] -= mean[t];
+        }
+    }
+    let mut sv: Vec<f64> = x.svd(false, false).singular_values.iter().map(|s| s * s).collect();
+    sv.sort_by(|a, b| b.total_cmp(a));
+    sv
+}
+
 #[test]
 fn eigenvalues_match_svd_and_eckart_young_holds() {
     let (n, m) = (20, 3 * 17 * 13);
@@ -219,15 +234,10 @@ fn large_mean_costs_no_precision() {
     let (n, m) = (12, 3 * 10 * 10);
     let mut input = slot_data(n, m, 13);
     input.data.iter_mut().for_each(|v| *v += 1e4);
-    let mut x = DMatrix::<f64>::from_fn(n, m, |i, t| input.data[i * m + t] as f64);
-    let mean = x.row_mean();
-    for i in 0..n {
-        for t in 0..m {
-            x[(i, t)] -= mean[t];
-        }
-    }
-    let mut sv: Vec<f64> = x.svd(false, false).singular_values.iter().map(|s| s * s).collect();
-    sv.sort_by(|a, b| b.total_cmp(a));
+    let sv = centred_spectrum(&input.data, n, m);
+    let mean: Vec<f64> = (0..m)
+        .map(|t| (0..n).map(|i| input.data[i * m + t] as f64).sum::<f64>() / n as f64)
+        .collect();
     let c = 4;
     let r = pca_slot(&input, c, Quantization::F16).unwrap();
     for k in 0..n - 1 {
@@ -279,17 +289,9 @@ fn f16_data_gets_an_f32_gram_within_its_bound_and_every_path_agrees() {
     let input = slot_data(n, m, 7);
     let halves: Vec<half::f16> = input.data.iter().map(|&v| half::f16::from_f32(v)).collect();
     let wide = SlotData { data: halves.iter().map(|h| h.to_f32()).collect(), ..input.clone() };
-    let mut x = DMatrix::<f64>::from_fn(n, m, |i, t| wide.data[i * m + t] as f64);
-    let tr_y: f64 =
-        (0..n).map(|i| (0..m).map(|t| (x[(i, t)] - x[(0, t)]).powi(2)).sum::<f64>()).sum();
-    let mean = x.row_mean();
-    for i in 0..n {
-        for t in 0..m {
-            x[(i, t)] -= mean[t];
-        }
-    }
-    let mut sv: Vec<f64> = x.svd(false, false).singular_values.iter().map(|s| s * s).collect();
-    sv.sort_by(|a, b| b.total_cmp(a));
+    let x = |i: usize, t: usize| wide.data[i * m + t] as f64;
+    let tr_y: f64 = (0..n).map(|i| (0..m).map(|t| (x(i, t) - x(0, t)).powi(2)).sum::<f64>()).sum();
+    let sv = centred_spectrum(&wide.data, n, m);
     let bound = GRAM32_EPS * tr_y;
     let rows =
         SlotRows::<half::f16> { view: 3, rows: halves.chunks_exact(m).collect(), texel_values: m };
@@ -351,4 +353,41 @@ fn f16_duplicates_stay_rank_deficient_with_an_f32_gram() {
     assert_eq!(r.effective_components, 1);
     assert!(r.sse <= GRAM32_EPS * r.energy, "{}", r.sse);
     assert!(r.stored.weights.iter().all(|w| w.is_finite()));
+}
+
+#[test]
+fn a_component_below_the_f32_gram_bound_is_not_effective() {
+    // Six f16 images of 2048 values: 1.5 + a_i·u + b_i·v with u = ±¼ and v = ±2⁻¹⁰ (the f16
+    // quantum at 1.5), all exact in f16. The v component's eigenvalue, Σb²·2⁻²⁰·m ≈ 0.0039,
+    // is below ε·tr(YYᵀ) ≈ 3.9·10⁻⁶·1440 ≈ 0.0057: in f32 lanes it is not a component, in
+    // f64 it is.
+    let (n, m) = (6, 2048);
+    let (a, b) = ([0.0, 1.5, -1.5, 1.5, -1.5, 1.5], [0.0, 1.0, -1.0, 0.0, 0.0, 0.0]);
+    let sign = |t: usize, k: usize| if (t * 2_654_435_761 >> k) & 1 == 0 { 1.0 } else { -1.0 };
+    let halves: Vec<half::f16> = (0..n * m)
+        .map(|q| {
+            let (i, t) = (q / m, q % m);
+            let v = 1.5 + a[i] * 0.25 * sign(t, 7) + b[i] * 2f64.powi(-10) * sign(t, 13);
+            let h = half::f16::from_f64(v);
+            assert_eq!(h.to_f64(), v, "({i}, {t}) is not an f16 value");
+            h
+        })
+        .collect();
+    let rows =
+        SlotRows::<half::f16> { view: 0, rows: halves.chunks_exact(m).collect(), texel_values: m };
+    let run = |gram: GramPrecision| {
+        let mut scratch = PcaScratch::default().with_gram(gram);
+        pca_rows_in(&rows, 3, Quantization::F16, &mut scratch, None).unwrap()
+    };
+    let (r32, r64) = (run(GramPrecision::F32), run(GramPrecision::F64));
+    assert_eq!((r32.effective_components, r64.effective_components), (1, 2));
+    // The second eigenvalue itself agrees (to the bound); only its count differs.
+    let tr_y: f64 = (0..n)
+        .map(|i| {
+            (0..m).map(|t| (halves[i * m + t].to_f64() - halves[t].to_f64()).powi(2)).sum::<f64>()
+        })
+        .sum();
+    let (l32, l64) = (r32.stored.eigenvalues[1], r64.stored.eigenvalues[1]);
+    assert!(l64 < GRAM32_EPS * tr_y && (l32 - l64).abs() <= GRAM32_EPS * tr_y, "{l32} {l64}");
+    assert!(r32.stored.weights.iter().all(|w| w.is_finite()));
 }
