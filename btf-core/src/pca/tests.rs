@@ -363,7 +363,7 @@ fn a_component_below_the_f32_gram_bound_is_not_effective() {
     // f64 it is.
     let (n, m) = (6, 2048);
     let (a, b) = ([0.0, 1.5, -1.5, 1.5, -1.5, 1.5], [0.0, 1.0, -1.0, 0.0, 0.0, 0.0]);
-    let sign = |t: usize, k: usize| if (t * 2_654_435_761 >> k) & 1 == 0 { 1.0 } else { -1.0 };
+    let sign = |t: usize, k: usize| if ((t * 2_654_435_761) >> k) & 1 == 0 { 1.0 } else { -1.0 };
     let halves: Vec<half::f16> = (0..n * m)
         .map(|q| {
             let (i, t) = (q / m, q % m);
