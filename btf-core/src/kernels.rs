@@ -436,11 +436,12 @@ mod avx512;
 mod dot;
 mod f16_round;
 mod lanes;
+mod panel;
 mod single;
 pub use dot::DotAcc;
 pub use f16_round::round_to_f16;
 pub(crate) use f16_round::round_to_f16_with;
-pub use single::{Block32, CrossAcc32, GramAcc32, LANES32};
+pub use single::{Block32, CHUNK32, CrossAcc32, GramAcc32, LANES32};
 
 #[cfg(test)]
 mod tests;

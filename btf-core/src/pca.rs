@@ -80,7 +80,7 @@ impl GramPrecision {
 }
 
 /// The `ε` of [`GramPrecision::F32`]: a bound on each entry's relative error.
-pub const GRAM32_EPS: f64 = (BLOCK / crate::kernels::LANES32 + 2) as f64 / (1u64 << 24) as f64;
+pub const GRAM32_EPS: f64 = (crate::kernels::CHUNK32 + 2) as f64 / (1u64 << 24) as f64;
 
 /// Result of the PCA of one slot.
 #[derive(Debug, Clone)]

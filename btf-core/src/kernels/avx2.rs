@@ -36,9 +36,92 @@ pub(super) fn tile(
     lanes::tile::<true>(ta, kind, a, b, w, cols, acc)
 }
 
+/// A tile of `panel.rs`: the 8 rows of the packed `a` against the `N` of `b` (packed,
+/// `b[k·ldb + j]`, or with `ROWS` row by row, `b[j·ldb + k]`) over `kc` columns (`lda`
+/// values per column of `a`), one `f32` lane per output from zero (a fused multiply-add
+/// per column, as `lanes::panel_tile`), added in `f64` to `s[j·lds + i]`. Safety: AVX2
+/// and FMA present; `a` valid for reads at `k·lda + i` (`k < kc`, `i < 8`), `b` at those
+/// of its `j < N` and `k < kc`, `s` for reads and writes at `j·lds + i`.
 #[target_feature(enable = "avx2,fma,f16c")]
-pub(super) fn tile32(s_count: usize, e: &[f32], y: &[f32], w: usize, out: &mut [f64], ldo: usize) {
-    lanes::tile32::<true>(s_count, e, y, w, out, ldo)
+pub(super) unsafe fn panel_tile<const N: usize, const ROWS: bool>(
+    a: *const f32,
+    lda: usize,
+    b: *const f32,
+    ldb: usize,
+    kc: usize,
+    s: *mut f64,
+    lds: usize,
+) {
+    let mut acc = [_mm256_setzero_ps(); N];
+    // SAFETY: every access lies in the extents the caller guarantees.
+    unsafe {
+        let (mut a, mut b) = (a, b);
+        for _ in 0..kc {
+            let av = _mm256_loadu_ps(a);
+            for (j, x) in acc.iter_mut().enumerate() {
+                *x = _mm256_fmadd_ps(
+                    av,
+                    _mm256_broadcast_ss(&*b.add(if ROWS { j * ldb } else { j })),
+                    *x,
+                );
+            }
+            (a, b) = (a.add(lda), b.add(if ROWS { 1 } else { ldb }));
+        }
+        for (j, x) in acc.iter().enumerate() {
+            let (lo, hi) = widen8(*x);
+            let p = s.add(j * lds);
+            _mm256_storeu_pd(p, _mm256_add_pd(_mm256_loadu_pd(p), lo));
+            _mm256_storeu_pd(p.add(4), _mm256_add_pd(_mm256_loadu_pd(p.add(4)), hi));
+        }
+    }
+}
+
+/// `to[k·ldt + i] = from[i·ldf + k]` for `i < rows` and `k < cols` (both multiples of 8), in
+/// 8 × 8 blocks. Safety: AVX present; `from` valid for those reads, `to` for those writes.
+#[target_feature(enable = "avx2,fma,f16c")]
+pub(super) unsafe fn transpose(
+    from: *const f32,
+    ldf: usize,
+    (rows, cols): (usize, usize),
+    to: *mut f32,
+    ldt: usize,
+) {
+    for i in (0..rows).step_by(8) {
+        for k in (0..cols).step_by(8) {
+            // SAFETY: rows i..i + 8 and columns k..k + 8 lie inside the caller's extents.
+            unsafe { transpose8(from.add(i * ldf + k), ldf, to.add(k * ldt + i), ldt) };
+        }
+    }
+}
+
+/// `to[k·ldt + i] = from[i·ldf + k]` for `i, k < 8`: an 8 × 8 block of `f32` transposed
+/// (rows `i` and `i + 4` loaded into the halves of one register, then two 4 × 4
+/// transpositions within the halves: 16 shuffles). Safety: AVX present; `from` valid for
+/// those reads, `to` for those writes.
+#[target_feature(enable = "avx2,fma,f16c")]
+#[inline]
+unsafe fn transpose8(from: *const f32, ldf: usize, to: *mut f32, ldt: usize) {
+    // SAFETY: forwarded from the caller.
+    unsafe {
+        for half in [0, 4] {
+            let r: [__m256; 4] = std::array::from_fn(|i| {
+                _mm256_loadu2_m128(from.add((i + 4) * ldf + half), from.add(i * ldf + half))
+            });
+            let t0 = _mm256_unpacklo_ps(r[0], r[1]);
+            let t1 = _mm256_unpackhi_ps(r[0], r[1]);
+            let t2 = _mm256_unpacklo_ps(r[2], r[3]);
+            let t3 = _mm256_unpackhi_ps(r[2], r[3]);
+            let c = [
+                _mm256_shuffle_ps::<0x44>(t0, t2),
+                _mm256_shuffle_ps::<0xEE>(t0, t2),
+                _mm256_shuffle_ps::<0x44>(t1, t3),
+                _mm256_shuffle_ps::<0xEE>(t1, t3),
+            ];
+            for (k, v) in c.into_iter().enumerate() {
+                _mm256_storeu_ps(to.add((half + k) * ldt), v);
+            }
+        }
+    }
 }
 
 /// Eight stored values from `p` as `f32` (`vcvtph2ps` for `f16`, exact). Safety: AVX2 and

@@ -264,40 +264,36 @@ pub(super) unsafe fn lift32<const K: usize>(
     }
 }
 
-/// See `single::tile_portable` (`S` rows of `y`). Safety: AVX-512F present; `e` valid for
-/// `4·w` reads, `y` for `S·w`, `out` for reads and writes at `r·ldo + s` (`r < 4`,
-/// `s < S`); `w` a multiple of 16.
+/// `avx2::panel_tile` with 16 rows of `a`. Safety: AVX-512F present; `a` valid for reads
+/// at `k·lda + i` (`k < kc`, `i < 16`), `b` at those of its `j < N` and `k < kc`, `s` for
+/// reads and writes at `j·lds + i`.
 #[target_feature(enable = "avx512f")]
-pub(super) unsafe fn tile32<const S: usize>(
-    e: *const f32,
-    y: *const f32,
-    w: usize,
-    out: *mut f64,
-    ldo: usize,
+pub(super) unsafe fn panel_tile<const N: usize, const ROWS: bool>(
+    a: *const f32,
+    lda: usize,
+    b: *const f32,
+    ldb: usize,
+    kc: usize,
+    s: *mut f64,
+    lds: usize,
 ) {
-    let mut v = [[_mm512_setzero_ps(); S]; 4];
-    let mut k = 0;
-    while k < w {
-        // SAFETY: k + 16 ≤ w; rows r < 4 and s < S lie inside the caller's extents.
-        unsafe {
-            let mut ev = [_mm512_setzero_ps(); 4];
-            for (r, x) in ev.iter_mut().enumerate() {
-                *x = _mm512_loadu_ps(e.add(r * w + k));
+    let mut acc = [_mm512_setzero_ps(); N];
+    // SAFETY: every access lies in the extents the caller guarantees.
+    unsafe {
+        let (mut a, mut b) = (a, b);
+        for _ in 0..kc {
+            let av = _mm512_loadu_ps(a);
+            for (j, x) in acc.iter_mut().enumerate() {
+                *x =
+                    _mm512_fmadd_ps(av, _mm512_set1_ps(*b.add(if ROWS { j * ldb } else { j })), *x);
             }
-            for s in 0..S {
-                let ys = _mm512_loadu_ps(y.add(s * w + k));
-                for r in 0..4 {
-                    v[r][s] = _mm512_fmadd_ps(ev[r], ys, v[r][s]);
-                }
-            }
+            (a, b) = (a.add(lda), b.add(if ROWS { 1 } else { ldb }));
         }
-        k += 16;
-    }
-    for r in 0..4 {
-        for s in 0..S {
-            let (lo, hi) = widen16(v[r][s]);
-            // SAFETY: r < 4, s < S (the caller's extents).
-            unsafe { *out.add(r * ldo + s) += reduce8(_mm512_add_pd(lo, hi)) };
+        for (j, x) in acc.iter().enumerate() {
+            let (lo, hi) = widen16(*x);
+            let p = s.add(j * lds);
+            _mm512_storeu_pd(p, _mm512_add_pd(_mm512_loadu_pd(p), lo));
+            _mm512_storeu_pd(p.add(8), _mm512_add_pd(_mm512_loadu_pd(p.add(8)), hi));
         }
     }
 }

@@ -1,16 +1,17 @@
 //! The kernels of `kernels.rs` as portable Rust over fixed lanes — the "lane model": the
 //! dot-product tiles of the Gram matrix (eight `f64` partial sums per output), the lift
-//! (one `f64` sum per output, over the images in order) and the `f32` cross products
-//! (sixteen `f32` partial sums per output, reduced by [`reduce16`]).
+//! (one `f64` sum per output, over the images in order) and the `f32` panel tiles of
+//! `panel.rs` (one `f32` lane per output and chunk of columns).
 //!
 //! With `FUSED` every step is a fused multiply-add (`f64::mul_add`): the arithmetic of the
 //! AVX-512 kernels lane for lane, so the results are theirs bit for bit. That is the AVX2
 //! path (compiled with AVX2 + FMA enabled, the compiler turns each group of four lanes into
 //! one 256-bit register) and the NEON path. Without `FUSED` each step multiplies, rounds
-//! and adds: the scalar path. The lanes are processed four at a time in "half passes"
-//! over the columns, and the outputs in sub-tiles of at most 2 × 5, so that a sub-tile's
-//! partial sums fit sixteen 256-bit (or thirty-two 128-bit) registers; which outputs are
-//! grouped does not change any output's arithmetic.
+//! and adds: the scalar path. The `f64` lanes are processed four at a time in "half
+//! passes" over the columns, and the outputs in sub-tiles of at most 2 × 5, so that a
+//! sub-tile's partial sums fit sixteen 256-bit (or thirty-two 128-bit) registers; which
+//! outputs are grouped does not change any output's arithmetic. The AVX2 path's panel
+//! tiles are intrinsics (`avx2.rs`), in this arithmetic.
 
 use super::dot::Tile;
 use super::{LANES, TB};
@@ -33,13 +34,6 @@ pub(crate) fn reduce8(s: [f64; 8]) -> f64 {
     let t = [s[0] + s[4], s[1] + s[5], s[2] + s[6], s[3] + s[7]];
     let u = [t[0] + t[2], t[1] + t[3]];
     u[0] + u[1]
-}
-
-/// Sixteen `f32` lanes summed in `f64`: lane `l` widened and added to lane `l + 8`, then
-/// [`reduce8`].
-#[inline(always)]
-pub(crate) fn reduce16(v: &[f32; 16]) -> f64 {
-    reduce8(std::array::from_fn(|l| v[l] as f64 + v[l + 8] as f64))
 }
 
 /// `acc[(r·5 + s)·8 + l] += Σ_k a_r[8k + l]·b_s[8k + l]` over columns `k0..k1` of the `ta`
@@ -170,69 +164,31 @@ pub(super) fn lift<const FUSED: bool>(
     }
 }
 
-/// `f32` lanes per output of the cross products.
-const LANES32: usize = 16;
-
-/// `out[r·ldo + s] += reduce16(Σ_t e_r[t]·y_s[t])` (sixteen `f32` lanes) for the 4 rows of
-/// `e` and `s_count ≤ 5` of `y`, in sub-tiles of 2 × `s_count`, eight lanes at a time.
+/// A tile of `panel.rs` in the lane model: rows `0..8` of the packed `a` (`lda` values
+/// per column) against rows `0..N` of `b` (packed, `b[k·ldb + j]`, or with `ROWS` row by
+/// row, `b[j·ldb + k]`) over `kc` columns, one `f32` lane per output from zero, added in
+/// `f64` to `s[j·lds + i]`.
 #[inline(always)]
-pub(super) fn tile32<const FUSED: bool>(
-    s_count: usize,
-    e: &[f32],
-    y: &[f32],
-    w: usize,
-    out: &mut [f64],
-    ldo: usize,
+pub(super) fn panel_tile<const N: usize, const ROWS: bool, const FUSED: bool>(
+    (a, lda): (&[f32], usize),
+    (b, ldb): (&[f32], usize),
+    kc: usize,
+    (s, lds): (&mut [f64], usize),
 ) {
-    for r0 in [0, 2] {
-        match s_count {
-            1 => sub_tile32::<1, FUSED>(r0, e, y, w, out, ldo),
-            2 => sub_tile32::<2, FUSED>(r0, e, y, w, out, ldo),
-            3 => sub_tile32::<3, FUSED>(r0, e, y, w, out, ldo),
-            4 => sub_tile32::<4, FUSED>(r0, e, y, w, out, ldo),
-            _ => sub_tile32::<5, FUSED>(r0, e, y, w, out, ldo),
-        }
-    }
-}
-
-#[inline(always)]
-fn sub_tile32<const S: usize, const FUSED: bool>(
-    r0: usize,
-    e: &[f32],
-    y: &[f32],
-    w: usize,
-    out: &mut [f64],
-    ldo: usize,
-) {
-    let groups = w / LANES32;
-    fn row(m: &[f32], from: usize, groups: usize) -> &[[f32; LANES32]] {
-        m[from..].as_chunks::<LANES32>().0.get(..groups).expect("rows inside the block")
-    }
-    let er: [&[[f32; LANES32]]; 2] = std::array::from_fn(|r| row(e, (r0 + r) * w, groups));
-    let yr: [&[[f32; LANES32]]; S] = std::array::from_fn(|s| row(y, s * w, groups));
-    let mut lanes = [[[0f32; LANES32]; S]; 2];
-    for h in [0, 8] {
-        let mut v = [[[0f32; 8]; S]; 2];
-        for g in 0..groups {
-            let ev: [[f32; 8]; 2] = std::array::from_fn(|r| er[r][g][h..h + 8].try_into().unwrap());
-            for s in 0..S {
-                let ys: &[f32; 8] = yr[s][g][h..h + 8].try_into().unwrap();
-                for r in 0..2 {
-                    for l in 0..8 {
-                        v[r][s][l] = madd32::<FUSED>(ev[r][l], ys[l], v[r][s][l]);
-                    }
-                }
-            }
-        }
-        for r in 0..2 {
-            for s in 0..S {
-                lanes[r][s][h..h + 8].copy_from_slice(&v[r][s]);
+    let mut acc = [[0f32; 8]; N];
+    for k in 0..kc {
+        let av: &[f32; 8] = a[k * lda..k * lda + 8].try_into().unwrap();
+        let bv: [f32; N] =
+            std::array::from_fn(|j| if ROWS { b[j * ldb + k] } else { b[k * ldb + j] });
+        for j in 0..N {
+            for l in 0..8 {
+                acc[j][l] = madd32::<FUSED>(av[l], bv[j], acc[j][l]);
             }
         }
     }
-    for r in 0..2 {
-        for s in 0..S {
-            out[(r0 + r) * ldo + s] += reduce16(&lanes[r][s]);
+    for (j, lanes) in acc.iter().enumerate() {
+        for (o, &v) in s[j * lds..j * lds + 8].iter_mut().zip(lanes) {
+            *o += v as f64;
         }
     }
 }

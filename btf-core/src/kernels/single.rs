@@ -1,20 +1,19 @@
 //! Single-precision products of the per-slot PCA ([S03 eq. 1]): the Gram matrix `YYᵀ` of
 //! `f16` data ([`GramAcc32`]), and `E·Yᵀ`, the projections of the images on the rounding
-//! error `E = S − B` of the stored (`f16`) eigentextures. `E` is at most `2⁻¹¹` of an entry of `B`, so its
-//! products need a relative precision of about `2⁻¹¹` less than the rest: in `f32`, with
-//! 16 lanes per register, they cost half the instructions of `f64`. Within one block of
-//! columns (at most 1024) every output sums in `f32` lanes; across blocks, in `f64`.
-//! The images enter widened to `f32` (exact for `f32` and `f16` data) or as a `f64` block
+//! error `E = S − B` of the stored (`f16`) eigentextures. `E` is at most `2⁻¹¹` of an entry
+//! of `B`, so its products need a relative precision of about `2⁻¹¹` less than the rest: in
+//! `f32` they cost half the instructions of `f64`. Every output sums chunks of
+//! [`CHUNK32`] columns in one `f32` lane each and the chunks in `f64` (`panel.rs`). The
+//! images enter widened to `f32` (exact for `f32` and `f16` data) or as a `f64` block
 //! rounded to `f32` (a relative change of `2⁻²⁴`).
 
-use super::{Block, Texel, lanes, runnable};
+use super::panel::PanelSums;
+use super::{Block, Texel, runnable};
 use crate::simd::Isa;
 
-/// `f32` lanes of one AVX-512 register.
+/// `f32` lanes of one AVX-512 register: the row pitch of a [`Block32`] is a multiple.
 pub const LANES32: usize = 16;
-/// Rows of `E` and of `Y` per tile.
-const TE: usize = 4;
-const TY: usize = 5;
+pub use super::panel::CHUNK as CHUNK32;
 
 /// Rows of `f32` values over one block of columns; like [`Block`], the columns past the
 /// width and [`Block32::PAD_ROWS`] rows past the last are zero.
@@ -24,17 +23,20 @@ pub struct Block32 {
     pub data: Vec<f32>,
     /// Rows in use.
     pub rows: usize,
+    /// Columns in use.
+    pub width: usize,
     /// Columns per row (a multiple of [`LANES32`]).
     pub stride: usize,
 }
 
 impl Block32 {
     /// Zero rows kept after the last one.
-    pub const PAD_ROWS: usize = TY;
+    pub const PAD_ROWS: usize = 5;
 
     /// Reshapes to `rows × width` (zeroed when the shape changes or the width is ragged).
     pub fn shape(&mut self, rows: usize, width: usize) {
         let stride = super::padded_stride(width.div_ceil(LANES32) * LANES32, LANES32);
+        self.width = width;
         if rows != self.rows || stride != self.stride || !width.is_multiple_of(LANES32) {
             self.rows = rows;
             self.stride = stride;
@@ -99,139 +101,79 @@ impl Block32 {
     }
 }
 
-/// Accumulates `E·Yᵀ` (`e_rows × y_rows`) block by block: `f32` sums within a block,
-/// `f64` across blocks.
+/// Accumulates `E·Yᵀ` (`e_rows × y_rows`) block by block: `f32` sums within a chunk of
+/// columns, `f64` across chunks and blocks (`panel.rs`).
 #[derive(Debug, Clone)]
 pub struct CrossAcc32 {
-    e_rows: usize,
-    y_rows: usize,
-    sums: Vec<f64>,
+    sums: PanelSums,
 }
 
 impl CrossAcc32 {
     /// For `e_rows × y_rows` outputs.
     pub fn new(e_rows: usize, y_rows: usize) -> Self {
-        let padded = e_rows.div_ceil(TE) * TE;
-        CrossAcc32 { e_rows, y_rows, sums: vec![0.0; padded * y_rows] }
+        CrossAcc32 { sums: PanelSums::new(e_rows, y_rows, false) }
     }
 
-    /// Adds the products of one block of columns (`e` with at least `e_rows` rounded up
-    /// to 4 rows, zero past `e_rows`).
+    /// Adds the products of one block of columns (`e` and `y` of the rows given to
+    /// [`CrossAcc32::new`] and the same width).
     pub fn add(&mut self, e: &Block32, y: &Block32) {
         self.add_with(e, y, Isa::active());
     }
 
     /// [`CrossAcc32::add`] on the path `isa`.
     pub(crate) fn add_with(&mut self, e: &Block32, y: &Block32, isa: Isa) {
-        assert_eq!((e.rows, y.rows), (self.e_rows, self.y_rows), "blocks of other shapes");
-        assert_eq!(e.stride, y.stride, "blocks of different widths");
-        let (w, n) = (e.stride, self.y_rows);
-        assert!(e.data.len() >= e.rows.div_ceil(TE) * TE * w, "block e lacks padding rows");
-        assert!(y.data.len() >= n * w);
-        let isa = runnable(isa);
-        for i0 in (0..self.e_rows).step_by(TE) {
-            let re = &e.data[i0 * w..(i0 + TE) * w];
-            let out = &mut self.sums[i0 * n..(i0 + TE) * n];
-            tile_rows(re, &y.data, (0, n), w, out, isa);
-        }
+        self.sums.add(e, Some(y), runnable(isa));
     }
 
     /// `out[i·ldo + j] = Σ e_i·y_j` over every block added.
     pub fn finish(&self, out: &mut [f64], ldo: usize) {
-        for i in 0..self.e_rows {
-            out[i * ldo..i * ldo + self.y_rows]
-                .copy_from_slice(&self.sums[i * self.y_rows..(i + 1) * self.y_rows]);
+        let (m, n) = (self.sums.a_rows(), self.sums.b_rows());
+        assert!(ldo >= n && (m == 0 || out.len() >= (m - 1) * ldo + n));
+        for i in 0..m {
+            for j in 0..n {
+                out[i * ldo + j] = self.sums.get(i, j);
+            }
         }
     }
 }
 
 /// Accumulates the upper triangle of the Gram matrix `Y·Yᵀ` of the rows of one block after
-/// another, as [`CrossAcc32`] does `E·Yᵀ` (the same tiles and lanes: `f32` sums of at most
-/// `w/16` products per lane within a block, `f64` across blocks): each block's sum is within
-/// `(w/16)·2⁻²⁴` of the sum of its products' magnitudes — for `f16` data, whose values
-/// carry 11 significant bits, far below the data's own precision — at twice the lanes of
-/// `f64` ([`crate::pca::GramPrecision`]). Every 4 rows are multiplied with
-/// the rows from their first on (3444 products a column for 81 rows; 3321 are needed).
+/// another, as [`CrossAcc32`] does `E·Yᵀ` (the same tiles: `f32` sums of at most
+/// [`CHUNK32`] products, `f64` across chunks): each entry is within `(CHUNK32 + 2)·2⁻²⁴`
+/// of the sum of its products' magnitudes — for `f16` data, whose values carry 11
+/// significant bits, far below the data's own precision — at twice the lanes of `f64`
+/// ([`crate::pca::GramPrecision`]). Panels of 8 rows (16 on AVX-512) are multiplied with
+/// the rows from their first on (3 608 products a column for 81 rows, 3 936 on AVX-512;
+/// 3 321 are needed).
 #[derive(Debug, Clone)]
 pub struct GramAcc32 {
-    rows: usize,
-    sums: Vec<f64>,
+    sums: PanelSums,
 }
 
 impl GramAcc32 {
     /// For the Gram matrix of `rows` rows.
     pub fn new(rows: usize) -> Self {
-        GramAcc32 { rows, sums: vec![0.0; rows.div_ceil(TE) * TE * rows] }
+        GramAcc32 { sums: PanelSums::new(rows, rows, true) }
     }
 
-    /// Adds the products of one block of columns (with at least `rows` rounded up to 4
-    /// rows, zero past `rows`).
+    /// Adds the products of one block of columns (of the rows given to [`GramAcc32::new`]).
     pub fn add(&mut self, y: &Block32) {
         self.add_with(y, Isa::active());
     }
 
     /// [`GramAcc32::add`] on the path `isa`.
     pub(crate) fn add_with(&mut self, y: &Block32, isa: Isa) {
-        assert_eq!(y.rows, self.rows, "a block of other rows");
-        let (w, n) = (y.stride, self.rows);
-        assert!(y.data.len() >= n.div_ceil(TE) * TE * w, "block lacks padding rows");
-        let isa = runnable(isa);
-        for i0 in (0..n).step_by(TE) {
-            let re = &y.data[i0 * w..(i0 + TE) * w];
-            let out = &mut self.sums[i0 * n..(i0 + TE) * n];
-            tile_rows(re, &y.data, (i0, n), w, out, isa);
-        }
+        self.sums.add(y, None, runnable(isa));
     }
 
     /// `out[i·ldo + j] += Σ_t y_i[t]·y_j[t]` over every block added, for `j ≥ i` (the
     /// other entries are left alone).
     pub fn finish(&self, out: &mut [f64], ldo: usize) {
-        let n = self.rows;
+        let n = self.sums.a_rows();
         assert!(ldo >= n && (n == 0 || out.len() >= (n - 1) * ldo + n));
         for i in 0..n {
             for j in i..n {
-                out[i * ldo + j] += self.sums[i * n + j];
-            }
-        }
-    }
-}
-
-/// `out[r·n + j] += Σ_t e_r[t]·y_j[t]` for the 4 rows of `e` and the rows `j0..n` of `y`
-/// (`w` values apart), in tiles of 4 × 5 (narrower at the end) on the path `isa`.
-fn tile_rows(e: &[f32], y: &[f32], (j0, n): (usize, usize), w: usize, out: &mut [f64], isa: Isa) {
-    let mut j = j0;
-    while j < n {
-        let s = TY.min(n - j);
-        let (ry, o) = (&y[j * w..(j + s) * w], &mut out[j..]);
-        match isa {
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx512 => tile_avx512(s, e, ry, w, o, n),
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: AVX2, FMA and F16C checked (`runnable`); the kernel is safe code.
-            Isa::Avx2 => unsafe { super::avx2::tile32(s, e, ry, w, o, n) },
-            Isa::Scalar => lanes::tile32::<false>(s, e, ry, w, o, n),
-            _ => lanes::tile32::<true>(s, e, ry, w, o, n),
-        }
-        j += s;
-    }
-}
-
-/// `lanes::tile32` with AVX-512 intrinsics (checked by the caller's caller).
-#[cfg(target_arch = "x86_64")]
-fn tile_avx512(s_count: usize, e: &[f32], y: &[f32], w: usize, out: &mut [f64], ldo: usize) {
-    assert!(e.len() >= TE * w && y.len() >= s_count * w && w.is_multiple_of(LANES32));
-    assert!((1..=TY).contains(&s_count) && out.len() > (TE - 1) * ldo + s_count - 1);
-    {
-        let (e, y, o) = (e.as_ptr(), y.as_ptr(), out.as_mut_ptr());
-        // SAFETY: AVX-512F checked by the caller's caller; e holds 4 rows and y s_count
-        // rows of w values (a multiple of 16), out the 4 × s_count outputs (asserted).
-        unsafe {
-            match s_count {
-                1 => super::avx512::tile32::<1>(e, y, w, o, ldo),
-                2 => super::avx512::tile32::<2>(e, y, w, o, ldo),
-                3 => super::avx512::tile32::<3>(e, y, w, o, ldo),
-                4 => super::avx512::tile32::<4>(e, y, w, o, ldo),
-                _ => super::avx512::tile32::<TY>(e, y, w, o, ldo),
+                out[i * ldo + j] += self.sums.get(i, j);
             }
         }
     }
@@ -252,8 +194,9 @@ mod tests {
 
     #[test]
     fn gram_matches_f64_sums_within_its_bound_on_every_path_and_the_simd_paths_agree_bitwise() {
-        // 13 rows (4-row tiles 0, 4, 8 and a padded 12; 5-row spans from each), two blocks
-        // of 1024 and 200 columns of values of mixed sign and magnitude.
+        // 13 rows (panels of 8 and 16 rows, partial; tiles of 12 and fewer), two blocks of
+        // 1024 and 200 columns (chunks of 64 and a last one of 8) of values of mixed sign
+        // and magnitude.
         let n = 13;
         let val = |i: usize, t: usize| {
             let v = ((i * 7919 + t * 104_729) % 1009) as f64 / 1009.0 - 0.45;
@@ -282,7 +225,7 @@ mod tests {
                     }
                 }
                 acc.add_with(&y, isa);
-                longest = longest.max(w.div_ceil(LANES32));
+                longest = longest.max(w.min(CHUNK32));
             }
             let mut out = vec![f64::NAN; n * n];
             for i in 0..n {
@@ -298,8 +241,9 @@ mod tests {
                         assert!(o.is_nan(), "{isa}: lower entry ({i}, {j}) written");
                         continue;
                     }
-                    // At most `longest` rounded f32 additions a lane (the first product
-                    // of a lane is exact only when unfused), then f64 sums.
+                    // At most `longest` rounded f32 steps a chunk (fused or not: a product
+                    // and a sum rounded once each, or the sum of the rounded product),
+                    // then f64 sums.
                     let tol = (longest + 2) as f64 * f32::EPSILON as f64 / 2.0 * abs[i * n + j];
                     let e = (o - want[i * n + j]).abs();
                     assert!(e <= tol, "{isa} ({i}, {j}): {o} vs {} (tol {tol})", want[i * n + j]);
@@ -319,8 +263,9 @@ mod tests {
 
     #[test]
     fn cross_products_match_f64_sums_on_every_path_and_the_simd_paths_agree_bitwise() {
-        // 6 E rows (padded to 8), 12 Y rows (5 + 5 + 2), two blocks of 48 and 40 columns.
-        let (ne, ny) = (6, 12);
+        // 6 E rows (a partial panel), 14 Y rows (tiles of 12 and 2), two blocks of 48 and 40
+        // columns (each one chunk; the AVX2 transposition's 8 × 8 blocks and a remainder).
+        let (ne, ny) = (6, 14);
         let val = |i: usize, t: usize, k: f64| ((i * 131 + t * 17) % 97) as f64 / 97.0 - k;
         let mut first: Option<Vec<f64>> = None;
         for isa in paths() {
@@ -353,9 +298,9 @@ mod tests {
             let mut out = vec![0f64; ne * ny];
             acc.finish(&mut out, ny);
             for (k, o) in out.iter().enumerate() {
-                // f32 sums of at most 3 terms per lane, an exact f32 product each: within
-                // (3 + 1)·2⁻²⁴ of Σ|e·y| (the f64 reduction and the naive sum add less).
-                let tol = 4.0 * f32::EPSILON as f64 / 2.0 * abs[k] * 1.01;
+                // f32 sums of at most 48 products a chunk: within (48 + 2)·2⁻²⁴ of Σ|e·y|
+                // (the f64 sum of the chunks and the naive sum add less).
+                let tol = 50.0 * f32::EPSILON as f64 / 2.0 * abs[k] * 1.01;
                 assert!((o - want[k]).abs() <= tol, "{isa} output {k}: {o} vs {}", want[k]);
             }
             if isa != Isa::Scalar {
