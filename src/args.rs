@@ -77,11 +77,11 @@ impl Quantization {
 choices! {
     /// Arithmetic of the compressor's Gram matrices (`btf compress --gram`).
     Gram {
-        /// f32 lanes for f16 stores, f64 for f32 ones.
+        /// f32 for f16 stores, f64 for f32 ones.
         Auto = "auto",
         /// f64 throughout.
         F64 = "f64",
-        /// f32 lanes within blocks of columns, f64 across them.
+        /// f32 within chunks of 64 columns, f64 across them.
         F32 = "f32",
     }
 }

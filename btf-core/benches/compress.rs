@@ -49,7 +49,7 @@ fn bench_pca_slot(c: &mut Criterion) {
     g.bench_function("c16_f16", |b| {
         b.iter(|| black_box(pca_slot(&slot, 16, Quantization::F16).unwrap()))
     });
-    // The slot as an f16 store holds it: the Gram matrix in f32 lanes (the default for f16
+    // The slot as an f16 store holds it: the Gram matrix in f32 (the default for f16
     // data) and, as the baseline, in f64.
     let halves: Vec<half::f16> = slot.data.iter().map(|&v| half::f16::from_f32(v)).collect();
     let m = slot.texel_values;

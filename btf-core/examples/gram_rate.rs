@@ -1,6 +1,6 @@
 //! The Gram kernels' throughput against the core's peak (BENCHMARKS.md #2 and "Instruction
 //! sets"), on the path `BTF_SIMD` chooses: `DotAcc::add` of one `rows × columns` block with
-//! itself in `f64` and `GramAcc32::add` of it in `f32` lanes (upper triangle, the block in
+//! itself in `f64` and `GramAcc32::add` of it in `f32` panels (upper triangle, the block in
 //! the cache), against independent chains of register-only FMAs of the path's width (twelve
 //! 512-bit chains under `avx512`, ten 256-bit ones under `avx2`), all in multiply-adds per
 //! second, best of five, on one thread: `gram_rate [ROWS [COLUMNS]]` (default 81 × 1024).
@@ -129,7 +129,7 @@ fn main() {
     std::hint::black_box(out);
     println!("path {isa}, Gram matrix of {n} × {w} (needed products only):");
     let peak = peak_f32(isa);
-    for (name, g, per_peak) in [("f64 (DotAcc)", g64, 0.5), ("f32 lanes (GramAcc32)", g32, 1.0)] {
+    for (name, g, per_peak) in [("f64 (DotAcc)", g64, 0.5), ("f32 panels (GramAcc32)", g32, 1.0)] {
         match peak {
             Some(p) => println!(
                 "  {name}: {:.2} G multiply-adds/s, {:.0} % of the register-only FMA peak in its precision ({:.2} G/s)",

@@ -5,11 +5,12 @@
 //!
 //! In `f64`, every product is of `f32` data widened exactly, so each single product is
 //! exact and only the sums round; in `f32` (the Gram matrix of `f16` data, the `f16`
-//! correction: `single.rs`) sixteen lanes sum within a block and `f64` across blocks. Each
-//! kernel has a path per instruction set ([`Isa`], chosen at run time or forced by
-//! `BTF_SIMD`): AVX-512 intrinsics (`avx512.rs`); the portable lane model (`lanes.rs`) with
-//! fused multiply-adds, compiled for AVX2 + FMA + F16C (`avx2.rs`, whose loads, widening
-//! and rounding are intrinsics in the same lanes) or for NEON; and the same lane model
+//! correction: `single.rs`, `panel.rs`) one lane sums each chunk of 64 columns and `f64`
+//! the chunks. Each kernel has a path per instruction set ([`Isa`], chosen at run time or
+//! forced by `BTF_SIMD`): AVX-512 intrinsics (`avx512.rs`); the portable lane model
+//! (`lanes.rs`) with fused multiply-adds, compiled for AVX2 + FMA + F16C (`avx2.rs`, whose
+//! loads, widening, rounding and `f32` panel tiles are intrinsics in the same arithmetic)
+//! or for NEON; and the same lane model
 //! without fusing, the scalar reference. The SIMD paths agree bit for bit, the scalar one
 //! within the rounding of its unfused products; the tests check both. `f16` rows are
 //! widened in the AVX-512 and AVX2 loads (`vcvtph2ps`), elsewhere by the `half` crate's

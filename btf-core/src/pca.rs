@@ -39,11 +39,11 @@ const CRC_SPAN_BYTES: usize = 8192;
 ///
 /// - `F64`: `Y` exact in `f64` and every product and sum in `f64` ([`DotAcc`]): the
 ///   eigenvalues to `f64` rounding (within `10⁻⁹` of the largest in the tests).
-/// - `F32`: `Y` rounded to `f32` and each block's products summed in sixteen `f32` lanes
-///   per entry, the blocks' sums in `f64` ([`GramAcc32`]), at twice the lanes a register
-///   and half the bytes a block. Every entry is then within `ε·Σ_t |y_it||y_jt|` of the
-///   exact one with `ε = (BLOCK/16 + 2)·2⁻²⁴ ≈ 3.9·10⁻⁶` (64 rounded additions a lane, the
-///   two roundings of `y`), so by Weyl's inequality every eigenvalue of the centred matrix
+/// - `F32`: `Y` rounded to `f32`, each entry's products summed in one `f32` lane over
+///   chunks of 64 columns, the chunks' sums in `f64` ([`GramAcc32`]), at twice the lanes a
+///   register and half the bytes a block. Every entry is then within `ε·Σ_t |y_it||y_jt|`
+///   of the exact one with `ε = (CHUNK32 + 2)·2⁻²⁴ ≈ 3.9·10⁻⁶` (64 rounded steps a chunk,
+///   the two roundings of `y`), so by Weyl's inequality every eigenvalue of the centred matrix
 ///   within `ε·tr(YYᵀ)`: for `f16` data, whose values carry 11 significant bits (a relative
 ///   precision of `2⁻¹¹ ≈ 4.9·10⁻⁴`), an error 125 times below the data's own. Components
 ///   whose eigenvalue is below that bound are not counted as effective.
@@ -55,7 +55,7 @@ pub enum GramPrecision {
     Auto,
     /// In `f64`.
     F64,
-    /// In `f32` lanes within a block, `f64` across blocks.
+    /// In `f32` within chunks of 64 columns, `f64` across them.
     F32,
 }
 

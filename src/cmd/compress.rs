@@ -24,9 +24,9 @@ pub struct CompressArgs {
     /// Storage of the eigentextures.
     #[arg(long, alias = "quantize", default_value = "f16")]
     quantization: crate::args::Quantization,
-    /// Arithmetic of each slot's Gram matrix: f64, or f32 lanes within blocks of 1024
-    /// columns (for f16 data, 125 times below its precision; twice the lanes); auto: f32
-    /// for f16 stores, f64 for f32 ones.
+    /// Arithmetic of each slot's Gram matrix: f64, or f32 within chunks of 64 columns and
+    /// f64 across them (for f16 data, 125 times below its precision; twice the lanes);
+    /// auto: f32 for f16 stores, f64 for f32 ones.
     #[arg(long, default_value = "auto")]
     gram: crate::args::Gram,
     /// Print one JSON object.

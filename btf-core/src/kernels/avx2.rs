@@ -10,17 +10,44 @@
 use super::{Lane, LoadStats, LoadTarget, Texel, lanes};
 use std::arch::x86_64::*;
 
+/// `lanes::lift` in intrinsics: 8 components × 4 columns per step (eight registers of sums;
+/// each row's four values widened once for eight multiply-adds, where the lane model's
+/// 4 × 8 widens each value for four), the same fused multiply-adds in the same order per
+/// output.
 #[target_feature(enable = "avx2,fma,f16c")]
 pub(super) fn lift(
     y: &[f32],
     n: usize,
     w: usize,
     coef: &[f64],
-    ks: (usize, usize, usize),
+    (cp, k0, step): (usize, usize, usize),
     out: &mut [f64],
     ldo: usize,
 ) {
-    lanes::lift::<true>(y, n, w, coef, ks, out, ldo)
+    const K: usize = super::LIFT_COMPONENTS;
+    assert!(y.len() >= n * w && w.is_multiple_of(4) && step.is_multiple_of(K));
+    assert!(coef.len() >= n * cp && k0 + step <= cp);
+    assert!(step == 0 || out.len() >= (step - 1) * ldo + w);
+    for kg in (0..step).step_by(K) {
+        for t in (0..w).step_by(4) {
+            let mut acc = [_mm256_setzero_pd(); K];
+            for i in 0..n {
+                // SAFETY: i < n and t + 4 ≤ w (the rows of y); k0 + kg + K ≤ cp (coef's
+                // row i).
+                unsafe {
+                    let yv = _mm256_cvtps_pd(_mm_loadu_ps(y.as_ptr().add(i * w + t)));
+                    let c = coef.as_ptr().add(i * cp + k0 + kg);
+                    for (k, a) in acc.iter_mut().enumerate() {
+                        *a = _mm256_fmadd_pd(_mm256_broadcast_sd(&*c.add(k)), yv, *a);
+                    }
+                }
+            }
+            for (k, a) in acc.iter().enumerate() {
+                // SAFETY: kg + k < step and t + 4 ≤ w: inside out (asserted).
+                unsafe { _mm256_storeu_pd(out.as_mut_ptr().add((kg + k) * ldo + t), *a) };
+            }
+        }
+    }
 }
 
 #[target_feature(enable = "avx2,fma,f16c")]
