@@ -164,30 +164,30 @@ pub(super) fn lift<const FUSED: bool>(
     }
 }
 
-/// A tile of `panel.rs` in the lane model: rows `0..8` of the packed `a` (`lda` values
+/// A tile of `panel.rs` in the lane model: rows `0..MR` of the packed `a` (`lda` values
 /// per column) against rows `0..N` of `b` (packed, `b[k·ldb + j]`, or with `ROWS` row by
 /// row, `b[j·ldb + k]`) over `kc` columns, one `f32` lane per output from zero, added in
 /// `f64` to `s[j·lds + i]`.
 #[inline(always)]
-pub(super) fn panel_tile<const N: usize, const ROWS: bool, const FUSED: bool>(
+pub(super) fn panel_tile<const MR: usize, const N: usize, const ROWS: bool, const FUSED: bool>(
     (a, lda): (&[f32], usize),
     (b, ldb): (&[f32], usize),
     kc: usize,
     (s, lds): (&mut [f64], usize),
 ) {
-    let mut acc = [[0f32; 8]; N];
+    let mut acc = [[0f32; MR]; N];
     for k in 0..kc {
-        let av: &[f32; 8] = a[k * lda..k * lda + 8].try_into().unwrap();
+        let av: &[f32; MR] = a[k * lda..k * lda + MR].try_into().unwrap();
         let bv: [f32; N] =
             std::array::from_fn(|j| if ROWS { b[j * ldb + k] } else { b[k * ldb + j] });
         for j in 0..N {
-            for l in 0..8 {
+            for l in 0..MR {
                 acc[j][l] = madd32::<FUSED>(av[l], bv[j], acc[j][l]);
             }
         }
     }
     for (j, lanes) in acc.iter().enumerate() {
-        for (o, &v) in s[j * lds..j * lds + 8].iter_mut().zip(lanes) {
+        for (o, &v) in s[j * lds..j * lds + MR].iter_mut().zip(lanes) {
             *o += v as f64;
         }
     }

@@ -34,8 +34,19 @@ pub const CHUNK: usize = 64;
 pub(super) const NR: usize = 12;
 /// Rows of `A` per panel on the AVX-512 path (and the padding of a packed chunk's rows).
 const PANEL_WIDE: usize = 16;
-/// Rows of `A` per panel on every other path.
-const PANEL: usize = 8;
+
+/// Rows of `A` per panel and outputs per tile on the path `isa`: a register of `f32`
+/// rows (16 on AVX-512, 8 on AVX2) times [`NR`]; 8 × 12 in NEON's 32 registers of 4
+/// lanes; 4 × 12 for the scalar path, whose sixteen SSE2 (or baseline) registers hold
+/// 12 sums of 4 lanes (8 × 6, sharing each broadcast between two registers, measured
+/// 16 % slower: the compiler keeps fewer of those sums in registers).
+fn panel_shape(isa: Isa) -> (usize, usize) {
+    match isa {
+        Isa::Avx512 => (PANEL_WIDE, NR),
+        Isa::Scalar => (4, NR),
+        _ => (8, NR),
+    }
+}
 
 /// `Σ a_i·b_j` over the columns of every block added, for the rows `i` of `A` and `j` of
 /// `B` a product asks for, summed as the module says. The sums are kept as `sums[j·ld + i]`
@@ -78,15 +89,15 @@ impl PanelSums {
             assert_eq!(a.width, b.width, "blocks of different widths");
         }
         let isa = runnable(isa);
-        let mr = if isa == Isa::Avx512 { PANEL_WIDE } else { PANEL };
+        let (mr, nr_most) = panel_shape(isa);
         let ld = self.ld;
         for k0 in (0..a.width).step_by(CHUNK) {
             let kc = CHUNK.min(a.width - k0);
             pack(a, k0, kc, &mut self.pack_a, ld, isa);
             for i0 in (0..self.a_rows).step_by(mr) {
                 let j_first = if self.upper { i0 } else { 0 };
-                for j0 in (j_first..self.b_rows).step_by(NR) {
-                    let nr = NR.min(self.b_rows - j0);
+                for j0 in (j_first..self.b_rows).step_by(nr_most) {
+                    let nr = nr_most.min(self.b_rows - j0);
                     let (a, s) = (&self.pack_a[i0..], &mut self.sums[j0 * ld + i0..]);
                     // A Gram matrix's B is the packed chunk; a product's, the rows of `b`.
                     let b = match b {
@@ -166,7 +177,7 @@ fn tile(
     kc: usize,
     (s, lds): (&mut [f64], usize),
 ) {
-    let mr = if isa == Isa::Avx512 { PANEL_WIDE } else { PANEL };
+    let mr = panel_shape(isa).0;
     assert!((1..=NR).contains(&nr) && kc >= 1);
     let (rows, b, ldb) = match b {
         Operand::Packed(b, ld) => (false, b, ld),
@@ -231,9 +242,9 @@ fn tile(
             macro_rules! go {
                 ($n:literal) => {
                     if rows {
-                        lanes::panel_tile::<$n, true, false>((a, lda), (b, ldb), kc, (s, lds))
+                        lanes::panel_tile::<4, $n, true, false>((a, lda), (b, ldb), kc, (s, lds))
                     } else {
-                        lanes::panel_tile::<$n, false, false>((a, lda), (b, ldb), kc, (s, lds))
+                        lanes::panel_tile::<4, $n, false, false>((a, lda), (b, ldb), kc, (s, lds))
                     }
                 };
             }
@@ -243,9 +254,9 @@ fn tile(
             macro_rules! go {
                 ($n:literal) => {
                     if rows {
-                        lanes::panel_tile::<$n, true, true>((a, lda), (b, ldb), kc, (s, lds))
+                        lanes::panel_tile::<8, $n, true, true>((a, lda), (b, ldb), kc, (s, lds))
                     } else {
-                        lanes::panel_tile::<$n, false, true>((a, lda), (b, ldb), kc, (s, lds))
+                        lanes::panel_tile::<8, $n, false, true>((a, lda), (b, ldb), kc, (s, lds))
                     }
                 };
             }
