@@ -192,3 +192,77 @@ pub(super) fn panel_tile<const MR: usize, const N: usize, const ROWS: bool, cons
         }
     }
 }
+
+/// `f32` lanes per output of the scalar path's dot-product tiles.
+const LANES32: usize = 16;
+
+/// The scalar path's `f32` products (`panel.rs`), as dot products along the columns:
+/// `out[r·rs + s·ss] += Σ_l Σ_t e_r[16t + l]·y_s[16t + l]` for the 4 rows of `e` and
+/// `s_count ≤ 5` of `y` (`w` values apart, `w` a multiple of 16), unfused, in sixteen `f32`
+/// lanes per output over the whole block, the lanes added in `f64` (lane `l` to `l + 8`,
+/// then [`reduce8`]). Without fused multiply-adds, a broadcast costs two SSE2
+/// instructions per four products, these tiles none: 16 % faster end to end than the
+/// panels (and within the same bound: `w/16 ≤ 64` roundings a lane).
+pub(super) fn dot_tile32(
+    s_count: usize,
+    e: &[f32],
+    y: &[f32],
+    w: usize,
+    out: &mut [f64],
+    (rs, ss): (usize, usize),
+) {
+    for r0 in [0, 2] {
+        match s_count {
+            1 => dot_sub_tile32::<1>(r0, e, y, w, out, (rs, ss)),
+            2 => dot_sub_tile32::<2>(r0, e, y, w, out, (rs, ss)),
+            3 => dot_sub_tile32::<3>(r0, e, y, w, out, (rs, ss)),
+            4 => dot_sub_tile32::<4>(r0, e, y, w, out, (rs, ss)),
+            _ => dot_sub_tile32::<5>(r0, e, y, w, out, (rs, ss)),
+        }
+    }
+}
+
+/// Rows `r0, r0 + 1` of `dot_tile32`, eight lanes at a time (two half sweeps).
+#[inline(always)]
+fn dot_sub_tile32<const S: usize>(
+    r0: usize,
+    e: &[f32],
+    y: &[f32],
+    w: usize,
+    out: &mut [f64],
+    (rs, ss): (usize, usize),
+) {
+    let groups = w / LANES32;
+    fn row(m: &[f32], from: usize, groups: usize) -> &[[f32; LANES32]] {
+        m[from..].as_chunks::<LANES32>().0.get(..groups).expect("rows inside the block")
+    }
+    let er: [&[[f32; LANES32]]; 2] = std::array::from_fn(|r| row(e, (r0 + r) * w, groups));
+    let yr: [&[[f32; LANES32]]; S] = std::array::from_fn(|s| row(y, s * w, groups));
+    let mut lanes = [[[0f32; LANES32]; S]; 2];
+    for h in [0, 8] {
+        let mut v = [[[0f32; 8]; S]; 2];
+        for g in 0..groups {
+            let ev: [[f32; 8]; 2] = std::array::from_fn(|r| er[r][g][h..h + 8].try_into().unwrap());
+            for s in 0..S {
+                let ys: &[f32; 8] = yr[s][g][h..h + 8].try_into().unwrap();
+                for r in 0..2 {
+                    for l in 0..8 {
+                        v[r][s][l] = madd32::<false>(ev[r][l], ys[l], v[r][s][l]);
+                    }
+                }
+            }
+        }
+        for r in 0..2 {
+            for s in 0..S {
+                lanes[r][s][h..h + 8].copy_from_slice(&v[r][s]);
+            }
+        }
+    }
+    for r in 0..2 {
+        for s in 0..S {
+            let l = &lanes[r][s];
+            out[(r0 + r) * rs + s * ss] +=
+                reduce8(std::array::from_fn(|i| l[i] as f64 + l[i + 8] as f64));
+        }
+    }
+}

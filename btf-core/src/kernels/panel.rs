@@ -10,10 +10,12 @@
 //! held in registers. An output's sum over a chunk is therefore one `f32` lane adding the
 //! chunk's products in column order from zero, and the chunk sums are added in `f64`, in
 //! chunk order. That arithmetic does not depend on the panel or tile shape: every SIMD
-//! path gives the same bits, the scalar one (multiplying and adding separately) agrees
-//! within its rounding, and each output is within `(CHUNK + 2)·2⁻²⁴` of the sum of its
-//! products' magnitudes (`CHUNK` roundings of the sum, two of the operands' rounding to
-//! `f32`), the bound [`crate::pca::GRAM32_EPS`] states.
+//! path gives the same bits, and each output is within `(CHUNK + 2)·2⁻²⁴` of the sum of
+//! its products' magnitudes (`CHUNK` roundings of the sum, two of the operands' rounding
+//! to `f32`), the bound [`crate::pca::GRAM32_EPS`] states. The scalar path, which has no
+//! fused multiply-add and pays two SSE2 instructions per broadcast, keeps the dot products
+//! along the columns instead (`lanes::dot_tile32`: sixteen lanes over a block of at most
+//! 1024 columns, so at most 64 roundings a lane, the same bound), and agrees within it.
 //!
 //! Why not lanes along the columns, as the `f64` tiles (`lanes.rs`) and, until session 27,
 //! these did: a dot product of two rows costs two loads per multiply-add unless a tile of
@@ -37,13 +39,10 @@ const PANEL_WIDE: usize = 16;
 
 /// Rows of `A` per panel and outputs per tile on the path `isa`: a register of `f32`
 /// rows (16 on AVX-512, 8 on AVX2) times [`NR`]; 8 × 12 in NEON's 32 registers of 4
-/// lanes; 4 × 12 for the scalar path, whose sixteen SSE2 (or baseline) registers hold
-/// 12 sums of 4 lanes (8 × 6, sharing each broadcast between two registers, measured
-/// 16 % slower: the compiler keeps fewer of those sums in registers).
+/// lanes. (The scalar path does not use panels: [`PanelSums::add_scalar`].)
 fn panel_shape(isa: Isa) -> (usize, usize) {
     match isa {
         Isa::Avx512 => (PANEL_WIDE, NR),
-        Isa::Scalar => (4, NR),
         _ => (8, NR),
     }
 }
@@ -89,6 +88,9 @@ impl PanelSums {
             assert_eq!(a.width, b.width, "blocks of different widths");
         }
         let isa = runnable(isa);
+        if isa == Isa::Scalar {
+            return self.add_scalar(a, b);
+        }
         let (mr, nr_most) = panel_shape(isa);
         let ld = self.ld;
         for k0 in (0..a.width).step_by(CHUNK) {
@@ -106,6 +108,27 @@ impl PanelSums {
                     };
                     tile(isa, nr, (a, ld), b, kc, (s, ld));
                 }
+            }
+        }
+    }
+
+    /// [`PanelSums::add`] on the scalar path: dot products along the columns in tiles of
+    /// 4 × 5 outputs (`lanes::dot_tile32`), each block's sixteen lanes added into `f64`.
+    fn add_scalar(&mut self, a: &Block32, b: Option<&Block32>) {
+        let (w, ld) = (a.stride, self.ld);
+        let bd = b.map_or(&a.data, |b| &b.data);
+        assert!(b.is_none_or(|b| b.stride == w), "blocks of different pitches");
+        // Rows past `a_rows` (up to 3 of them, read as whole tiles) are the block's zero
+        // padding rows; their sums land in `sums`'s padding lanes.
+        assert!(a.data.len() >= a.rows.div_ceil(4) * 4 * w && bd.len() >= self.b_rows * w);
+        for i0 in (0..self.a_rows).step_by(4) {
+            let e = &a.data[i0 * w..(i0 + 4) * w];
+            let mut j = if self.upper { i0 } else { 0 };
+            while j < self.b_rows {
+                let s = 5.min(self.b_rows - j);
+                let out = &mut self.sums[j * ld + i0..];
+                lanes::dot_tile32(s, e, &bd[j * w..(j + s) * w], w, out, (1, ld));
+                j += s;
             }
         }
     }
@@ -233,18 +256,6 @@ fn tile(
                         } else {
                             super::avx2::panel_tile::<$n, false>(ap, lda, bp, ldb, kc, sp, lds)
                         }
-                    }
-                };
-            }
-            each_nr!(go)
-        }
-        Isa::Scalar => {
-            macro_rules! go {
-                ($n:literal) => {
-                    if rows {
-                        lanes::panel_tile::<4, $n, true, false>((a, lda), (b, ldb), kc, (s, lds))
-                    } else {
-                        lanes::panel_tile::<4, $n, false, false>((a, lda), (b, ldb), kc, (s, lds))
                     }
                 };
             }
