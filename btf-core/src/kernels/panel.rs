@@ -98,8 +98,14 @@ impl PanelSums {
             pack(a, k0, kc, &mut self.pack_a, ld, isa);
             for i0 in (0..self.a_rows).step_by(mr) {
                 let j_first = if self.upper { i0 } else { 0 };
-                for j0 in (j_first..self.b_rows).step_by(nr_most) {
-                    let nr = nr_most.min(self.b_rows - j0);
+                // The rows from j_first on in tiles of near-equal size (73 rows: 11, 11, 11,
+                // 10, 10, 10, 10, not six of 12 and one of 1, whose one chain of sums would
+                // wait on every multiply-add's latency).
+                let rest = self.b_rows - j_first;
+                let tiles = rest.div_ceil(nr_most);
+                let mut j0 = j_first;
+                for t in 0..tiles {
+                    let nr = rest / tiles + usize::from(t < rest % tiles);
                     let (a, s) = (&self.pack_a[i0..], &mut self.sums[j0 * ld + i0..]);
                     // A Gram matrix's B is the packed chunk; a product's, the rows of `b`.
                     let b = match b {
@@ -107,6 +113,7 @@ impl PanelSums {
                         Some(b) => Operand::Rows(&b.data[j0 * b.stride + k0..], b.stride),
                     };
                     tile(isa, nr, (a, ld), b, kc, (s, ld));
+                    j0 += nr;
                 }
             }
         }

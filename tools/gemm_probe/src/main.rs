@@ -80,7 +80,7 @@ fn main() {
     println!("Gram matrix of {n} × {w}, one thread, btf-core path {} (µs a block, best of 7):", Isa::active());
     for (name, t) in [
         ("btf-core DotAcc, f64, upper triangle", t_dot),
-        ("btf-core GramAcc32, f32 lanes, upper triangle", t_g32),
+        ("btf-core GramAcc32, f32 panels, upper triangle", t_g32),
         ("gemm 0.18, f32, whole product", t_gemm32),
         ("gemm 0.18, f64, whole product", t_gemm64),
         ("matrixmultiply, f32, whole product", t_mm32),
