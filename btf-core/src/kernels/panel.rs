@@ -163,10 +163,11 @@ impl PanelSums {
 fn pack(x: &Block32, k0: usize, kc: usize, pack: &mut [f32], ld: usize, isa: Isa) {
     assert!(pack.len() >= kc * ld && x.rows <= ld && k0 + kc <= x.width);
     let (rows, w) = (x.rows, x.stride);
-    let (mut i_done, mut k_done) = (0, 0);
+    // The rows and columns done in 8 × 8 blocks; the rest value by value.
+    let x86 = cfg!(target_arch = "x86_64") && matches!(isa, Isa::Avx2 | Isa::Avx512);
+    let (i_done, k_done) = if x86 { (rows - rows % 8, kc - kc % 8) } else { (0, 0) };
     #[cfg(target_arch = "x86_64")]
-    if matches!(isa, Isa::Avx2 | Isa::Avx512) {
-        (i_done, k_done) = (rows - rows % 8, kc - kc % 8);
+    if x86 {
         // SAFETY: AVX2 checked (`runnable`: both paths' CPUs have it); rows < i_done ≤ rows
         // of x at columns k0.. + k_done ≤ width ≤ stride, and pack columns < k_done ≤ kc of
         // rows < i_done ≤ ld (asserted above).
@@ -180,7 +181,6 @@ fn pack(x: &Block32, k0: usize, kc: usize, pack: &mut [f32], ld: usize, isa: Isa
             )
         }
     }
-    let _ = isa;
     for i in 0..rows {
         let row = &x.data[i * w + k0..i * w + k0 + kc];
         let from = if i < i_done { k_done } else { 0 };
@@ -234,6 +234,7 @@ fn tile(
             }
         };
     }
+    #[cfg(target_arch = "x86_64")]
     let (ap, bp, sp) = (a.as_ptr(), b.as_ptr(), s.as_mut_ptr());
     match isa {
         #[cfg(target_arch = "x86_64")]
