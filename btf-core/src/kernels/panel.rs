@@ -219,69 +219,55 @@ fn tile(
     assert!(a.len() > (kc - 1) * lda + mr - 1 && b.len() > b_last);
     assert!(s.len() > (nr - 1) * lds + mr - 1);
     macro_rules! each_nr {
-        ($f:ident) => {
+        ($f:ident, $m:ident) => {
             match nr {
-                1 => $f!(1),
-                2 => $f!(2),
-                3 => $f!(3),
-                4 => $f!(4),
-                5 => $f!(5),
-                6 => $f!(6),
-                7 => $f!(7),
-                8 => $f!(8),
-                9 => $f!(9),
-                10 => $f!(10),
-                11 => $f!(11),
-                _ => $f!(12),
+                1 => $f!($m, 1),
+                2 => $f!($m, 2),
+                3 => $f!($m, 3),
+                4 => $f!($m, 4),
+                5 => $f!($m, 5),
+                6 => $f!($m, 6),
+                7 => $f!($m, 7),
+                8 => $f!($m, 8),
+                9 => $f!($m, 9),
+                10 => $f!($m, 10),
+                11 => $f!($m, 11),
+                _ => $f!($m, 12),
             }
         };
     }
+    // The intrinsics of the module `$m` (`avx2`, `avx512`).
     #[cfg(target_arch = "x86_64")]
     let (ap, bp, sp) = (a.as_ptr(), b.as_ptr(), s.as_mut_ptr());
+    #[cfg(target_arch = "x86_64")]
+    macro_rules! simd {
+        ($m:ident, $n:literal) => {
+            // SAFETY: the path's features checked (`runnable`: AVX-512F, or AVX2 and FMA);
+            // the extents are asserted above.
+            unsafe {
+                if rows {
+                    super::$m::panel_tile::<$n, true>(ap, lda, bp, ldb, kc, sp, lds)
+                } else {
+                    super::$m::panel_tile::<$n, false>(ap, lda, bp, ldb, kc, sp, lds)
+                }
+            }
+        };
+    }
+    // The lane model, fused (NEON; on x86 the tests' NEON path).
+    macro_rules! portable {
+        ($m:ident, $n:literal) => {
+            if rows {
+                $m::panel_tile::<8, $n, true, true>((a, lda), (b, ldb), kc, (s, lds))
+            } else {
+                $m::panel_tile::<8, $n, false, true>((a, lda), (b, ldb), kc, (s, lds))
+            }
+        };
+    }
     match isa {
         #[cfg(target_arch = "x86_64")]
-        Isa::Avx512 => {
-            macro_rules! go {
-                ($n:literal) => {
-                    // SAFETY: AVX-512F checked (`runnable`); the extents are asserted above.
-                    unsafe {
-                        if rows {
-                            super::avx512::panel_tile::<$n, true>(ap, lda, bp, ldb, kc, sp, lds)
-                        } else {
-                            super::avx512::panel_tile::<$n, false>(ap, lda, bp, ldb, kc, sp, lds)
-                        }
-                    }
-                };
-            }
-            each_nr!(go)
-        }
+        Isa::Avx512 => each_nr!(simd, avx512),
         #[cfg(target_arch = "x86_64")]
-        Isa::Avx2 => {
-            macro_rules! go {
-                ($n:literal) => {
-                    // SAFETY: AVX2 and FMA checked (`runnable`); the extents are asserted above.
-                    unsafe {
-                        if rows {
-                            super::avx2::panel_tile::<$n, true>(ap, lda, bp, ldb, kc, sp, lds)
-                        } else {
-                            super::avx2::panel_tile::<$n, false>(ap, lda, bp, ldb, kc, sp, lds)
-                        }
-                    }
-                };
-            }
-            each_nr!(go)
-        }
-        _ => {
-            macro_rules! go {
-                ($n:literal) => {
-                    if rows {
-                        lanes::panel_tile::<8, $n, true, true>((a, lda), (b, ldb), kc, (s, lds))
-                    } else {
-                        lanes::panel_tile::<8, $n, false, true>((a, lda), (b, ldb), kc, (s, lds))
-                    }
-                };
-            }
-            each_nr!(go)
-        }
+        Isa::Avx2 => each_nr!(simd, avx2),
+        _ => each_nr!(portable, lanes),
     }
 }
