@@ -5,7 +5,10 @@
 //! kernels', bit for bit. The block loads and widenings are written with intrinsics (the
 //! vectoriser leaves the portable load's `f16` conversion, NaN-aware maximum and energy
 //! lanes scalar, five times slower), in the lanes of the portable load, so they give its
-//! bits. Callers check the features at run time ([`crate::simd::Isa::supported`]).
+//! bits; so are the lift (8 components × 4 columns a step, where the vectoriser widened
+//! every value four times) and the `f32` panel tiles of `panel.rs` with their 8 × 8
+//! transpositions, in the lane model's order of operations per output. Callers check the
+//! features at run time ([`crate::simd::Isa::supported`]).
 
 use super::{Lane, LoadStats, LoadTarget, Texel, lanes};
 use std::arch::x86_64::*;
