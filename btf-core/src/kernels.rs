@@ -403,6 +403,16 @@ fn load_shifted_body<T: Texel, B: LoadTarget>(
     Some(load_tail(x, c0, (body, w), &sh[c0..c0 + w], blk, cs, st))
 }
 
+/// `dst[t] = src[t] − sh[t]` (or `src[t]`), exactly in `f64` then as a lane value: the
+/// columns after the vector body of the AVX2 and AVX-512 loads without statistics.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn plain_tail<T: Texel, V: Lane>(src: &[T], sh: Option<&[T]>, dst: &mut [V]) {
+    for (t, d) in dst.iter_mut().enumerate() {
+        *d = V::of(src[t].widen() as f64 - sh.map_or(0.0, |s| s[t].widen() as f64));
+    }
+}
+
 /// The last columns `body..w` of a load with statistics, one by one after the lanes are
 /// reduced into `st` (every path's rule): `sh` and `cs` start at column `c0`.
 #[inline(always)]

@@ -275,15 +275,12 @@ fn load_plain<T: Texel, B: LoadTarget>(
                 store4(dst.as_mut_ptr().add(t + 4), hi);
             }
         }
-        for t in body..w {
-            dst[t] = B::V::of(src[t].widen() as f64 - sh.map_or(0.0, |s| s[t].widen() as f64));
-        }
+        super::plain_tail(&src[body..], sh.map(|s| &s[body..]), &mut dst[body..]);
     }
 }
 
-/// See `f16_round::round_to_f16_with`, eight values at a time (all slices of `b.len()`;
-/// `narrow` is unused here): every step a correctly rounded conversion or exact, so the
-/// portable path's bits.
+/// See `f16_round::round_to_f16_with`, eight values at a time (all slices of `b.len()`):
+/// every step a correctly rounded conversion or exact, so the portable path's bits.
 #[target_feature(enable = "avx2,fma,f16c")]
 pub(super) fn round_to_f16(
     b: &[f64],
@@ -291,7 +288,6 @@ pub(super) fn round_to_f16(
     stored: &mut [f64],
     err: &mut [f32],
     (hi, lo): (&mut f64, &mut f64),
-    _narrow: &mut [f32],
 ) {
     let w = b.len();
     assert!(halves.len() == w && stored.len() == w && err.len() == w);
@@ -326,14 +322,15 @@ pub(super) fn round_to_f16(
     }
     *hi = h4.iter().copied().fold(*hi, f64::max);
     *lo = l4.iter().copied().fold(*lo, f64::min);
-    for t in body..w {
-        let v = b[t];
-        halves[t] = half::f16::from_f32(v as f32);
-        stored[t] = halves[t].to_f64();
-        err[t] = (stored[t] - v) as f32;
-        *hi = if v > *hi { v } else { *hi };
-        *lo = if v < *lo { v } else { *lo };
-    }
+    // The last w mod 8 values as the portable path rounds them (the same conversions).
+    super::f16_round::round_portable(
+        &b[body..],
+        &mut halves[body..],
+        &mut stored[body..],
+        &mut err[body..],
+        (hi, lo),
+        &mut [0f32; 8],
+    );
 }
 
 /// `to[t] = from[t]` widened to `f32` (exact), eight at a time.

@@ -102,9 +102,7 @@ fn load_plain<T: Texel, B: LoadTarget>(
                 store16(dst.as_mut_ptr().add(t), lo, hi);
             }
         }
-        for t in body..w {
-            dst[t] = B::V::of(src[t].widen() as f64 - sh.map_or(0.0, |s| s[t].widen() as f64));
-        }
+        super::plain_tail(&src[body..], sh.map(|s| &s[body..]), &mut dst[body..]);
     }
 }
 
@@ -358,12 +356,13 @@ pub(super) fn round_to_f16(
     }
     *hi = _mm512_reduce_max_pd(vhi);
     *lo = _mm512_reduce_min_pd(vlo);
-    for t in body..w {
-        let v = b[t];
-        halves[t] = half::f16::from_f32(v as f32);
-        stored[t] = halves[t].to_f64();
-        err[t] = (stored[t] - v) as f32;
-        *hi = if v > *hi { v } else { *hi };
-        *lo = if v < *lo { v } else { *lo };
-    }
+    // The last w mod 8 values as the portable path rounds them (the same conversions).
+    super::f16_round::round_portable(
+        &b[body..],
+        &mut halves[body..],
+        &mut stored[body..],
+        &mut err[body..],
+        (hi, lo),
+        &mut [0f32; 8],
+    );
 }

@@ -43,7 +43,7 @@ pub(crate) fn round_to_f16_with(
         Isa::Avx512 => unsafe { super::avx512::round_to_f16(b, halves, stored, err, (hi, lo)) },
         #[cfg(target_arch = "x86_64")]
         // SAFETY: AVX2, FMA and F16C checked (`runnable`); the function is safe code.
-        Isa::Avx2 => unsafe { super::avx2::round_to_f16(b, halves, stored, err, (hi, lo), narrow) },
+        Isa::Avx2 => unsafe { super::avx2::round_to_f16(b, halves, stored, err, (hi, lo)) },
         _ => round_portable(b, halves, stored, err, (hi, lo), narrow),
     }
 }
