@@ -194,9 +194,9 @@ mod tests {
 
     #[test]
     fn gram_matches_f64_sums_within_its_bound_on_every_path_and_the_simd_paths_agree_bitwise() {
-        // 13 rows (panels of 8 and 16 rows, partial; tiles of 12 and fewer), two blocks of
-        // 1024 and 200 columns (chunks of 64 and a last one of 8) of values of mixed sign
-        // and magnitude.
+        // 13 rows (panels of 8 and 16 rows, partial; tiles of 12 and fewer), three blocks
+        // of 1024, 200 and 75 columns (chunks of 64, a last one of 8, and 11: 8 columns
+        // transposed and 3 copied) of values of mixed sign and magnitude.
         let n = 13;
         let val = |i: usize, t: usize| {
             let v = ((i * 7919 + t * 104_729) % 1009) as f64 / 1009.0 - 0.45;
@@ -207,7 +207,7 @@ mod tests {
             let mut acc = GramAcc32::new(n);
             let (mut want, mut abs) = (vec![0f64; n * n], vec![0f64; n * n]);
             let mut longest = 0;
-            for (c0, w) in [(0, 1024), (1024, 200)] {
+            for (c0, w) in [(0, 1024), (1024, 200), (1224, 75)] {
                 let mut y = Block32::default();
                 y.shape(n, w);
                 for i in 0..n {
@@ -263,15 +263,16 @@ mod tests {
 
     #[test]
     fn cross_products_match_f64_sums_on_every_path_and_the_simd_paths_agree_bitwise() {
-        // 6 E rows (a partial panel), 14 Y rows (tiles of 12 and 2), two blocks of 48 and 40
-        // columns (each one chunk; the AVX2 transposition's 8 × 8 blocks and a remainder).
-        let (ne, ny) = (6, 14);
+        // 10 E rows (one 8-row transposition group and 2 copied; a partial panel), 14 Y
+        // rows (tiles of 7 and 7), blocks of 48 and 43 columns (one chunk each; the second
+        // with 3 columns past the transposition's 8 × 8 blocks).
+        let (ne, ny) = (10, 14);
         let val = |i: usize, t: usize, k: f64| ((i * 131 + t * 17) % 97) as f64 / 97.0 - k;
         let mut first: Option<Vec<f64>> = None;
         for isa in paths() {
             let mut acc = CrossAcc32::new(ne, ny);
             let (mut want, mut abs) = (vec![0f64; ne * ny], vec![0f64; ne * ny]);
-            for (c0, w) in [(0, 48), (48, 40)] {
+            for (c0, w) in [(0, 48), (48, 43)] {
                 let (mut e, mut y) = (Block32::default(), Block32::default());
                 e.shape(ne, w);
                 y.shape(ny, w);
