@@ -107,8 +107,18 @@ fn peak_f32(_: Isa) -> Option<f64> {
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let n: usize = args.get(1).map_or(81, |a| a.parse().expect("ROWS: a number"));
-    let w: usize = args.get(2).map_or(1024, |a| a.parse().expect("COLUMNS: a number"));
+    // ROWS and COLUMNS: positive and modest (a block is ROWS × COLUMNS values, twice).
+    let arg = |k: usize, name: &str, default: usize, most: usize| -> usize {
+        let Some(a) = args.get(k) else { return default };
+        match a.parse::<usize>() {
+            Ok(v) if (1..=most).contains(&v) => v,
+            _ => {
+                eprintln!("gram_rate [ROWS [COLUMNS]]: {name} '{a}' is not a number in 1..={most}");
+                std::process::exit(2)
+            }
+        }
+    };
+    let (n, w) = (arg(1, "ROWS", 81, 1024), arg(2, "COLUMNS", 1024, 1 << 16));
     let isa = Isa::active();
     let (mut b64, mut b32) = (Block::default(), Block32::default());
     b64.shape(n, w);

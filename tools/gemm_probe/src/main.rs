@@ -24,8 +24,17 @@ fn best_us(reps: usize, mut f: impl FnMut()) -> f64 {
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let n: usize = args.get(1).map_or(81, |a| a.parse().expect("ROWS: a number"));
-    let w: usize = args.get(2).map_or(1024, |a| a.parse().expect("COLUMNS: a number"));
+    let arg = |k: usize, name: &str, default: usize, most: usize| -> usize {
+        let Some(a) = args.get(k) else { return default };
+        match a.parse::<usize>() {
+            Ok(v) if (1..=most).contains(&v) => v,
+            _ => {
+                eprintln!("gemm_probe [ROWS [COLUMNS]]: {name} '{a}' is not a number in 1..={most}");
+                std::process::exit(2)
+            }
+        }
+    };
+    let (n, w) = (arg(1, "ROWS", 81, 1024), arg(2, "COLUMNS", 1024, 1 << 16));
     let value = |i: usize, t: usize| ((i * 31 + t * 17) % 97) as f64 * 1e-2 - 0.4;
     let y64: Vec<f64> = (0..n * w).map(|k| value(k / w, k % w)).collect();
     let y32: Vec<f32> = y64.iter().map(|&v| v as f32).collect();
