@@ -1,18 +1,23 @@
 //! The Gram kernels' throughput against the core's peak (BENCHMARKS.md #2 and "Instruction
 //! sets"), on the path `BTF_SIMD` chooses: `DotAcc::add` of one `rows × columns` block with
 //! itself in `f64` and `GramAcc32::add` of it in `f32` panels (upper triangle, the block in
-//! the cache), against independent chains of register-only FMAs of the path's width (twelve
-//! 512-bit chains under `avx512`, ten 256-bit ones under `avx2`), all in multiply-adds per
-//! second, best of five, on one thread: `gram_rate [ROWS [COLUMNS]]` (default 81 × 1024).
+//! the cache), and the fused pass's lift of the block to 16 rows in `f64` (`lift_rows32`),
+//! against independent chains of register-only FMAs of the path's width (twelve 512-bit
+//! chains under `avx512`, ten 256-bit ones under `avx2`), all in multiply-adds per second,
+//! best of five, on one thread: `gram_rate [ROWS [COLUMNS]]` (default 81 × 1024).
 #![allow(unsafe_code)] // the peak loops use intrinsics directly
 
-use btf_core::kernels::{Block, Block32, DotAcc, GramAcc32};
+use btf_core::kernels::{Block, Block32, DotAcc, GramAcc32, lift_rows32};
 use btf_core::simd::Isa;
 use std::time::Instant;
 
 /// Multiply-adds per second of `add` (one block's upper triangle), best of five.
-fn rate(n: usize, w: usize, mut add: impl FnMut()) -> f64 {
-    let products = (n * (n + 1) / 2 * w) as f64;
+fn rate(n: usize, w: usize, add: impl FnMut()) -> f64 {
+    rate_of((n * (n + 1) / 2 * w) as f64, add)
+}
+
+/// Multiply-adds per second of `add`, which does `products` of them, best of five.
+fn rate_of(products: f64, mut add: impl FnMut()) -> f64 {
     let reps = (4e9 / products) as usize + 1;
     let mut best = 0f64;
     for _ in 0..5 {
@@ -137,9 +142,18 @@ fn main() {
     acc64.finish(&mut out, n);
     acc32.finish(&mut out, n);
     std::hint::black_box(out);
-    println!("path {isa}, Gram matrix of {n} × {w} (needed products only):");
+    // The lift of the fused pass: 16 components of the block in f64 (lift_rows32).
+    let cp = 16;
+    let coef: Vec<f64> = (0..n * cp).map(|i| value(i, 3) - 0.4).collect();
+    let ws = b32.stride;
+    let mut lifted = vec![0f64; cp * ws];
+    let l64 = rate_of((n * cp * w) as f64, || lift_rows32(&b32, &coef, cp, &mut lifted, ws, 0));
+    std::hint::black_box(lifted);
+    println!("path {isa}, Gram matrix of {n} × {w} (needed products only), lift to {cp} rows:");
     let peak = peak_f32(isa);
-    for (name, g, per_peak) in [("f64 (DotAcc)", g64, 0.5), ("f32 panels (GramAcc32)", g32, 1.0)] {
+    let rows =
+        [("f64 (DotAcc)", g64, 0.5), ("f32 panels (GramAcc32)", g32, 1.0), ("f64 lift", l64, 0.5)];
+    for (name, g, per_peak) in rows {
         match peak {
             Some(p) => println!(
                 "  {name}: {:.2} G multiply-adds/s, {:.0} % of the register-only FMA peak in its precision ({:.2} G/s)",
