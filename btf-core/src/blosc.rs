@@ -734,4 +734,50 @@ mod tests {
         t[12..16].copy_from_slice(&cbytes.to_le_bytes());
         assert!(decode(&t, n).unwrap_err().to_string().contains("block 2"));
     }
+
+    /// Frames c-blosc 1.21 wrote (numcodecs 0.16.6, `tests/data/blosc/make_frames.py`):
+    /// (name, typesize, clevel, shuffle, blocksize asked for, split).
+    const FIXTURES: [(&str, usize, u8, bool, u32, bool); 8] = [
+        ("f16_shuffle", 2, 1, true, 1024, false),
+        ("f16_noshuffle", 2, 3, false, 1024, false),
+        ("f16_shuffle_split", 2, 1, true, 1024, true),
+        ("u32_shuffle_split_odd", 4, 5, true, 1024, true),
+        ("f64_noshuffle_odd", 8, 1, false, 1024, false),
+        ("u8_shuffle", 1, 1, true, 512, false),
+        ("small_memcpyed", 2, 1, true, 0, false),
+        ("clevel0_memcpyed", 2, 0, true, 0, false),
+    ];
+
+    #[test]
+    fn frames_written_by_c_blosc_decode_identically() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/blosc");
+        for (name, ts, clevel, shuffle, blocksize, split) in FIXTURES {
+            let frame = std::fs::read(dir.join(format!("{name}.blosc"))).unwrap();
+            let packed = std::fs::read(dir.join(format!("{name}.raw.zst"))).unwrap();
+            let raw = zstd::bulk::decompress(&packed, 1 << 20).unwrap();
+            let h = read_header(&frame, raw.len()).unwrap();
+            assert_eq!(h.typesize, ts, "{name}");
+            let memcpyed = h.flags & FLAG_MEMCPYED != 0;
+            assert_eq!(memcpyed, name.contains("memcpyed"), "{name}");
+            assert_eq!(h.flags & FLAG_DONT_SPLIT == 0, split, "{name}");
+            if !memcpyed {
+                assert!(raw.len().div_ceil(h.blocksize) >= 2, "{name}: several blocks");
+                assert_ne!(raw.len() % h.blocksize, 0, "{name}: a leftover block");
+            }
+            assert_eq!(decode(&frame, raw.len()).unwrap(), raw, "{name}");
+            // Our writer, asked the same, writes the same header fields and (unsplit) a
+            // frame within a few percent of c-blosc's size (c-blosc enlarges split blocks
+            // to 64 KiB; we keep the blocksize asked for).
+            let s = Settings { clevel, shuffle, blocksize, split };
+            let ours = encode(&raw, ts, &s).unwrap();
+            let o = read_header(&ours, raw.len()).unwrap();
+            assert_eq!(o.flags, h.flags, "{name}");
+            if !split {
+                assert_eq!(o.blocksize, h.blocksize, "{name}");
+                let ratio = ours.len() as f64 / frame.len() as f64;
+                assert!((0.95..1.05).contains(&ratio), "{name}: {} vs {}", ours.len(), frame.len());
+            }
+            assert_eq!(decode(&ours, raw.len()).unwrap(), raw, "{name}");
+        }
+    }
 }
