@@ -515,7 +515,7 @@ impl BtfWriter {
         resume: bool,
         job: Value,
     ) -> Result<Self> {
-        Self::create_compressed(path, meta, dtype, resume, job, zarr::Compression::DEFAULT_ZSTD)
+        Self::create_compressed(path, meta, dtype, resume, job, zarr::Compression::DEFAULT)
     }
 
     /// [`BtfWriter::create_for_job`] with the chunks' compression chosen:
@@ -557,7 +557,7 @@ impl BtfWriter {
         let record = json!({"store": "btf", "meta": meta, "dtype": dtype.zarr_name(), "job": job});
         let txn = StoreTxn::join(path, &record)?;
         let array = ArrayMeta {
-            compression: zarr::Compression::DEFAULT_ZSTD,
+            compression: zarr::Compression::DEFAULT,
             ..normtexture_array(&meta, dtype)
         };
         let arr = ZarrArray::create(&txn.dir().join("normtextures"), array)?;
