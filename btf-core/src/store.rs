@@ -1112,7 +1112,7 @@ mod tests {
         write_store(&p, 1.0);
         claim_texels(&p, 8192, 8192);
         // Consistent metadata opens; reading refuses by naming the chunk file and the claim
-        // (the decoded size its zstd frame records against the claim) instead of
+        // (the decoded size its blosc frame records against the claim) instead of
         // allocating 4 × 805 MB for the slot.
         let s = BtfStore::open(&p).unwrap();
         assert_eq!((s.meta().width, s.meta().height), (8192, 8192));

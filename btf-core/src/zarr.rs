@@ -744,6 +744,17 @@ impl ZarrArray {
     fn check_frame_size(&self, path: &Path, frame: &[u8], frame_len: usize) -> Result<()> {
         let expect = self.meta.chunk_bytes()? - 4;
         if let Compression::Blosc { .. } = self.meta.compression {
+            if let Some(n) = frame.get(4..8).map(|b| u32::from_le_bytes(b.try_into().unwrap())) {
+                if n as u64 != expect {
+                    return Err(Error::Corrupt {
+                        path: path.to_owned(),
+                        what: format!(
+                            "blosc frame decodes to {n} bytes, but zarr.json (shape, \
+                             chunk_shape, data_type) claims {expect}"
+                        ),
+                    });
+                }
+            }
             let h = crate::blosc::read_header(frame, expect as usize).map_err(|e| e.at(path))?;
             if h.cbytes != frame_len {
                 let what = format!(
