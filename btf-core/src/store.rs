@@ -1,5 +1,6 @@
 //! The BTF store: normtextures `[view][light][y][x][rgb]` in a Zarr v3 group, one chunk
-//! per (view slot, light) image (zstd-compressed since issue #25), linear values in `f16`
+//! per (view slot, light) image (compressed since issue #25: zstd, then blosc = byte
+//! shuffle + zstd, [`crate::zarr::Compression`]), linear values in `f16`
 //! or `f32`, with the (θ, φ) of every view slot and light beside them ([`crate::axes`]).
 //!
 //! A store is written into `NAME.partial/` and renamed to `NAME` only when every chunk is
