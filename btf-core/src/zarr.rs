@@ -329,14 +329,14 @@ impl ArrayMeta {
             Some(o) => return Err(unsupported(format!("shuffle '{o}'"))),
             None => return Err(bad("blosc codec without a configuration.shuffle".into())),
         };
-        if let Some(ts) = c.get("typesize").filter(|t| !t.is_null()) {
-            if ts.as_u64() != Some(dtype.size() as u64) {
-                return Err(bad(format!(
-                    "blosc typesize {ts} does not match data type {} ({} bytes)",
-                    dtype.zarr_name(),
-                    dtype.size()
-                )));
-            }
+        if let Some(ts) = c.get("typesize").filter(|t| !t.is_null())
+            && ts.as_u64() != Some(dtype.size() as u64)
+        {
+            return Err(bad(format!(
+                "blosc typesize {ts} does not match data type {} ({} bytes)",
+                dtype.zarr_name(),
+                dtype.size()
+            )));
         }
         if c.get("blocksize").is_some_and(|b| b.as_u64().is_none()) {
             return Err(bad(format!("blosc blocksize {} is not an integer", c["blocksize"])));
@@ -744,16 +744,16 @@ impl ZarrArray {
     fn check_frame_size(&self, path: &Path, frame: &[u8], frame_len: usize) -> Result<()> {
         let expect = self.meta.chunk_bytes()? - 4;
         if let Compression::Blosc { .. } = self.meta.compression {
-            if let Some(n) = frame.get(4..8).map(|b| u32::from_le_bytes(b.try_into().unwrap())) {
-                if n as u64 != expect {
-                    return Err(Error::Corrupt {
-                        path: path.to_owned(),
-                        what: format!(
-                            "blosc frame decodes to {n} bytes, but zarr.json (shape, \
-                             chunk_shape, data_type) claims {expect}"
-                        ),
-                    });
-                }
+            if let Some(n) = frame.get(4..8).map(|b| u32::from_le_bytes(b.try_into().unwrap()))
+                && n as u64 != expect
+            {
+                return Err(Error::Corrupt {
+                    path: path.to_owned(),
+                    what: format!(
+                        "blosc frame decodes to {n} bytes, but zarr.json (shape, \
+                         chunk_shape, data_type) claims {expect}"
+                    ),
+                });
             }
             let h = crate::blosc::read_header(frame, expect as usize).map_err(|e| e.at(path))?;
             if h.cbytes != frame_len {
