@@ -489,7 +489,7 @@ pub fn shuffle_block(typesize: usize, src: &[u8], dst: &mut [u8]) {
     let body = n * typesize;
     match typesize {
         2 => shuffle2(&src[..body], &mut dst[..body]),
-        4 => shuffle_n::<4>(&src[..body], &mut dst[..body]),
+        4 => shuffle4(&src[..body], &mut dst[..body]),
         8 => shuffle_n::<8>(&src[..body], &mut dst[..body]),
         _ => {
             for (j, plane) in dst[..body].chunks_exact_mut(n.max(1)).enumerate().take(typesize) {
@@ -508,7 +508,7 @@ pub fn unshuffle_block(typesize: usize, src: &[u8], dst: &mut [u8]) {
     let body = n * typesize;
     match typesize {
         2 => unshuffle2(&src[..body], &mut dst[..body]),
-        4 => unshuffle_n::<4>(&src[..body], &mut dst[..body]),
+        4 => unshuffle4(&src[..body], &mut dst[..body]),
         8 => unshuffle_n::<8>(&src[..body], &mut dst[..body]),
         _ => {
             for (j, plane) in src[..body].chunks_exact(n.max(1)).enumerate().take(typesize) {
@@ -546,6 +546,42 @@ fn unshuffle2(src: &[u8], dst: &mut [u8]) {
     for ((e, &l), &h) in dst.chunks_exact_mut(2).zip(lo).zip(hi) {
         e[0] = l;
         e[1] = h;
+    }
+}
+
+fn shuffle4(src: &[u8], dst: &mut [u8]) {
+    let n = src.len() / 4;
+    let (p0, rest) = dst.split_at_mut(n);
+    let (p1, rest) = rest.split_at_mut(n);
+    let (p2, p3) = rest.split_at_mut(n);
+    match bytemuck::try_cast_slice::<u8, u32>(src) {
+        // As `shuffle2`: whole-element loads, then shifts and packs.
+        Ok(words) if cfg!(target_endian = "little") => {
+            let planes = p0.iter_mut().zip(p1.iter_mut()).zip(p2.iter_mut()).zip(p3.iter_mut());
+            for ((((a, b), c), d), &w) in planes.zip(words) {
+                *a = w as u8;
+                *b = (w >> 8) as u8;
+                *c = (w >> 16) as u8;
+                *d = (w >> 24) as u8;
+            }
+        }
+        _ => shuffle_n::<4>(src, dst),
+    }
+}
+
+fn unshuffle4(src: &[u8], dst: &mut [u8]) {
+    let n = src.len() / 4;
+    let (p0, rest) = src.split_at(n);
+    let (p1, rest) = rest.split_at(n);
+    let (p2, p3) = rest.split_at(n);
+    match bytemuck::try_cast_slice_mut::<u8, u32>(dst) {
+        Ok(words) if cfg!(target_endian = "little") => {
+            let planes = p0.iter().zip(p1).zip(p2).zip(p3);
+            for ((((&a, &b), &c), &d), w) in planes.zip(words) {
+                *w = a as u32 | (b as u32) << 8 | (c as u32) << 16 | (d as u32) << 24;
+            }
+        }
+        _ => unshuffle_n::<4>(src, dst),
     }
 }
 
@@ -600,11 +636,14 @@ mod tests {
 
     #[test]
     fn shuffle_matches_the_definition_and_inverts() {
-        for ts in [1, 2, 3, 4, 7, 8, 16] {
+        // Aligned buffers and buffers one byte off (the kernels' word path and fallback).
+        for (ts, off) in [1, 2, 3, 4, 7, 8, 16].into_iter().flat_map(|t| [(t, 0), (t, 1)]) {
             for len in [0, 1, 5, 64, 1001] {
-                let src = data(len);
-                let mut dst = vec![0u8; len];
-                shuffle_block(ts, &src, &mut dst);
+                let src_buf = data(len + off);
+                let src = &src_buf[off..];
+                let mut dst_buf = vec![0u8; len + off];
+                let dst = &mut dst_buf[off..];
+                shuffle_block(ts, src, dst);
                 let n = len / ts;
                 for i in 0..n {
                     for j in 0..ts {
@@ -612,9 +651,9 @@ mod tests {
                     }
                 }
                 assert_eq!(dst[n * ts..], src[n * ts..]);
-                let mut back = vec![0u8; len];
-                unshuffle_block(ts, &dst, &mut back);
-                assert_eq!(back, src, "ts {ts} len {len}");
+                let mut back_buf = vec![0u8; len + off];
+                unshuffle_block(ts, dst, &mut back_buf[off..]);
+                assert_eq!(&back_buf[off..], src, "ts {ts} len {len} offset {off}");
             }
         }
     }
