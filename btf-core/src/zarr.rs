@@ -487,6 +487,15 @@ impl ZarrArray {
     /// Creates (or re-opens with identical metadata, for resuming) an array folder.
     pub fn create(dir: &Path, meta: ArrayMeta) -> Result<Self> {
         meta.check_limits(dir, &Limits::default())?;
+        let payload = meta.chunk_bytes()? - 4;
+        if matches!(meta.compression, Compression::Blosc { .. })
+            && payload > (i32::MAX as usize - crate::blosc::HEADER_BYTES) as u64
+        {
+            return Err(Error::Limit(format!(
+                "{}: {payload}-byte chunks do not fit a blosc1 frame (2 GiB at most)",
+                dir.display()
+            )));
+        }
         let path = dir.join("zarr.json");
         if path.exists() {
             let existing = ArrayMeta::from_json(&path, &read_json(&path)?)?;
@@ -974,6 +983,10 @@ mod tests {
             let e = ZarrArray::open(dir.path(), &Limits::default()).unwrap_err().to_string();
             assert!(e.contains(kind) && e.contains(want) && e.contains("zarr.json"), "{e}");
         }
+        // Chunks of 2 GiB (allowed by the default limits) do not fit a blosc1 frame.
+        let big = ArrayMeta::new(vec![1 << 30], vec![1 << 30], DType::F16, &["i"]);
+        let e = ZarrArray::create(&dir.path().join("big"), big).unwrap_err();
+        assert!(matches!(e, Error::Limit(_)) && e.to_string().contains("blosc1 frame"), "{e}");
         // zarr-python's automatic blocksize (0) and a missing typesize read.
         let mut j = m.to_json();
         j["codecs"][1]["configuration"]["blocksize"] = json!(0);
