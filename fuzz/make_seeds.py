@@ -551,6 +551,39 @@ def zarr_seeds():
             array_json(shape, chunk, dtype, names) + SEP + chunk_bytes(chunk, dtype))
     group = group_json({"note": "a group"})
     put("zarr_array", "group.bin", group)
+    # The blosc chain (zstd, shuffle): a memcpyed frame, and a compressed one c-blosc wrote
+    # (btf-core/tests/data/blosc, made by numcodecs).
+    for name, shape, frame in [
+        ("blosc-memcpyed-f16-3x5.bin", [3, 5], blosc_memcpyed(chunk_bytes([3, 5], "float16")[:-4], 2)),
+        ("blosc-zstd-f16-1501.bin", [1501], blosc_fixture("f16_shuffle.blosc")),
+    ]:
+        j = json.loads(array_json(shape, shape, "float16", ["d%d" % i for i in range(len(shape))]))
+        j["codecs"].insert(1, {"name": "blosc", "configuration": {
+            "cname": "zstd", "clevel": 1, "shuffle": "shuffle", "typesize": 2, "blocksize": 0}})
+        put("zarr_array", name, json.dumps(j, separators=(",", ":")).encode() + SEP
+            + frame + struct.pack("<I", crc32c(frame)))
+
+
+BLOSC_FIXTURES = os.path.join(ROOT, "btf-core", "tests", "data", "blosc")
+
+
+def blosc_fixture(name):
+    with open(os.path.join(BLOSC_FIXTURES, name), "rb") as f:
+        return f.read()
+
+
+def blosc_memcpyed(raw, typesize):
+    """A blosc1 frame storing `raw` as it is (flags: shuffle, memcpyed, don't split, zstd)."""
+    return struct.pack("<BBBBIII", 2, 1, 0x01 | 0x02 | 0x10 | 4 << 5, typesize, len(raw),
+                       len(raw), len(raw) + 16) + raw
+
+
+def blosc_seeds():
+    # blosc_frame target: one frame, as c-blosc 1.21 wrote it (numcodecs) or by hand.
+    for name in ["f16_shuffle", "f16_noshuffle", "f64_noshuffle_odd", "u8_shuffle",
+                 "small_memcpyed"]:
+        put("blosc_frame", name + ".bin", blosc_fixture(name + ".blosc"))
+    put("blosc_frame", "memcpyed-u32.bin", blosc_memcpyed(bytes(range(200)), 4))
 
 
 def btf_store_seeds():
@@ -676,6 +709,7 @@ def main():
     pvf_seeds()
     ubo2014_seeds()
     bcc_seeds()
+    blosc_seeds()
     total = 0
     for t in sorted(os.listdir(OUT)):
         files = os.listdir(os.path.join(OUT, t))

@@ -23,7 +23,7 @@ SANITIZER=${SANITIZER:-address}
 NICE=${NICE:-15}
 TRIPLE=x86_64-unknown-linux-gnu
 ALL=(envmap scene_toml obj_mesh capture_toml zarr_array btf_store
-     eigen_store ubo2014 pvf raw_image ubo2003_image bcc)
+     eigen_store ubo2014 pvf raw_image ubo2003_image bcc blosc_frame)
 targets=("$@")
 [ ${#targets[@]} -eq 0 ] && targets=("${ALL[@]}")
 

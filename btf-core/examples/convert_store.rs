@@ -1,9 +1,12 @@
 //! Rewrites a BTF store with another element type, e.g. the `f32` benchmark store as `f16`
 //! (half the bytes; the natural type of HDR normtextures): `cargo run --release -p btf-core
-//! --example convert_store -- IN.btf OUT.btf f16 [none|zstd]`. Values are rounded to nearest;
-//! one beyond the `f16` range is refused with its image named (the writer's check). The
-//! optional last argument chooses the chunks' codec (default zstd, as every writer): `none`
-//! writes the uncompressed layout the PCA maps in place (BENCHMARKS.md, issue #24/#25).
+//! --example convert_store -- IN.btf OUT.btf f16 [blosc|bloscN|zstd|none]`. Values are
+//! rounded to nearest; one beyond the `f16` range is refused with its image named (the
+//! writer's check). The optional last argument chooses the chunks' codec: `blosc` (the
+//! default, as every writer: byte shuffle + zstd, `Compression::DEFAULT`), `blosc0`‥`blosc9`
+//! (the same at another c-blosc level), `zstd` (zstd level 3 alone, the stores of issue #25
+//! before blosc), `none` (the uncompressed layout the PCA maps in place; BENCHMARKS.md,
+//! issue #24/#25).
 
 use btf_core::store::{BtfStore, BtfWriter};
 use btf_core::zarr::{Compression, DType};
@@ -14,12 +17,18 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     if !(4..=5).contains(&args.len()) {
-        return Err("usage: convert_store IN.btf OUT.btf f16|f32 [none|zstd]".into());
+        return Err("usage: convert_store IN.btf OUT.btf f16|f32 [blosc|bloscN|zstd|none]".into());
     }
     let compression = match args.get(4).map(String::as_str) {
-        None | Some("zstd") => Compression::DEFAULT_ZSTD,
+        None | Some("blosc") => Compression::DEFAULT,
+        Some("zstd") => Compression::ZSTD,
         Some("none") => Compression::None,
-        Some(o) => return Err(format!("codec '{o}' is not none or zstd").into()),
+        Some(o) => match o.strip_prefix("blosc").and_then(|l| l.parse::<u8>().ok()) {
+            Some(clevel @ 0..=9) => Compression::Blosc { clevel, shuffle: true },
+            _ => {
+                return Err(format!("codec '{o}' is not blosc, blosc0‥blosc9, zstd or none").into());
+            }
+        },
     };
     let dtype = match args[3].as_str() {
         "f16" => DType::F16,

@@ -133,7 +133,7 @@ fn array_metas(m: &EigenMeta) -> [(&'static str, ArrayMeta); 5] {
         (
             "mean",
             ArrayMeta {
-                compression: Compression::FAST_ZSTD,
+                compression: Compression::FAST,
                 ..ArrayMeta::new(
                     vec![v, h, w, 3],
                     vec![1, h, w, 3],
@@ -148,7 +148,7 @@ fn array_metas(m: &EigenMeta) -> [(&'static str, ArrayMeta); 5] {
                 attributes: json!({
                     "description": "unit-norm eigentextures B_kj, quantised: value = stored * scale_offset[view, component, 0] + scale_offset[view, component, 1]",
                 }),
-                compression: Compression::FAST_ZSTD,
+                compression: Compression::FAST,
                 ..ArrayMeta::new(
                     vec![v, c, h, w, 3],
                     vec![1, c, h, w, 3],

@@ -22,6 +22,7 @@
 //! No GPU code and no image-format crates live here.
 
 pub mod axes;
+pub mod blosc;
 pub mod compress;
 pub mod direct_io;
 pub mod direction;

@@ -1,5 +1,6 @@
 //! The BTF store: normtextures `[view][light][y][x][rgb]` in a Zarr v3 group, one chunk
-//! per (view slot, light) image (zstd-compressed since issue #25), linear values in `f16`
+//! per (view slot, light) image (compressed since issue #25: zstd, then blosc = byte
+//! shuffle + zstd, [`crate::zarr::Compression`]), linear values in `f16`
 //! or `f32`, with the (θ, φ) of every view slot and light beside them ([`crate::axes`]).
 //!
 //! A store is written into `NAME.partial/` and renamed to `NAME` only when every chunk is
@@ -515,7 +516,7 @@ impl BtfWriter {
         resume: bool,
         job: Value,
     ) -> Result<Self> {
-        Self::create_compressed(path, meta, dtype, resume, job, zarr::Compression::DEFAULT_ZSTD)
+        Self::create_compressed(path, meta, dtype, resume, job, zarr::Compression::DEFAULT)
     }
 
     /// [`BtfWriter::create_for_job`] with the chunks' compression chosen:
@@ -557,7 +558,7 @@ impl BtfWriter {
         let record = json!({"store": "btf", "meta": meta, "dtype": dtype.zarr_name(), "job": job});
         let txn = StoreTxn::join(path, &record)?;
         let array = ArrayMeta {
-            compression: zarr::Compression::DEFAULT_ZSTD,
+            compression: zarr::Compression::DEFAULT,
             ..normtexture_array(&meta, dtype)
         };
         let arr = ZarrArray::create(&txn.dir().join("normtextures"), array)?;
@@ -1112,7 +1113,7 @@ mod tests {
         write_store(&p, 1.0);
         claim_texels(&p, 8192, 8192);
         // Consistent metadata opens; reading refuses by naming the chunk file and the claim
-        // (the decoded size its zstd frame records against the claim) instead of
+        // (the decoded size its blosc frame records against the claim) instead of
         // allocating 4 × 805 MB for the slot.
         let s = BtfStore::open(&p).unwrap();
         assert_eq!((s.meta().width, s.meta().height), (8192, 8192));

@@ -1,8 +1,11 @@
 //! A small, strict implementation of the Zarr v3 on-disk format: one JSON metadata document
-//! per group and array, regular chunk grids, the `default` chunk-key encoding with `/`, and
-//! the codec chain `bytes` (little endian) → `zstd` → `crc32c`, so every chunk is
-//! compressed and carries a checksum of its compressed bytes. Stores written before issue
-//! #25 use `bytes` → `crc32c` (uncompressed) and stay readable.
+//! per group and array, regular chunk grids, the `default` chunk-key encoding with `/` or
+//! `.`, and the codec chain `bytes` (little endian) → `blosc` (zstd, byte shuffle) →
+//! `crc32c`, so every chunk is compressed and carries a checksum of its compressed bytes.
+//! The `blosc` frames are c-blosc 1.x's ([`crate::blosc`]), each chunk one frame whose
+//! block is the whole chunk. Stores written before the blosc codec use `bytes` → `zstd` →
+//! `crc32c`, stores written before issue #25 `bytes` → `crc32c` (uncompressed); both stay
+//! readable, and [`Compression`] can still write either.
 //!
 //! The stores written here open in zarr-python ≥ 3 (`zarr.open_group(path)`), numpy and
 //! Dask. Only what the toolkit needs is implemented; anything else in a metadata document
@@ -80,20 +83,36 @@ impl Default for Limits {
 pub enum Compression {
     /// No compression: a chunk is its raw bytes and a CRC32C (stores before issue #25).
     None,
-    /// The Zarr v3 `zstd` codec at this level (zarr-python's `ZstdCodec`).
+    /// The Zarr v3 `zstd` codec at this level (zarr-python's `ZstdCodec`; the stores of
+    /// issue #25 before the blosc codec).
     Zstd {
         /// zstd compression level (1‥22; 3 is zstd's own default).
         level: i32,
     },
+    /// The Zarr v3 `blosc` codec with the zstd compressor (zarr-python's `BloscCodec`,
+    /// c-blosc 1.x frames, [`crate::blosc`]): each chunk one blosc block, byte-shuffled by
+    /// the element size when `shuffle`, then zstd. Chunks written by others may use any
+    /// blocksize and split mode; they read all the same.
+    Blosc {
+        /// c-blosc's level, 0‥9: zstd level `2 · clevel − 1` below 8
+        /// ([`crate::blosc::zstd_level`]); 0 stores frames uncompressed.
+        clevel: u8,
+        /// Byte shuffle (`"shuffle"`) or not (`"noshuffle"`).
+        shuffle: bool,
+    },
 }
 
 impl Compression {
-    /// What new stores use: zstd level 3 (BENCHMARKS.md, "Stores on disk").
-    pub const DEFAULT_ZSTD: Compression = Compression::Zstd { level: 3 };
-    /// What the compressor writes its means and eigentextures with: zstd level 1, twice
-    /// level 3's speed on their noisy low mantissa bits for 5 % more bytes (BENCHMARKS.md,
-    /// "Instruction sets", session 26); all-zero (rank-deficient) components still vanish.
-    pub const FAST_ZSTD: Compression = Compression::Zstd { level: 1 };
+    /// What new BTF stores use: blosc, byte shuffle, zstd level 1 — smaller than zstd
+    /// level 3 alone, three times its encoding and twice its decoding speed on `f16`
+    /// normtextures (BENCHMARKS.md, "The blosc codec: byte shuffle before zstd").
+    pub const DEFAULT: Compression = Compression::Blosc { clevel: 1, shuffle: true };
+    /// What the compressor writes its means and eigentextures with: blosc, byte shuffle,
+    /// zstd level 1 — 25 % smaller than zstd level 1 alone and faster to decode; all-zero
+    /// (rank-deficient) components still vanish (BENCHMARKS.md, "The blosc codec").
+    pub const FAST: Compression = Compression::Blosc { clevel: 1, shuffle: true };
+    /// What BTF stores used between issue #25 and the blosc codec: zstd level 3.
+    pub const ZSTD: Compression = Compression::Zstd { level: 3 };
 }
 
 /// Metadata of one array.
@@ -130,14 +149,14 @@ impl PartialEq for ArrayMeta {
 
 impl ArrayMeta {
     /// An array of `shape` in chunks of `chunk_shape`, compressed with
-    /// [`Compression::DEFAULT_ZSTD`], without attributes.
+    /// [`Compression::DEFAULT`], without attributes.
     pub fn new(shape: Vec<u64>, chunk_shape: Vec<u64>, dtype: DType, dims: &[&str]) -> Self {
         ArrayMeta {
             shape,
             chunk_shape,
             dtype,
             dimension_names: dims.iter().map(|d| d.to_string()).collect(),
-            compression: Compression::DEFAULT_ZSTD,
+            compression: Compression::DEFAULT,
             attributes: json!({}),
             separator: '.',
         }
@@ -176,7 +195,30 @@ impl ArrayMeta {
                 {"name": "zstd", "configuration": {"level": level, "checksum": false}},
                 {"name": "crc32c"}
             ]),
+            Compression::Blosc { clevel, shuffle } => json!([
+                bytes,
+                {"name": "blosc", "configuration": {
+                    "cname": "zstd",
+                    "clevel": clevel,
+                    "shuffle": if shuffle { "shuffle" } else { "noshuffle" },
+                    "typesize": self.dtype.size(),
+                    "blocksize": self.blosc_blocksize(),
+                }},
+                {"name": "crc32c"}
+            ]),
         }
+    }
+
+    /// The blosc block size this toolkit writes: the whole chunk (BENCHMARKS.md, "The
+    /// blosc codec"), within c-blosc's limit; 0 when that does not fit its `int`.
+    fn blosc_blocksize(&self) -> u64 {
+        let n = self.chunk_bytes().map_or(0, |b| b - 4);
+        if n > crate::blosc::MAX_BLOCKSIZE as u64 { 0 } else { n }
+    }
+
+    fn blosc_settings(&self, clevel: u8, shuffle: bool) -> crate::blosc::Settings {
+        let blocksize = self.blosc_blocksize() as u32;
+        crate::blosc::Settings { clevel, shuffle, blocksize, split: false }
     }
 
     fn from_json(path: &Path, v: &Value) -> Result<Self> {
@@ -222,15 +264,19 @@ impl ArrayMeta {
             .collect();
         let unsupported = || {
             Error::Unsupported(format!(
-                "{}: codec chain {codecs:?} (this toolkit reads bytes(little) → [zstd] → crc32c)",
+                "{}: codec chain {codecs:?} (this toolkit reads bytes(little) → [zstd or blosc] \
+                 → crc32c)",
                 path.display()
             ))
         };
         if v["codecs"][0]["configuration"]["endian"] != json!("little") {
             return Err(unsupported());
         }
+        let dtype =
+            DType::from_zarr_name(v["data_type"].as_str().ok_or_else(|| bad("data_type"))?)?;
         let compression = match codecs[..] {
             ["bytes", "crc32c"] => Compression::None,
+            ["bytes", "blosc", "crc32c"] => Self::blosc_from_json(path, &v["codecs"][1], dtype)?,
             ["bytes", "zstd", "crc32c"] => {
                 let level = v["codecs"][1]["configuration"]["level"]
                     .as_i64()
@@ -240,8 +286,6 @@ impl ArrayMeta {
             }
             _ => return Err(unsupported()),
         };
-        let dtype =
-            DType::from_zarr_name(v["data_type"].as_str().ok_or_else(|| bad("data_type"))?)?;
         let dimension_names = v["dimension_names"]
             .as_array()
             .map(|a| a.iter().map(|x| x.as_str().unwrap_or("").to_owned()).collect())
@@ -258,6 +302,48 @@ impl ArrayMeta {
         })
     }
 
+    /// Reads a `blosc` codec's configuration: cname `zstd`, clevel 0‥9, shuffle `shuffle`
+    /// or `noshuffle`, typesize (when given) the data type's size, blocksize an integer.
+    fn blosc_from_json(path: &Path, codec: &Value, dtype: DType) -> Result<Compression> {
+        let c = &codec["configuration"];
+        let bad = |what: String| Error::Corrupt { path: path.to_owned(), what };
+        let unsupported = |what: String| {
+            Error::Unsupported(format!(
+                "{}: blosc codec with {what} (this toolkit reads and writes blosc with cname \
+                 zstd and shuffle or noshuffle)",
+                path.display()
+            ))
+        };
+        match c["cname"].as_str() {
+            Some("zstd") => {}
+            Some(o) => return Err(unsupported(format!("cname '{o}'"))),
+            None => return Err(bad("blosc codec without a configuration.cname".into())),
+        }
+        let clevel = c["clevel"]
+            .as_u64()
+            .filter(|&l| l <= 9)
+            .ok_or_else(|| bad(format!("blosc clevel {} is not an integer 0‥9", c["clevel"])))?;
+        let shuffle = match c["shuffle"].as_str() {
+            Some("shuffle") => true,
+            Some("noshuffle") => false,
+            Some(o) => return Err(unsupported(format!("shuffle '{o}'"))),
+            None => return Err(bad("blosc codec without a configuration.shuffle".into())),
+        };
+        if let Some(ts) = c.get("typesize").filter(|t| !t.is_null())
+            && ts.as_u64() != Some(dtype.size() as u64)
+        {
+            return Err(bad(format!(
+                "blosc typesize {ts} does not match data type {} ({} bytes)",
+                dtype.zarr_name(),
+                dtype.size()
+            )));
+        }
+        if c.get("blocksize").is_some_and(|b| b.as_u64().is_none()) {
+            return Err(bad(format!("blosc blocksize {} is not an integer", c["blocksize"])));
+        }
+        Ok(Compression::Blosc { clevel: clevel as u8, shuffle })
+    }
+
     /// Elements per chunk, or an error when that overflows.
     pub fn chunk_elems(&self) -> Result<u64> {
         self.chunk_shape
@@ -267,13 +353,24 @@ impl ArrayMeta {
     }
 
     /// The largest chunk file that can hold one chunk: [`ArrayMeta::chunk_bytes`] when
-    /// uncompressed, zstd's bound on its output (plus the checksum) when compressed. A chunk
-    /// file larger than this is refused before it is read.
+    /// uncompressed, zstd's bound on its output (plus the checksum) with zstd, the data and
+    /// blosc's 16-byte header (a memcpyed frame; c-blosc never writes a larger one) with
+    /// blosc. A chunk file larger than this is refused before it is read.
     pub fn max_stored_bytes(&self) -> Result<u64> {
         let raw = self.chunk_bytes()?;
         Ok(match self.compression {
             Compression::None => raw,
             Compression::Zstd { .. } => zstd_bound(raw - 4) + 4,
+            Compression::Blosc { .. } => raw + crate::blosc::HEADER_BYTES as u64,
+        })
+    }
+
+    /// The smallest chunk file that can hold one chunk.
+    fn min_stored_bytes(&self) -> Result<u64> {
+        Ok(match self.compression {
+            Compression::None => self.chunk_bytes()?,
+            Compression::Zstd { .. } => 5,
+            Compression::Blosc { .. } => crate::blosc::HEADER_BYTES as u64 + 4,
         })
     }
 
@@ -390,6 +487,15 @@ impl ZarrArray {
     /// Creates (or re-opens with identical metadata, for resuming) an array folder.
     pub fn create(dir: &Path, meta: ArrayMeta) -> Result<Self> {
         meta.check_limits(dir, &Limits::default())?;
+        let payload = meta.chunk_bytes()? - 4;
+        if matches!(meta.compression, Compression::Blosc { .. })
+            && payload > (i32::MAX as usize - crate::blosc::HEADER_BYTES) as u64
+        {
+            return Err(Error::Limit(format!(
+                "{}: {payload}-byte chunks do not fit a blosc1 frame (2 GiB at most)",
+                dir.display()
+            )));
+        }
         let path = dir.join("zarr.json");
         if path.exists() {
             let existing = ArrayMeta::from_json(&path, &read_json(&path)?)?;
@@ -450,8 +556,18 @@ impl ZarrArray {
             )));
         }
         let path = self.chunk_path(idx);
-        if let Compression::Zstd { level } = self.meta.compression {
-            let mut buf = zstd::bulk::compress(raw, level).map_err(|e| Error::io(&path, e))?;
+        let compressed = match self.meta.compression {
+            Compression::None => None,
+            Compression::Zstd { level } => {
+                Some(zstd::bulk::compress(raw, level).map_err(|e| Error::io(&path, e))?)
+            }
+            Compression::Blosc { clevel, shuffle } => {
+                let settings = self.meta.blosc_settings(clevel, shuffle);
+                let ts = self.meta.dtype.size();
+                Some(crate::blosc::encode(raw, ts, &settings).map_err(|e| Error::io(&path, e))?)
+            }
+        };
+        if let Some(mut buf) = compressed {
             let crc = crc32c::crc32c(&buf).to_le_bytes();
             buf.extend_from_slice(&crc);
             return crate::fs::write_atomic_unsynced(&path, &buf);
@@ -485,7 +601,8 @@ impl ZarrArray {
     }
 
     /// Opens chunk `idx` and checks its file size against what the metadata allows: exactly
-    /// [`ArrayMeta::chunk_bytes`] uncompressed, 5‥[`ArrayMeta::max_stored_bytes`] compressed.
+    /// [`ArrayMeta::chunk_bytes`] uncompressed, 5 (zstd) or 20 (blosc) ‥
+    /// [`ArrayMeta::max_stored_bytes`] compressed.
     fn open_chunk(&self, path: &Path) -> Result<(fs::File, u64)> {
         let f = fs::File::open(path).map_err(|e| Error::io(path, e))?;
         let len = f.metadata().map_err(|e| Error::io(path, e))?.len();
@@ -495,18 +612,13 @@ impl ZarrArray {
 
     fn check_len(&self, path: &Path, len: u64) -> Result<()> {
         let expect = self.meta.chunk_bytes()?;
-        let ok = match self.meta.compression {
-            Compression::None => len == expect,
-            Compression::Zstd { .. } => len > 4 && len <= self.meta.max_stored_bytes()?,
-        };
-        if ok {
+        let (min, max) = (self.meta.min_stored_bytes()?, self.meta.max_stored_bytes()?);
+        if (min..=max).contains(&len) {
             return Ok(());
         }
         let claim = match self.meta.compression {
             Compression::None => format!("{expect}"),
-            Compression::Zstd { .. } => {
-                format!("at most {} (compressed)", self.meta.max_stored_bytes()?)
-            }
+            _ => format!("{min}‥{max} (compressed)"),
         };
         Err(Error::Corrupt {
             path: path.to_owned(),
@@ -548,7 +660,11 @@ impl ZarrArray {
         if crc32c::crc32c(&stored[..n]) != u32::from_le_bytes(stored[n..].try_into().unwrap()) {
             return Err(Error::Corrupt { path, what: "crc32c checksum mismatch".into() });
         }
-        self.check_frame_size(&path, &stored[..n])?;
+        self.check_frame_size(&path, &stored[..n], n)?;
+        if let Compression::Blosc { .. } = self.meta.compression {
+            crate::blosc::decode_to(&stored[..n], out).map_err(|e| e.at(&path))?;
+            return Ok(());
+        }
         let got = zstd::bulk::decompress_to_buffer(&stored[..n], out).map_err(|e| {
             Error::Corrupt { path: path.clone(), what: format!("zstd frame does not decode: {e}") }
         })?;
@@ -574,19 +690,20 @@ impl ZarrArray {
     }
 
     /// Checks that chunk `idx` is on disk with a size the metadata allows (not its
-    /// checksum) — for a compressed chunk, also the decoded size its zstd frame header
-    /// records — so that a caller can refuse a claim before allocating for it; the error
-    /// names the chunk file, the claimed size and the real one.
+    /// checksum) — for a compressed chunk, also the decoded size its zstd or blosc frame
+    /// header records (and a blosc header's other fields) — so that a caller can refuse a
+    /// claim before allocating for it; the error names the chunk file, the claimed size and
+    /// the real one.
     pub fn check_chunk_file(&self, idx: &[u64]) -> Result<()> {
         use std::io::Read;
         let path = self.chunk_path(idx);
         let (f, len) = self.open_chunk(&path)?;
         if self.meta.compression != Compression::None {
-            // A zstd frame header is at most 18 bytes.
+            // A zstd frame header is at most 18 bytes, a blosc header 16.
             let mut head = Vec::with_capacity(18);
             f.take(18).read_to_end(&mut head).map_err(|e| Error::io(&path, e))?;
             head.truncate((len - 4).min(18) as usize);
-            if let Err(e) = self.check_frame_size(&path, &head) {
+            if let Err(e) = self.check_frame_size(&path, &head, (len - 4) as usize) {
                 // A damaged header is first of all a checksum mismatch: say so when it is.
                 if !self.stored_crc_matches(&path, len)? {
                     return Err(Error::Corrupt { path, what: "crc32c checksum mismatch".into() });
@@ -598,7 +715,7 @@ impl ZarrArray {
     }
 
     /// Checks chunk `idx` without decoding it: its size against the metadata, for a
-    /// compressed chunk the decoded size its zstd frame header records, and its stored
+    /// compressed chunk the decoded size its zstd or blosc frame header records, and its stored
     /// crc32c against its bytes (streamed through a fixed buffer). A chunk that passes holds
     /// exactly the bytes its writer checksummed — what [`ZarrArray::read_chunk`] checks
     /// short of decompressing them, at a fraction of the cost (`btf finalize` checks every
@@ -630,9 +747,33 @@ impl ZarrArray {
         Ok(crc == u32::from_le_bytes(tail))
     }
 
-    /// Refuses a zstd frame whose header records a decoded size other than the chunk's.
-    fn check_frame_size(&self, path: &Path, frame: &[u8]) -> Result<()> {
+    /// Refuses a zstd or blosc frame whose header (at the start of `frame`, a frame of
+    /// `frame_len` bytes in all) records a decoded size other than the chunk's — for blosc
+    /// also a frame size other than `frame_len` or a blocksize out of range.
+    fn check_frame_size(&self, path: &Path, frame: &[u8], frame_len: usize) -> Result<()> {
         let expect = self.meta.chunk_bytes()? - 4;
+        if let Compression::Blosc { .. } = self.meta.compression {
+            if let Some(n) = frame.get(4..8).map(|b| u32::from_le_bytes(b.try_into().unwrap()))
+                && n as u64 != expect
+            {
+                return Err(Error::Corrupt {
+                    path: path.to_owned(),
+                    what: format!(
+                        "blosc frame decodes to {n} bytes, but zarr.json (shape, \
+                         chunk_shape, data_type) claims {expect}"
+                    ),
+                });
+            }
+            let h = crate::blosc::read_header(frame, expect as usize).map_err(|e| e.at(path))?;
+            if h.cbytes != frame_len {
+                let what = format!(
+                    "blosc frame: header says {} bytes, the chunk holds {frame_len}",
+                    h.cbytes
+                );
+                return Err(Error::Corrupt { path: path.to_owned(), what });
+            }
+            return Ok(());
+        }
         match zstd::zstd_safe::get_frame_content_size(frame) {
             Ok(Some(n)) if n != expect => Err(Error::Corrupt {
                 path: path.to_owned(),
@@ -746,7 +887,7 @@ mod tests {
     #[test]
     fn zstd_chunks_round_trip_and_hostile_frames_are_named_errors() {
         let dir = tempfile::tempdir().unwrap();
-        let m = ArrayMeta { compression: Compression::DEFAULT_ZSTD, ..meta() };
+        let m = ArrayMeta { compression: Compression::ZSTD, ..meta() };
         let a = ZarrArray::create(dir.path(), m).unwrap();
         let raw = encode_f32(&[0.5, 0.5, 0.5, 0.5], DType::F32);
         a.write_chunk(&[2, 0], &raw).unwrap();
@@ -788,7 +929,7 @@ mod tests {
 
     #[test]
     fn the_codec_chain_is_what_zarr_python_reads() {
-        let m = ArrayMeta { compression: Compression::DEFAULT_ZSTD, ..meta() };
+        let m = ArrayMeta { compression: Compression::ZSTD, ..meta() };
         let codecs = m.to_json()["codecs"].clone();
         assert_eq!(
             codecs,
@@ -798,6 +939,147 @@ mod tests {
                 {"name": "crc32c"}
             ])
         );
+        // The default: blosc with zstd, byte shuffle by the element size, one block per
+        // chunk (4 float32 = 16 bytes here), as zarr-python's BloscCodec writes it.
+        let m = ArrayMeta { compression: Compression::DEFAULT, ..meta() };
+        assert_eq!(
+            m.to_json()["codecs"],
+            json!([
+                {"name": "bytes", "configuration": {"endian": "little"}},
+                {"name": "blosc", "configuration": {
+                    "cname": "zstd", "clevel": 1, "shuffle": "shuffle", "typesize": 4,
+                    "blocksize": 16
+                }},
+                {"name": "crc32c"}
+            ])
+        );
+        let m =
+            ArrayMeta { compression: Compression::Blosc { clevel: 5, shuffle: false }, ..meta() };
+        let c = m.to_json()["codecs"][1]["configuration"].clone();
+        assert_eq!((c["clevel"].clone(), c["shuffle"].clone()), (json!(5), json!("noshuffle")));
+        // And it reads back.
+        let dir = tempfile::tempdir().unwrap();
+        ZarrArray::create(dir.path(), m.clone()).unwrap();
+        let b = ZarrArray::open(dir.path(), &Limits::default()).unwrap();
+        assert_eq!(b.meta().compression, Compression::Blosc { clevel: 5, shuffle: false });
+    }
+
+    #[test]
+    fn blosc_metadata_outside_what_we_read_is_refused_by_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = ArrayMeta { compression: Compression::DEFAULT, ..meta() };
+        let p = dir.path().join("zarr.json");
+        let cases = [
+            ("cname", json!("lz4"), "unsupported", "cname 'lz4'"),
+            ("shuffle", json!("bitshuffle"), "unsupported", "shuffle 'bitshuffle'"),
+            ("typesize", json!(2), "corrupt", "typesize 2 does not match data type float32"),
+            ("clevel", json!(12), "corrupt", "clevel 12 is not an integer"),
+            ("blocksize", json!("big"), "corrupt", "blocksize \"big\" is not an integer"),
+        ];
+        for (key, value, kind, want) in cases {
+            let mut j = m.to_json();
+            j["codecs"][1]["configuration"][key] = value;
+            fs::write(&p, serde_json::to_string(&j).unwrap()).unwrap();
+            let e = ZarrArray::open(dir.path(), &Limits::default()).unwrap_err().to_string();
+            assert!(e.contains(kind) && e.contains(want) && e.contains("zarr.json"), "{e}");
+        }
+        // Chunks of 2 GiB (allowed by the default limits) do not fit a blosc1 frame.
+        let big = ArrayMeta::new(vec![1 << 30], vec![1 << 30], DType::F16, &["i"]);
+        let e = ZarrArray::create(&dir.path().join("big"), big).unwrap_err();
+        assert!(matches!(e, Error::Limit(_)) && e.to_string().contains("blosc1 frame"), "{e}");
+        // zarr-python's automatic blocksize (0) and a missing typesize read.
+        let mut j = m.to_json();
+        j["codecs"][1]["configuration"]["blocksize"] = json!(0);
+        j["codecs"][1]["configuration"].as_object_mut().unwrap().remove("typesize");
+        fs::write(&p, serde_json::to_string(&j).unwrap()).unwrap();
+        let b = ZarrArray::open(dir.path(), &Limits::default()).unwrap();
+        assert_eq!(b.meta().compression, Compression::DEFAULT);
+    }
+
+    #[test]
+    fn blosc_chunks_round_trip_and_hostile_frames_are_named_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        // 3 × 4 × 40 f16 texels: 320-byte chunks (under 128 bytes blosc only copies).
+        let m = ArrayMeta {
+            compression: Compression::DEFAULT,
+            ..ArrayMeta::new(vec![3, 4, 40], vec![1, 4, 40], DType::F16, &["a", "b", "c"])
+        };
+        let a = ZarrArray::create(dir.path(), m).unwrap();
+        let vals: Vec<f32> = (0..160).map(|i| 1.0 + (i / 16) as f32 * 0.25).collect();
+        let raw = encode_f32(&vals, DType::F16);
+        a.write_chunk(&[2, 0, 0], &raw).unwrap();
+        let b = ZarrArray::open(dir.path(), &Limits::default()).unwrap();
+        assert_eq!(b.read_chunk(&[2, 0, 0]).unwrap(), raw);
+        b.check_chunk_file(&[2, 0, 0]).unwrap();
+        b.verify_chunk(&[2, 0, 0]).unwrap();
+        let p = b.chunk_path(&[2, 0, 0]);
+        let frame = fs::read(&p).unwrap();
+        let frame = frame[..frame.len() - 4].to_vec();
+        // Compressed (not memcpyed), shuffled, one block.
+        let h = crate::blosc::read_header(&frame, 320).unwrap();
+        assert_eq!((h.flags & 0x03, h.typesize, h.blocksize), (0x01, 2, 320));
+        assert!(frame.len() < 100, "{}", frame.len());
+        let with_crc = |f: &[u8]| [f, &crc32c::crc32c(f).to_le_bytes()].concat();
+        let put = |f: &[u8]| fs::write(&p, with_crc(f)).unwrap();
+        // nbytes lying (with a right checksum): refused from the header, before decoding,
+        // by the size check, the verifier and the reader.
+        let mut f = frame.clone();
+        f[4..8].copy_from_slice(&(1u32 << 20).to_le_bytes());
+        put(&f);
+        for e in [
+            b.check_chunk_file(&[2, 0, 0]).unwrap_err(),
+            b.verify_chunk(&[2, 0, 0]).unwrap_err(),
+            b.read_chunk(&[2, 0, 0]).unwrap_err(),
+        ] {
+            let e = e.to_string();
+            assert!(e.contains("1048576") && e.contains("320") && e.contains("c.2.0.0"), "{e}");
+        }
+        // cbytes other than the frame's length.
+        let mut f = frame.clone();
+        f[12] ^= 1;
+        put(&f);
+        let e = b.check_chunk_file(&[2, 0, 0]).unwrap_err().to_string();
+        assert!(e.contains("header says") && e.contains("c.2.0.0"), "{e}");
+        // Another compressor: unsupported, naming the file.
+        let mut f = frame.clone();
+        f[2] = (f[2] & 0x1f) | 1 << 5;
+        put(&f);
+        let e = b.read_chunk(&[2, 0, 0]).unwrap_err();
+        assert!(matches!(e, Error::Unsupported(_)), "{e}");
+        assert!(e.to_string().contains("lz4") && e.to_string().contains("c.2.0.0"), "{e}");
+        // A damaged stream size.
+        let mut f = frame.clone();
+        f[20..24].copy_from_slice(&1000u32.to_le_bytes());
+        put(&f);
+        let e = b.read_chunk(&[2, 0, 0]).unwrap_err().to_string();
+        assert!(e.contains("block 0 stream 0: 1000 bytes") && e.contains("c.2.0.0"), "{e}");
+        // A bit flip: the checksum, as for every codec.
+        let mut bytes = with_crc(&frame);
+        bytes[30] ^= 4;
+        fs::write(&p, &bytes).unwrap();
+        let e = b.read_chunk(&[2, 0, 0]).unwrap_err().to_string();
+        assert!(e.contains("checksum") && e.contains("c.2.0.0"), "{e}");
+        // Shorter than a header, longer than a memcpyed frame: the size check.
+        for len in [10, 320 + 16 + 4 + 1] {
+            fs::write(&p, vec![0u8; len]).unwrap();
+            let e = b.read_chunk(&[2, 0, 0]).unwrap_err().to_string();
+            assert!(e.contains("20‥340") && e.contains(&format!("chunk has {len} bytes")), "{e}");
+        }
+        // A frame c-blosc wrote for these bytes (numcodecs, memcpyed or not) reads.
+        let fixture = |name: &str| {
+            let d = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/blosc");
+            fs::read(d.join(name)).unwrap()
+        };
+        let raw = zstd::bulk::decompress(&fixture("f16_shuffle.raw.zst"), 4096).unwrap();
+        let m = ArrayMeta {
+            compression: Compression::DEFAULT,
+            ..ArrayMeta::new(vec![1501], vec![1501], DType::F16, &["i"])
+        };
+        let d2 = tempfile::tempdir().unwrap();
+        let c = ZarrArray::create(d2.path(), m).unwrap();
+        fs::write(c.chunk_path(&[0]), with_crc(&fixture("f16_shuffle.blosc"))).unwrap();
+        assert_eq!(c.read_chunk(&[0]).unwrap(), raw);
+        c.verify_chunk(&[0]).unwrap();
     }
 
     #[test]

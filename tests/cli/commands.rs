@@ -248,11 +248,13 @@ fn corrupt_input_is_named_and_leaves_no_output() {
         "{err}"
     );
     assert!(!d.path("m.eig").exists());
-    // A NaN with a valid checksum, in the store's codec (zstd, then crc32c over the frame):
-    // refused, slot and light named.
+    // A NaN with a valid checksum, in the store's codec (blosc, then crc32c over the
+    // frame): refused, slot and light named.
     let mut raw = vec![0u8; 48 * 4];
     raw[..4].copy_from_slice(&f32::NAN.to_le_bytes());
-    let mut with_crc = zstd::bulk::compress(&raw, 3).unwrap();
+    let settings =
+        btf_core::blosc::Settings { clevel: 1, shuffle: true, blocksize: 0, split: false };
+    let mut with_crc = btf_core::blosc::encode(&raw, 4, &settings).unwrap();
     with_crc.extend_from_slice(&crc32c::crc32c(&with_crc).to_le_bytes());
     std::fs::write(&chunk, &with_crc).unwrap();
     let err = d.fails(&["compress", "m.btf", "-c", "2", "-o", "m.eig"]);

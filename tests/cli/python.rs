@@ -111,3 +111,83 @@ fn zarr_python_opens_every_store_and_the_example_matches_btf_reconstruct() {
         }
     }
 }
+
+/// The `blosc` codec both ways, bit for bit: chunks this toolkit writes (byte shuffle or
+/// not, f16/f32/f64/u8, one block per chunk) read identically in zarr-python, and chunks
+/// zarr-python writes through c-blosc (its automatic 32 KiB blocks, so a leftover block)
+/// read identically here.
+#[test]
+fn zarr_python_and_the_toolkit_read_each_others_blosc_chunks_bit_identically() {
+    use btf_core::zarr::{ArrayMeta, Compression, DType, Limits, ZarrArray};
+    if !python_or_skip() {
+        return;
+    }
+    let d = Dir::new();
+    // Ours → zarr-python. Two chunks along the first axis; the bytes a smooth ramp with
+    // noisy low bits, like the stores' data.
+    let ours = [
+        ("o16", DType::F16, Compression::DEFAULT),
+        ("o32", DType::F32, Compression::Blosc { clevel: 5, shuffle: false }),
+        ("o64", DType::F64, Compression::Blosc { clevel: 3, shuffle: true }),
+        ("o8", DType::U8, Compression::Blosc { clevel: 1, shuffle: true }),
+    ];
+    let mut script = String::from("import sys, zarr\n");
+    for (name, dtype, compression) in ours {
+        let meta = ArrayMeta {
+            compression,
+            ..ArrayMeta::new(vec![2, 37, 41], vec![1, 37, 41], dtype, &["a", "b", "c"])
+        };
+        let a = ZarrArray::create(&d.path(name), meta).unwrap();
+        let n = 37 * 41;
+        let mut all = Vec::new();
+        for k in 0..2u64 {
+            let vals: Vec<f32> =
+                (0..n).map(|i| (i as f32 * 0.01 + k as f32).sin() * 100.0 + 120.0).collect();
+            let raw = btf_core::zarr::encode_f32(&vals, dtype);
+            a.write_chunk(&[k, 0, 0], &raw).unwrap();
+            all.extend_from_slice(&raw);
+        }
+        std::fs::write(d.path(&format!("{name}.bin")), &all).unwrap();
+        script += &format!(
+            "a = zarr.open_array('{name}', mode='r')\n\
+             assert a.metadata.codecs[1].to_dict()['name'] == 'blosc', a.metadata.codecs\n\
+             with open('{name}.bin', 'rb') as f:\n\
+             \x20   assert a[...].tobytes() == f.read(), '{name}'\n\
+             print('{name}', a.dtype, a.shape, 'identical')\n"
+        );
+    }
+    // zarr-python → ours.
+    script += "import numpy as np\n\
+        from zarr.codecs import BloscCodec, BytesCodec, Crc32cCodec\n\
+        for name, dtype, clevel, shuffle in [('p16', 'float16', 1, 'shuffle'),\n\
+        \x20                                    ('p32', 'float32', 5, 'noshuffle')]:\n\
+        \x20   a = zarr.create_array(name, shape=(3, 128, 129), chunks=(1, 128, 129), dtype=dtype,\n\
+        \x20       serializer=BytesCodec(endian='little'), fill_value=0,\n\
+        \x20       compressors=[BloscCodec(cname='zstd', clevel=clevel, shuffle=shuffle), Crc32cCodec()])\n\
+        \x20   x = np.arange(3 * 128 * 129).reshape(3, 128, 129)\n\
+        \x20   v = (np.sin(x / 50.0) * 3 + np.cos(x * 0.37) * 0.01).astype(dtype)\n\
+        \x20   a[...] = v\n\
+        \x20   with open(name + '.bin', 'wb') as f:\n\
+        \x20       f.write(v.tobytes())\n";
+    let out = python(d.tmp.path(), &["-c", &script]);
+    for name in ["o16", "o32", "o64", "o8"] {
+        assert!(out.contains(&format!("{name} ")) && out.contains("identical"), "{out}");
+    }
+    for (name, typesize) in [("p16", 2usize), ("p32", 4)] {
+        let a = ZarrArray::open(&d.path(name), &Limits::default()).unwrap();
+        assert!(matches!(a.meta().compression, Compression::Blosc { .. }), "{name}");
+        let want = std::fs::read(d.path(&format!("{name}.bin"))).unwrap();
+        let n = 128 * 129 * typesize;
+        for k in 0..3u64 {
+            let got = a.read_chunk(&[k, 0, 0]).unwrap();
+            assert!(got == want[k as usize * n..][..n], "{name} chunk {k}");
+            a.verify_chunk(&[k, 0, 0]).unwrap();
+        }
+        // c-blosc's automatic blocks at clevel 1: 32 KiB and a leftover.
+        let f = std::fs::read(a.chunk_path(&[0, 0, 0])).unwrap();
+        let blocksize = u32::from_le_bytes(f[8..12].try_into().unwrap()) as usize;
+        if name == "p16" {
+            assert_eq!((blocksize, n % blocksize), (32 << 10, n - (32 << 10)));
+        }
+    }
+}
