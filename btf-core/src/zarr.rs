@@ -484,8 +484,11 @@ pub struct ZarrArray {
 const DIRECT_MIN_BYTES: usize = 256 << 10;
 
 impl ZarrArray {
-    /// Creates (or re-opens with identical metadata, for resuming) an array folder.
-    pub fn create(dir: &Path, meta: ArrayMeta) -> Result<Self> {
+    /// Creates (or re-opens with the same shape, chunks, type and dimensions, for resuming)
+    /// an array folder. A partial array written by an older version in another codec or
+    /// chunk key separator (zstd before the blosc codec, `/` before `.`) is resumed in its
+    /// own: its chunks so far stay valid, and the new ones match its `zarr.json`.
+    pub fn create(dir: &Path, mut meta: ArrayMeta) -> Result<Self> {
         meta.check_limits(dir, &Limits::default())?;
         let payload = meta.chunk_bytes()? - 4;
         if matches!(meta.compression, Compression::Blosc { .. })
@@ -499,6 +502,8 @@ impl ZarrArray {
         let path = dir.join("zarr.json");
         if path.exists() {
             let existing = ArrayMeta::from_json(&path, &read_json(&path)?)?;
+            meta.compression = existing.compression;
+            meta.separator = existing.separator;
             if existing != meta {
                 return Err(Error::Invalid(format!(
                     "{}: existing partial array has different metadata; remove it to start over",
@@ -882,6 +887,32 @@ mod tests {
         // Truncate.
         fs::write(&p, &bytes[..7]).unwrap();
         assert!(b.read_chunk(&[1, 0]).unwrap_err().to_string().contains("truncated"));
+    }
+
+    #[test]
+    fn a_partial_array_of_an_older_codec_and_separator_resumes_in_its_own() {
+        // Begun by a version that wrote zstd chunks under `/` keys, resumed by one that
+        // writes blosc under `.`: the array keeps its codec and keys, old and new chunks
+        // read back; another shape is still refused.
+        let dir = tempfile::tempdir().unwrap();
+        let old = ArrayMeta { compression: Compression::ZSTD, separator: '/', ..meta() };
+        let a = ZarrArray::create(dir.path(), old).unwrap();
+        let first = encode_f32(&[1.0, -2.0, 3.5, 1e30], DType::F32);
+        a.write_chunk(&[0, 0], &first).unwrap();
+        let now = ArrayMeta { compression: Compression::DEFAULT, ..meta() };
+        let b = ZarrArray::create(dir.path(), now).unwrap();
+        assert_eq!((b.meta().compression, b.meta().separator), (Compression::ZSTD, '/'));
+        let second = encode_f32(&[0.5, 0.25, -8.0, 2.0], DType::F32);
+        b.write_chunk(&[2, 0], &second).unwrap();
+        assert!(dir.path().join("c/2/0").is_file());
+        let c = ZarrArray::open(dir.path(), &Limits::default()).unwrap();
+        assert_eq!(
+            (c.read_chunk(&[0, 0]).unwrap(), c.read_chunk(&[2, 0]).unwrap()),
+            (first, second)
+        );
+        let other = ArrayMeta { shape: vec![4, 4], ..meta() };
+        let e = ZarrArray::create(dir.path(), other).unwrap_err().to_string();
+        assert!(e.contains("different metadata"), "{e}");
     }
 
     #[test]
