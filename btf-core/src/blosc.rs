@@ -406,7 +406,11 @@ pub fn decode_to(frame: &[u8], out: &mut [u8]) -> Result<Header, FrameError> {
     if frame[1] != ZSTD_VERSION {
         return Err(corrupt(format!("zstd format version {} (1 expected)", frame[1])));
     }
-    if h.flags & FLAG_BITSHUFFLE != 0 && h.flags & FLAG_SHUFFLE == 0 {
+    // c-blosc unshuffles by bytes when the flag says so and the typesize exceeds 1, else by
+    // bits when that flag is set (also for typesize 1 with both flags, which it never
+    // writes): refused rather than misread.
+    let shuffle = h.flags & FLAG_SHUFFLE != 0 && h.typesize > 1;
+    if h.flags & FLAG_BITSHUFFLE != 0 && !shuffle {
         return Err(FrameError::Unsupported("bitshuffle".into()));
     }
     let (bs, ts, n) = (h.blocksize, h.typesize, h.nbytes);
@@ -422,7 +426,6 @@ pub fn decode_to(frame: &[u8], out: &mut [u8]) -> Result<Header, FrameError> {
     if split && bs % ts != 0 {
         return Err(corrupt(format!("split blocks of {bs} bytes, not a multiple of {ts}")));
     }
-    let shuffle = h.flags & FLAG_SHUFFLE != 0 && ts > 1;
     DCTX.with(|d| {
         let mut d = d.borrow_mut();
         let dctx = match d.as_mut() {
@@ -751,6 +754,14 @@ mod tests {
             (hostile(&f, n, |f| f[2] = (f[2] & 0x1f) | 3 << 5), "compressor zlib"),
             (
                 hostile(&f, n, |f| f[2] = f[2] & !FLAG_SHUFFLE | FLAG_BITSHUFFLE),
+                "unsupported blosc frame: bitshuffle",
+            ),
+            (
+                // Both shuffle flags at typesize 1: c-blosc would unshuffle by bits.
+                hostile(&f, n, |f| {
+                    f[2] |= FLAG_BITSHUFFLE;
+                    f[3] = 1
+                }),
                 "unsupported blosc frame: bitshuffle",
             ),
             (hostile(&f, n, |f| f[3] = 0), "typesize 0"),
