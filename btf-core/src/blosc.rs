@@ -281,8 +281,12 @@ pub fn encode_into(
                     if at + 4 > limit {
                         return Ok(false);
                     }
-                    out.resize(at + 4 + neblock.saturating_sub(1), 0);
-                    let size = match cctx.compress_to_buffer(stream, &mut out[at + 4..]) {
+                    out.extend_from_slice(&[0; 4]);
+                    // zstd writes into the frame's spare capacity (reserved above), not
+                    // into bytes zeroed first only to be overwritten.
+                    let mut dst = std::io::Cursor::new(&mut *out);
+                    dst.set_position((at + 4) as u64);
+                    let size = match cctx.compress_to_buffer(stream, &mut dst) {
                         Ok(n) if n < neblock => n,
                         _ => {
                             out.truncate(at + 4);
@@ -290,7 +294,7 @@ pub fn encode_into(
                             neblock
                         }
                     };
-                    out.truncate(at + 4 + size);
+                    debug_assert_eq!(out.len(), at + 4 + size);
                     out[at..at + 4].copy_from_slice(&(size as u32).to_le_bytes());
                 }
             }

@@ -659,8 +659,16 @@ impl ZarrArray {
             }
             return Ok(());
         }
-        let mut stored = vec![0u8; len as usize];
-        f.read_exact(&mut stored).map_err(|e| Error::io(&path, e))?;
+        // Read into uninitialised capacity (no zero-fill of bytes about to be overwritten).
+        let mut stored = Vec::with_capacity(len as usize);
+        (&mut f).take(len).read_to_end(&mut stored).map_err(|e| Error::io(&path, e))?;
+        if stored.len() as u64 != len {
+            let short = std::io::Error::new(
+                std::io::ErrorKind::UnexpectedEof,
+                format!("{} of {len} bytes (the file shrank while read)", stored.len()),
+            );
+            return Err(Error::io(&path, short));
+        }
         let n = stored.len() - 4;
         if crc32c::crc32c(&stored[..n]) != u32::from_le_bytes(stored[n..].try_into().unwrap()) {
             return Err(Error::Corrupt { path, what: "crc32c checksum mismatch".into() });
