@@ -16,9 +16,15 @@ Usage (normally through benches/isa_sklearn.sh): isa_sklearn.py STORE.btf [K] [O
    compress` does: the rows are the slot's light images, centred on their mean image
    (btf-core/src/pca.rs, `G = X~X~^T` with `X~ = X - 1 mu^T`), 16 components kept. The
    times are extrapolated to every view slot of the store (x n_views / K).
-4. Prints a markdown table with ratios: each path against the fastest path and against
-   scikit-learn, wall time of ours (all slots, reading and writing included) against the
-   extrapolated fit time of scikit-learn (BLAS threads: its own default, both cores here).
+4. Like for like, on the same exported slots in memory: btf-core's `fit_slots` example
+   (`FIT_SLOTS`, default $CARGO_TARGET_DIR/release/examples/fit_slots; the .sh wrapper
+   builds it) fits every slot on two threads per path, ROUNDS times, right before
+   scikit-learn's fits: the per-slot PCA of `btf compress` with nothing read or written,
+   timed as scikit-learn's fits are, extrapolated the same way.
+5. Prints two markdown tables with ratios. End to end: each path against the fastest path
+   and against scikit-learn, wall time of ours (all slots, reading and writing included)
+   against the extrapolated fit time of scikit-learn (BLAS threads: its own default, both
+   cores here). Fit only: each path's fits against scikit-learn's.
 
 The last line is the whole result as JSON.
 """
@@ -204,6 +210,17 @@ def main():
         f = slot_dir / f"slot{j}.npy"
         sh([btf, "export", str(store), "--format", "npy", "--slot", str(j), "-o", str(f)])
         files.append(f)
+    fit_bin = os.environ.get("FIT_SLOTS", f"{tgt}/release/examples/fit_slots")
+    if not Path(fit_bin).exists():
+        sys.exit(f"{fit_bin} is missing: cargo build --release -p btf-core --example fit_slots")
+    fits = {p: [] for p in paths}
+    for r in range(rounds):
+        res = sh([fit_bin, ",".join(paths)] + [str(f) for f in files])
+        for line in res.stdout.splitlines():
+            js = json.loads(line)
+            fits[js["path"]].append(js)
+            print(f"fit round {r + 1} {js['path']}: {js['fits']} fits in {js['wall_s']:.3f} s "
+                  f"on two threads, rel_rmse {js['rel_rmse']:.15f}")
     la_sk = loadavg()
     sk = sklearn_fits(files, 16)
     shutil.rmtree(slot_dir, ignore_errors=True)
@@ -241,9 +258,25 @@ def main():
             f"| {d['all_slots_s'] / fastest:.2f} | | | | {d['rel_rmse']:.9e} |"
         )
     print()
+    print(f"Fit only, the same {len(slots)} exported slots in memory on both sides (ours: "
+          f"2 x {len(slots)} fits on two threads, median of {rounds} round(s); both x {n_views} "
+          f"slots):")
+    print()
+    print("| | seconds (all slots) | sklearn randomized / this | sklearn full / this "
+          "| rel. RMSE (the K slots) |")
+    print("|---|---:|---:|---:|---:|")
+    for p in paths:
+        t = median([f["wall_s"] for f in fits[p]]) / (2 * len(slots)) * n_views
+        print(f"| `fit_slots` {p} | {t:.2f} | {rnd / t:.1f} | {full / t:.1f} | "
+              f"{fits[p][0]['rel_rmse']:.9e} |")
+    for s in ("randomized", "full"):
+        d = sk[s]
+        print(f"| scikit-learn `{s}` | {d['all_slots_s']:.2f} | | | {d['rel_rmse']:.9e} |")
+    print()
     print("loadavg at end:", loadavg())
     print(json.dumps({"cpu": model, "arch": arch, "paths": paths, "store": str(store),
-                      "meta": meta, "slots": slots, "runs": runs, "sklearn": sk}))
+                      "meta": meta, "slots": slots, "runs": runs, "fits": fits,
+                      "sklearn": sk}))
 
 
 if __name__ == "__main__":

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Issue #24: `btf compress` on every kernel path this CPU runs (BTF_SIMD=scalar|avx2|avx512)
 # against scikit-learn's PCA on the same view slots, in one run. See benches/isa_sklearn.py
-# for what is measured; this wrapper installs scikit-learn and numpy (PyPI) if missing.
+# for what is measured; this wrapper installs scikit-learn and numpy (PyPI) if missing and
+# builds btf-core's fit_slots example (the like-for-like fits) if it is not built.
 #
 #   benches/isa_sklearn.sh STORE.btf [K] [OUT_DIR]
 #
@@ -24,5 +25,10 @@ if ! python3 -c "import sklearn, numpy" 2>/dev/null; then
 fi
 if [ -n "${SKLEARN_THREADS:-}" ]; then # read by the BLAS libraries when they load
   export OPENBLAS_NUM_THREADS=$SKLEARN_THREADS OMP_NUM_THREADS=$SKLEARN_THREADS MKL_NUM_THREADS=$SKLEARN_THREADS
+fi
+fit="${FIT_SLOTS:-${CARGO_TARGET_DIR:-target}/release/examples/fit_slots}"
+if [ ! -x "$fit" ]; then # the like-for-like fits (isa_sklearn.py, step 4)
+  echo "building btf-core's fit_slots example" >&2
+  cargo build --release --quiet -p btf-core --example fit_slots
 fi
 exec python3 "$here/isa_sklearn.py" "$@"
