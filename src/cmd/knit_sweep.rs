@@ -1,23 +1,22 @@
-//! `btf knit sweep -o DIR`: what accuracy costs in time for the GPU fiber renderer and the
-//! yarn strips of [H25] (`--strips`, issue #20: bake directions, texture size, tangents,
-//! ξ and Ψ on/off, PCSS, MSAA, the plain strips; DESIGN §3.5) (issue
+//! `btf knit sweep -o DIR`: what accuracy costs in time for the GPU fiber renderer (issue
 //! #19, DESIGN §2.5 "What accuracy costs in time", with the per-cell metrics of §4.2's
-//! headline study). One chart patch (hair flyaways off: DESIGN §2.5's R-approx; with
-//! `--hairs` on in the reference and the GPU fibers, which draw the same hairs, and the
-//! strips get [H25 §4.4]'s flyaway overlay, whose cost and error the `no-flyaways` strip
-//! variant shows) is path traced by `yarn-ref` once per camera and shading
-//! model; then `yarn-render` draws it over the grid ω^LoD ([W19 eq. 4]) × shading ([W19
-//! eq. 5] simple, [W19 eq. 6] Khungurn) × n_max, plus the plain-tube baseline, all cells
-//! interleaved frame by frame in one run. Per cell: relative RMSE `√(Σ(g−r)²/Σr²)` over the
-//! interior mask (reference coverage ≥ 0.99 and GPU alpha ≥ 0.99) and over the silhouette
-//! band (the other pixels either covers by more than 0.01), median frame ms and its ratio
-//! to the tubes of the same camera and shading, instances and triangles. Writes
-//! `sweep.csv`, `sweep.md`, `sweep.png` (error against time ratio) and the references
-//! `ref-*.exr`, and prints the LoD crossover (defined in
-//! [`super::knit_sweep_report::crossover`]); the tables and the plot are
-//! `knit_sweep_report`. The defaults are set for speed; `--samples-per-turn 48 --n-sub 64
-//! --min-strip-px 0 --supersample 16 --no-core --fiber-shadows --shadow-map 8192` converge
-//! both renderers (#19's 5 % comparison, yarn-render README).
+//! headline study) and, with `--strips`, for the yarn strips of [H25] (issue #20, DESIGN
+//! §3.5: bake directions, texture size, tangents, ξ and Ψ on/off, PCSS, MSAA, the plain
+//! strips). One chart patch (hair flyaways off: DESIGN §2.5's R-approx; with `--hairs` on
+//! in the reference and the GPU fibers, which draw the same hairs, and the strips get
+//! [H25 §4.4]'s flyaway overlay, whose cost and error the `no-flyaways` strip variant
+//! shows) is path traced by `yarn-ref` once per camera and shading model; then
+//! `yarn-render` draws it over the grid ω^LoD ([W19 eq. 4]) × shading ([W19 eq. 5] simple,
+//! [W19 eq. 6] Khungurn) × n_max, plus the plain-tube baseline, all cells interleaved frame
+//! by frame in one run. Per cell: relative RMSE `√(Σ(g−r)²/Σr²)` over the interior mask
+//! (reference coverage ≥ 0.99 and GPU alpha ≥ 0.99) and over the silhouette band (the other
+//! pixels either covers by more than 0.01), median frame ms and its ratio to the tubes of
+//! the same camera and shading, instances and triangles. Writes `sweep.csv`, `sweep.md`,
+//! `sweep.png` (error against time ratio) and the references `ref-*.exr`, and prints the
+//! LoD crossover (defined in [`super::knit_sweep_report::crossover`]); the tables and the
+//! plot are `knit_sweep_report`. The defaults are set for speed; `--samples-per-turn 48
+//! --n-sub 64 --min-strip-px 0 --supersample 16 --no-core --fiber-shadows --shadow-map
+//! 8192` converge both renderers (#19's 5 % comparison, yarn-render README).
 
 use super::knit::{ShadingChoice, chart_inputs_of, load_chart, load_yarn};
 use super::knit_render::{bcsdf as fiber_bcsdf, fiber_light};

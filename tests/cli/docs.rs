@@ -3,7 +3,9 @@
 //! workspace root and cites that equation by its tag, either exactly or inside a list or
 //! range of the same paper (`[S03 eq. 2–5]`, `[S03 eq. 3, 5]`, `[C03 eq. 5 and 9]`); a row
 //! without a file says `not implemented: …` or `planned (issue #N)`; and every numbered
-//! equation of the papers has exactly one row.
+//! equation of the papers has exactly one row. The module map has one table per source
+//! folder of the workspace (`### CRATE/src`, `### src` for the binary) and in it exactly one
+//! row per Rust file, unit-test modules named `tests.rs` aside.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -243,4 +245,100 @@ fn the_readme_first_session_runs_as_written() {
     let peak = x.iter().fold(0f32, |m, &v| m.max(v)).max(1.0);
     let worst = x.iter().zip(&y).map(|(p, q)| (p - q).abs()).fold(0f32, f32::max);
     assert!(worst <= peak / 65535.0, "round trip error {worst} (peak {peak})");
+}
+
+/// The module map's tables: heading's source folder (`btf-core/src`, `src`) → the backticked
+/// `.rs` paths of each row's first cell, with the 1-based line of each.
+fn module_map(text: &str) -> BTreeMap<String, Vec<(String, usize)>> {
+    let mut tables: BTreeMap<String, Vec<(String, usize)>> = BTreeMap::new();
+    let mut inside = false;
+    let mut current: Option<String> = None;
+    for (i, line) in text.lines().enumerate() {
+        if line.starts_with("## ") {
+            inside = line.trim() == "## Module map";
+            current = None;
+            continue;
+        }
+        if !inside {
+            continue;
+        }
+        if let Some(h) = line.strip_prefix("### ") {
+            let folder = h.split_whitespace().next().unwrap_or("");
+            assert!(
+                folder == "src" || folder.ends_with("/src"),
+                "ARCHITECTURE.md:{}: a module map heading names no source folder: {line}",
+                i + 1
+            );
+            current = Some(folder.to_string());
+            tables.entry(folder.to_string()).or_default();
+            continue;
+        }
+        let Some(folder) = &current else { continue };
+        if let Some(first) = line.strip_prefix('|').and_then(|l| l.split('|').next()) {
+            for token in first.split('`').skip(1).step_by(2).filter(|t| t.ends_with(".rs")) {
+                tables.get_mut(folder).unwrap().push((token.to_string(), i + 1));
+            }
+        }
+    }
+    tables
+}
+
+/// The `.rs` files under `dir`, as paths relative to it with `/` separators.
+fn rust_files(dir: &Path, prefix: &str, out: &mut Vec<String>) {
+    let mut entries: Vec<_> = std::fs::read_dir(dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|e| e.expect("directory entry").path())
+        .collect();
+    entries.sort();
+    for path in entries {
+        let name = path.file_name().unwrap().to_string_lossy().to_string();
+        if path.is_dir() {
+            rust_files(&path, &format!("{prefix}{name}/"), out);
+        } else if name.ends_with(".rs") {
+            out.push(format!("{prefix}{name}"));
+        }
+    }
+}
+
+#[test]
+fn module_map_has_one_row_per_source_file() {
+    let (root, text) = architecture();
+    let tables = module_map(&text);
+    let cargo = std::fs::read_to_string(root.join("Cargo.toml")).expect("Cargo.toml reads");
+    let members = cargo
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("members = ["))
+        .expect("the workspace's members line");
+    let mut folders: Vec<String> = members
+        .trim_end_matches(']')
+        .split(',')
+        .map(|m| format!("{}/src", m.trim().trim_matches('"')))
+        .collect();
+    folders.push("src".into());
+    let mut failures = Vec::new();
+    for folder in &folders {
+        let Some(rows) = tables.get(folder) else {
+            failures.push(format!("no `### {folder}` table in the module map"));
+            continue;
+        };
+        let mut files = Vec::new();
+        rust_files(&root.join(folder), "", &mut files);
+        for f in files.iter().filter(|f| !f.ends_with("/tests.rs") && *f != "tests.rs") {
+            let lines: Vec<usize> = rows.iter().filter(|(t, _)| t == f).map(|r| r.1).collect();
+            match lines.len() {
+                0 => failures.push(format!("{folder}/{f} has no row under `### {folder}`")),
+                1 => {}
+                _ => failures.push(format!("{folder}/{f} has rows at lines {lines:?}")),
+            }
+        }
+        for (t, line) in rows {
+            if !files.contains(t) {
+                failures.push(format!("ARCHITECTURE.md:{line}: `{t}` is no file of {folder}"));
+            }
+        }
+    }
+    for folder in tables.keys().filter(|f| !folders.contains(f)) {
+        failures.push(format!("`### {folder}` is no source folder of the workspace"));
+    }
+    assert!(failures.is_empty(), "module map out of date:\n{}", failures.join("\n"));
 }

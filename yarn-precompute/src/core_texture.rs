@@ -4,10 +4,11 @@
 //!
 //! **Bake.** The core fibers of ply 0 of the fiber table (`yarn::fiber::FiberTable`, sorted
 //! by `R_i`), with migration rate `s = 1` as [W19 §3.2] asks (so `R` has the period of one
-//! twist and the texture tiles), are generated as capsule chains with `FiberModel` ([W19
-//! eq. 1–2]) and ray-cast orthographically with `yarn-ref`'s `FiberScene`, `supersample²`
-//! rays per texel, box-downsampled. If the yarn has `s = 0` the core keeps `s = 0`: its radii
-//! are then constant, which tiles over one twist just as well (DESIGN §4.4 hard case).
+//! twist and the texture tiles), are generated as capsule chains with `FiberModel`
+//! ([W19 eq. 1–2]) and ray-cast orthographically with `yarn-ref`'s `FiberScene`,
+//! `supersample²` rays per texel, box-downsampled. If the yarn has `s = 0` the core keeps
+//! `s = 0`: its radii are then constant, which tiles over one twist just as well (DESIGN
+//! §4.4 hard case).
 //!
 //! **The circular space (our choice).** The fibers are cast in the ply's *circular* space,
 //! where the ply ellipse `(e_N, e_B)` becomes the circle of radius `ḡ = √(e_N e_B)`; real

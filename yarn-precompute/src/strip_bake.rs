@@ -1,6 +1,6 @@
-//! `StripBake`: the baked textures of Huang et al.'s fiber-textured yarn strips [H25 §4.3,
-//! §5.1] — what a camera-facing strip of the yarn's width needs to stand in for the
-//! explicit fibers: per texel the fiber coverage, the visible fiber direction, ambient
+//! `StripBake`: the baked textures of Huang et al.'s fiber-textured yarn strips
+//! [H25 §4.3, §5.1] — what a camera-facing strip of the yarn's width needs to stand in for
+//! the explicit fibers: per texel the fiber coverage, the visible fiber direction, ambient
 //! occlusion, the fiber-level shadowing `Ψ^Fiber_G` and the multiple-scattering correction
 //! `ξ`, the last two factorised into a longitudinal × azimuthal product ([H25 eq. 10–11]).
 //!

@@ -1,10 +1,13 @@
-//! `[[yarns]]` of a scene: knit patches drawn as fiber-level yarns (Wu & Yuksel 2019,
-//! [W19 §3–5]) next to the BTF meshes, in the same colour and depth targets. This module is
-//! data only: btf-render parses the entries, resolves their paths and checks their ranges
-//! (naming the key), and draws nothing for them — `yarn-render::scene` builds the yarns
-//! (chart → stitch mesh on the carrier mesh's UVs → Chen skeleton → fibers) and draws them
-//! through [`crate::renderer::Overlay`], because btf-render cannot depend on yarn-render.
-//! No equation of the papers lives here.
+//! `[[yarns]]` of a scene: knit patches drawn next to the BTF meshes, in the same colour and
+//! depth targets, by the method each entry names ([`YarnMethod`]): fiber-level yarns (Wu &
+//! Yuksel 2019, [W19 §3–5]; the default), fiber-textured yarn strips (Huang et al. 2025,
+//! [H25]) or lumislices (Chen et al. 2003, [C03 §5]; blended over the opaque scene, so the
+//! scene needs MSAA 4). This module is data only: btf-render parses the entries, resolves
+//! their paths and checks their ranges (naming the key), and draws nothing for them —
+//! `yarn-render::scene` builds the yarns (chart → stitch mesh on the carrier mesh's UVs →
+//! Chen skeleton → packed yarn curves) and draws them through
+//! [`crate::renderer::Overlay`], because btf-render cannot depend on yarn-render. No
+//! equation of the papers lives here.
 
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -77,7 +80,8 @@ pub struct YarnsDesc {
     /// Level-of-detail threshold ω^LoD in pixels ([W19 eq. 4]; 0: every fiber).
     #[serde(default = "default_lod_px")]
     pub lod_px: f32,
-    /// How the yarns are drawn: `fibers` or `strips` (`lumislice` is not implemented yet).
+    /// How the yarns are drawn: `fibers` (the default), `strips` or `lumislice` (the last
+    /// needs `effects.msaa = 4`).
     #[serde(default)]
     pub method: YarnMethod,
     /// Yarn colour (linear RGB in [0, 1]); default: the skeleton's.

@@ -5,8 +5,8 @@
 //!   a third of the scarf over the edge) or a body proxy (a horizontal capsule, an "arm",
 //!   or a ball), [C03 Fig. 13 top: "approximately 15000 triangles", 40 s at 25 fps];
 //! - [`ScarfStretch`]: both end courses are pinned and pulled apart along the scarf, held,
-//!   then released and the scarf springs back under gravity [C03 Fig. 13 bottom: "about
-//!   11000 triangles", 3 s].
+//!   then released and the scarf springs back under gravity
+//!   [C03 Fig. 13 bottom: "about 11000 triangles", 3 s].
 //!
 //! [`ScarfSize::FULL`] is 250 courses × 30 wales = 15 000 triangles (1.25 m × 0.18 m with
 //! the default 5 × 6 mm loops); tests use a few loops. The scarf runs along `+x` (its

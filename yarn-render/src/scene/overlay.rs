@@ -1,11 +1,15 @@
 //! [`YarnOverlay`]: a scene's `[[yarns]]` drawn by the fiber renderer of [W19] (§5: fibers
 //! generated from the control points every frame, LoD of [W19 eq. 4], the fiber BCSDF of
 //! [W19 eq. 5–6]) — or, with `method = "strips"`, by the yarn strips of [H25] (textures
-//! baked once per yarn and colour, cached with the fiber bakes) — into btf-render's own
-//! colour and depth targets, after its BTF pass, with its camera matrix and the scene's
-//! lights. The environment reaches fibers and strips as its fit by 16 SRBFs with the `I_M`
-//! table ([H25 eq. 14–17], `yarn_precompute::srbf`), fitted once per map and rotated about
-//! `+z` with the environment; each SRBF has a tube (strip) shadow map.
+//! baked once per yarn and colour, cached with the fiber bakes), or, with
+//! `method = "lumislice"`, by the lumislices of [C03 §5] (the table computed once per yarn
+//! and colour, cached likewise; drawn after the fibers and strips and blended over them, in
+//! 4× MSAA targets) — into btf-render's own colour and depth targets, after its BTF pass,
+//! with its camera matrix and the scene's lights. The environment reaches fibers and strips
+//! as its fit by 16 SRBFs with the `I_M` table ([H25 eq. 14–17], `yarn_precompute::srbf`),
+//! fitted once per map and rotated about `+z` with the environment; each SRBF has a tube
+//! (strip) shadow map. Lumislices take the point and directional lights only ([C03] has no
+//! environment light).
 //!
 //! **How the two renderers meet — choice (a), drawing into shared targets.** btf-render
 //! keeps its depth buffer when an overlay is present and hands the overlay its colour

@@ -22,12 +22,12 @@
 //! `θ₀`, `l₀` from the contacts (`l₀ = 1.667 r` at the default 9r × 8r gauge) and puts the
 //! leg points at `x_k ± r b` (the skeleton's are 2.25 r apart and not ⟂ `d`). A loop has 14
 //! CPs: 12 on knots (six of its own face's two knots, six of the face above's) and the
-//! sinker and head, which are fixed — 14 × 4 = 56 rendering vertices per face, as [H25
-//! §5.2] counts. Knit and purl faces have knots; increase, decrease and yarn-over cells keep
-//! the skeleton's shapes mapped through the face (their knot templates, [H25 Fig. 3], need
-//! stitch counts our grid does not track); cables are refused ([H25 §7]: layered
-//! structures are unsupported). Faces on the bottom course of a non-periodic mesh have no
-//! loop below and keep interpolated points.
+//! sinker and head, which are fixed — 14 × 4 = 56 rendering vertices per face, as
+//! [H25 §5.2] counts. Knit and purl faces have knots; increase, decrease and yarn-over
+//! cells keep the skeleton's shapes mapped through the face (their knot templates,
+//! [H25 Fig. 3], need stitch counts our grid does not track); cables are refused ([H25 §7]:
+//! layered structures are unsupported). Faces on the bottom course of a non-periodic mesh
+//! have no loop below and keep interpolated points.
 //!
 //! **Per frame** ([H25 §5.2] with DESIGN §3.3 items 3–5):
 //! 1. the face map is the bilinear map of its four corners (exact at corners, the affine
