@@ -6,8 +6,8 @@ Usage (normally through benches/isa_sklearn.sh): isa_sklearn.py STORE.btf [K] [O
 1. Prints the CPU model, its flags and /proc/loadavg.
 2. For each round and each kernel path the CPU runs (scalar, avx2, avx512; `neon` on
    aarch64), interleaved: `BTF_SIMD=PATH /usr/bin/time -v btf compress STORE -c 16 -o
-   OUT --json` to a fresh output path: wall, user and sys seconds and peak RSS from GNU
-   time, the JSON's `seconds`, `simd` (checked to be PATH), `rel_rmse`, and the relative
+   OUT --json` (plus COMPRESS_ARGS, e.g. "--codec none") to a fresh output path: wall,
+   user and sys seconds and peak RSS from GNU time, the JSON's `seconds`, `simd` (checked to be PATH), `rel_rmse`, and the relative
    RMSE over the K exported slots (from the JSON's per-slot `sse_stored` and `energy`).
 3. Exports K view slots with `btf export --format npy --slot J` (lights x h*w*3 float32;
    the f16 values widened exactly, so both sides see the same numbers) and times
@@ -145,6 +145,7 @@ def main():
     tgt = os.environ.get("CARGO_TARGET_DIR", "target")
     btf = os.environ.get("BTF", f"{tgt}/release/btf")
     rounds = int(os.environ.get("ROUNDS", "1"))
+    extra = os.environ.get("COMPRESS_ARGS", "").split()
 
     model, flags, arch = cpu_info()
     print(f"CPU: {model} ({arch}, {os.cpu_count()} logical CPUs)")
@@ -154,6 +155,8 @@ def main():
     print("loadavg at start:", loadavg())
     paths = os.environ.get("PATHS", "").split() or paths_of(flags, arch)
     print("paths:", " ".join(paths))
+    if extra:
+        print("btf compress arguments added:", " ".join(extra))
 
     meta = json.loads(sh([btf, "inspect", str(store), "--json"]).stdout)
     n_views = meta["n_views"]
@@ -182,7 +185,7 @@ def main():
             env = dict(os.environ, BTF_SIMD=p, BTF_NO_PROGRESS="1")
             res = sh(
                 ["/usr/bin/time", "-v", "-o", str(tfile), btf, "compress", str(store), "-c", "16",
-                 "-o", str(eig), "--json"],
+                 "-o", str(eig), "--json"] + extra,
                 env=env,
             )
             js = json.loads(res.stdout[res.stdout.index("{"):])

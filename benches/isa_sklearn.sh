@@ -13,7 +13,8 @@
 #   the eigen stores are deleted after each run, the exported slots at the end).
 # Environment: BTF (the btf binary; default $CARGO_TARGET_DIR/release/btf, else
 #   target/release/btf), ROUNDS (rounds of the paths, interleaved; default 1),
-#   PATHS (e.g. "avx2 avx512"; default every path the CPU runs), SKLEARN_THREADS (BLAS
+#   PATHS (e.g. "avx2 avx512"; default every path the CPU runs), COMPRESS_ARGS (added to
+#   every `btf compress`, e.g. "--codec none"), SKLEARN_THREADS (BLAS
 #   threads of scikit-learn, through OPENBLAS/OMP/MKL_NUM_THREADS; default: the library's
 #   own choice, all cores — on a loaded machine its spinning threads inflate its times).
 # Example, quiet machine: benches/quiet.sh benches/isa_sklearn.sh /tmp/bench/corduroy256_f16.btf

@@ -7,7 +7,7 @@ use crate::metrics::{psnr_db, rel_rmse_from};
 use crate::pca::{GramPrecision, PcaScratch, SlotRows, max_components, pca_rows_in, pca_slot_in};
 use crate::shard::Shard;
 use crate::store::{BtfStore, ShardedStatus, SlotData};
-use crate::zarr::DType;
+use crate::zarr::{Compression, DType};
 use crate::{Error, Result};
 use half::f16;
 use rayon::prelude::*;
@@ -29,6 +29,9 @@ pub struct CompressParams {
     pub resume: bool,
     /// The Gram matrix's arithmetic (by default `f32` lanes for `f16` stores, `f64` else).
     pub gram: GramPrecision,
+    /// The chunk codec of the means and eigentextures ([`Compression::FAST`] by default;
+    /// [`Compression::None`]: no encoding, a larger store — BENCHMARKS.md, "Session 29").
+    pub codec: Compression,
 }
 
 impl Default for CompressParams {
@@ -38,6 +41,7 @@ impl Default for CompressParams {
             quantization: Quantization::F16,
             resume: false,
             gram: GramPrecision::Auto,
+            codec: Compression::FAST,
         }
     }
 }
@@ -110,7 +114,7 @@ pub fn compress(
     let isa = crate::simd::Isa::from_env()?;
     let (emeta, mut warnings) = eigen_meta(input, params)?;
     let job = serde_json::json!({ "input": crate::fs::input_identity(input.path()) });
-    let writer = EigenWriter::create_for_job(output, emeta, params.resume, job)?;
+    let writer = EigenWriter::create_for_job_with(output, emeta, params.resume, job, params.codec)?;
     let views = 0..input.meta().n_views();
     let slots = compress_views(input, &writer, views, params, isa, false, progress)?;
     writer.finish()?;
@@ -203,7 +207,7 @@ pub fn compress_shard(
         r.gram = gram_of(input, params.gram);
         return Ok(r);
     }
-    let writer = EigenWriter::join_for_job(output, emeta, job)?;
+    let writer = EigenWriter::join_for_job_with(output, emeta, job, params.codec)?;
     let slots = compress_views(input, &writer, views, params, isa, true, progress)?;
     let mut r = report_of(input.meta(), params, slots, &mut warnings, 0);
     r.seconds = start.elapsed().as_secs_f64();

@@ -121,7 +121,8 @@ struct Arrays {
     values: ZarrArray,
 }
 
-fn array_metas(m: &EigenMeta) -> [(&'static str, ArrayMeta); 5] {
+/// The arrays of an eigen store, the means and eigentextures chunked with `bulk`.
+fn array_metas(m: &EigenMeta, bulk: Compression) -> [(&'static str, ArrayMeta); 5] {
     let (v, l, h, w, c) = (
         m.btf.n_views() as u64,
         m.btf.n_lights() as u64,
@@ -133,7 +134,7 @@ fn array_metas(m: &EigenMeta) -> [(&'static str, ArrayMeta); 5] {
         (
             "mean",
             ArrayMeta {
-                compression: Compression::FAST,
+                compression: bulk,
                 ..ArrayMeta::new(
                     vec![v, h, w, 3],
                     vec![1, h, w, 3],
@@ -148,7 +149,7 @@ fn array_metas(m: &EigenMeta) -> [(&'static str, ArrayMeta); 5] {
                 attributes: json!({
                     "description": "unit-norm eigentextures B_kj, quantised: value = stored * scale_offset[view, component, 0] + scale_offset[view, component, 1]",
                 }),
-                compression: Compression::FAST,
+                compression: bulk,
                 ..ArrayMeta::new(
                     vec![v, c, h, w, 3],
                     vec![1, c, h, w, 3],
@@ -184,8 +185,8 @@ fn array_metas(m: &EigenMeta) -> [(&'static str, ArrayMeta); 5] {
     ]
 }
 
-fn open_arrays(dir: &Path, m: &EigenMeta, create: bool) -> Result<Arrays> {
-    let mut it = array_metas(m).into_iter().map(|(name, meta)| {
+fn open_arrays(dir: &Path, m: &EigenMeta, create: bool, bulk: Compression) -> Result<Arrays> {
+    let mut it = array_metas(m, bulk).into_iter().map(|(name, meta)| {
         let p = dir.join(name);
         if create {
             ZarrArray::create(&p, meta)
@@ -290,6 +291,20 @@ impl EigenWriter {
         resume: bool,
         job: serde_json::Value,
     ) -> Result<Self> {
+        Self::create_for_job_with(path, meta, resume, job, Compression::FAST)
+    }
+
+    /// [`EigenWriter::create_for_job`] with the chunks of the means and eigentextures (all
+    /// but a few kilobytes of the store) in `bulk` ([`Compression::FAST`] by default;
+    /// [`Compression::None`] writes them raw, for a faster compression and a larger store).
+    /// A resumed store keeps the codec it was begun with.
+    pub fn create_for_job_with(
+        path: &Path,
+        meta: EigenMeta,
+        resume: bool,
+        job: serde_json::Value,
+        bulk: Compression,
+    ) -> Result<Self> {
         if meta.components == 0 || meta.components > meta.btf.n_lights() {
             return Err(Error::Invalid(format!(
                 "components {} not in 1..={}",
@@ -299,7 +314,7 @@ impl EigenWriter {
         }
         let record = serde_json::json!({"store": "eigen", "meta": meta, "job": job});
         let txn = StoreTxn::begin(path, resume, &record)?;
-        let arrays = open_arrays(txn.dir(), &meta, true)?;
+        let arrays = open_arrays(txn.dir(), &meta, true, bulk)?;
         zarr::ensure_record_group(txn.dir(), "stats")?;
         Ok(EigenWriter { txn, meta, arrays })
     }
@@ -309,9 +324,21 @@ impl EigenWriter {
     /// the others check that they agree before writing anything. Nothing is committed: the
     /// finaliser does that ([`EigenWriter::reopen`], then [`EigenWriter::finish`]).
     pub fn join_for_job(path: &Path, meta: EigenMeta, job: serde_json::Value) -> Result<Self> {
+        Self::join_for_job_with(path, meta, job, Compression::FAST)
+    }
+
+    /// [`EigenWriter::join_for_job`] with the means and eigentextures in `bulk`, as
+    /// [`EigenWriter::create_for_job_with`] (the shard that creates the store chooses; the
+    /// others keep its codec).
+    pub fn join_for_job_with(
+        path: &Path,
+        meta: EigenMeta,
+        job: serde_json::Value,
+        bulk: Compression,
+    ) -> Result<Self> {
         let record = serde_json::json!({"store": "eigen", "meta": meta, "job": job});
         let txn = StoreTxn::join(path, &record)?;
-        let arrays = open_arrays(txn.dir(), &meta, true)?;
+        let arrays = open_arrays(txn.dir(), &meta, true, bulk)?;
         zarr::ensure_record_group(txn.dir(), "stats")?;
         Ok(EigenWriter { txn, meta, arrays })
     }
@@ -329,7 +356,8 @@ impl EigenWriter {
         let mut meta: EigenMeta = serde_json::from_value(record["meta"].clone())
             .map_err(|source| Error::Json { path: txn.dir().join("zarr.json"), source })?;
         meta.btf = meta.btf.validate(txn.dir())?;
-        let arrays = open_arrays(txn.dir(), &meta, true)?;
+        // The arrays exist: each keeps the codec its store was begun with.
+        let arrays = open_arrays(txn.dir(), &meta, true, Compression::FAST)?;
         zarr::ensure_record_group(txn.dir(), "stats")?;
         Ok((EigenWriter { txn, meta, arrays }, record["job"].clone()))
     }
@@ -343,7 +371,7 @@ impl EigenWriter {
         let mut meta: EigenMeta = serde_json::from_value(record["meta"].clone())
             .map_err(|source| Error::Json { path: txn.dir().join("zarr.json"), source })?;
         meta.btf = meta.btf.validate(txn.dir())?;
-        let arrays = open_arrays(txn.dir(), &meta, false)?;
+        let arrays = open_arrays(txn.dir(), &meta, false, Compression::FAST)?;
         Ok((EigenWriter { txn, meta, arrays }, record["job"].clone()))
     }
 
@@ -470,7 +498,7 @@ impl EigenStore {
         }
         crate::axes::check(path, &btf)?;
         let meta = EigenMeta { btf, components, quantization };
-        let arrays = open_arrays(path, &meta, false)?;
+        let arrays = open_arrays(path, &meta, false, Compression::FAST)?;
         Ok(EigenStore { path: path.to_owned(), meta, arrays })
     }
 

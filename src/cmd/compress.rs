@@ -29,6 +29,12 @@ pub struct CompressArgs {
     /// auto: f32 for f16 stores, f64 for f32 ones.
     #[arg(long, default_value = "auto")]
     gram: crate::args::Gram,
+    /// Chunk codec of the means and eigentextures: blosc (byte shuffle, zstd level 1), or
+    /// none (no encoding: on 2 cores 14–16 % faster at 256², about 40 % more disk). A
+    /// resumed run, and every shard after the first, keeps the codec the store was begun
+    /// with.
+    #[arg(long, default_value = "blosc")]
+    codec: crate::args::EigenCodec,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
@@ -66,6 +72,7 @@ pub fn run(a: CompressArgs) -> Result<()> {
         quantization,
         resume: a.resume,
         gram: a.gram.precision(),
+        codec: a.codec.compression(),
     };
     if let Some(shard) = a.shard.shard()? {
         return run_shard(&input, &output, params, shard, a.json);

@@ -77,6 +77,51 @@ fn f16_stores_get_the_f32_gram_by_default_within_its_bound() {
 }
 
 #[test]
+fn eigen_stores_written_raw_hold_the_same_values() {
+    // `--codec none` changes how the means and eigentextures are chunked, nothing computed.
+    let d = Dir::new();
+    write_test_btf_as(&d.path("h.btf"), 32, btf_core::zarr::DType::F16);
+    let run = |out: &str, codec: &[&str]| -> Value {
+        let mut args = vec!["compress", "h.btf", "-c", "3", "-o", out, "--json"];
+        args.extend_from_slice(codec);
+        serde_json::from_str(&d.ok(&args)).unwrap()
+    };
+    let (packed, raw) = (run("a.eig", &[]), run("b.eig", &["--codec", "none"]));
+    assert_eq!(packed["rel_rmse"], raw["rel_rmse"]);
+    assert_eq!(packed["slots"].as_array().unwrap().len(), 7);
+    for (x, y) in packed["slots"].as_array().unwrap().iter().zip(raw["slots"].as_array().unwrap()) {
+        assert_eq!((&x["sse_stored"], &x["sse"]), (&y["sse_stored"], &y["sse"]));
+    }
+    for array in ["mean", "eigentextures", "weights"] {
+        let codecs = |store: &str| {
+            std::fs::read_to_string(d.path(store).join(array).join("zarr.json")).unwrap()
+        };
+        // The bulk arrays raw (bytes and the checksum only); the small ones as always.
+        assert!(codecs("a.eig").contains("\"blosc\""), "{array}");
+        assert_eq!(codecs("b.eig").contains("\"blosc\""), array == "weights", "{array}");
+    }
+    let (a, b) = (
+        btf_core::eigen::EigenStore::open(&d.path("a.eig")).unwrap(),
+        btf_core::eigen::EigenStore::open(&d.path("b.eig")).unwrap(),
+    );
+    for v in 0..7 {
+        let (sa, sb) = (a.read_slot(v).unwrap(), b.read_slot(v).unwrap());
+        assert_eq!((sa.mean, sa.basis, sa.weights), (sb.mean, sb.basis, sb.weights), "slot {v}");
+    }
+    // The binary reads it back like any other.
+    for store in ["a.eig", "b.eig"] {
+        let out = format!("{store}.exr");
+        d.ok(&["reconstruct", store, "--view", "0,0", "--light", "30,0", "-o", &out]);
+    }
+    assert_eq!(
+        std::fs::read(d.path("a.eig.exr")).unwrap(),
+        std::fs::read(d.path("b.eig.exr")).unwrap()
+    );
+    let err = d.fails(&["compress", "h.btf", "-o", "x.eig", "--codec", "lz4"]);
+    assert!(err.contains("invalid value 'lz4'") && err.contains("none"), "{err}");
+}
+
+#[test]
 fn too_many_components_are_clamped_with_a_warning() {
     let d = Dir::new();
     write_test_btf(&d.path("m.btf"), 4);
