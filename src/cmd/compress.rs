@@ -30,8 +30,8 @@ pub struct CompressArgs {
     #[arg(long, default_value = "auto")]
     gram: crate::args::Gram,
     /// Chunk codec of the means and eigentextures: blosc (byte shuffle, zstd level 1), or
-    /// none (no encoding: on 2 cores 14–16 % faster at 256², about 40 % more disk). A
-    /// resumed run, and every shard after the first, keeps the codec the store was begun
+    /// none (no encoding: 7–20 % less wall time at 256² on 2 cores, about 40 % more disk).
+    /// A resumed run, and every shard after the first, keeps the codec the store was begun
     /// with.
     #[arg(long, default_value = "blosc")]
     codec: crate::args::EigenCodec,
