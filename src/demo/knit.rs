@@ -5,10 +5,10 @@
 //! wales with the yarns moved by the knot solver ([H25], `yarn::knit::knot`), side by side;
 //! then the rest patch by the fibers and by [H25]'s yarn strips (`yarn_render::strips`,
 //! textures baked once into `knit/bake-cache`) and by [C03]'s lumislices
-//! (`yarn_render::lumislice`, the table computed once into the same cache), each timed. Writes `knit/knit.png`,
-//! `knit/knit-stretch.png`, `knit/knit-strips.png`, `knit/knit-shadows.png` (the close-up
-//! with [W19]'s tube maps and self-shadow volume beside shadows of every fiber, and those
-//! at 4 × 4 frames a pixel) and
+//! (`yarn_render::lumislice`, the table computed once into the same cache), each timed.
+//! Writes `knit/knit.png`, `knit/knit-stretch.png`, `knit/knit-strips.png`,
+//! `knit/knit-shadows.png` (the close-up with [W19]'s tube maps and self-shadow volume
+//! beside shadows of every fiber, and those at 4 × 4 frames a pixel) and
 //! `knit/knit.json` (what the report shows); no equation lives here.
 
 use anyhow::Result;

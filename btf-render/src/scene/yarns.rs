@@ -77,7 +77,8 @@ pub struct YarnsDesc {
     /// UV size of one stitch `[Δu, Δv]` (default: the yarn's gauge on this mesh).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stitch_uv: Option<[f64; 2]>,
-    /// Level-of-detail threshold ω^LoD in pixels ([W19 eq. 4]; 0: every fiber).
+    /// Level-of-detail threshold ω^LoD in pixels ([W19 eq. 4]; 0: every fiber); read by
+    /// `method = "fibers"` only.
     #[serde(default = "default_lod_px")]
     pub lod_px: f32,
     /// How the yarns are drawn: `fibers` (the default), `strips` or `lumislice` (the last
@@ -93,7 +94,7 @@ pub struct YarnsDesc {
     /// Self-shadows inside the yarns and shadows of other yarns (directional lights).
     #[serde(default = "yes")]
     pub shadows: bool,
-    /// Ambient occlusion inside the yarns.
+    /// Ambient occlusion inside the yarns ([W19 §4.2]); read by `method = "fibers"` only.
     #[serde(default)]
     pub ao: YarnAo,
     /// Hair flyaways: the yarn's hairs on the fibers, the flyaway overlay on the strips.

@@ -1,8 +1,8 @@
-// strip_regular (render, vertex pulling): the fiber-textured yarn strips of [H25 §4.3,
-// §5.2] — one instance per yarn segment, a camera-facing triangle strip of 2·(n_sub + 1)
-// vertices on the yarn centre line (yarn_point of the generator), 2H wide (H the baked
-// strip half-width), in place of [H25]'s geometry shader. The fragment reads the strip
-// bake (yarn_precompute::StripBake) at the screw-symmetric texture coordinate
+// strip_regular (render, vertex pulling): the fiber-textured yarn strips of
+// [H25 §4.3, §5.2] — one instance per yarn segment, a camera-facing triangle strip of
+// 2·(n_sub + 1) vertices on the yarn centre line (yarn_point of the generator), 2H wide
+// (H the baked strip half-width), in place of [H25]'s geometry shader. The fragment reads
+// the strip bake (yarn_precompute::StripBake) at the screw-symmetric texture coordinate
 // u = frac(z/α_ply − ψ_e/2π) (ψ_e the eye azimuth about the yarn in its (N, B) frame) and
 // v across, and shades [H25 eq. 11] as DESIGN §3.3 item 10 reads it:
 //   L = Σ_lights E · V_yarn · Ψ_M(θ_i) Ψ_N(φ) · ξ_M(θ_i) ξ_N(φ) · (1/K) Σ_k f(ω_i, ω_o; t_k) cos θ_i · tint
