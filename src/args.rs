@@ -87,21 +87,31 @@ choices! {
 }
 
 choices! {
-    /// Chunk codec of an eigen store's means and eigentextures (`btf compress --codec`).
-    EigenCodec {
-        /// Byte shuffle, then zstd level 1 (blosc): about 30 % smaller.
+    /// Chunk codec of a store's bulk arrays (`--codec`: a BTF store's normtextures, an eigen
+    /// store's means and eigentextures).
+    Codec {
+        /// Byte shuffle, then zstd level 1 (blosc): about half the bytes of a BTF store, 30 %
+        /// fewer for an eigen store.
         Blosc = "blosc",
-        /// Raw chunks with their checksum: no encoding time, a larger store.
+        /// Raw chunks with their checksum: no encoding or decoding time, a larger store.
         Raw = "none",
     }
 }
 
-impl EigenCodec {
-    /// The chunk codec.
-    pub fn compression(self) -> btf_core::zarr::Compression {
+impl Codec {
+    /// The normtextures' codec of a BTF store.
+    pub fn btf(self) -> btf_core::zarr::Compression {
         match self {
-            EigenCodec::Blosc => btf_core::zarr::Compression::FAST,
-            EigenCodec::Raw => btf_core::zarr::Compression::None,
+            Codec::Blosc => btf_core::zarr::Compression::DEFAULT,
+            Codec::Raw => btf_core::zarr::Compression::None,
+        }
+    }
+
+    /// The means' and eigentextures' codec of an eigen store.
+    pub fn eigen(self) -> btf_core::zarr::Compression {
+        match self {
+            Codec::Blosc => btf_core::zarr::Compression::FAST,
+            Codec::Raw => btf_core::zarr::Compression::None,
         }
     }
 }

@@ -549,6 +549,19 @@ impl BtfWriter {
     /// before writing anything. Nothing is committed: the finaliser does that
     /// ([`finalize_sharded`]).
     pub fn join_for_job(path: &Path, meta: BtfMeta, dtype: DType, job: Value) -> Result<Self> {
+        Self::join_for_job_compressed(path, meta, dtype, job, zarr::Compression::DEFAULT)
+    }
+
+    /// [`BtfWriter::join_for_job`] with the chunks' compression chosen, as
+    /// [`BtfWriter::create_compressed`] (the shard that creates the store chooses; the others
+    /// keep its codec).
+    pub fn join_for_job_compressed(
+        path: &Path,
+        meta: BtfMeta,
+        dtype: DType,
+        job: Value,
+        compression: zarr::Compression,
+    ) -> Result<Self> {
         if !matches!(dtype, DType::F16 | DType::F32) {
             return Err(Error::Unsupported(format!(
                 "normtexture dtype {dtype:?} (use f16 or f32)"
@@ -557,10 +570,7 @@ impl BtfWriter {
         let meta = meta.validate(path)?;
         let record = json!({"store": "btf", "meta": meta, "dtype": dtype.zarr_name(), "job": job});
         let txn = StoreTxn::join(path, &record)?;
-        let array = ArrayMeta {
-            compression: zarr::Compression::DEFAULT,
-            ..normtexture_array(&meta, dtype)
-        };
+        let array = ArrayMeta { compression, ..normtexture_array(&meta, dtype) };
         let arr = ZarrArray::create(&txn.dir().join("normtextures"), array)?;
         Ok(BtfWriter { txn, meta, arr })
     }

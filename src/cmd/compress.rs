@@ -34,7 +34,7 @@ pub struct CompressArgs {
     /// A resumed run, and every shard after the first, keeps the codec the store was begun
     /// with.
     #[arg(long, default_value = "blosc")]
-    codec: crate::args::EigenCodec,
+    codec: crate::args::Codec,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
@@ -72,7 +72,7 @@ pub fn run(a: CompressArgs) -> Result<()> {
         quantization,
         resume: a.resume,
         gram: a.gram.precision(),
-        codec: a.codec.compression(),
+        codec: a.codec.eigen(),
     };
     if let Some(shard) = a.shard.shard()? {
         return run_shard(&input, &output, params, shard, a.json);

@@ -146,6 +146,12 @@ pub struct MaterialArgs {
     /// Old spelling of `--dtype f16` (hidden).
     #[arg(long, hide = true, conflicts_with = "dtype")]
     pub f16: bool,
+    /// Chunk codec of the normtextures: blosc (byte shuffle, zstd level 1; the default), or
+    /// none (raw: about twice the disk, and `btf compress` maps the chunks in place instead
+    /// of decoding them). A resumed run, and every shard after the first, keeps the codec
+    /// the store was begun with. Not for --kind yarn yet.
+    #[arg(long)]
+    pub codec: Option<crate::args::Codec>,
     /// Keep the images of an interrupted run.
     #[arg(long)]
     pub resume: bool,
@@ -260,6 +266,9 @@ fn material(a: MaterialArgs) -> Result<()> {
         if a.shard.shard.is_some() || a.shard.shard_count.is_some() {
             bail!("--shard is not available for --kind yarn yet (issue #23)");
         }
+        if a.codec.is_some() {
+            bail!("--codec is not available for --kind yarn yet (its stores are blosc)");
+        }
         synth_yarn_material(&a, crate::progress::enabled())?;
         if let Some(dir) = a.preview {
             let store = btf_core::store::BtfStore::open(&a.output)?;
@@ -285,8 +294,13 @@ fn material(a: MaterialArgs) -> Result<()> {
     if shard.is_some() && a.preview.is_some() {
         bail!("--preview needs the whole store: give it to a run without --shard");
     }
-    let opts =
-        GenerateOptions { resume: a.resume, progress: crate::progress::enabled(), dtype, shard };
+    let opts = GenerateOptions {
+        resume: a.resume,
+        progress: crate::progress::enabled(),
+        dtype,
+        shard,
+        codec: a.codec.unwrap_or(crate::args::Codec::Blosc).btf(),
+    };
     let r = datasets::generate(&spec, &a.output, &opts)
         .with_context(|| format!("synthesising {} into {}", a.kind, a.output.display()))?;
     if let Some(s) = shard {

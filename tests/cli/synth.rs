@@ -51,6 +51,58 @@ fn synth_material_writes_analytic_lambert_store_and_preview() {
 }
 
 #[test]
+fn synth_material_writes_raw_stores_that_compress_alike() {
+    // `--codec none`: the same values in raw chunks (read in place by the compressor), so
+    // both stores compress to the same eigen store.
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    for (out, codec) in [("b.btf", "blosc"), ("n.btf", "none")] {
+        ok(&[
+            "synth",
+            "material",
+            "--kind",
+            "corduroy",
+            "--size",
+            "8",
+            "--sampling",
+            "rings:0x1,45x4",
+            "--dtype",
+            "f16",
+            "--codec",
+            codec,
+            "-o",
+            &p(out),
+        ]);
+    }
+    let chain = |store: &str| {
+        std::fs::read_to_string(dir.path().join(store).join("normtextures/zarr.json")).unwrap()
+    };
+    assert!(chain("b.btf").contains("\"blosc\"") && !chain("n.btf").contains("\"blosc\""));
+    let (b, n) = (
+        btf_core::store::BtfStore::open(&dir.path().join("b.btf")).unwrap(),
+        btf_core::store::BtfStore::open(&dir.path().join("n.btf")).unwrap(),
+    );
+    assert!(b.map_slot(0).unwrap().is_none() && n.map_slot(0).unwrap().is_some());
+    for v in 0..5 {
+        assert_eq!(b.read_slot(v).unwrap().data, n.read_slot(v).unwrap().data, "slot {v}");
+    }
+    for s in ["b", "n"] {
+        ok(&["compress", &p(&format!("{s}.btf")), "-c", "3", "-o", &p(&format!("{s}.eig"))]);
+    }
+    let (eb, en) = (
+        btf_core::eigen::EigenStore::open(&dir.path().join("b.eig")).unwrap(),
+        btf_core::eigen::EigenStore::open(&dir.path().join("n.eig")).unwrap(),
+    );
+    for v in 0..5 {
+        let (x, y) = (eb.read_slot(v).unwrap(), en.read_slot(v).unwrap());
+        assert_eq!((x.basis, x.weights), (y.basis, y.weights), "slot {v}");
+    }
+    let out = btf(&["synth", "material", "--kind", "yarn", "--codec", "none", "-o", &p("y.btf")]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("--codec") && err.contains("yarn"), "{err}");
+}
+
+#[test]
 fn synth_env_and_mesh_write_loadable_files() {
     let dir = tempfile::tempdir().unwrap();
     let exr = dir.path().join("sky.exr");

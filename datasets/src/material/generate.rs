@@ -6,7 +6,7 @@
 use super::{Material, MaterialSpec};
 use crate::Result;
 use btf_core::store::{BtfMeta, BtfWriter};
-use btf_core::zarr::DType;
+use btf_core::zarr::{Compression, DType};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde_json::json;
@@ -25,11 +25,20 @@ pub struct GenerateOptions {
     /// Write only this shard's view slots into the store that every shard fills
     /// (issue #23); the store is committed by `btf finalize`, not here.
     pub shard: Option<btf_core::shard::Shard>,
+    /// Chunk codec of the normtextures ([`Compression::DEFAULT`]: blosc; `None`: raw, which
+    /// `btf compress` maps in place instead of decoding).
+    pub codec: Compression,
 }
 
 impl Default for GenerateOptions {
     fn default() -> Self {
-        GenerateOptions { resume: false, progress: false, dtype: DType::F32, shard: None }
+        GenerateOptions {
+            resume: false,
+            progress: false,
+            dtype: DType::F32,
+            shard: None,
+            codec: Compression::DEFAULT,
+        }
     }
 }
 
@@ -64,9 +73,13 @@ pub fn generate(spec: &MaterialSpec, out: &Path, opts: &GenerateOptions) -> Resu
     let (writer, views) = match opts.shard {
         Some(shard) => {
             let job = json!({ "shards": shard.count });
-            (BtfWriter::join_for_job(out, meta, opts.dtype, job)?, shard.range(n))
+            let w = BtfWriter::join_for_job_compressed(out, meta, opts.dtype, job, opts.codec)?;
+            (w, shard.range(n))
         }
-        None => (BtfWriter::create(out, meta, opts.dtype, opts.resume)?, 0..n),
+        None => {
+            let (dtype, resume, codec) = (opts.dtype, opts.resume, opts.codec);
+            (BtfWriter::create_compressed(out, meta, dtype, resume, json!(null), codec)?, 0..n)
+        }
     };
     let bar = if opts.progress {
         ProgressBar::new((views.len() * n) as u64)
