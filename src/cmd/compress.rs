@@ -32,9 +32,9 @@ pub struct CompressArgs {
     /// Chunk codec of the means and eigentextures: blosc (byte shuffle, zstd level 1), or
     /// none (no encoding: 7–20 % less wall time at 256² on 2 cores, about 40 % more disk).
     /// A resumed run, and every shard after the first, keeps the codec the store was begun
-    /// with.
-    #[arg(long, default_value = "blosc")]
-    codec: crate::args::Codec,
+    /// with. Default: blosc.
+    #[arg(long)]
+    codec: Option<crate::args::Codec>,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
@@ -59,6 +59,9 @@ pub fn run(a: CompressArgs) -> Result<()> {
         BtfStore::open(&a.input).with_context(|| format!("cannot open {}", a.input.display()))?;
     if let Some(cs) = a.sweep {
         let Some(dir) = a.report else { bail!("--sweep needs --report DIR") };
+        if a.codec.is_some() {
+            bail!("--codec is not available with --sweep (its stores are blosc)");
+        }
         if cs.is_empty() || cs.contains(&0) {
             bail!("--sweep needs component counts ≥ 1, e.g. --sweep 1,2,4,8,16");
         }
@@ -72,7 +75,7 @@ pub fn run(a: CompressArgs) -> Result<()> {
         quantization,
         resume: a.resume,
         gram: a.gram.precision(),
-        codec: a.codec.eigen(),
+        codec: a.codec.unwrap_or(crate::args::Codec::Blosc).eigen(),
     };
     if let Some(shard) = a.shard.shard()? {
         return run_shard(&input, &output, params, shard, a.json);

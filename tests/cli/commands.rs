@@ -119,6 +119,9 @@ fn eigen_stores_written_raw_hold_the_same_values() {
     );
     let err = d.fails(&["compress", "h.btf", "-o", "x.eig", "--codec", "lz4"]);
     assert!(err.contains("invalid value 'lz4'") && err.contains("none"), "{err}");
+    let err = d.fails(&["compress", "h.btf", "--sweep", "1,2", "--report", "r", "--codec", "none"]);
+    assert!(err.contains("--codec") && err.contains("--sweep"), "{err}");
+    assert!(!d.path("r").exists());
 }
 
 #[test]
